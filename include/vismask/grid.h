@@ -1,0 +1,54 @@
+// Grid: the SEADS-style uniform grid over one environment's patches.
+// Two flat arrays built once at init: cellStart (numCells + 1 offsets) and
+// refs (patch indices, cell by cell). Rays walk it with a 3D-DDA (Amanatides &
+// Woo). Intersect finds the closest hit, Occluded stops at the first.
+// The resolution follows the patch count and the extent (Cleary et al.:
+// cells per axis = extent * cbrt(density * N / volume)).
+#pragma once
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+#include "vismask/arena.h"
+#include "vismask/patch.h"
+#include "vismask/scene.h"
+#include "vismask/span.h"
+
+namespace vismask {
+
+class Grid {
+ public:
+  // What the grid needs, decided at init before any arena exists.
+  struct Plan {
+    int res[3] = {1, 1, 1};
+    uint64_t refs = 0;  // total (cell, patch) references
+    Bounds bounds;      // padded box the cells cover
+  };
+  // Plans the grid for `patches` with about `density` cells per patch.
+  static Plan MakePlan(Span<const Patch> patches, float density);
+
+  // Carves cellStart and refs from `arena` (also from a measuring arena).
+  void Layout(Arena& arena, const Plan& plan);
+  // Fills the arrays. `geom` must outlive the grid; indices are into it.
+  void Build(Span<const Patch> patches, Span<const PatchGeom> geom);
+
+  // Closest hit in (ray.tMin, ray.tMax), ignoring patch `skip`. Front and
+  // back sides both count.
+  bool Intersect(const Ray& ray, uint32_t skip, Hit* hit) const;
+  // True if anything is hit in (ray.tMin, ray.tMax), ignoring `skip`.
+  bool Occluded(const Ray& ray, uint32_t skip) const;
+
+  const Plan& plan() const { return plan_; }
+  size_t cellCount() const { return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2]; }
+  size_t bytes() const { return cellStart_.bytes() + refs_.bytes(); }
+
+ private:
+  Plan plan_;
+  glm::vec3 cellSize_{1.0f};
+  glm::vec3 invCellSize_{1.0f};
+  Span<uint32_t> cellStart_;
+  Span<uint32_t> refs_;
+  Span<const PatchGeom> geom_;
+};
+
+}  // namespace vismask

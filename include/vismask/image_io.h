@@ -1,0 +1,35 @@
+// Image output: tone mapping, PNG (stb_image_write, compressed by zlib with
+// every allocation served from an arena region) and PFM (linear float RGB).
+// Nothing here allocates from the heap.
+#pragma once
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+
+#include "vismask/os.h"
+#include "vismask/span.h"
+
+namespace vismask {
+
+// Bytes of scratch the PNG encoder needs for a width x height RGB image,
+// whatever its content (a bound from the encoder's allocations and zlib's
+// documented memory use and deflateBound).
+size_t PngScratchBytes(int width, int height);
+
+// Encodes `rgb` (row 0 at the top, 3 bytes a pixel) as PNG into `file`,
+// using only `scratch`. False with *why (os::kWhyBytes) on failure.
+bool WritePng(os::OutFile* file, int width, int height, Span<const uint8_t> rgb,
+              Span<uint8_t> scratch, char* why);
+
+// Writes `color` (row 0 at the top) as a little-endian PFM ("PF", scale -1,
+// rows bottom to top).
+bool WritePfm(os::OutFile* file, int width, int height, Span<const glm::vec3> color);
+
+// An exposure that maps the log-average luminance of the covered pixels
+// (mask[i] != 0) to middle grey. 1 if nothing is covered.
+float AutoExposure(Span<const glm::vec3> color, Span<const uint32_t> coverage, uint32_t emptyId);
+
+// color * exposure, clamped to [0, 1], sRGB-encoded to 8 bits.
+void ToneMap(Span<const glm::vec3> color, float exposure, Span<uint8_t> rgb);
+
+}  // namespace vismask

@@ -1,0 +1,33 @@
+// MaxTree: which patch has the most unshot power, in O(1), kept current in
+// O(log n) per change. A tournament tree over a fixed key array, carved from
+// the arena; ties go to the lower index, so the choice is deterministic.
+#pragma once
+#include <cstdint>
+
+#include "vismask/arena.h"
+#include "vismask/patch.h"
+#include "vismask/span.h"
+
+namespace vismask {
+
+class MaxTree {
+ public:
+  // Carves room for `n` keys (also from a measuring arena).
+  void Layout(Arena& arena, uint32_t n);
+  // Sets every key to 0.
+  void Clear();
+  // Sets key `i` and replays its path to the root.
+  void Set(uint32_t i, double key);
+  double Key(uint32_t i) const { return key_[i]; }
+  // The index with the largest key (lowest index on ties); kNoPatch if n == 0.
+  uint32_t Top() const { return n_ == 0 ? kNoPatch : node_[1]; }
+
+ private:
+  uint32_t Winner(uint32_t a, uint32_t b) const;
+  uint32_t n_ = 0;
+  uint32_t leaves_ = 1;  // power of two >= n
+  Span<double> key_;
+  Span<uint32_t> node_;  // node_[1..leaves_-1]; leaves are implicit
+};
+
+}  // namespace vismask

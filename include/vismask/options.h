@@ -1,0 +1,43 @@
+// Options: the command line. `vismask render SCENE.obj [flags]` and
+// `vismask --help`. Parsing is strict: an unknown flag, a missing value or a
+// value that does not parse completely, is not finite or is out of range is
+// an error (never clamped).
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include "vismask/camera.h"
+#include "vismask/status.h"
+
+namespace vismask {
+
+struct Options {
+  std::string command;  // "render"; empty with --help
+  bool help = false;
+  std::string scene;
+  std::string outDir = "out";
+  float patchSize = 0.0f;  // 0: automatic (largest scene extent / kAutoPatchDivisions)
+  uint32_t rays = 4096;
+  uint64_t seed = 1;
+  double stopUnshot = 1e-3;
+  uint64_t maxShots = 0;   // 0: none
+  double maxSeconds = 0.0; // 0: none
+  int width = 512;
+  int height = 512;
+  bool hasCamera = false;
+  Camera camera;
+  bool hasExposure = false;
+  float exposure = 1.0f;
+  bool quiet = false;
+};
+
+constexpr float kAutoPatchDivisions = 24.0f;
+
+// Parses argv (argv[0] is the program). On error returns a Status whose
+// message names the flag and the offending value.
+Status ParseArgs(int argc, const char* const* argv, Options* options);
+
+// The --help text.
+const char* HelpText();
+
+}  // namespace vismask

@@ -1,0 +1,65 @@
+// The operating-system services vismask uses, implemented in platform/.
+// Nothing here allocates after it is set up: paths are fixed char arrays and
+// writes go straight to file descriptors. src/ uses only this header, never
+// <unistd.h> or <fcntl.h>.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+namespace vismask::os {
+
+constexpr size_t kMaxPath = 1024;
+// Size of the buffers that receive an error description ("why").
+constexpr size_t kWhyBytes = 2048;
+
+// Seconds from an arbitrary fixed point (monotonic clock).
+double Seconds();
+
+// Writes all of `s` to standard error / standard output (no buffering).
+void WriteErr(const char* s, size_t n);
+void WriteOut(const char* s, size_t n);
+// printf-style to stderr; lines longer than 1 KiB are cut.
+void PrintErr(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+
+// True if standard error is a terminal (progress lines then redraw in place).
+bool StderrIsTerminal();
+
+// Creates `path` and missing parents. False (with errno text in *why, which
+// must hold kWhyBytes) on failure.
+bool MakeDirs(const char* path, char* why);
+
+// True if `path` exists (any kind of file).
+bool Exists(const char* path);
+
+// Peak resident set size of this process (VmHWM), bytes; 0 if unknown.
+uint64_t PeakRssBytes();
+
+// An output file written under a temporary name ("NAME.tmp") and renamed to
+// its final name only by Commit(), so an interrupted run never leaves a file
+// that looks complete. Discard() (or destruction without Commit) removes the
+// temporary file.
+class OutFile {
+ public:
+  OutFile() = default;
+  ~OutFile();
+  OutFile(const OutFile&) = delete;
+  OutFile& operator=(const OutFile&) = delete;
+
+  // Opens "<path>.tmp" for writing. False (with *why, kWhyBytes) on failure.
+  bool Open(const char* path, char* why);
+  // Writes all bytes. False on failure (the file is then discarded by Commit).
+  bool Write(const void* data, size_t n);
+  // Closes and renames to the final name. False (with *why, kWhyBytes) on failure.
+  bool Commit(char* why);
+  void Discard();
+  bool isOpen() const { return fd_ >= 0; }
+  const char* path() const { return path_; }
+
+ private:
+  int fd_ = -1;
+  bool failed_ = false;
+  char path_[kMaxPath] = {};
+  char tmpPath_[kMaxPath + 8] = {};
+};
+
+}  // namespace vismask::os

@@ -1,0 +1,86 @@
+// Patch: the unit of radiosity. A planar convex polygon of 3 or 4 corners,
+// one-sided (it emits, receives and reflects on its front side only, the side
+// from which its corners run counter-clockwise).
+//
+// A patch's data is split by who reads it:
+//   PatchGeom   - what a ray test reads (plane and edge planes): 80 bytes, hot.
+//   Patch       - geometry and material for sampling, meshing and output.
+//   PatchEnergy - the solver's state in double (radiosity, unshot power).
+#pragma once
+#include <cstdint>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+namespace vismask {
+
+constexpr uint32_t kNoPatch = 0xffffffffu;
+
+// A ray: origin, direction (need not be unit length; t is in its units) and
+// the open interval (tMin, tMax) of accepted hits.
+struct Ray {
+  glm::vec3 o;
+  glm::vec3 d;
+  float tMin;
+  float tMax;
+};
+
+// The closest hit of a ray: the patch (index local to its environment), the
+// ray parameter, and whether the ray struck the front side.
+struct Hit {
+  uint32_t patch = kNoPatch;
+  float t = 0.0f;
+  bool front = false;
+};
+
+// Ray-test data. A point x on the plane dot(n, x) == d is inside the patch
+// iff dot(edge[i].xyz, x) >= edge[i].w for all four edges (a triangle's
+// fourth edge is (0,0,0,-inf), which always passes). Edge planes are widened
+// by a tiny tolerance so that rays through a shared edge hit at least one of
+// its two patches.
+struct PatchGeom {
+  glm::vec3 n;
+  float d;
+  glm::vec4 edge[4];
+};
+static_assert(sizeof(PatchGeom) == 80, "PatchGeom is the grid's hot data");
+
+struct Patch {
+  glm::vec3 corner[4];   // counter-clockwise seen from the front; corner[3] == corner[2] for triangles
+  glm::vec3 normal;      // unit, front side
+  glm::vec3 kd;          // diffuse reflectance per channel, in [0, 1)
+  glm::vec3 ke;          // emitted exitance per channel (W/m^2 in scene units)
+  float area;            // in scene units^2
+  uint32_t numCorners;   // 3 or 4
+  uint32_t surface;      // index of the source polygon in the scene
+  uint32_t vertex[4];    // display-lattice vertices, for Gouraud shading
+  uint32_t globalId;     // id in the whole scene, independent of partition
+};
+
+struct PatchEnergy {
+  double b[3];       // radiosity (W/m^2): emitted + received and reflected
+  double unshot[3];  // unshot power (W): B*area not yet distributed
+};
+
+// Builds a patch's ray-test data from its corners and normal.
+PatchGeom MakePatchGeom(const Patch& p);
+
+// Intersects `ray` with one patch. Returns true and sets *t and *front when the
+// ray meets the patch at ray.tMin < t < ray.tMax.
+inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* front) {
+  float denom = g.n.x * ray.d.x + g.n.y * ray.d.y + g.n.z * ray.d.z;
+  if (denom == 0.0f) return false;
+  float num = g.d - (g.n.x * ray.o.x + g.n.y * ray.o.y + g.n.z * ray.o.z);
+  float tt = num / denom;
+  if (!(tt > ray.tMin && tt < ray.tMax)) return false;
+  glm::vec3 x = ray.o + tt * ray.d;
+  for (int i = 0; i < 4; ++i) {
+    const glm::vec4& e = g.edge[i];
+    if (e.x * x.x + e.y * x.y + e.z * x.z < e.w) return false;
+  }
+  *t = tt;
+  *front = denom < 0.0f;
+  return true;
+}
+
+}  // namespace vismask

@@ -1,0 +1,52 @@
+// Scene: the polygons and materials of a Wavefront OBJ + MTL file, as loaded
+// and validated at init (see ../shared/cornell/README.md for the conventions).
+// Init-time data: it lives on the heap and is dropped once the environments
+// have taken their patches.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "vismask/status.h"
+
+namespace vismask {
+
+struct Bounds {
+  glm::vec3 lo{0.0f};
+  glm::vec3 hi{0.0f};
+};
+
+struct Material {
+  std::string name;
+  glm::vec3 kd{0.0f};  // diffuse reflectance, each channel in [0, 1)
+  glm::vec3 ke{0.0f};  // emitted exitance, each channel >= 0
+};
+
+// A planar polygon with 3 or more corners, counter-clockwise seen from its
+// front side.
+struct Polygon {
+  std::vector<glm::vec3> corners;
+  glm::vec3 normal{0.0f};  // unit, front side (Newell's method)
+  double area = 0.0;
+  uint32_t material = 0;  // index into Scene::materials
+  int line = 0;           // line of the 'f' statement in Scene::objPath
+};
+
+struct Scene {
+  std::string objPath;
+  std::vector<Material> materials;
+  std::vector<Polygon> polygons;
+  Bounds bounds;  // of all polygon corners
+};
+
+// Loads and validates `objPath` and the MTL files it names (relative to the
+// OBJ's directory). On malformed input returns an error naming file and line:
+// missing or unreadable file, unknown statement arguments, a bad or
+// out-of-range index, a non-finite number, a degenerate or non-planar face, a
+// face with no material, Kd outside [0, 1), negative Ke, no emitter at all.
+// Unknown MTL keys are ignored with one warning each on stderr.
+Status LoadScene(const std::string& objPath, Scene* scene);
+
+}  // namespace vismask

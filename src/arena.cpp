@@ -1,0 +1,44 @@
+#include "vismask/arena.h"
+
+#include <cstdlib>
+#include <utility>
+
+namespace vismask {
+
+Arena::Arena(size_t capacity) : capacity_(ArenaRoundUp(capacity)) {
+  if (capacity_ == 0) capacity_ = kAlign;
+  base_ = static_cast<uint8_t*>(std::aligned_alloc(kAlign, capacity_));
+  CHECK_MSG(base_ != nullptr, "arena allocation failed");
+  std::memset(base_, 0, capacity_);
+}
+
+Arena::~Arena() { std::free(base_); }
+
+Arena::Arena(Arena&& o) noexcept : base_(o.base_), capacity_(o.capacity_), used_(o.used_) {
+  o.base_ = nullptr;
+  o.capacity_ = o.used_ = 0;
+}
+
+Arena& Arena::operator=(Arena&& o) noexcept {
+  if (this != &o) {
+    std::free(base_);
+    base_ = std::exchange(o.base_, nullptr);
+    capacity_ = std::exchange(o.capacity_, 0);
+    used_ = std::exchange(o.used_, 0);
+  }
+  return *this;
+}
+
+void* Arena::AllocBytes(size_t bytes, size_t align) {
+  CHECK(align != 0 && (align & (align - 1)) == 0 && align <= kAlign);
+  size_t start = (used_ + align - 1) & ~(align - 1);
+  if (measuring()) {
+    used_ = start + bytes;
+    return nullptr;
+  }
+  CHECK_MSG(start + bytes <= capacity_, "arena overflow: the init-time layout was not measured");
+  used_ = start + bytes;
+  return base_ + start;  // zeroed at construction, never reused
+}
+
+}  // namespace vismask

@@ -1,0 +1,178 @@
+#include "vismask/image_io.h"
+
+#include <zlib.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "vismask/check.h"
+
+namespace vismask {
+
+namespace {
+
+// A bump heap over a fixed region for the PNG encoder: malloc bumps,
+// realloc and free of the most recent block work in place, other frees are
+// no-ops. Out of room returns null (the encoder then fails cleanly).
+class BumpHeap {
+ public:
+  explicit BumpHeap(Span<uint8_t> region) : region_(region) {}
+  void* Malloc(size_t n) {
+    size_t start = Align(used_) + kHeader;
+    if (start + n > region_.size()) return nullptr;
+    std::memcpy(region_.data() + start - kHeader, &n, sizeof n);
+    last_ = start;
+    used_ = start + n;
+    return region_.data() + start;
+  }
+  void Free(void* p) {
+    if (p && Offset(p) == last_) used_ = last_ - kHeader;
+  }
+  void* Realloc(void* p, size_t n) {
+    if (!p) return Malloc(n);
+    size_t off = Offset(p);
+    size_t old;
+    std::memcpy(&old, region_.data() + off - kHeader, sizeof old);
+    if (off == last_ && off + n <= region_.size()) {
+      std::memcpy(region_.data() + off - kHeader, &n, sizeof n);
+      used_ = off + n;
+      return p;
+    }
+    void* q = Malloc(n);
+    if (q) std::memcpy(q, p, old < n ? old : n);
+    return q;
+  }
+  static constexpr size_t kHeader = 16;
+
+ private:
+  static size_t Align(size_t x) { return (x + 15) & ~size_t(15); }
+  size_t Offset(void* p) const { return static_cast<size_t>(static_cast<uint8_t*>(p) - region_.data()); }
+  Span<uint8_t> region_;
+  size_t used_ = 0;
+  size_t last_ = 0;
+};
+
+BumpHeap* gHeap = nullptr;  // the heap of the WritePng call in progress
+
+// zlib's memory for deflateInit2(windowBits 15, memLevel 8), from zconf.h:
+// (1 << (windowBits + 2)) + (1 << (memLevel + 9)), plus its state structure,
+// which is a few KiB; 32 KiB covers it and the allocation headers.
+constexpr int kWindowBits = 15;
+constexpr int kMemLevel = 8;
+constexpr size_t kZlibBytes = (size_t(1) << (kWindowBits + 2)) + (size_t(1) << (kMemLevel + 9)) + 32768;
+
+voidpf ZAlloc(voidpf, uInt items, uInt size) { return gHeap->Malloc(size_t(items) * size); }
+void ZFree(voidpf, voidpf p) { gHeap->Free(p); }
+
+unsigned char* Compress(unsigned char* data, int len, int* outLen, int quality) {
+  z_stream zs;
+  std::memset(&zs, 0, sizeof zs);
+  zs.zalloc = ZAlloc;
+  zs.zfree = ZFree;
+  int level = quality < 1 ? 1 : (quality > 9 ? 9 : quality);
+  if (deflateInit2(&zs, level, Z_DEFLATED, kWindowBits, kMemLevel, Z_DEFAULT_STRATEGY) != Z_OK)
+    return nullptr;
+  uLong bound = deflateBound(&zs, static_cast<uLong>(len));
+  CHECK(bound <= compressBound(static_cast<uLong>(len)));
+  unsigned char* out = static_cast<unsigned char*>(gHeap->Malloc(bound));
+  if (!out) {
+    deflateEnd(&zs);
+    return nullptr;
+  }
+  zs.next_in = data;
+  zs.avail_in = static_cast<uInt>(len);
+  zs.next_out = out;
+  zs.avail_out = static_cast<uInt>(bound);
+  int rc = deflate(&zs, Z_FINISH);
+  *outLen = static_cast<int>(zs.total_out);
+  deflateEnd(&zs);
+  return rc == Z_STREAM_END ? out : nullptr;
+}
+
+void StbWrite(void* context, void* data, int size) {
+  auto* file = static_cast<os::OutFile*>(context);
+  file->Write(data, static_cast<size_t>(size));
+}
+
+}  // namespace
+
+}  // namespace vismask
+
+// stb_image_write, compiled here with every allocation routed to gHeap.
+#define STBIW_MALLOC(sz) ::vismask::gHeap->Malloc(sz)
+#define STBIW_REALLOC(p, newsz) ::vismask::gHeap->Realloc(p, newsz)
+#define STBIW_FREE(p) ::vismask::gHeap->Free(p)
+#define STBIW_ZLIB_COMPRESS ::vismask::Compress
+#define STB_IMAGE_WRITE_STATIC
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STBI_WRITE_NO_STDIO
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#include <stb_image_write.h>
+#pragma GCC diagnostic pop
+
+namespace vismask {
+
+size_t PngScratchBytes(int width, int height) {
+  size_t raw = (3 * size_t(width) + 1) * size_t(height);  // filtered scanlines
+  size_t z = compressBound(static_cast<uLong>(raw));
+  // filt + line buffer + zlib + deflate output + PNG file, each with a header.
+  return raw + 3 * size_t(width) + kZlibBytes + z + (z + 64) + 16 * BumpHeap::kHeader + 64;
+}
+
+bool WritePng(os::OutFile* file, int width, int height, Span<const uint8_t> rgb,
+              Span<uint8_t> scratch, char* why) {
+  CHECK(rgb.size() == size_t(width) * size_t(height) * 3);
+  BumpHeap heap(scratch);
+  gHeap = &heap;
+  int ok = stbi_write_png_to_func(StbWrite, file, width, height, 3, rgb.data(), width * 3);
+  gHeap = nullptr;
+  if (!ok) std::snprintf(why, os::kWhyBytes, "PNG encoder failed (scratch %zu bytes)", scratch.size());
+  return ok != 0;
+}
+
+bool WritePfm(os::OutFile* file, int width, int height, Span<const glm::vec3> color) {
+  static_assert(sizeof(glm::vec3) == 12, "PFM rows are written straight from memory");
+  CHECK(color.size() == size_t(width) * size_t(height));
+  char header[64];
+  int n = std::snprintf(header, sizeof header, "PF\n%d %d\n-1.0\n", width, height);
+  bool ok = file->Write(header, static_cast<size_t>(n));
+  for (int y = height - 1; y >= 0 && ok; --y)
+    ok = file->Write(color.data() + size_t(y) * size_t(width), size_t(width) * sizeof(glm::vec3));
+  return ok;
+}
+
+namespace {
+float Luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+}  // namespace
+
+float AutoExposure(Span<const glm::vec3> color, Span<const uint32_t> coverage, uint32_t emptyId) {
+  double sumLog = 0.0;
+  size_t count = 0;
+  for (size_t i = 0; i < color.size(); ++i) {
+    if (coverage[i] == emptyId) continue;
+    sumLog += std::log(1e-12 + static_cast<double>(Luminance(color[i])));
+    ++count;
+  }
+  if (count == 0) return 1.0f;
+  double logAverage = std::exp(sumLog / static_cast<double>(count));
+  if (!(logAverage > 1e-11)) return 1.0f;
+  return static_cast<float>(0.18 / logAverage);
+}
+
+void ToneMap(Span<const glm::vec3> color, float exposure, Span<uint8_t> rgb) {
+  CHECK(rgb.size() == 3 * color.size());
+  for (size_t i = 0; i < color.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      float v = color[i][c] * exposure;
+      v = !(v > 0.0f) ? 0.0f : (v >= 1.0f ? 1.0f : v);  // NaN -> 0
+      float s = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+      rgb[3 * i + c] = static_cast<uint8_t>(std::lround(255.0f * s));
+    }
+  }
+}
+
+}  // namespace vismask

@@ -1,0 +1,3 @@
+#include "vismask/app.h"
+
+int main(int argc, char** argv) { return vismask::Main(argc, argv); }

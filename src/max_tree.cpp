@@ -1,0 +1,45 @@
+#include "vismask/max_tree.h"
+
+namespace vismask {
+
+void MaxTree::Layout(Arena& arena, uint32_t n) {
+  n_ = n;
+  leaves_ = 1;
+  while (leaves_ < n) leaves_ <<= 1;
+  key_ = arena.Alloc<double>(n);
+  node_ = arena.Alloc<uint32_t>(leaves_ < 2 ? 2 : leaves_);
+}
+
+uint32_t MaxTree::Winner(uint32_t a, uint32_t b) const {
+  if (a == kNoPatch) return b;
+  if (b == kNoPatch) return a;
+  if (key_[b] > key_[a]) return b;
+  if (key_[a] > key_[b]) return a;
+  return a < b ? a : b;
+}
+
+void MaxTree::Clear() {
+  for (uint32_t i = 0; i < n_; ++i) key_[i] = 0.0;
+  if (leaves_ == 1) {
+    node_[1] = n_ == 1 ? 0 : kNoPatch;
+    return;
+  }
+  // Bottom level of internal nodes from the implicit leaves, then upwards.
+  for (uint32_t v = leaves_ / 2; v < leaves_; ++v) {
+    uint32_t a = 2 * v - leaves_, b = a + 1;
+    node_[v] = Winner(a < n_ ? a : kNoPatch, b < n_ ? b : kNoPatch);
+  }
+  for (uint32_t v = leaves_ / 2 - 1; v >= 1; --v) node_[v] = Winner(node_[2 * v], node_[2 * v + 1]);
+}
+
+void MaxTree::Set(uint32_t i, double key) {
+  DCHECK(i < n_);
+  key_[i] = key;
+  if (leaves_ == 1) return;
+  uint32_t v = (leaves_ + i) >> 1;
+  uint32_t a = 2 * v - leaves_, b = a + 1;
+  node_[v] = Winner(a, b < n_ ? b : kNoPatch);
+  for (v >>= 1; v >= 1; v >>= 1) node_[v] = Winner(node_[2 * v], node_[2 * v + 1]);
+}
+
+}  // namespace vismask

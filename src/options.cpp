@@ -1,0 +1,163 @@
+#include "vismask/options.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <vector>
+
+namespace vismask {
+
+const char* HelpText() {
+  return R"(vismask - fixed-memory progressive-refinement radiosity
+
+usage:
+  vismask render SCENE.obj [options]     solve and render a scene
+  vismask --help                         this text
+
+render options:
+  --out DIR            output directory (default out/); created if missing
+  --patch-size L       longest patch edge, scene units (default: largest
+                       scene extent / 24)
+  --rays N             Monte Carlo rays per shot (default 4096)
+  --seed S             random seed, unsigned 64-bit (default 1)
+  --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
+                       (default 1e-3)
+  --max-shots N        stop after N shots (default: no limit)
+  --max-seconds T      stop after T seconds of solving (default: no limit;
+                       a time limit makes the result depend on speed)
+  --width W, --height H   image size in pixels (default 512 x 512)
+  --camera ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy_deg
+                       eye, target, up and vertical field of view (default:
+                       frame the scene's bounding box from -z, looking +z)
+  --exposure E         linear exposure for image.png (default: automatic)
+  --quiet              no progress line on stderr
+
+outputs (in --out DIR):
+  image.png         tone-mapped sRGB image
+  image.pfm         linear float RGB radiance (B/pi, with the ambient term)
+  patches.csv       id,env,cx,cy,cz,nx,ny,nz,area,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b,b_r,b_g,b_b
+                    (b = solved radiosity, without the ambient term)
+  convergence.csv   shot,seconds,unshot_fraction (one row per shot)
+  run.json          options, counts, energy balance, timings, memory
+
+exit status: 0 success; 1 an output could not be written; 2 bad input or
+options (the message names file:line or the option)
+)";
+}
+
+namespace {
+
+Status Bad(const std::string& flag, const std::string& value, const std::string& expected) {
+  return Status::Error("vismask: " + flag + ": expected " + expected + ", got '" + value + "'");
+}
+
+bool ParseDouble(const std::string& s, double* out) {
+  if (s.empty() || std::isspace(static_cast<unsigned char>(s[0]))) return false;
+  errno = 0;
+  char* end = nullptr;
+  double v = std::strtod(s.c_str(), &end);
+  if (end != s.c_str() + s.size() || errno == ERANGE || !std::isfinite(v)) return false;
+  *out = v;
+  return true;
+}
+
+bool ParseU64(const std::string& s, uint64_t* out) {
+  if (s.empty() || !std::isdigit(static_cast<unsigned char>(s[0]))) return false;
+  errno = 0;
+  char* end = nullptr;
+  unsigned long long v = std::strtoull(s.c_str(), &end, 10);
+  if (end != s.c_str() + s.size() || errno == ERANGE) return false;
+  *out = v;
+  return true;
+}
+
+}  // namespace
+
+Status ParseArgs(int argc, const char* const* argv, Options* o) {
+  *o = Options();
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty()) return Status::Error("vismask: no command (try 'vismask --help')");
+  size_t i = 0;
+  if (args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    o->help = true;
+    return Status::Ok();
+  }
+  if (args[0] != "render")
+    return Status::Error("vismask: unknown command '" + args[0] + "' (try 'vismask --help')");
+  o->command = args[i++];
+  for (; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    if (a == "--help" || a == "-h") {
+      o->help = true;
+      return Status::Ok();
+    }
+    if (a == "--quiet") {
+      o->quiet = true;
+      continue;
+    }
+    if (a.rfind("--", 0) != 0) {
+      if (!o->scene.empty())
+        return Status::Error("vismask: unexpected argument '" + a + "' (one scene per run)");
+      o->scene = a;
+      continue;
+    }
+    if (i + 1 >= args.size()) return Status::Error("vismask: " + a + ": missing value");
+    const std::string& v = args[++i];
+    double d = 0.0;
+    uint64_t u = 0;
+    if (a == "--out") {
+      if (v.empty()) return Bad(a, v, "a directory");
+      o->outDir = v;
+    } else if (a == "--patch-size") {
+      if (!ParseDouble(v, &d) || !(d > 0.0) || d > 3.4e38) return Bad(a, v, "a length > 0");
+      o->patchSize = static_cast<float>(d);
+    } else if (a == "--rays") {
+      if (!ParseU64(v, &u) || u < 1 || u > 100000000) return Bad(a, v, "an integer in [1, 1e8]");
+      o->rays = static_cast<uint32_t>(u);
+    } else if (a == "--seed") {
+      if (!ParseU64(v, &u)) return Bad(a, v, "an unsigned 64-bit integer");
+      o->seed = u;
+    } else if (a == "--stop-unshot") {
+      if (!ParseDouble(v, &d) || d < 0.0 || d >= 1.0) return Bad(a, v, "a number in [0, 1)");
+      o->stopUnshot = d;
+    } else if (a == "--max-shots") {
+      if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive integer");
+      o->maxShots = u;
+    } else if (a == "--max-seconds") {
+      if (!ParseDouble(v, &d) || !(d > 0.0)) return Bad(a, v, "a number of seconds > 0");
+      o->maxSeconds = d;
+    } else if (a == "--width" || a == "--height") {
+      if (!ParseU64(v, &u) || u < 1 || u > 16384) return Bad(a, v, "an integer in [1, 16384]");
+      (a == "--width" ? o->width : o->height) = static_cast<int>(u);
+    } else if (a == "--exposure") {
+      if (!ParseDouble(v, &d) || !(d > 0.0) || d > 3.4e38) return Bad(a, v, "a number > 0");
+      o->hasExposure = true;
+      o->exposure = static_cast<float>(d);
+    } else if (a == "--camera") {
+      std::vector<std::string> parts(1);
+      for (char ch : v) {
+        if (ch == ',') parts.emplace_back();
+        else parts.back() += ch;
+      }
+      double c[10];
+      bool good = parts.size() == 10;
+      for (size_t k = 0; good && k < 10; ++k) good = ParseDouble(parts[k], &c[k]);
+      if (!good) return Bad(a, v, "ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy_deg (10 numbers)");
+      o->hasCamera = true;
+      o->camera.eye = glm::vec3(c[0], c[1], c[2]);
+      o->camera.target = glm::vec3(c[3], c[4], c[5]);
+      o->camera.up = glm::vec3(c[6], c[7], c[8]);
+      o->camera.fovyDeg = static_cast<float>(c[9]);
+      View view;
+      if (!MakeView(o->camera, 1, 1, &view))
+        return Bad(a, v, "eye != target, up not parallel to the view direction, 0 < fovy < 180");
+    } else {
+      return Status::Error("vismask: unknown option '" + a + "' (try 'vismask --help')");
+    }
+  }
+  if (o->scene.empty()) return Status::Error("vismask: render: no scene given (vismask render SCENE.obj)");
+  return Status::Ok();
+}
+
+}  // namespace vismask
