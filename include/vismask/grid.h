@@ -41,14 +41,26 @@ class Grid {
   const Plan& plan() const { return plan_; }
   size_t cellCount() const { return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2]; }
   size_t bytes() const { return cellStart_.bytes() + refs_.bytes(); }
+  // The built arrays, read-only (tests, statistics): cell c holds
+  // refs()[cellStart()[c] .. cellStart()[c + 1]), in ascending patch order.
+  Span<const uint32_t> cellStart() const { return cellStart_; }
+  Span<const uint32_t> refs() const { return refs_; }
 
  private:
+  // The DDA walk behind Intersect (kAnyHit false) and Occluded (true).
+  template <bool kAnyHit>
+  bool Walk(const Ray& ray, uint32_t skip, Hit* hit) const;
+  // Every patch, for rays whose origin is too far away for the grid's padding.
+  template <bool kAnyHit>
+  bool TestAll(const Ray& ray, uint32_t skip, Hit* hit) const;
+
   Plan plan_;
   glm::vec3 cellSize_{1.0f};
   glm::vec3 invCellSize_{1.0f};
   Span<uint32_t> cellStart_;
   Span<uint32_t> refs_;
   Span<const PatchGeom> geom_;
+  float farLimit_ = 0.0f;  // origins with a coordinate beyond this skip the grid
 };
 
 }  // namespace vismask

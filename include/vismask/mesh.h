@@ -16,11 +16,12 @@ struct Mesh {
   std::vector<glm::vec3> vertices;   // display lattice; Patch::vertex[] index it
 };
 
-// Splits every polygon of `scene` into patches whose edges are all at most
-// `patchSize` long. Triangles split into n*n similar triangles, convex quads
-// into an m*n bilinear grid of planar quads, anything else is triangulated
-// first. Patch areas sum to the polygon's area. Patches of one polygon share
-// lattice vertices; patches of different polygons never do.
+// Appends the patches of the given polygons of `scene` to `mesh`, with edges
+// at most `patchSize` long (up to float rounding of the corners). Triangles
+// split into n*n similar triangles, convex quads into an m*n bilinear grid of
+// planar quads, anything else is ear-clipped into triangles first. Patch areas
+// sum to the polygon's area. Patches of one polygon (of one of its triangles,
+// if triangulated) share lattice vertices; different polygons never do.
 // Fails (without partial output) if patchSize is not a positive finite number
 // or the mesh would exceed `maxPatches`.
 Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, float patchSize,

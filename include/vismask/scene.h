@@ -24,8 +24,8 @@ struct Material {
   glm::vec3 ke{0.0f};  // emitted exitance, each channel >= 0
 };
 
-// A planar polygon with 3 or more corners, counter-clockwise seen from its
-// front side.
+// A planar simple polygon with 3 or more corners, counter-clockwise seen from
+// its front side.
 struct Polygon {
   std::vector<glm::vec3> corners;
   glm::vec3 normal{0.0f};  // unit, front side (Newell's method)
@@ -42,11 +42,13 @@ struct Scene {
 };
 
 // Loads and validates `objPath` and the MTL files it names (relative to the
-// OBJ's directory). On malformed input returns an error naming file and line:
-// missing or unreadable file, unknown statement arguments, a bad or
-// out-of-range index, a non-finite number, a degenerate or non-planar face, a
-// face with no material, Kd outside [0, 1), negative Ke, no emitter at all.
-// Unknown MTL keys are ignored with one warning each on stderr.
+// OBJ's directory). On malformed input returns an error naming file and line,
+// leaving *scene untouched: a missing or unreadable file, an unknown statement
+// or wrong argument count, a bad or out-of-range index, a number that does not
+// parse or is not finite, a degenerate, non-planar or self-intersecting face, a
+// face with no material, Kd outside [0, 1), negative Ke, a duplicate material,
+// no emitter at all (line 0). Unknown MTL keys are ignored with one warning
+// each on stderr.
 Status LoadScene(const std::string& objPath, Scene* scene);
 
 }  // namespace vismask

@@ -1,0 +1,477 @@
+#include "vismask/grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+namespace vismask {
+
+namespace {
+
+// Why the padding: IntersectPatch's float edge tests accept points up to a
+// few ulps of the scene magnitude outside its edge planes (kEdgeRel, which a
+// sharp corner amplifies, so it is kept small), and hit points and the DDA's
+// cell boundaries are rounded too. Every patch is registered with a further
+// margin of kPadRel * (scene magnitude), about 300 ulps of the largest
+// coordinate, which covers the rest while the ray origin is within kFarRel
+// magnitudes of the world origin. Rays from farther away test every patch.
+constexpr float kEdgeRel = 8.0f * std::numeric_limits<float>::epsilon();
+constexpr float kPadRel = 4e-5f;
+constexpr float kFarRel = 8.0f;
+constexpr int kMaxRes = 1024;          // cells per axis
+constexpr double kBoundsRel = 1e-3;    // grid margin, relative to the largest extent
+constexpr double kClipRel = 1e4;       // half-size of the clip square, in patch sizes
+constexpr int kMaxPolyVerts = 8;       // a square clipped by four half-planes
+constexpr int kMaxAxes = 1 + 4 * kMaxPolyVerts + 3;
+
+// Padding and far limit, from the corners' extent and distance from the origin.
+struct Scale {
+  float edgePad = 0.0f;
+  float pad = 0.0f;
+  float farLimit = 0.0f;
+};
+
+Scale ScaleOf(Span<const Patch> patches) {
+  glm::vec3 lo(std::numeric_limits<float>::infinity());
+  glm::vec3 hi(-std::numeric_limits<float>::infinity());
+  for (const Patch& p : patches) {
+    for (uint32_t k = 0; k < p.numCorners && k < 4; ++k) {
+      lo = glm::min(lo, p.corner[k]);
+      hi = glm::max(hi, p.corner[k]);
+    }
+  }
+  float mag = 0.0f;
+  for (int a = 0; a < 3; ++a) {
+    if (!(lo[a] <= hi[a])) continue;
+    mag = std::max({mag, std::fabs(lo[a]), std::fabs(hi[a]), hi[a] - lo[a]});
+  }
+  Scale s;
+  s.edgePad = kEdgeRel * mag;
+  s.pad = kPadRel * mag;
+  s.farLimit = kFarRel * mag;
+  return s;
+}
+
+// The region where IntersectPatch can report a hit on one patch, widened by
+// the padding: a prism over the patch's (widened) polygon. Kept as a box plus
+// separating axes with the prism's projection on each.
+struct Shape {
+  glm::dvec3 lo;
+  glm::dvec3 hi;
+  int numAxes = 0;
+  glm::dvec3 axis[kMaxAxes];
+  double pMin[kMaxAxes];
+  double pMax[kMaxAxes];
+};
+
+// Conservative fallback for a patch whose plane or edges are not usable.
+void CornerShape(const Patch& p, double pad, Shape* s) {
+  s->lo = glm::dvec3(std::numeric_limits<double>::infinity());
+  s->hi = -s->lo;
+  for (uint32_t k = 0; k < p.numCorners && k < 4; ++k) {
+    s->lo = glm::min(s->lo, glm::dvec3(p.corner[k]) - pad);
+    s->hi = glm::max(s->hi, glm::dvec3(p.corner[k]) + pad);
+  }
+  s->numAxes = 0;
+}
+
+void AddAxis(Shape* s, glm::dvec3 a) {
+  double len = glm::length(a);
+  if (!(len > 1e-9)) return;
+  s->axis[s->numAxes++] = a / len;
+}
+
+// Builds the shape of patch `p` with ray-test data `g` (depends on nothing
+// else, so MakePlan and Build register the same cells).
+void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s) {
+  double pad = scale.pad;
+  glm::dvec3 n(g.n);
+  double nLen = glm::length(n);
+  if (!(nLen > 0.5 && nLen < 2.0) || !std::isfinite(g.d)) return CornerShape(p, pad, s);
+  glm::dvec3 nn = n / nLen;
+  glm::dvec3 u = glm::normalize(
+      glm::cross(nn, std::fabs(nn.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+  glm::dvec3 v = glm::cross(nn, u);
+  glm::dvec3 p0 = n * (static_cast<double>(g.d) / (nLen * nLen));
+
+  // Clip square around the corners, then clipped by each widened edge.
+  uint32_t nc = std::min<uint32_t>(p.numCorners, 4);
+  glm::dvec3 centre(0.0);
+  double size = 0.0;
+  for (uint32_t k = 0; k < nc; ++k) {
+    centre += glm::dvec3(p.corner[k]);
+    size = std::max(size, glm::length(glm::dvec3(p.corner[(k + 1) % nc] - p.corner[k])));
+  }
+  centre /= static_cast<double>(nc);
+  double ca = glm::dot(u, centre - p0), cb = glm::dot(v, centre - p0);
+  double r = kClipRel * (size + pad);
+  double poly[2][kMaxPolyVerts + 1][2] = {{{ca - r, cb - r}, {ca + r, cb - r}, {ca + r, cb + r},
+                                           {ca - r, cb + r}}};
+  int count = 4, cur = 0;
+  for (int i = 0; i < 4; ++i) {
+    const glm::vec4& e = g.edge[i];
+    if (!std::isfinite(e.w)) continue;  // a triangle's missing fourth edge
+    glm::dvec3 ed(e.x, e.y, e.z);
+    double ea = glm::dot(ed, u), eb = glm::dot(ed, v);
+    double c = static_cast<double>(e.w) - scale.edgePad - glm::dot(ed, p0);
+    const double(*in)[2] = poly[cur];
+    double(*out)[2] = poly[cur ^ 1];
+    int outCount = 0;
+    for (int k = 0; k < count; ++k) {
+      const double* a = in[k];
+      const double* b = in[(k + 1) % count];
+      double fa = ea * a[0] + eb * a[1] - c;
+      double fb = ea * b[0] + eb * b[1] - c;
+      if (fa >= 0.0 && outCount < kMaxPolyVerts) {
+        out[outCount][0] = a[0];
+        out[outCount][1] = a[1];
+        ++outCount;
+      }
+      if ((fa >= 0.0) != (fb >= 0.0) && outCount < kMaxPolyVerts) {
+        double w = fa / (fa - fb);
+        out[outCount][0] = a[0] + w * (b[0] - a[0]);
+        out[outCount][1] = a[1] + w * (b[1] - a[1]);
+        ++outCount;
+      }
+    }
+    count = outCount;
+    cur ^= 1;
+  }
+  if (count < 3) return CornerShape(p, pad, s);
+
+  // Prism corners: the polygon shifted by +-pad along the normal.
+  glm::dvec3 verts[2 * kMaxPolyVerts];
+  for (int k = 0; k < count; ++k) {
+    glm::dvec3 x = p0 + poly[cur][k][0] * u + poly[cur][k][1] * v;
+    verts[2 * k] = x - pad * nn;
+    verts[2 * k + 1] = x + pad * nn;
+  }
+  int numVerts = 2 * count;
+  s->lo = glm::dvec3(std::numeric_limits<double>::infinity());
+  s->hi = -s->lo;
+  for (int k = 0; k < numVerts; ++k) {
+    s->lo = glm::min(s->lo, verts[k]);
+    s->hi = glm::max(s->hi, verts[k]);
+  }
+  s->lo -= pad;
+  s->hi += pad;
+  if (!std::isfinite(s->lo.x + s->lo.y + s->lo.z + s->hi.x + s->hi.y + s->hi.z))
+    return CornerShape(p, pad, s);
+
+  // Separating axes beyond the box's own: the plane normal, the side faces and
+  // the edge-edge crosses with the box's axes.
+  const glm::dvec3 boxAxis[3] = {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
+  s->numAxes = 0;
+  AddAxis(s, nn);
+  for (int k = 0; k < count; ++k) {
+    glm::dvec3 edge = verts[2 * ((k + 1) % count)] - verts[2 * k];
+    double len = glm::length(edge);
+    if (!(len > 0.0)) continue;
+    edge /= len;
+    AddAxis(s, glm::cross(nn, edge));
+    for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(edge, b));
+  }
+  for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(nn, b));
+  for (int i = 0; i < s->numAxes; ++i) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k = 0; k < numVerts; ++k) {
+      double x = glm::dot(s->axis[i], verts[k]);
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+    s->pMin[i] = lo - pad;
+    s->pMax[i] = hi + pad;
+  }
+}
+
+// Cell geometry of a plan, in double for registration.
+struct Frame {
+  glm::dvec3 lo;
+  glm::dvec3 size;
+  glm::dvec3 inv;
+  int res[3];
+};
+
+Frame FrameOf(const Grid::Plan& plan) {
+  Frame f;
+  f.lo = glm::dvec3(plan.bounds.lo);
+  for (int a = 0; a < 3; ++a) {
+    f.res[a] = plan.res[a];
+    double extent = static_cast<double>(plan.bounds.hi[a]) - plan.bounds.lo[a];
+    f.size[a] = extent / plan.res[a];
+    f.inv[a] = plan.res[a] / extent;
+  }
+  return f;
+}
+
+int ClampCell(double x, int res) {
+  if (!(x >= 0.0)) return 0;  // also NaN
+  if (x >= res - 1) return res - 1;
+  return static_cast<int>(x);
+}
+
+// Calls visit(cellIndex) for every cell the shape may overlap, in index order.
+template <class Visit>
+void ForEachCell(const Frame& f, const Shape& s, Visit&& visit) {
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = ClampCell(std::floor((s.lo[a] - f.lo[a]) * f.inv[a]), f.res[a]);
+    hi[a] = ClampCell(std::floor((s.hi[a] - f.lo[a]) * f.inv[a]), f.res[a]);
+  }
+  glm::dvec3 half = 0.5 * f.size;
+  for (int z = lo[2]; z <= hi[2]; ++z) {
+    for (int y = lo[1]; y <= hi[1]; ++y) {
+      for (int x = lo[0]; x <= hi[0]; ++x) {
+        glm::dvec3 centre = f.lo + (glm::dvec3(x, y, z) + 0.5) * f.size;
+        bool apart = false;
+        for (int i = 0; i < s.numAxes && !apart; ++i) {
+          const glm::dvec3& ax = s.axis[i];
+          double c = glm::dot(ax, centre);
+          double r = std::fabs(ax.x) * half.x + std::fabs(ax.y) * half.y + std::fabs(ax.z) * half.z;
+          apart = c + r < s.pMin[i] || c - r > s.pMax[i];
+        }
+        if (!apart) visit((static_cast<size_t>(z) * f.res[1] + y) * f.res[0] + x);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
+  CHECK_MSG(density > 0.0f && std::isfinite(density), "grid density must be positive");
+  Plan plan;
+  size_t n = patches.size();
+  if (n == 0) {
+    plan.bounds.hi = glm::vec3(1.0f);
+    return plan;
+  }
+  Scale scale = ScaleOf(patches);
+
+  // Bounds: every patch's registration box, plus a margin on every side so a
+  // flat scene gets some thickness.
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo.x);
+  Shape shape;
+  for (const Patch& p : patches) {
+    MakeShape(p, MakePatchGeom(p), scale, &shape);
+    lo = glm::min(lo, shape.lo);
+    hi = glm::max(hi, shape.hi);
+  }
+  glm::dvec3 extent = hi - lo;
+  double maxExtent = std::max({extent.x, extent.y, extent.z});
+  if (!(maxExtent > 0.0)) maxExtent = 1.0;
+  double margin = kBoundsRel * maxExtent;
+  for (int a = 0; a < 3; ++a) {
+    plan.bounds.lo[a] = std::nextafter(static_cast<float>(lo[a] - margin), -HUGE_VALF);
+    plan.bounds.hi[a] = std::nextafter(static_cast<float>(hi[a] + margin), HUGE_VALF);
+    extent[a] = static_cast<double>(plan.bounds.hi[a]) - plan.bounds.lo[a];
+  }
+
+  // Resolution (Cleary): cells per axis = extent * cbrt(density * N / volume).
+  double volume = extent.x * extent.y * extent.z;
+  double k = std::cbrt(density * static_cast<double>(n) / volume);
+  for (int a = 0; a < 3; ++a)
+    plan.res[a] = static_cast<int>(std::clamp(std::round(extent[a] * k), 1.0, double{kMaxRes}));
+  double limit = 8.0 * static_cast<double>(n) + 64.0;
+  for (;;) {
+    double cells = static_cast<double>(plan.res[0]) * plan.res[1] * plan.res[2];
+    if (cells <= limit) break;
+    double shrink = std::cbrt(limit / cells);
+    for (int a = 0; a < 3; ++a)
+      plan.res[a] = std::max(1, static_cast<int>(std::floor(plan.res[a] * shrink)));
+  }
+
+  // Exact reference count, by the same rule Build uses.
+  Frame frame = FrameOf(plan);
+  uint64_t refs = 0;
+  for (const Patch& p : patches) {
+    MakeShape(p, MakePatchGeom(p), scale, &shape);
+    ForEachCell(frame, shape, [&refs](size_t) { ++refs; });
+  }
+  plan.refs = refs;
+  return plan;
+}
+
+void Grid::Layout(Arena& arena, const Plan& plan) {
+  plan_ = plan;
+  size_t cells = cellCount();
+  CHECK_MSG(cells < 0xffffffffu && plan.refs <= 0xffffffffu, "grid too large for 32-bit offsets");
+  cellStart_ = arena.Alloc<uint32_t>(cells + 1);
+  refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs));
+  for (int a = 0; a < 3; ++a) {
+    float extent = plan.bounds.hi[a] - plan.bounds.lo[a];
+    cellSize_[a] = extent / static_cast<float>(plan.res[a]);
+    invCellSize_[a] = static_cast<float>(plan.res[a]) / extent;
+  }
+}
+
+void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
+  CHECK(patches.size() == geom.size());
+  CHECK_MSG(cellStart_.data() != nullptr, "Grid::Build needs a real arena");
+  geom_ = geom;
+  Scale scale = ScaleOf(patches);
+  farLimit_ = scale.farLimit;
+  Frame frame = FrameOf(plan_);
+  size_t cells = cellCount();
+  uint32_t* start = cellStart_.data();
+
+  // Counting sort: count per cell, exclusive prefix sum, fill advancing each
+  // cell's start to its end, then shift the starts back by one cell.
+  for (size_t c = 0; c <= cells; ++c) start[c] = 0;
+  Shape shape;
+  uint64_t total = 0;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    MakeShape(patches[i], geom[i], scale, &shape);
+    ForEachCell(frame, shape, [&](size_t c) {
+      ++start[c];
+      ++total;
+    });
+  }
+  CHECK_MSG(total == plan_.refs, "grid plan does not match the patches it is built from");
+  uint32_t sum = 0;
+  for (size_t c = 0; c < cells; ++c) {
+    uint32_t count = start[c];
+    start[c] = sum;
+    sum += count;
+  }
+  start[cells] = sum;
+  uint32_t* refs = refs_.data();
+  for (size_t i = 0; i < patches.size(); ++i) {
+    MakeShape(patches[i], geom[i], scale, &shape);
+    uint32_t index = static_cast<uint32_t>(i);
+    ForEachCell(frame, shape, [&](size_t c) { refs[start[c]++] = index; });
+  }
+  for (size_t c = cells; c > 0; --c) start[c] = start[c - 1];
+  start[0] = 0;
+}
+
+template <bool kAnyHit>
+bool Grid::TestAll(const Ray& ray, uint32_t skip, Hit* hit) const {
+  const PatchGeom* geom = geom_.data();
+  uint32_t n = static_cast<uint32_t>(geom_.size());
+  Hit best;
+  best.t = ray.tMax;
+  for (uint32_t p = 0; p < n; ++p) {
+    float t;
+    bool front;
+    if (p == skip || !IntersectPatch(geom[p], ray, &t, &front)) continue;
+    if (kAnyHit) return true;
+    if (t < best.t || best.patch == kNoPatch) best = Hit{p, t, front};
+  }
+  if (best.patch == kNoPatch) return false;
+  *hit = best;
+  return true;
+}
+
+template <bool kAnyHit>
+bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
+  if (!(ray.tMin < ray.tMax)) return false;
+  const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
+  const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
+  if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return false;
+  if (!(std::fabs(o[0]) <= farLimit_ && std::fabs(o[1]) <= farLimit_ &&
+        std::fabs(o[2]) <= farLimit_))
+    return TestAll<kAnyHit>(ray, skip, hit);
+
+  // Clip (tMin, tMax) to the grid box; an axis the ray does not move along
+  // must already hold the origin.
+  const glm::vec3& lo = plan_.bounds.lo;
+  const glm::vec3& hi = plan_.bounds.hi;
+  float invD[3];
+  float t0 = ray.tMin, t1 = ray.tMax;
+  for (int a = 0; a < 3; ++a) {
+    if (d[a] == 0.0f) {
+      if (o[a] < lo[a] || o[a] > hi[a]) return false;
+      invD[a] = 0.0f;
+      continue;
+    }
+    invD[a] = 1.0f / d[a];
+    float tNear = (lo[a] - o[a]) * invD[a];
+    float tFar = (hi[a] - o[a]) * invD[a];
+    if (tNear > tFar) std::swap(tNear, tFar);
+    if (tNear > t0) t0 = tNear;
+    if (tFar < t1) t1 = tFar;
+  }
+  if (!(t0 <= t1)) return false;
+
+  // Entry cell and, per axis, the t of the next cell plane (recomputed from
+  // the plane each step rather than accumulated, so the error stays ~1 ulp).
+  const int* res = plan_.res;
+  const int stride[3] = {1, res[0], res[0] * res[1]};
+  int cell[3], step[3], stop[3], next[3], move[3];
+  float tNext[3];
+  int index = 0;
+  for (int a = 0; a < 3; ++a) {
+    float p = d[a] == 0.0f ? o[a] : o[a] + t0 * d[a];
+    float f = (p - lo[a]) * invCellSize_[a];
+    int c = f >= 0.0f ? (f < static_cast<float>(res[a]) ? static_cast<int>(f) : res[a] - 1) : 0;
+    cell[a] = c;
+    index += c * stride[a];
+    if (d[a] > 0.0f) {
+      step[a] = 1;
+      stop[a] = res[a];
+      next[a] = 1;
+    } else if (d[a] < 0.0f) {
+      step[a] = -1;
+      stop[a] = -1;
+      next[a] = 0;
+    } else {
+      step[a] = 0;
+      stop[a] = -1;
+      next[a] = 0;
+    }
+    move[a] = step[a] * stride[a];
+    tNext[a] = step[a] == 0 ? std::numeric_limits<float>::infinity()
+                            : (lo[a] + static_cast<float>(c + next[a]) * cellSize_[a] - o[a]) *
+                                  invD[a];
+  }
+
+  const uint32_t* start = cellStart_.data();
+  const uint32_t* refs = refs_.data();
+  const PatchGeom* geom = geom_.data();
+  Ray r = ray;  // tMax shrinks to just past the best hit so far
+  uint32_t bestPatch = kNoPatch;
+  float bestT = 0.0f;
+  bool bestFront = false;
+  for (;;) {
+    for (uint32_t k = start[index], end = start[index + 1]; k < end; ++k) {
+      uint32_t p = refs[k];
+      float t;
+      bool front;
+      if (p == skip || !IntersectPatch(geom[p], r, &t, &front)) continue;
+      if (kAnyHit) return true;
+      // t <= bestT here; on a tie the lower index wins.
+      if (t < bestT || p < bestPatch) {
+        bestPatch = p;
+        bestT = t;
+        bestFront = front;
+        r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+      }
+    }
+    int axis = tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2) : (tNext[1] < tNext[2] ? 1 : 2);
+    float tExit = tNext[axis];
+    if (bestPatch != kNoPatch && bestT <= tExit) break;  // nothing beyond can be closer
+    if (tExit >= t1) break;                              // the ray ends in this cell
+    cell[axis] += step[axis];
+    if (cell[axis] == stop[axis]) break;
+    index += move[axis];
+    tNext[axis] =
+        (lo[axis] + static_cast<float>(cell[axis] + next[axis]) * cellSize_[axis] - o[axis]) *
+        invD[axis];
+  }
+  if (bestPatch == kNoPatch) return false;
+  hit->patch = bestPatch;
+  hit->t = bestT;
+  hit->front = bestFront;
+  return true;
+}
+
+bool Grid::Intersect(const Ray& ray, uint32_t skip, Hit* hit) const {
+  return Walk<false>(ray, skip, hit);
+}
+
+bool Grid::Occluded(const Ray& ray, uint32_t skip) const { return Walk<true>(ray, skip, nullptr); }
+
+}  // namespace vismask

@@ -1,0 +1,221 @@
+#include "vismask/mesh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+
+#include "vismask/check.h"
+
+namespace vismask {
+namespace {
+
+// A part of a polygon to subdivide: a convex quad into an m x n grid of quads,
+// or a triangle into n x n similar triangles (m unused).
+struct Piece {
+  uint32_t polygon;
+  int numCorners;
+  glm::dvec3 c[4];
+  double m, n;
+};
+
+std::string Num(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), x < 1e18 && x == std::floor(x) ? "%.0f" : "%.3g", x);
+  return buf;
+}
+
+// How many parts an edge of length `len` needs (double: it may be huge).
+double Divisions(double len, double patchSize) { return std::max(1.0, std::ceil(len / patchSize)); }
+
+double Cross2(glm::dvec2 a, glm::dvec2 b) { return a.x * b.y - a.y * b.x; }
+
+bool IsConvexQuad(const std::vector<glm::dvec3>& c, glm::dvec3 normal) {
+  if (c.size() != 4) return false;
+  for (size_t i = 0; i < 4; ++i) {
+    glm::dvec3 a = c[i] - c[(i + 3) % 4], b = c[(i + 1) % 4] - c[i];
+    if (glm::dot(glm::cross(a, b), normal) <= 0.0) return false;
+  }
+  return true;
+}
+
+// Ear-clipping triangulation of a simple polygon whose corners run counter-
+// clockwise about `normal`. False if it finds no ear (input the loader rejects).
+bool Triangulate(const std::vector<glm::dvec3>& c, glm::dvec3 normal,
+                 std::vector<std::array<size_t, 3>>* tris) {
+  // Project along the normal's dominant axis, keeping the winding CCW.
+  glm::dvec3 an = glm::abs(normal);
+  int axis = an.x > an.y ? (an.x > an.z ? 0 : 2) : (an.y > an.z ? 1 : 2);
+  double flip = normal[axis] < 0.0 ? -1.0 : 1.0;
+  std::vector<glm::dvec2> p;
+  for (const glm::dvec3& v : c) p.emplace_back(v[(axis + 1) % 3], flip * v[(axis + 2) % 3]);
+
+  std::vector<size_t> left(c.size());
+  std::iota(left.begin(), left.end(), size_t{0});
+  while (left.size() > 3) {
+    const size_t size = left.size();
+    size_t k = 0;
+    for (; k < size; ++k) {
+      size_t ia = left[(k + size - 1) % size], ib = left[k], ic = left[(k + 1) % size];
+      glm::dvec2 a = p[ia], b = p[ib], d = p[ic];
+      if (Cross2(b - a, d - b) <= 0.0) continue;  // reflex or flat corner
+      // An ear holds no other corner, not even on its border.
+      bool empty = true;
+      for (size_t q : left) {
+        if (q == ia || q == ib || q == ic) continue;
+        if (Cross2(b - a, p[q] - a) >= 0.0 && Cross2(d - b, p[q] - b) >= 0.0 &&
+            Cross2(a - d, p[q] - d) >= 0.0) {
+          empty = false;
+          break;
+        }
+      }
+      if (empty) break;
+    }
+    if (k == size) return false;
+    tris->push_back({left[(k + size - 1) % size], left[k], left[(k + 1) % size]});
+    left.erase(left.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  tris->push_back({left[0], left[1], left[2]});
+  return true;
+}
+
+// Appends the patch over lattice vertices v[0..k) of one polygon.
+void AddPatch(const Scene& scene, uint32_t polygon, const uint32_t* v, uint32_t k, Mesh* mesh) {
+  const Polygon& poly = scene.polygons[polygon];
+  const Material& mat = scene.materials[poly.material];
+  Patch p{};
+  for (uint32_t q = 0; q < 4; ++q) {
+    p.vertex[q] = v[std::min(q, k - 1)];
+    p.corner[q] = mesh->vertices[p.vertex[q]];
+  }
+  p.numCorners = k;
+  p.normal = poly.normal;
+  p.kd = mat.kd;
+  p.ke = mat.ke;
+  // Area projected on the normal: two triangles (the second is empty for k == 3).
+  glm::dvec3 n(poly.normal), a(p.corner[0]), b(p.corner[1]), c(p.corner[2]), d(p.corner[3]);
+  p.area = static_cast<float>(
+      0.5 * (glm::dot(n, glm::cross(b - a, c - a)) + glm::dot(n, glm::cross(c - a, d - a))));
+  p.surface = polygon;
+  p.globalId = static_cast<uint32_t>(mesh->patches.size());
+  mesh->patches.push_back(p);
+}
+
+// Appends an m x n grid over a convex quad: (m+1)(n+1) shared lattice points.
+void MeshQuad(const Scene& scene, const Piece& q, Mesh* mesh) {
+  const uint64_t m = static_cast<uint64_t>(q.m), n = static_cast<uint64_t>(q.n);
+  const uint64_t base = mesh->vertices.size();
+  for (uint64_t j = 0; j <= n; ++j) {
+    for (uint64_t i = 0; i <= m; ++i) {
+      double u = static_cast<double>(i) / q.m, v = static_cast<double>(j) / q.n;
+      glm::dvec3 x =
+          (1 - u) * (1 - v) * q.c[0] + u * (1 - v) * q.c[1] + u * v * q.c[2] + (1 - u) * v * q.c[3];
+      mesh->vertices.emplace_back(x);
+    }
+  }
+  auto at = [&](uint64_t i, uint64_t j) { return static_cast<uint32_t>(base + j * (m + 1) + i); };
+  for (uint64_t j = 0; j < n; ++j) {
+    for (uint64_t i = 0; i < m; ++i) {
+      uint32_t v[4] = {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)};
+      AddPatch(scene, q.polygon, v, 4, mesh);
+    }
+  }
+}
+
+// Appends n x n triangles similar to the piece over a triangular lattice of
+// (n+1)(n+2)/2 points; point (i, j) is c0 + (i(c1-c0) + j(c2-c0)) / n.
+void MeshTriangle(const Scene& scene, const Piece& t, Mesh* mesh) {
+  const uint64_t n = static_cast<uint64_t>(t.n);
+  const uint64_t base = mesh->vertices.size();
+  for (uint64_t j = 0; j <= n; ++j) {
+    for (uint64_t i = 0; i + j <= n; ++i) {
+      glm::dvec3 x = (static_cast<double>(n - i - j) * t.c[0] + static_cast<double>(i) * t.c[1] +
+                      static_cast<double>(j) * t.c[2]) /
+                     t.n;
+      mesh->vertices.emplace_back(x);
+    }
+  }
+  auto at = [&](uint64_t i, uint64_t j) {
+    return static_cast<uint32_t>(base + j * (n + 1) - j * (j - 1) / 2 + i);
+  };
+  for (uint64_t j = 0; j < n; ++j) {
+    for (uint64_t i = 0; i + j < n; ++i) {
+      uint32_t up[3] = {at(i, j), at(i + 1, j), at(i, j + 1)};
+      AddPatch(scene, t.polygon, up, 3, mesh);
+      if (i + j + 1 < n) {
+        uint32_t down[3] = {at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)};
+        AddPatch(scene, t.polygon, down, 3, mesh);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, float patchSize,
+                 uint64_t maxPatches, Mesh* mesh) {
+  if (!(std::isfinite(patchSize) && patchSize > 0.0f))
+    return Status::Error("patch size must be a positive finite number, got " + Num(patchSize));
+  const double s = patchSize;
+
+  // Plan every piece and count, so that nothing is appended on failure.
+  std::vector<Piece> pieces;
+  double numPatches = 0.0, numVertices = 0.0;
+  for (uint32_t index : polygons) {
+    CHECK(index < scene.polygons.size());
+    const Polygon& poly = scene.polygons[index];
+    std::vector<glm::dvec3> c;
+    for (const glm::vec3& v : poly.corners) c.emplace_back(v);
+    if (IsConvexQuad(c, glm::dvec3(poly.normal))) {
+      Piece q{index, 4, {c[0], c[1], c[2], c[3]}, 0.0, 0.0};
+      q.m = Divisions(std::max(glm::length(c[1] - c[0]), glm::length(c[2] - c[3])), s);
+      q.n = Divisions(std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1])), s);
+      numPatches += q.m * q.n;
+      numVertices += (q.m + 1) * (q.n + 1);
+      pieces.push_back(q);
+      continue;
+    }
+    std::vector<std::array<size_t, 3>> tris;
+    if (!Triangulate(c, glm::dvec3(poly.normal), &tris))
+      return Status::At(scene.objPath, poly.line, "cannot triangulate face");
+    for (const auto& tri : tris) {
+      Piece t{index, 3, {c[tri[0]], c[tri[1]], c[tri[2]], c[tri[2]]}, 0.0, 0.0};
+      double longest = std::max({glm::length(t.c[1] - t.c[0]), glm::length(t.c[2] - t.c[1]),
+                                 glm::length(t.c[0] - t.c[2])});
+      t.n = t.m = Divisions(longest, s);
+      numPatches += t.n * t.n;
+      numVertices += (t.n + 1) * (t.n + 2) / 2;
+      pieces.push_back(t);
+    }
+  }
+  if (numPatches > static_cast<double>(maxPatches))
+    return Status::Error("the mesh needs " + Num(numPatches) + " patches at patch size " + Num(s) +
+                         ", more than the limit of " + Num(static_cast<double>(maxPatches)));
+  // Patch and vertex ids are 32-bit (kNoPatch is reserved).
+  const double kMaxId = static_cast<double>(kNoPatch);
+  if (static_cast<double>(mesh->patches.size()) + numPatches >= kMaxId ||
+      static_cast<double>(mesh->vertices.size()) + numVertices >= kMaxId)
+    return Status::Error("the mesh needs " + Num(numPatches) + " patches and " + Num(numVertices) +
+                         " vertices at patch size " + Num(s) + ", more than 32-bit ids allow");
+
+  mesh->patches.reserve(mesh->patches.size() + static_cast<size_t>(numPatches));
+  mesh->vertices.reserve(mesh->vertices.size() + static_cast<size_t>(numVertices));
+  for (const Piece& piece : pieces) {
+    if (piece.numCorners == 4) {
+      MeshQuad(scene, piece, mesh);
+    } else {
+      MeshTriangle(scene, piece, mesh);
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace vismask

@@ -1,0 +1,166 @@
+// Unit tests of the building blocks: arena, FixedVec, MaxTree, RNG, sampling.
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "vismask/arena.h"
+#include "vismask/max_tree.h"
+#include "vismask/patch.h"
+#include "vismask/rng.h"
+#include "vismask/sampling.h"
+
+namespace vismask {
+namespace {
+
+TEST(ArenaTest, MeasuredLayoutFitsExactly) {
+  auto layout = [](Arena& a) {
+    a.Alloc<char>(3);
+    a.Alloc<double>(10);
+    a.Alloc<glm::vec3>(7);
+    a.AllocBytes(100, 64);
+  };
+  Arena measure = Arena::Measure();
+  layout(measure);
+  EXPECT_TRUE(measure.measuring());
+  Arena real(measure.used());
+  layout(real);
+  EXPECT_EQ(real.used(), measure.used());
+  EXPECT_LE(real.used(), real.capacity());
+  EXPECT_LT(real.capacity() - real.used(), Arena::kAlign);
+}
+
+TEST(ArenaTest, AllocationsAreAlignedZeroedAndDisjoint) {
+  Arena a(4096);
+  Span<uint8_t> s1 = a.Alloc<uint8_t>(5);
+  Span<double> s2 = a.Alloc<double>(4);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(s2.data()) % 16, 0u);
+  EXPECT_GE(reinterpret_cast<uint8_t*>(s2.data()), s1.data() + 5);
+  for (double d : s2) EXPECT_EQ(d, 0.0);
+}
+
+TEST(ArenaDeathTest, OverflowIsCaught) {
+  EXPECT_DEATH(
+      {
+        Arena a(64);
+        a.Alloc<char>(65);
+      },
+      "arena overflow");
+}
+
+TEST(FixedVecDeathTest, PushPastCapacityIsCaught) {
+  int storage[3];
+  FixedVec<int> v(Span<int>(storage, 3));
+  v.push_back(1);
+  v.push_back(2);
+  v.push_back(3);
+  EXPECT_TRUE(v.full());
+  EXPECT_DEATH(v.push_back(4), "capacity exceeded");
+}
+
+TEST(MaxTreeTest, AgreesWithLinearScan) {
+  for (uint32_t n : {1u, 2u, 3u, 7u, 64u, 1000u}) {
+    Arena measure = Arena::Measure();
+    MaxTree probe;
+    probe.Layout(measure, n);
+    Arena arena(measure.used());
+    MaxTree t;
+    t.Layout(arena, n);
+    t.Clear();
+    std::vector<double> keys(n, 0.0);
+    std::mt19937 rng(n);
+    for (int step = 0; step < 5000; ++step) {
+      uint32_t i = rng() % n;
+      double k = (rng() % 4 == 0) ? 0.0 : static_cast<double>(rng() % 50);  // many ties
+      keys[i] = k;
+      t.Set(i, k);
+      uint32_t best = 0;
+      for (uint32_t j = 1; j < n; ++j)
+        if (keys[j] > keys[best]) best = j;
+      ASSERT_EQ(t.Top(), best) << "n=" << n << " step=" << step;
+    }
+  }
+}
+
+TEST(RngTest, StreamsAreReproducibleAndDistinct) {
+  Rng a = ShotRng(ShotKey(1, 5, 0)), b = ShotRng(ShotKey(1, 5, 0)), c = ShotRng(ShotKey(1, 5, 1));
+  int same = 0;
+  for (int i = 0; i < 100; ++i) {
+    uint32_t x = a.NextU32();
+    EXPECT_EQ(x, b.NextU32());
+    same += x == c.NextU32();
+  }
+  EXPECT_LT(same, 3);
+  double sum = 0.0;
+  Rng d(42, 7);
+  for (int i = 0; i < 100000; ++i) {
+    float u = d.NextFloat();
+    ASSERT_GE(u, 0.0f);
+    ASSERT_LT(u, 1.0f);
+    sum += u;
+  }
+  EXPECT_NEAR(sum / 100000, 0.5, 0.005);
+}
+
+Patch MakeQuad(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d) {
+  Patch p{};
+  p.corner[0] = a, p.corner[1] = b, p.corner[2] = c, p.corner[3] = d;
+  p.numCorners = 4;
+  p.normal = glm::normalize(glm::cross(b - a, c - a));
+  p.area = 0.5f * (glm::length(glm::cross(b - a, c - a)) + glm::length(glm::cross(c - a, d - a)));
+  return p;
+}
+
+TEST(SamplingTest, PointsAreUniformOnATrapezoid) {
+  // Trapezoid with bases 4 (y = 0) and 2 (y = 1): the area below y = 0.5 is
+  // (4 + 3) / 2 * 0.5 = 1.75 of 3.
+  Patch p = MakeQuad({0, 0, 0}, {4, 0, 0}, {3, 1, 0}, {1, 1, 0});
+  PatchSampler s = MakePatchSampler(p);
+  PatchGeom g = MakePatchGeom(p);
+  Rng rng(3, 3);
+  int below = 0, n = 200000;
+  for (int i = 0; i < n; ++i) {
+    glm::vec3 x = s.Point(rng.NextFloat(), rng.NextFloat(), rng.NextFloat());
+    ASSERT_NEAR(x.z, 0.0f, 1e-6f);
+    for (int e = 0; e < 4; ++e) ASSERT_GE(glm::dot(glm::vec3(g.edge[e]), x), g.edge[e].w);
+    below += x.y < 0.5f;
+  }
+  EXPECT_NEAR(static_cast<double>(below) / n, 1.75 / 3.0, 0.005);
+}
+
+TEST(SamplingTest, DirectionsAreCosineDistributed) {
+  // E[cos theta] = 2/3 and E[cos^2 theta] = 1/2 under pdf cos(theta)/pi.
+  Rng rng(9, 1);
+  double m1 = 0, m2 = 0, mx = 0;
+  int n = 200000;
+  for (int i = 0; i < n; ++i) {
+    glm::vec3 d = CosineDirection(rng.NextFloat(), rng.NextFloat());
+    ASSERT_NEAR(glm::length(d), 1.0f, 1e-5f);
+    ASSERT_GE(d.z, 0.0f);
+    m1 += d.z;
+    m2 += d.z * d.z;
+    mx += d.x;
+  }
+  EXPECT_NEAR(m1 / n, 2.0 / 3.0, 0.003);
+  EXPECT_NEAR(m2 / n, 0.5, 0.003);
+  EXPECT_NEAR(mx / n, 0.0, 0.005);
+}
+
+TEST(PatchTest, SharedEdgeLeavesNoCrack) {
+  // Two quads sharing the edge x = 1; rays aimed exactly at the edge hit one.
+  Patch a = MakeQuad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});
+  Patch b = MakeQuad({1, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0});
+  PatchGeom ga = MakePatchGeom(a), gb = MakePatchGeom(b);
+  for (int i = 0; i <= 100; ++i) {
+    Ray ray{{1.0f, i / 100.0f, 1.0f}, {0.0f, 0.0f, -1.0f}, 0.0f, 10.0f};
+    float t;
+    bool front;
+    bool hit = IntersectPatch(ga, ray, &t, &front) || IntersectPatch(gb, ray, &t, &front);
+    EXPECT_TRUE(hit) << i;
+  }
+}
+
+}  // namespace
+}  // namespace vismask

@@ -1,0 +1,356 @@
+#include "vismask/scene.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <glm/geometric.hpp>
+
+namespace vismask {
+namespace {
+
+// A good MTL (one emitter) and an OBJ header using it: 6 lines, so the first
+// statement of a test's body is line 7.
+const char kMtl[] = "newmtl white\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
+const char kHead[] = "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+
+// Each test gets its own directory for the files it writes.
+class SceneTest : public testing::Test {
+ protected:
+  void SetUp() override {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "vismask_scene_XXXXXX").string();
+    ASSERT_NE(mkdtemp(tmpl.data()), nullptr);
+    dir_ = tmpl + "/";
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  std::string Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ + name, std::ios::binary) << text;
+    return dir_ + name;
+  }
+  // Loads kHead + `body` with kMtl as m.mtl.
+  Status LoadBody(const std::string& body, Scene* scene) {
+    Write("m.mtl", kMtl);
+    return LoadScene(Write("s.obj", kHead + body), scene);
+  }
+  std::string obj() const { return dir_ + "s.obj"; }
+  std::string mtl() const { return dir_ + "m.mtl"; }
+
+  std::string dir_;
+};
+
+void ExpectError(const Status& s, const std::string& file, int line, const std::string& word) {
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.file(), file);
+  EXPECT_EQ(s.line(), line);
+  EXPECT_NE(s.message().find(word), std::string::npos) << s.ToString();
+}
+
+TEST_F(SceneTest, LoadsCornellBox) {
+  Scene scene;
+  Status s = LoadScene("scenes/cornell.obj", &scene);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_EQ(scene.objPath, "scenes/cornell.obj");
+  // 16 surfaces; the non-planar left wall is two triangles.
+  ASSERT_EQ(scene.polygons.size(), 17u);
+  ASSERT_EQ(scene.materials.size(), 5u);
+  // In file order; only the light emits.
+  const char* names[] = {"white", "red", "green", "yellow", "light"};
+  const glm::vec3 kd[] = {{0.725f, 0.71f, 0.68f},
+                          {0.63f, 0.065f, 0.05f},
+                          {0.14f, 0.45f, 0.091f},
+                          {0.75f, 0.65f, 0.15f},
+                          {0.78f, 0.78f, 0.78f}};
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_EQ(scene.materials[i].name, names[i]);
+    EXPECT_EQ(scene.materials[i].kd, kd[i]);
+    EXPECT_EQ(scene.materials[i].ke, i == 4 ? glm::vec3(17.0f, 12.0f, 4.0f) : glm::vec3(0.0f));
+  }
+  EXPECT_EQ(scene.materials[scene.polygons[6].material].name, "light");
+  EXPECT_EQ(scene.materials[scene.polygons[16].material].name, "yellow");
+  EXPECT_EQ(scene.bounds.lo, glm::vec3(0.0f));
+  EXPECT_EQ(scene.bounds.hi, glm::vec3(556.0f, 548.8f, 559.2f));
+  EXPECT_NEAR(scene.polygons[0].area, 308231.04, 0.1);       // floor
+  EXPECT_NEAR(scene.polygons[6].area, 130.0 * 105.0, 1e-3);  // light
+}
+
+TEST_F(SceneTest, CornellNormalsFaceTheInterior) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene("scenes/cornell.obj", &scene).ok());
+  auto normal = [&](size_t i) { return scene.polygons[i].normal; };
+  auto centroid = [&](size_t i) {
+    glm::vec3 c(0.0f);
+    for (const glm::vec3& v : scene.polygons[i].corners) c += v;
+    return c / static_cast<float>(scene.polygons[i].corners.size());
+  };
+  const float eps = 1e-6f;
+  EXPECT_LT(glm::length(normal(0) - glm::vec3(0, 1, 0)), eps);   // floor
+  EXPECT_LT(glm::length(normal(1) - glm::vec3(0, -1, 0)), eps);  // ceiling
+  EXPECT_LT(glm::length(normal(2) - glm::vec3(0, 0, -1)), eps);  // back wall
+  EXPECT_LT(glm::length(normal(3) - glm::vec3(1, 0, 0)), eps);   // right wall (x = 0)
+  EXPECT_LT(normal(4).x, -0.99f);                                // left wall, 2 triangles
+  EXPECT_LT(normal(5).x, -0.99f);
+  EXPECT_LT(glm::length(normal(6) - glm::vec3(0, -1, 0)), eps);  // light
+  EXPECT_LT(glm::length(normal(7) - glm::vec3(0, 1, 0)), eps);   // short block top
+  EXPECT_LT(glm::length(normal(12) - glm::vec3(0, 1, 0)), eps);  // tall block top
+  // Room surfaces face the box's centre; block sides face away from the block.
+  const glm::vec3 room(278.0f, 274.0f, 280.0f);
+  for (size_t i = 0; i <= 6; ++i) EXPECT_GT(glm::dot(normal(i), room - centroid(i)), 0.0f) << i;
+  for (size_t top : {7u, 12u}) {
+    for (size_t i = top + 1; i <= top + 4; ++i) {
+      glm::vec3 out = centroid(i) - centroid(top);
+      out.y = 0.0f;
+      EXPECT_NEAR(normal(i).y, 0.0f, eps) << i;
+      EXPECT_GT(glm::dot(normal(i), out), 0.0f) << i;
+    }
+  }
+  for (const Polygon& p : scene.polygons) EXPECT_NEAR(glm::length(p.normal), 1.0f, 1e-6f);
+}
+
+TEST_F(SceneTest, NegativeIndicesAndCornerForms) {
+  Scene scene;
+  Status s = LoadBody("vt 0 0\nvn 0 0 1\nf -4/1/1 -3//1 -2/1 -1\n", &scene);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_EQ(scene.polygons.size(), 1u);
+  const Polygon& p = scene.polygons[0];
+  ASSERT_EQ(p.corners.size(), 4u);
+  EXPECT_EQ(p.corners[0], glm::vec3(0, 0, 0));
+  EXPECT_EQ(p.corners[3], glm::vec3(0, 1, 0));
+  EXPECT_EQ(p.normal, glm::vec3(0, 0, 1));
+  EXPECT_DOUBLE_EQ(p.area, 1.0);
+  EXPECT_EQ(p.line, 9);
+}
+
+TEST_F(SceneTest, CrlfCommentsAndTrailingWhitespace) {
+  Write("m.mtl", "# materials\r\nnewmtl light \r\nKd 0.5 0.5 0.5\t\r\nKe 1 1 1\r\n");
+  std::string path = Write("s.obj",
+                           "# a square\r\n\r\nmtllib m.mtl\r\no square  \r\ng sq\r\ns off\r\n"
+                           "usemtl light\r\nv 0 0 0 1\r\nv 2 0 0\r\nv 2 2 0  # corner\r\n"
+                           "  v 0 2 0\t\r\nf 1 2 3 4 \r\n");
+  Scene scene;
+  Status s = LoadScene(path, &scene);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_EQ(scene.polygons.size(), 1u);
+  EXPECT_EQ(scene.materials[0].name, "light");
+  EXPECT_EQ(scene.polygons[0].line, 12);
+  EXPECT_DOUBLE_EQ(scene.polygons[0].area, 4.0);
+  EXPECT_EQ(scene.bounds.hi, glm::vec3(2, 2, 0));
+}
+
+TEST_F(SceneTest, PentagonNormalAndArea) {
+  Scene scene;
+  // A notched pentagon in the plane x = 1, counter-clockwise about -x.
+  Status s = LoadBody("v 1 0 0\nv 1 0 4\nv 1 1 2\nv 1 4 4\nv 1 4 0\nf -5 -4 -3 -2 -1\n", &scene);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_EQ(scene.polygons[0].normal, glm::vec3(-1, 0, 0));
+  EXPECT_DOUBLE_EQ(scene.polygons[0].area, 12.0);
+}
+
+TEST_F(SceneTest, SeveralMtlFilesRelativeToTheObj) {
+  std::filesystem::create_directory(dir_ + "sub");
+  Write("sub/a.mtl", "newmtl a\nKd 0.1 0.2 0.3\n");
+  Write("sub/b.mtl", "newmtl b\nKe 1 0 0\n");
+  std::string path = Write("sub/s.obj",
+                           "mtllib a.mtl b.mtl\nmtllib a.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                           "usemtl a\nf 1 2 3\nusemtl b\nf 1 2 3\n");
+  Scene scene;
+  Status s = LoadScene(path, &scene);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_EQ(scene.materials.size(), 2u);
+  EXPECT_EQ(scene.materials[scene.polygons[0].material].name, "a");
+  EXPECT_EQ(scene.materials[scene.polygons[1].material].name, "b");
+  EXPECT_EQ(scene.materials[0].kd, glm::vec3(0.1f, 0.2f, 0.3f));
+}
+
+TEST_F(SceneTest, UnknownMtlKeysWarnOncePerKey) {
+  Write("m.mtl", "newmtl light\nNs 10\nKd 0.5 0.5 0.5\nNs 20\nillum 2\nKe 1 1 1\n");
+  Scene scene;
+  testing::internal::CaptureStderr();
+  Status s = LoadScene(Write("s.obj", kHead + std::string("f 1 2 3\n")), &scene);
+  std::string err = testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_EQ(err, mtl() + ":2: warning: ignoring MTL key 'Ns'\n" + mtl() +
+                     ":5: warning: ignoring MTL key 'illum'\n");
+}
+
+TEST_F(SceneTest, ErrorLeavesSceneUntouched) {
+  Scene scene;
+  scene.objPath = "before";
+  EXPECT_FALSE(LoadBody("f 1 2 9\n", &scene).ok());
+  EXPECT_EQ(scene.objPath, "before");
+  EXPECT_TRUE(scene.polygons.empty());
+}
+
+// Malformed input: each names its file and line.
+
+TEST_F(SceneTest, MissingObj) {
+  Scene scene;
+  ExpectError(LoadScene(dir_ + "none.obj", &scene), dir_ + "none.obj", 0, "cannot open");
+}
+
+TEST_F(SceneTest, UnreadableObj) {
+  Scene scene;
+  ExpectError(LoadScene(dir_, &scene), dir_, 0, "cannot read");  // a directory
+}
+
+TEST_F(SceneTest, MissingMtl) {
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", "v 0 0 0\nmtllib none.mtl\n"), &scene), obj(), 2,
+              "none.mtl");
+}
+
+TEST_F(SceneTest, BadNumber) {
+  Scene scene;
+  ExpectError(LoadBody("v 1 abc 0\n", &scene), obj(), 7, "bad number 'abc'");
+}
+
+TEST_F(SceneTest, PartlyParsedNumber) {
+  Scene scene;
+  ExpectError(LoadBody("v 1 2 3.5x\n", &scene), obj(), 7, "bad number '3.5x'");
+}
+
+TEST_F(SceneTest, NanNumber) {
+  Scene scene;
+  ExpectError(LoadBody("v nan 0 0\n", &scene), obj(), 7, "not finite");
+}
+
+TEST_F(SceneTest, InfiniteNumber) {
+  Scene scene;
+  ExpectError(LoadBody("v 0 0 -inf\n", &scene), obj(), 7, "not finite");
+}
+
+TEST_F(SceneTest, NumberBeyondFloat) {
+  Scene scene;
+  ExpectError(LoadBody("v 0 1e39 0\n", &scene), obj(), 7, "too large");
+}
+
+TEST_F(SceneTest, VertexArgumentCount) {
+  Scene scene;
+  ExpectError(LoadBody("v 1 2\n", &scene), obj(), 7, "needs 3 or 4");
+}
+
+TEST_F(SceneTest, IndexZero) {
+  Scene scene;
+  ExpectError(LoadBody("f 0 1 2\n", &scene), obj(), 7, "index 0");
+}
+
+TEST_F(SceneTest, IndexOutOfRange) {
+  Scene scene;
+  ExpectError(LoadBody("f 1 2 5\n", &scene), obj(), 7, "out of range");
+}
+
+TEST_F(SceneTest, NegativeIndexOutOfRange) {
+  Scene scene;
+  ExpectError(LoadBody("f -1 -2 -5\n", &scene), obj(), 7, "out of range");
+}
+
+TEST_F(SceneTest, BadFaceVertex) {
+  Scene scene;
+  ExpectError(LoadBody("f 1 2 3/1/1/1\n", &scene), obj(), 7, "bad face vertex");
+  ExpectError(LoadBody("f 1.5 2 3\n", &scene), obj(), 7, "bad face vertex");
+}
+
+TEST_F(SceneTest, FaceWithTwoVertices) {
+  Scene scene;
+  ExpectError(LoadBody("f 1 2\n", &scene), obj(), 7, "3 or more");
+}
+
+TEST_F(SceneTest, RepeatedVertex) {
+  Scene scene;
+  ExpectError(LoadBody("f 1 2 2 3\n", &scene), obj(), 7, "coincide");
+}
+
+TEST_F(SceneTest, CollinearVertices) {
+  Scene scene;
+  ExpectError(LoadBody("v 2 0 0\nf 1 2 5\n", &scene), obj(), 8, "collinear");
+}
+
+TEST_F(SceneTest, ZeroArea) {
+  Scene scene;
+  ExpectError(LoadBody("f 1 3 2 4\n", &scene), obj(), 7, "zero area");  // a symmetric bow tie
+}
+
+TEST_F(SceneTest, SelfIntersecting) {
+  Scene scene;
+  ExpectError(LoadBody("v 2 2 0\nf 1 2 4 5\n", &scene), obj(), 8, "self-intersecting");
+}
+
+TEST_F(SceneTest, NonPlanar) {
+  Scene scene;
+  ExpectError(LoadBody("v 0 1 0.01\nf 1 2 3 5\n", &scene), obj(), 8, "non-planar");
+}
+
+TEST_F(SceneTest, UndefinedMaterial) {
+  Scene scene;
+  ExpectError(LoadBody("usemtl nope\n", &scene), obj(), 7, "undefined material 'nope'");
+}
+
+TEST_F(SceneTest, FaceBeforeUsemtl) {
+  Write("m.mtl", kMtl);
+  Scene scene;
+  ExpectError(
+      LoadScene(Write("s.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), &scene),
+      obj(), 5, "usemtl");
+}
+
+TEST_F(SceneTest, UnknownStatement) {
+  Scene scene;
+  ExpectError(LoadBody("vp 0.5 0.5\n", &scene), obj(), 7, "unknown statement 'vp'");
+}
+
+TEST_F(SceneTest, LinesNotSupported) {
+  Scene scene;
+  ExpectError(LoadBody("l 1 2\n", &scene), obj(), 7, "not supported");
+}
+
+TEST_F(SceneTest, KdOutOfRange) {
+  Write("m.mtl", "newmtl light\nKd 0.5 1 0.5\nKe 1 1 1\n");
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead), &scene), mtl(), 2, "Kd must be in [0, 1)");
+}
+
+TEST_F(SceneTest, KdNegative) {
+  Write("m.mtl", "newmtl light\nKe 1 1 1\nKd 0.5 -0.1 0.5\n");
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead), &scene), mtl(), 3, "Kd must be in [0, 1)");
+}
+
+TEST_F(SceneTest, KdArgumentCount) {
+  Write("m.mtl", "newmtl light\nKd 0.5\n");
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead), &scene), mtl(), 2, "needs 3");
+}
+
+TEST_F(SceneTest, KdBeforeNewmtl) {
+  Write("m.mtl", "Kd 0.5 0.5 0.5\nnewmtl light\n");
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead), &scene), mtl(), 1, "newmtl");
+}
+
+TEST_F(SceneTest, KeNegative) {
+  Write("m.mtl", "newmtl light\n\nKe 1 -1 1\n");
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead), &scene), mtl(), 3, "Ke must be >= 0");
+}
+
+TEST_F(SceneTest, KeNotFinite) {
+  Write("m.mtl", "newmtl light\nKe 1 inf 1\n");
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead), &scene), mtl(), 2, "not finite");
+}
+
+TEST_F(SceneTest, DuplicateMaterial) {
+  Write("m.mtl", "newmtl light\nKe 1 1 1\nnewmtl light\n");
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead), &scene), mtl(), 3, "duplicate material 'light'");
+}
+
+TEST_F(SceneTest, NoEmitter) {
+  Scene scene;
+  ExpectError(LoadBody("usemtl white\nf 1 2 3\n", &scene), obj(), 0, "emitter");
+}
+
+}  // namespace
+}  // namespace vismask

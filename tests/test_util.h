@@ -1,0 +1,35 @@
+// Helpers shared by the tests: temporary directories, files, and running the
+// vismask command line in-process.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace vismask::test {
+
+// A fresh empty directory under /tmp, removed (with its contents) on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::string& path() const { return path_; }
+  std::string File(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+std::string ReadFile(const std::string& path);
+void WriteFile(const std::string& path, const std::string& text);
+bool FileExists(const std::string& path);
+
+struct RunResult {
+  int code = -1;
+  std::string err;  // what was written to stderr
+};
+// Runs vismask::Main with `args` (without the program name), capturing stderr.
+RunResult RunMain(const std::vector<std::string>& args);
+
+// Rows of a CSV file (header included), split on commas.
+std::vector<std::vector<std::string>> ReadCsv(const std::string& path);
+
+}  // namespace vismask::test
