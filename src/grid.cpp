@@ -20,10 +20,10 @@ namespace {
 constexpr float kEdgeRel = 8.0f * std::numeric_limits<float>::epsilon();
 constexpr float kPadRel = 4e-5f;
 constexpr float kFarRel = 8.0f;
-constexpr int kMaxRes = 1024;          // cells per axis
-constexpr double kBoundsRel = 1e-3;    // grid margin, relative to the largest extent
-constexpr double kClipRel = 1e4;       // half-size of the clip square, in patch sizes
-constexpr int kMaxPolyVerts = 8;       // a square clipped by four half-planes
+constexpr int kMaxRes = 1024;        // cells per axis
+constexpr double kBoundsRel = 1e-3;  // grid margin, relative to the largest extent
+constexpr double kClipRel = 1e4;     // half-size of the clip square, in patch sizes
+constexpr int kMaxPolyVerts = 8;     // a square clipped by four half-planes
 constexpr int kMaxAxes = 1 + 4 * kMaxPolyVerts + 3;
 
 // Padding and far limit, from the corners' extent and distance from the origin.
@@ -107,8 +107,8 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s)
   centre /= static_cast<double>(nc);
   double ca = glm::dot(u, centre - p0), cb = glm::dot(v, centre - p0);
   double r = kClipRel * (size + pad);
-  double poly[2][kMaxPolyVerts + 1][2] = {{{ca - r, cb - r}, {ca + r, cb - r}, {ca + r, cb + r},
-                                           {ca - r, cb + r}}};
+  double poly[2][kMaxPolyVerts + 1][2] = {
+      {{ca - r, cb - r}, {ca + r, cb - r}, {ca + r, cb + r}, {ca - r, cb + r}}};
   int count = 4, cur = 0;
   for (int i = 0; i < 4; ++i) {
     const glm::vec4& e = g.edge[i];
@@ -139,7 +139,13 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s)
     count = outCount;
     cur ^= 1;
   }
+  // Empty, or still reaching the clip square: a degenerate patch (collinear
+  // corners give an unbounded strip). Its corner box keeps the grid sane.
   if (count < 3) return CornerShape(p, pad, s);
+  for (int k = 0; k < count; ++k) {
+    if (std::fabs(poly[cur][k][0] - ca) > 0.5 * r || std::fabs(poly[cur][k][1] - cb) > 0.5 * r)
+      return CornerShape(p, pad, s);
+  }
 
   // Prism corners: the polygon shifted by +-pad along the normal.
   glm::dvec3 verts[2 * kMaxPolyVerts];
@@ -367,6 +373,7 @@ bool Grid::TestAll(const Ray& ray, uint32_t skip, Hit* hit) const {
 
 template <bool kAnyHit>
 bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
+  DCHECK(cellStart_.data() != nullptr);  // built
   if (!(ray.tMin < ray.tMax)) return false;
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
@@ -423,9 +430,9 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
       next[a] = 0;
     }
     move[a] = step[a] * stride[a];
-    tNext[a] = step[a] == 0 ? std::numeric_limits<float>::infinity()
-                            : (lo[a] + static_cast<float>(c + next[a]) * cellSize_[a] - o[a]) *
-                                  invD[a];
+    tNext[a] = step[a] == 0
+                   ? std::numeric_limits<float>::infinity()
+                   : (lo[a] + static_cast<float>(c + next[a]) * cellSize_[a] - o[a]) * invD[a];
   }
 
   const uint32_t* start = cellStart_.data();
@@ -472,6 +479,8 @@ bool Grid::Intersect(const Ray& ray, uint32_t skip, Hit* hit) const {
   return Walk<false>(ray, skip, hit);
 }
 
-bool Grid::Occluded(const Ray& ray, uint32_t skip) const { return Walk<true>(ray, skip, nullptr); }
+bool Grid::Occluded(const Ray& ray, uint32_t skip) const {
+  return Walk<true>(ray, skip, nullptr);
+}
 
 }  // namespace vismask

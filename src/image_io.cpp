@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 
 #include "vismask/check.h"
 
@@ -143,6 +145,38 @@ bool WritePfm(os::OutFile* file, int width, int height, Span<const glm::vec3> co
   for (int y = height - 1; y >= 0 && ok; --y)
     ok = file->Write(color.data() + size_t(y) * size_t(width), size_t(width) * sizeof(glm::vec3));
   return ok;
+}
+
+Status ReadPfm(const std::string& path, PfmImage* image) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::At(path, 0, "cannot open");
+  std::string magic;
+  int w = 0, h = 0;
+  double scale = 0.0;
+  in >> magic >> w >> h >> scale;
+  if (!in || magic != "PF" || w <= 0 || h <= 0 || scale == 0.0 || !std::isfinite(scale))
+    return Status::At(path, 0, "not a colour PFM (expected 'PF', width, height, scale)");
+  in.get();  // the single whitespace byte after the scale
+  size_t n = size_t(w) * size_t(h) * 3;
+  std::vector<float> data(n);
+  in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(n * sizeof(float)));
+  if (static_cast<size_t>(in.gcount()) != n * sizeof(float))
+    return Status::At(path, 0, "truncated PFM: expected " + std::to_string(n * sizeof(float)) +
+                                   " bytes of pixels");
+  if (scale > 0.0) {  // big-endian file
+    for (float& f : data) {
+      uint32_t u;
+      std::memcpy(&u, &f, 4);
+      u = __builtin_bswap32(u);
+      std::memcpy(&f, &u, 4);
+    }
+  }
+  image->width = w;
+  image->height = h;
+  image->pixels.assign(n, 0.0f);
+  for (int y = 0; y < h; ++y)  // PFM rows run bottom to top
+    std::memcpy(&image->pixels[size_t(h - 1 - y) * w * 3], &data[size_t(y) * w * 3], size_t(w) * 3 * 4);
+  return Status::Ok();
 }
 
 namespace {

@@ -42,4 +42,19 @@ void MaxTree::Set(uint32_t i, double key) {
   for (v >>= 1; v >= 1; v >>= 1) node_[v] = Winner(node_[2 * v], node_[2 * v + 1]);
 }
 
+void MaxTree::Increase(uint32_t i, double key) {
+  DCHECK(i < n_ && key >= key_[i]);
+  key_[i] = key;
+  // Each node holds its subtree's winner; a larger key for i can only make
+  // i the winner on some prefix of its path to the root, so stop at the
+  // first node that i does not win.
+  for (uint32_t v = (leaves_ + i) >> 1; v >= 1; v >>= 1) {
+    uint32_t w = node_[v];
+    if (w != i) {
+      if (Winner(w, i) != i) return;
+      node_[v] = i;
+    }
+  }
+}
+
 }  // namespace vismask

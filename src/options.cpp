@@ -6,6 +6,8 @@
 #include <cstring>
 #include <vector>
 
+#include "vismask/partition.h"
+
 namespace vismask {
 
 const char* HelpText() {
@@ -13,6 +15,8 @@ const char* HelpText() {
 
 usage:
   vismask render SCENE.obj [options]     solve and render a scene
+  vismask compare A.pfm B.pfm            relative RMSE and max abs error of A
+                                         against B
   vismask --help                         this text
 
 render options:
@@ -32,6 +36,23 @@ render options:
                        frame the scene's bounding box from -z, looking +z)
   --exposure E         linear exposure for image.png (default: automatic)
   --quiet              no progress line on stderr
+
+local environments and visibility masks:
+  --envs NX[xNY[xNZ]]  split the scene's box into a grid of environments
+                       (default 1); each owns only its own patches and grid
+  --mask-method M      none | A | B (default B): how a shooter's visibility
+                       mask is filled. A: from the form-factor rays that hit
+                       (cheap, leaks light where no ray hit); B: one ray from
+                       the shooter's centre per open pixel (exact at its
+                       resolution); none: no mask (light passes occluders)
+  --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
+                       1 <= R <= 4096 (default 50)
+  --round-shots K      shots per environment per round (default 1)
+  --queue Q            foreign shooters an environment holds at once
+                       (default 64); a full queue holds back new ones
+  --env-order I,J,...  run the environments in this order within each round
+                       (a permutation of 0..N-1); a check of determinism:
+                       the results must not change
 
 outputs (in --out DIR):
   image.png         tone-mapped sRGB image
@@ -81,6 +102,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   size_t i = 0;
   if (args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
     o->help = true;
+    return Status::Ok();
+  }
+  if (args[0] == "compare") {
+    if (args.size() != 3) return Status::Error("vismask: compare: usage: vismask compare A.pfm B.pfm");
+    o->command = "compare";
+    o->compareA = args[1];
+    o->compareB = args[2];
     return Status::Ok();
   }
   if (args[0] != "render")
@@ -152,11 +180,46 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       View view;
       if (!MakeView(o->camera, 1, 1, &view))
         return Bad(a, v, "eye != target, up not parallel to the view direction, 0 < fovy < 180");
+    } else if (a == "--envs") {
+      if (!ParseEnvGrid(v.c_str(), o->envs)) return Bad(a, v, "NX[xNY[xNZ]], each 1..64");
+    } else if (a == "--mask-method") {
+      if (v == "none") o->maskMethod = MaskMethod::kNone;
+      else if (v == "A") o->maskMethod = MaskMethod::kA;
+      else if (v == "B") o->maskMethod = MaskMethod::kB;
+      else return Bad(a, v, "none, A or B");
+    } else if (a == "--mask-res") {
+      if (!ParseU64(v, &u) || u < 1 || u > 4096) return Bad(a, v, "an integer in [1, 4096]");
+      o->maskRes = static_cast<uint32_t>(u);
+    } else if (a == "--round-shots") {
+      if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
+      o->roundShots = static_cast<uint32_t>(u);
+    } else if (a == "--env-order") {
+      o->envOrder.clear();
+      std::string part;
+      for (size_t k = 0; k <= v.size(); ++k) {
+        if (k < v.size() && v[k] != ',') {
+          part += v[k];
+          continue;
+        }
+        if (!ParseU64(part, &u) || u > 1000000) return Bad(a, v, "a comma-separated permutation");
+        o->envOrder.push_back(static_cast<uint32_t>(u));
+        part.clear();
+      }
+    } else if (a == "--queue") {
+      if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
+      o->queue = static_cast<uint32_t>(u);
     } else {
       return Status::Error("vismask: unknown option '" + a + "' (try 'vismask --help')");
     }
   }
   if (o->scene.empty()) return Status::Error("vismask: render: no scene given (vismask render SCENE.obj)");
+  if (!o->envOrder.empty()) {
+    size_t n = size_t(o->envs[0]) * o->envs[1] * o->envs[2];
+    std::vector<bool> seen(n, false);
+    bool ok = o->envOrder.size() == n;
+    for (uint32_t e : o->envOrder) ok = ok && e < n && !seen[e] && (seen[e] = true);
+    if (!ok) return Status::Error("vismask: --env-order: expected a permutation of 0.." + std::to_string(n - 1));
+  }
   return Status::Ok();
 }
 

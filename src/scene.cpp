@@ -17,6 +17,8 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "geometry_util.h"
+
 namespace vismask {
 namespace {
 
@@ -161,8 +163,7 @@ std::string FinishPolygon(Polygon* p) {
       return "degenerate face: vertex " + Str(i + 1) + " is collinear with its neighbours";
   }
   // Newell's method, about corner 0 for precision.
-  glm::dvec3 sum(0.0);
-  for (size_t i = 1; i + 1 < n; ++i) sum += glm::cross(c[i] - c[0], c[i + 1] - c[0]);
+  glm::dvec3 sum = NewellSum(c);
   double twiceArea = glm::length(sum);
   if (twiceArea / 2 <= kAreaTol * size * size) return "degenerate face: zero area";
   glm::dvec3 normal = sum / twiceArea;

@@ -3,7 +3,6 @@
 #include <cstdio>
 
 #include "vismask/os.h"
-#include "vismask/rng.h"
 
 namespace vismask {
 
@@ -16,19 +15,61 @@ const char* StopReasonName(StopReason r) {
   return "?";
 }
 
+uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
+                         uint64_t maxOutstanding) {
+  if (numEnvs <= 1) return 0;
+  // Every record created now may land in every other environment's queue,
+  // so the total admitted across environments is what the fullest can take.
+  uint64_t admit = capacity > maxOutstanding ? capacity - maxOutstanding : 0;
+  uint64_t base = admit / numEnvs, extra = admit % numEnvs;
+  uint64_t turn = (env + numEnvs - round % numEnvs) % numEnvs;  // rotate the remainder
+  uint64_t mine = base + (turn < extra ? 1 : 0);
+  return mine > 0xffffffffu ? 0xffffffffu : static_cast<uint32_t>(mine);
+}
+
+uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
+                    uint64_t maxShots) {
+  (void)numEnvs;
+  if (maxShots == 0) return roundShots;
+  uint64_t remaining = maxShots > shotsSoFar ? maxShots - shotsSoFar : 0;
+  uint64_t before = uint64_t(env) * roundShots;  // environments earlier in order go first
+  if (remaining <= before) return 0;
+  uint64_t left = remaining - before;
+  return static_cast<uint32_t>(left < roundShots ? left : roundShots);
+}
+
 namespace {
 
 double Sum3(const double v[3]) { return v[0] + v[1] + v[2]; }
 
-// Unshot and emitted power over all environments, in environment order (the
-// same order whatever the grouping onto ranks).
-void Totals(Span<Environment* const> envs, double* unshot, double* emitted) {
-  *unshot = 0.0;
-  *emitted = 0.0;
+RoundTotals Totals(Span<Environment* const> envs) {
+  RoundTotals t;
   for (Environment* e : envs) {
-    *unshot += Sum3(e->ledger().unshot);
-    *emitted += Sum3(e->ledger().emitted);
+    t.unshot += Sum3(e->ledger().unshot) + e->QueuedPower();
+    t.emitted += Sum3(e->ledger().emitted);
+    t.shots += e->stats().shots + e->stats().foreignShots;
+    t.recordsCreated += e->stats().recordsCreated;
   }
+  for (Environment* e : envs) {
+    uint64_t fromOthers = t.recordsCreated - e->stats().recordsCreated;
+    uint64_t outstanding = fromOthers - e->stats().foreignShots;
+    if (outstanding > t.maxOutstanding) t.maxOutstanding = outstanding;
+  }
+  return t;
+}
+
+// Delivers every outbox packet to its receiver: receivers in order, and for
+// each, senders in order and packets in the order they were sent.
+void Exchange(Span<Environment* const> envs) {
+  for (Environment* dest : envs) {
+    for (Environment* src : envs) {
+      for (uint32_t k = 0; k < src->outboxCount(); ++k) {
+        const uint8_t* packet = src->OutboxPacket(k);
+        if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
+      }
+    }
+  }
+  for (Environment* e : envs) e->ClearOutbox();
 }
 
 class Progress {
@@ -54,16 +95,13 @@ class Progress {
 
 SolveResult Solve(Span<Environment* const> envs, const SolveOptions& options,
                   TextWriter* convergence) {
-  // Energy crosses environments only with visibility masks (local
-  // environments); until then a solve is one environment.
-  CHECK_MSG(envs.size() == 1, "multi-environment solves need the mask propagation");
-  CHECK(options.rays > 0);
+  const uint32_t n = static_cast<uint32_t>(envs.size());
+  for (uint32_t i = 0; i < n; ++i) CHECK(envs[i]->index() == i);
   SolveResult result;
   Progress progress(options.quiet);
   double start = os::Seconds();
-  double unshot = 0.0, emitted = 0.0;
-  Totals(envs, &unshot, &emitted);
-  result.unshotFraction = emitted > 0.0 ? unshot / emitted : 0.0;
+  RoundTotals totals = Totals(envs);
+  result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   if (convergence) convergence->Printf("shot,seconds,unshot_fraction\n");
 
   for (;;) {
@@ -81,15 +119,25 @@ SolveResult Solve(Span<Environment* const> envs, const SolveOptions& options,
       result.reason = StopReason::kMaxSeconds;
       break;
     }
-    for (Environment* env : envs) {
-      uint32_t i = env->TopShooter();
-      if (i == kNoPatch || env->ShooterKey(i) <= 0.0) continue;
-      uint64_t key = ShotKey(options.seed, env->patches()[i].globalId, env->ShotCount(i));
-      env->Shoot(i, options.rays, key);
-      ++result.shots;
+    for (uint32_t k = 0; k < n; ++k) {
+      uint32_t i = options.order.empty() ? k : options.order[k];
+      envs[i]->RunRound(
+          ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
+          AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
     }
-    Totals(envs, &unshot, &emitted);
-    result.unshotFraction = emitted > 0.0 ? unshot / emitted : 0.0;
+    Exchange(envs);
+    ++result.rounds;
+    uint64_t before = result.shots;
+    totals = Totals(envs);
+    result.shots = totals.shots;
+    // A ready foreign shooter exists whenever any queue holds one, so a round
+    // without a shot means no power is left to shoot (--stop-unshot 0).
+    if (result.shots == before) {
+      result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
+      result.reason = StopReason::kConverged;
+      break;
+    }
+    result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     double t = os::Seconds() - start;
     if (convergence)
       convergence->Printf("%llu,%.6f,%.9g\n", static_cast<unsigned long long>(result.shots), t,
@@ -97,10 +145,6 @@ SolveResult Solve(Span<Environment* const> envs, const SolveOptions& options,
     progress.Update(now, t, result.shots, result.unshotFraction, false);
   }
   result.seconds = os::Seconds() - start;
-  for (Environment* env : envs) {
-    result.rays += env->stats().rays;
-    result.hits += env->stats().hits;
-  }
   progress.Update(os::Seconds(), result.seconds, result.shots, result.unshotFraction, true);
   return result;
 }

@@ -112,5 +112,20 @@ TEST(AllocTest, CornellRenderAllocatesNothingAfterInit) {
   EXPECT_EQ(n, 0) << "heap allocations after init";
 }
 
+TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  test::TempDir dir;
+  int code = -1;
+  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
+                                 "2x2x2", "--mask-method", "B", "--mask-res", "30", "--rays", "256",
+                                 "--max-shots", "1500", "--width", "96", "--height", "96",
+                                 "--patch-size", "50"},
+                                &code);
+  ASSERT_EQ(code, 0);
+  EXPECT_EQ(n, 0) << "heap allocations after init";
+}
+
 }  // namespace
 }  // namespace vismask

@@ -74,8 +74,12 @@ TEST(MaxTreeTest, AgreesWithLinearScan) {
     for (int step = 0; step < 5000; ++step) {
       uint32_t i = rng() % n;
       double k = (rng() % 4 == 0) ? 0.0 : static_cast<double>(rng() % 50);  // many ties
+      if (step % 2 == 0 && k >= keys[i]) {
+        t.Increase(i, k);
+      } else {
+        t.Set(i, k);
+      }
       keys[i] = k;
-      t.Set(i, k);
       uint32_t best = 0;
       for (uint32_t j = 1; j < n; ++j)
         if (keys[j] > keys[best]) best = j;

@@ -23,7 +23,8 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 Patch MakePatch(const glm::vec3* c, uint32_t n) {
   Patch p{};
   for (uint32_t k = 0; k < 4; ++k) p.corner[k] = c[k < n ? k : n - 1];
-  glm::vec3 cr = n == 3 ? glm::cross(c[1] - c[0], c[2] - c[0]) : glm::cross(c[2] - c[0], c[3] - c[1]);
+  glm::vec3 cr =
+      n == 3 ? glm::cross(c[1] - c[0], c[2] - c[0]) : glm::cross(c[2] - c[0], c[3] - c[1]);
   p.normal = glm::normalize(cr);
   p.area = 0.5f * glm::length(cr);
   p.numCorners = n;
@@ -125,12 +126,12 @@ void AddBlock(glm::vec3 lo, glm::vec3 hi, int m, TestScene* scene) {
 // A Cornell-like box in [0,1]^3: five inward walls, a light, two blocks.
 TestScene CornellScene(int m) {
   TestScene s;
-  AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, +1, m, &s);   // floor
-  AddSubdividedQuad(1, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f, -1, m, &s);   // ceiling
-  AddSubdividedQuad(2, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, +1, m, &s);   // back
-  AddSubdividedQuad(0, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, +1, m, &s);   // left
-  AddSubdividedQuad(0, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f, -1, m, &s);   // right
-  AddAxisQuad(1, 0.999f, 0.4f, 0.6f, 0.4f, 0.6f, -1, &s);          // light
+  AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, +1, m, &s);  // floor
+  AddSubdividedQuad(1, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f, -1, m, &s);  // ceiling
+  AddSubdividedQuad(2, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, +1, m, &s);  // back
+  AddSubdividedQuad(0, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, +1, m, &s);  // left
+  AddSubdividedQuad(0, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f, -1, m, &s);  // right
+  AddAxisQuad(1, 0.999f, 0.4f, 0.6f, 0.4f, 0.6f, -1, &s);         // light
   AddBlock(glm::vec3(0.2f, 0.0f, 0.2f), glm::vec3(0.45f, 0.3f, 0.45f), 2, &s);
   AddBlock(glm::vec3(0.55f, 0.0f, 0.5f), glm::vec3(0.8f, 0.6f, 0.75f), 3, &s);
   return s;
@@ -193,13 +194,14 @@ struct Checker {
                 (!wantHit || (want.patch == got.patch && Bits(want.t) == Bits(got.t) &&
                               want.front == got.front));
     if (!same && ++failures <= 5) {
-      ADD_FAILURE() << kind << " ray o=(" << ray.o.x << "," << ray.o.y << "," << ray.o.z
-                    << ") d=(" << ray.d.x << "," << ray.d.y << "," << ray.d.z << ") t=("
-                    << ray.tMin << "," << ray.tMax << ") skip=" << skip << ": brute "
+      ADD_FAILURE() << kind << " ray o=(" << ray.o.x << "," << ray.o.y << "," << ray.o.z << ") d=("
+                    << ray.d.x << "," << ray.d.y << "," << ray.d.z << ") t=(" << ray.tMin << ","
+                    << ray.tMax << ") skip=" << skip << ": brute "
                     << (wantHit ? std::to_string(want.patch) + "@" + std::to_string(want.t)
                                 : std::string("miss"))
-                    << ", grid " << (gotHit ? std::to_string(got.patch) + "@" + std::to_string(got.t)
-                                            : std::string("miss"))
+                    << ", grid "
+                    << (gotHit ? std::to_string(got.patch) + "@" + std::to_string(got.t)
+                               : std::string("miss"))
                     << ", occluded " << occluded;
     }
   }
@@ -308,8 +310,8 @@ TEST(GridTest, RandomScenesMatchBruteForce) {
   const Case cases[] = {
       {2000, glm::vec3(0.0f), glm::vec3(1.0f), 0.005f, 0.3f, 4.0f, 1800},
       {300, glm::vec3(-2.0f, 0.0f, 5.0f), glm::vec3(3.0f, 0.5f, 7.0f), 0.01f, 2.0f, 1.0f, 900},
-      {1000, glm::vec3(100.0f, -50.0f, 20.0f), glm::vec3(101.0f, -49.0f, 21.0f), 0.002f, 0.1f,
-       8.0f, 900},
+      {1000, glm::vec3(100.0f, -50.0f, 20.0f), glm::vec3(101.0f, -49.0f, 21.0f), 0.002f, 0.1f, 8.0f,
+       900},
       {50, glm::vec3(0.0f), glm::vec3(1.0f), 0.5f, 3.0f, 2.0f, 600},
   };
   uint32_t seed = 1;
@@ -322,8 +324,8 @@ TEST(GridTest, RandomScenesMatchBruteForce) {
     BuildGrid(s, c.density, &b);
     Checker ck{s, b.grid};
     CheckRays(s, b, seed + 100, c.rays, &ck);
-    EXPECT_EQ(ck.failures, 0) << "scene " << seed << " of " << c.count << " patches, "
-                              << ck.rays << " rays";
+    EXPECT_EQ(ck.failures, 0) << "scene " << seed << " of " << c.count << " patches, " << ck.rays
+                              << " rays";
     EXPECT_GT(ck.hits, ck.rays / 20);
     total += ck.rays;
     ++seed;
@@ -408,7 +410,8 @@ TEST(GridTest, ResolutionFollowsPatchCount) {
   // Higher density, more cells.
   Grid::Plan lo = Grid::MakePlan(Span<const Patch>(large.patches.data(), 10000), 1.0f);
   Grid::Plan hi = Grid::MakePlan(Span<const Patch>(large.patches.data(), 10000), 4.0f);
-  EXPECT_LT(uint64_t(lo.res[0]) * lo.res[1] * lo.res[2], uint64_t(hi.res[0]) * hi.res[1] * hi.res[2]);
+  EXPECT_LT(uint64_t(lo.res[0]) * lo.res[1] * lo.res[2],
+            uint64_t(hi.res[0]) * hi.res[1] * hi.res[2]);
   // A long thin scene gets its cells along the long axis, capped at 1024.
   TestScene rod;
   std::uniform_real_distribution<float> u01(0.0f, 1.0f);
@@ -456,8 +459,8 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
     ASSERT_LE(start[c], start[c + 1]);
     for (uint32_t k = start[c] + 1; k < start[c + 1]; ++k) ASSERT_LT(refs[k - 1], refs[k]);
   }
-  glm::vec3 cell = (plan.bounds.hi - plan.bounds.lo) /
-                   glm::vec3(plan.res[0], plan.res[1], plan.res[2]);
+  glm::vec3 cell =
+      (plan.bounds.hi - plan.bounds.lo) / glm::vec3(plan.res[0], plan.res[1], plan.res[2]);
   for (uint32_t i = 0; i < 700; ++i) {
     const Patch& p = s.patches[i];
     glm::vec3 centroid = (p.corner[0] + p.corner[1] + p.corner[2]) / 3.0f;
@@ -498,7 +501,8 @@ TEST(GridTest, CellAlignedSceneMatchesBruteForce) {
   TestScene first;
   anchored(&first);
   AddRandomPatches(rng, kCount, glm::vec3(0.3f), glm::vec3(0.7f), 0.01f, 0.1f, &first);
-  Grid::Plan plan = Grid::MakePlan(Span<const Patch>(first.patches.data(), first.patches.size()), 4.0f);
+  Grid::Plan plan =
+      Grid::MakePlan(Span<const Patch>(first.patches.data(), first.patches.size()), 4.0f);
   const Bounds& bb = plan.bounds;
   glm::vec3 cell = (bb.hi - bb.lo) / glm::vec3(plan.res[0], plan.res[1], plan.res[2]);
   auto lattice = [&](int a, int k) { return bb.lo[a] + static_cast<float>(k) * cell[a]; };
@@ -535,7 +539,8 @@ TEST(GridTest, CellAlignedSceneMatchesBruteForce) {
         }
       }
       Patch p = MakePatch(c, 3);
-      if (!std::isfinite(p.normal.x + p.normal.y + p.normal.z) || p.area <= 0.0f) continue;
+      float minCell = std::min({cell.x, cell.y, cell.z});
+      if (!(p.area > 0.1f * minCell * minCell)) continue;  // collinear corners
       s.Add(p);
     }
   }
@@ -577,7 +582,7 @@ TEST(GridTest, SliverTipsMatchBruteForce) {
     glm::vec3 axis = UnitVector(rng);
     glm::vec3 side = glm::normalize(glm::cross(axis, UnitVector(rng)));
     float length = 0.05f + 0.3f * u01(rng);
-    float width = length * std::exp(std::log(1e-5f) + std::log(1e3f) * u01(rng));
+    float width = length * std::exp(std::log(1e-6f) + std::log(1e4f) * u01(rng));
     glm::vec3 c[3] = {c0, c0 + length * axis, c0 + 0.5f * length * axis + width * side};
     Patch p = MakePatch(c, 3);
     if (!std::isfinite(p.normal.x + p.normal.y + p.normal.z) || p.area <= 0.0f) continue;
@@ -590,8 +595,8 @@ TEST(GridTest, SliverTipsMatchBruteForce) {
   Checker ck{s, b.grid};
   for (int i = 0; i < 20000; ++i) {
     const Tip& tip = tips[rng() % tips.size()];
-    // A target on the patch plane, at or beyond the tip by 0 .. 1e-2.
-    float beyond = i % 4 == 0 ? 0.0f : std::exp(std::log(1e-9f) + std::log(1e7f) * u01(rng));
+    // A target on the patch plane, at or beyond the tip by 0 .. 0.1.
+    float beyond = i % 4 == 0 ? 0.0f : std::exp(std::log(1e-9f) + std::log(1e8f) * u01(rng));
     glm::vec3 target = tip.point + beyond * tip.out;
     glm::vec3 from = target + (0.05f + u01(rng)) * UnitVector(rng);
     ck.CheckWithSkips(Ray{from, target - from, 0.0f, kInf}, "sliver-tip");
@@ -642,13 +647,21 @@ TEST(GridTest, EdgeCases) {
   // Shared edges between wall quads leave no crack.
   for (int i = 0; i <= 16; ++i) {
     float x = i / 16.0f;
-    EXPECT_TRUE(b.grid.Occluded(Ray{glm::vec3(x, 0.5f, 0.9f), glm::vec3(0, 0, -1), 0.0f, kInf},
-                                kNoPatch))
+    EXPECT_TRUE(
+        b.grid.Occluded(Ray{glm::vec3(x, 0.5f, 0.9f), glm::vec3(0, 0, -1), 0.0f, kInf}, kNoPatch))
         << x;
   }
+  // An empty grid answers every ray with a miss.
+  TestScene none;
+  BuiltGrid e;
+  BuildGrid(none, 4.0f, &e);
+  EXPECT_EQ(e.plan.refs, 0u);
+  EXPECT_FALSE(
+      e.grid.Intersect(Ray{glm::vec3(0.5f), glm::vec3(0, 1, 0), 0.0f, kInf}, kNoPatch, &hit));
+  EXPECT_FALSE(e.grid.Occluded(Ray{glm::vec3(-3.0f), glm::vec3(1, 1, 1), 0.0f, kInf}, kNoPatch));
   // Out of the open front: nothing.
-  EXPECT_FALSE(b.grid.Occluded(Ray{glm::vec3(0.1f, 0.9f, 0.9f), glm::vec3(0, 0, 1), 0.0f, kInf},
-                               kNoPatch));
+  EXPECT_FALSE(
+      b.grid.Occluded(Ray{glm::vec3(0.1f, 0.9f, 0.9f), glm::vec3(0, 0, 1), 0.0f, kInf}, kNoPatch));
 }
 
 // Closest-hit throughput on 10k random patches (run with

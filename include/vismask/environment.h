@@ -1,8 +1,10 @@
-// Environment: the unit that owns memory. One environment holds its own
+// Environment: the unit that owns memory. One local environment holds its own
 // patches (geometry, material, energy), its own uniform grid over them, its
-// own shooter-selection tree and its own energy ledger, all carved from one
-// arena sized exactly at init. A single-environment run is one of these.
-// No environment ever reads another's geometry.
+// own shooter-selection tree, its queue of foreign shooters and its packet
+// buffers, all carved from one arena sized exactly at init. A
+// single-environment run is one of these with no neighbours; it reserves no
+// queue, mask or packet bytes. No environment reads another's geometry: what
+// it knows of a foreign shooter is what its packet carries.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -11,32 +13,47 @@
 
 #include "vismask/arena.h"
 #include "vismask/grid.h"
+#include "vismask/mask.h"
 #include "vismask/max_tree.h"
 #include "vismask/mesh.h"
+#include "vismask/packet.h"
+#include "vismask/partition.h"
 #include "vismask/patch.h"
 #include "vismask/span.h"
 
 namespace vismask {
 
-// Per-channel energy bookkeeping, in W (double): at every moment
-// emitted == absorbed + escaped + unshot (up to rounding).
+// Per-channel energy bookkeeping, in W (double). For one environment with no
+// neighbours, emitted == absorbed + escaped + unshot up to rounding; with
+// several, the difference is the power still in flight between environments
+// plus what the masks lost or let leak.
 struct EnergyLedger {
   double emitted[3] = {0, 0, 0};
   double absorbed[3] = {0, 0, 0};  // by receivers (1 - kd) and by back faces
-  double escaped[3] = {0, 0, 0};   // rays that hit nothing
-  double unshot[3] = {0, 0, 0};    // kept current shot by shot
+  double escaped[3] = {0, 0, 0};   // rays that left the scene
+  double unshot[3] = {0, 0, 0};    // local patches' unshot power, kept current
 };
 
 // Counters of one environment's work.
 struct EnvStats {
-  uint64_t shots = 0;
-  uint64_t rays = 0;
+  uint64_t shots = 0;         // local shots
+  uint64_t foreignShots = 0;  // queued foreign shooters distributed here
+  uint64_t rays = 0;          // form-factor rays traced
+  uint64_t maskRays = 0;      // Method B's centre rays
   uint64_t hits = 0;
+  uint64_t packetsSent = 0;
+  uint64_t recordsCreated = 0;  // local shots that went on to neighbours
 };
 
 struct EnvOptions {
   float gridDensity = 4.0f;  // grid cells per patch (Cleary's lambda)
   float rayEpsilon = 0.0f;   // ray tMin in scene units
+  uint32_t rays = 4096;      // rays per shot
+  uint64_t seed = 1;         // run seed
+  MaskMethod maskMethod = MaskMethod::kB;
+  uint32_t maskRes = 50;
+  uint32_t roundShots = 1;   // shots per environment per round
+  uint32_t queueCapacity = 64;  // foreign shooters held at once
 };
 
 class Environment {
@@ -45,30 +62,42 @@ class Environment {
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
 
-  // Builds environment `index` from the patches `ids` of `mesh` (init only):
-  // measures the layout, makes the arena, copies the patches in, remaps their
-  // display vertices to a local lattice and builds the grid.
-  void Init(uint32_t index, const Mesh& mesh, const std::vector<uint32_t>& ids,
-            const EnvOptions& options);
+  // Builds environment `index` of `grid` from the patches `ids` of `mesh`
+  // (init only): measures the layout, makes the arena, copies the patches
+  // in, remaps their display vertices to a local lattice and builds the grid.
+  void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
+            const std::vector<uint32_t>& ids, const EnvOptions& options);
 
-  // Emission: B = Ke, unshot power = Ke * area; the ledger restarts.
+  // Emission: B = Ke, unshot power = Ke * area; ledger and queue restart.
   void Reset();
 
-  // Shoots patch `i`'s unshot power with `rays` rays (cosine directions from
-  // uniform points on the patch), seeded by `shotKey`. Every ray that strikes
-  // a front side delivers 1/rays of the power, reflected by the receiver's kd.
-  void Shoot(uint32_t i, uint32_t rays, uint64_t shotKey);
+  // One round: up to `shotBudget` shots, each the larger of the local patch
+  // with most unshot power (allowed while `newRecords` remains, when there
+  // are neighbours) and the queued foreign shooter with most power. Packets
+  // for neighbours go to the outbox.
+  void RunRound(uint32_t shotBudget, uint32_t newRecords);
 
-  // The local patch with most unshot power (kNoPatch if none), and its key.
-  uint32_t TopShooter() const { return tree_.Top(); }
-  double ShooterKey(uint32_t i) const { return tree_.Key(i); }
-  uint32_t ShotCount(uint32_t i) const { return shotCount_[i]; }
+  // The packets this round produced, `packetBytes()` each, in send order.
+  uint32_t outboxCount() const { return outCount_; }
+  const uint8_t* OutboxPacket(uint32_t i) const { return outbox_.data() + size_t(i) * packetBytes_; }
+  void ClearOutbox() { outCount_ = 0; }
+  // Takes a packet addressed to this environment. Packets must be delivered
+  // in a fixed order (sender, then sequence) for results to be reproducible.
+  void Deliver(const uint8_t* packet);
+
+  // Power waiting here in foreign shooters (channels summed, weighted by
+  // the open share of their masks), and how many are held.
+  double QueuedPower() const;
+  uint32_t queuedCount() const { return queued_; }
 
   // Display radiosity at the lattice vertices: the area-weighted mean of the
   // touching patches' B + kd * ambient.
   void ComputeVertexRadiosity(const double ambient[3]);
 
   uint32_t index() const { return index_; }
+  uint32_t packetBytes() const { return packetBytes_; }
+  bool hasNeighbours() const { return numNeighbours_ > 0; }
+  const Bounds& box() const { return box_; }
   Span<const Patch> patches() const { return patches_; }
   Span<const PatchEnergy> energy() const { return energy_; }
   Span<const glm::vec3> vertices() const { return vertices_; }
@@ -80,12 +109,46 @@ class Environment {
   size_t arenaCapacity() const { return arena_.capacity(); }
   size_t arenaUsed() const { return arena_.used(); }
 
+  // Test hooks: the shooter a plain progressive-refinement step would take.
+  uint32_t TopShooter() const { return tree_.Top(); }
+
  private:
+  // A queued foreign shooter: its packet header, its mask so far (AND of the
+  // upstream masks received), and how many of those have arrived.
+  struct Slot {
+    PacketHeader header;
+    double key;          // power * open share, channels summed
+    uint8_t used;
+    uint8_t received;
+    uint8_t expected;
+  };
+
   void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
+  void ShootLocal(uint32_t i);
+  void ShootForeign(uint32_t slot);
+  // Traces `rays` rays of one shooter through this environment. Rays whose
+  // pixel is closed in `in` are skipped; with a mask method, `out` loses the
+  // pixels of rays that hit here (and, for B, of centre rays that hit).
+  void Distribute(const Patch& shooter, uint32_t skip, const double power[3], uint64_t stream,
+                  const MaskBits* in, MaskBits* out);
   void Receive(uint32_t j, const double share[3]);
+  // True if a ray that leaves this environment's box leaves the scene.
+  bool LeavesScene(const Ray& ray) const;
+  // Sends the shooter's record and `mask` to the neighbours downstream from
+  // the source environment.
+  void Forward(PacketHeader header, const MaskBits& mask);
+  int FindSlot(uint32_t shooterId, uint32_t shotIndex) const;
+  int BestReadySlot() const;
+  MaskBits SlotMask(uint32_t slot) const;
 
   uint32_t index_ = 0;
+  EnvGrid grid3_;
+  int cell_[3] = {0, 0, 0};
+  Bounds box_;
+  uint32_t numNeighbours_ = 0;
   EnvOptions options_;
+  MaskShape shape_;
+  uint32_t packetBytes_ = 0;
   Arena arena_ = Arena::Measure();
   Span<Patch> patches_;
   Span<PatchGeom> geom_;
@@ -96,6 +159,15 @@ class Environment {
   Span<float> vertexWeight_;
   Grid grid_;
   MaxTree tree_;
+  // Exchange state: empty for an environment without neighbours.
+  Span<Slot> slots_;
+  Span<uint64_t> slotWords_;  // slot s's mask: words [s * shape_.words(), ...)
+  Span<uint64_t> scratchWords_;  // a working mask
+  Span<uint8_t> outbox_;
+  uint32_t outCapacity_ = 0;
+  uint32_t outCount_ = 0;
+  uint32_t queued_ = 0;
+  uint32_t newRecords_ = 0;
   EnergyLedger ledger_;
   EnvStats stats_;
   double totalArea_ = 0.0;

@@ -3,11 +3,14 @@
 // Nothing here allocates from the heap.
 #pragma once
 #include <cstdint>
+#include <string>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "vismask/os.h"
 #include "vismask/span.h"
+#include "vismask/status.h"
 
 namespace vismask {
 
@@ -24,6 +27,15 @@ bool WritePng(os::OutFile* file, int width, int height, Span<const uint8_t> rgb,
 // Writes `color` (row 0 at the top) as a little-endian PFM ("PF", scale -1,
 // rows bottom to top).
 bool WritePfm(os::OutFile* file, int width, int height, Span<const glm::vec3> color);
+
+// A PFM image read at init (heap): RGB floats, row 0 at the top.
+struct PfmImage {
+  int width = 0;
+  int height = 0;
+  std::vector<float> pixels;  // 3 per pixel
+};
+// Reads a colour PFM ("PF"), either byte order. Errors name the file.
+Status ReadPfm(const std::string& path, PfmImage* image);
 
 // An exposure that maps the log-average luminance of the covered pixels
 // (mask[i] != 0) to middle grey. 1 if nothing is covered.

@@ -18,6 +18,9 @@ class MaxTree {
   void Clear();
   // Sets key `i` and replays its path to the root.
   void Set(uint32_t i, double key);
+  // Raises key `i` to `key` (>= its current key): climbs only while `i` wins,
+  // so a receiver that stays small costs one or two comparisons.
+  void Increase(uint32_t i, double key);
   double Key(uint32_t i) const { return key_[i]; }
   // The index with the largest key (lowest index on ties); kNoPatch if n == 0.
   uint32_t Top() const { return n_ == 0 ? kNoPatch : node_[1]; }

@@ -5,8 +5,10 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "vismask/camera.h"
+#include "vismask/mask.h"
 #include "vismask/status.h"
 
 namespace vismask {
@@ -29,6 +31,14 @@ struct Options {
   bool hasExposure = false;
   float exposure = 1.0f;
   bool quiet = false;
+  int envs[3] = {1, 1, 1};  // --envs NX[xNY[xNZ]]
+  MaskMethod maskMethod = MaskMethod::kB;
+  uint32_t maskRes = 50;
+  uint32_t roundShots = 1;
+  uint32_t queue = 64;
+  std::vector<uint32_t> envOrder;  // --env-order: the order environments run in a round
+  // vismask compare A.pfm B.pfm
+  std::string compareA, compareB;
 };
 
 constexpr float kAutoPatchDivisions = 24.0f;

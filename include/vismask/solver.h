@@ -1,7 +1,13 @@
 // Solver: progressive-refinement radiosity with Monte Carlo form factors
-// (Cohen et al. 1988). Each step, the patch with most unshot power shoots it
-// with a fixed number of rays; the run stops when the unshot power falls
-// below a fraction of the emitted power, or at a shot or time limit.
+// (Cohen et al. 1988) over local environments, in bulk-synchronous rounds.
+//
+// In each round every environment makes up to --round-shots shots on its own
+// (its largest local patch or queued foreign shooter, see environment.h),
+// then the packets are exchanged and delivered in a fixed order (sender
+// environment, then sequence). An environment's state after a round depends
+// only on its state before and on what it was delivered, so the result does
+// not depend on the order in which environments run or on how they are
+// grouped onto processes. Stop rules are checked between rounds.
 #pragma once
 #include <cstdint>
 
@@ -12,12 +18,13 @@
 namespace vismask {
 
 struct SolveOptions {
-  uint32_t rays = 4096;      // rays per shot
-  uint64_t seed = 1;         // run seed
   double stopUnshot = 1e-3;  // stop when unshot/emitted power < this
   uint64_t maxShots = 0;     // 0: no limit
   double maxSeconds = 0.0;   // 0: no limit
+  uint32_t roundShots = 1;   // shots per environment per round
+  uint32_t queueCapacity = 64;  // foreign shooters an environment can hold
   bool quiet = false;        // no progress line on stderr
+  Span<const uint32_t> order;  // the order environments run in a round (empty: 0..n-1)
 };
 
 enum class StopReason { kConverged, kMaxShots, kMaxSeconds };
@@ -25,15 +32,36 @@ const char* StopReasonName(StopReason r);
 
 struct SolveResult {
   StopReason reason = StopReason::kConverged;
-  uint64_t shots = 0;
-  uint64_t rays = 0;
-  uint64_t hits = 0;
+  uint64_t rounds = 0;
+  uint64_t shots = 0;         // local and foreign
   double seconds = 0.0;
-  double unshotFraction = 1.0;  // unshot / emitted, channels summed
+  double unshotFraction = 1.0;  // (unshot + queued) / emitted, channels summed
 };
 
-// Solves the environments in place. `convergence` (may be null) receives one
-// row "shot,seconds,unshot_fraction" per shot. Allocates nothing.
+// What every environment reports between rounds; summed in environment
+// order, so the sums are the same whatever the grouping onto ranks.
+struct RoundTotals {
+  double unshot = 0.0;   // local unshot power plus queued foreign power
+  double emitted = 0.0;
+  uint64_t shots = 0;
+  uint64_t recordsCreated = 0;
+  uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
+};
+
+// Per-environment admission: how many new records (local shots with
+// neighbours) environment `env` of `numEnvs` may create this round, given
+// how many each environment still has to receive. Keeps every queue within
+// `capacity`, whatever order the records arrive in.
+uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
+                         uint64_t maxOutstanding);
+
+// The shot budget of environment `env` this round under --max-shots.
+uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
+                    uint64_t maxShots);
+
+// Solves the environments in place (all in this process). `convergence` (may
+// be null) receives one row "shot,seconds,unshot_fraction" per round.
+// Allocates nothing.
 SolveResult Solve(Span<Environment* const> envs, const SolveOptions& options,
                   TextWriter* convergence);
 

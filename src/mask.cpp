@@ -1,0 +1,90 @@
+#include "vismask/mask.h"
+
+#include <cmath>
+#include <cstring>
+
+namespace vismask {
+
+namespace {
+constexpr double kHalfPi = 1.5707963267948966;
+constexpr double kTwoPi = 6.283185307179586;
+}  // namespace
+
+const char* MaskMethodName(MaskMethod m) {
+  switch (m) {
+    case MaskMethod::kNone: return "none";
+    case MaskMethod::kA: return "A";
+    case MaskMethod::kB: return "B";
+  }
+  return "?";
+}
+
+uint32_t MaskPixel(const glm::vec3& d, uint32_t res) {
+  float z = d.z < 0.0f ? 0.0f : (d.z > 1.0f ? 1.0f : d.z);
+  double theta = std::acos(static_cast<double>(z));
+  double phi = std::atan2(static_cast<double>(d.y), static_cast<double>(d.x));
+  if (phi < 0.0) phi += kTwoPi;
+  uint32_t row = static_cast<uint32_t>(theta / kHalfPi * res);
+  uint32_t col = static_cast<uint32_t>(phi / kTwoPi * (4 * res));
+  if (row >= res) row = res - 1;
+  if (col >= 4 * res) col = 4 * res - 1;
+  return row * 4 * res + col;
+}
+
+glm::vec3 MaskPixelCentre(uint32_t pixel, uint32_t res) {
+  uint32_t row = pixel / (4 * res), col = pixel % (4 * res);
+  double theta = (row + 0.5) * kHalfPi / res;
+  double phi = (col + 0.5) * kTwoPi / (4 * res);
+  double s = std::sin(theta);
+  return glm::vec3(static_cast<float>(s * std::cos(phi)), static_cast<float>(s * std::sin(phi)),
+                   static_cast<float>(std::cos(theta)));
+}
+
+void MaskBits::SetAllOpen() {
+  uint32_t pixels = 4 * res_ * res_;
+  for (size_t w = 0; w < words_.size(); ++w) words_[w] = ~uint64_t(0);
+  if (pixels % 64) words_[words_.size() - 1] = (uint64_t(1) << (pixels % 64)) - 1;
+}
+
+void MaskBits::And(const MaskBits& other) {
+  DCHECK(other.words_.size() == words_.size());
+  for (size_t w = 0; w < words_.size(); ++w) words_[w] &= other.words_[w];
+}
+
+void MaskBits::CopyFrom(const MaskBits& other) {
+  DCHECK(other.words_.size() == words_.size());
+  for (size_t w = 0; w < words_.size(); ++w) words_[w] = other.words_[w];
+}
+
+double MaskBits::OpenFraction() const {
+  // Row i spans theta in [i, i+1) * (pi/2) / R; its cosine-weighted share of
+  // the hemisphere is sin^2(theta1) - sin^2(theta0), split over 4R pixels.
+  double total = 0.0;
+  uint32_t cols = 4 * res_;
+  for (uint32_t row = 0; row < res_; ++row) {
+    double s0 = std::sin(row * kHalfPi / res_), s1 = std::sin((row + 1) * kHalfPi / res_);
+    uint32_t open = 0;
+    for (uint32_t c = 0; c < cols; ++c) open += IsOpen(row * cols + c);
+    total += (s1 * s1 - s0 * s0) * open / cols;
+  }
+  return total;
+}
+
+uint32_t MaskBits::CountOpen() const {
+  uint32_t n = 0;
+  for (uint64_t w : words_) n += static_cast<uint32_t>(__builtin_popcountll(w));
+  return n;
+}
+
+void MaskBits::Pack(uint8_t* out) const {
+  uint32_t bytes = (4 * res_ * res_ + 7) / 8;
+  for (uint32_t b = 0; b < bytes; ++b) out[b] = static_cast<uint8_t>(words_[b >> 3] >> (8 * (b & 7)));
+}
+
+void MaskBits::Unpack(const uint8_t* in) {
+  uint32_t bytes = (4 * res_ * res_ + 7) / 8;
+  for (size_t w = 0; w < words_.size(); ++w) words_[w] = 0;
+  for (uint32_t b = 0; b < bytes; ++b) words_[b >> 3] |= uint64_t(in[b]) << (8 * (b & 7));
+}
+
+}  // namespace vismask

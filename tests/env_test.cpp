@@ -1,0 +1,156 @@
+// Local environments with visibility masks, end to end through the command
+// line: determinism under permuted processing, the closed box split into
+// environments, the light leak of Method A, and `vismask compare`.
+#include <cmath>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace vismask {
+namespace {
+
+using test::ReadCsv;
+using test::ReadFile;
+using test::RunMain;
+using test::TempDir;
+using test::WriteFile;
+
+struct PatchRow {
+  double cx, cy, cz, ny, area, b;  // b: channels summed
+};
+
+std::vector<PatchRow> ReadPatches(const std::string& path) {
+  std::vector<PatchRow> out;
+  auto rows = ReadCsv(path);
+  for (size_t i = 1; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    out.push_back({std::stod(r[2]), std::stod(r[3]), std::stod(r[4]), std::stod(r[6]),
+                   std::stod(r[8]), std::stod(r[15]) + std::stod(r[16]) + std::stod(r[17])});
+  }
+  return out;
+}
+
+void Render(const std::vector<std::string>& args) {
+  std::vector<std::string> a = {"render"};
+  a.insert(a.end(), args.begin(), args.end());
+  a.push_back("--quiet");
+  auto r = RunMain(a);
+  ASSERT_EQ(r.code, 0) << r.err;
+}
+
+TEST(EnvTest, PermutedEnvironmentOrderGivesIdenticalBytes) {
+  TempDir dir;
+  std::vector<std::string> base = {"scenes/cornell.obj", "--envs", "4x1x2", "--rays", "256",
+                                   "--max-shots", "800", "--width", "64", "--height", "64",
+                                   "--mask-res", "20", "--patch-size", "60", "--round-shots", "2"};
+  auto run = [&](const std::string& out, const std::string& order) {
+    auto args = base;
+    args.insert(args.end(), {"--out", dir.File(out)});
+    if (!order.empty()) args.insert(args.end(), {"--env-order", order});
+    Render(args);
+  };
+  run("a", "");
+  run("b", "7,3,5,1,0,6,2,4");
+  run("c", "7,6,5,4,3,2,1,0");
+  for (const char* f : {"image.pfm", "patches.csv"}) {
+    std::string a = ReadFile(dir.File(std::string("a/") + f));
+    ASSERT_FALSE(a.empty());
+    EXPECT_EQ(a, ReadFile(dir.File(std::string("b/") + f))) << f;
+    EXPECT_EQ(a, ReadFile(dir.File(std::string("c/") + f))) << f;
+  }
+  // Foreign shooters really crossed between environments.
+  std::string json = ReadFile(dir.File("a/run.json"));
+  EXPECT_EQ(json.find("\"foreign_shots\": 0,"), std::string::npos) << json;
+}
+
+TEST(EnvTest, ClosedBoxInEightEnvironmentsConverges) {
+  TempDir dir;
+  const double rho = 0.5, e = 2.0, exact = e / (1.0 - rho);
+  std::ostringstream obj;
+  obj << "mtllib box.mtl\nusemtl wall\n"
+      << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+      << "f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 4 3 7 8\nf 1 4 8 5\nf 2 6 7 3\n";
+  WriteFile(dir.File("box.obj"), obj.str());
+  WriteFile(dir.File("box.mtl"), "newmtl wall\nKd 0.5 0.5 0.5\nKe 2 2 2\n");
+  Render({dir.File("box.obj"), "--out", dir.File("out"), "--envs", "2x2x2", "--mask-method", "B",
+          "--mask-res", "50", "--patch-size", "0.26", "--rays", "20000", "--stop-unshot", "1e-3",
+          "--width", "16", "--height", "16"});
+  auto patches = ReadPatches(dir.File("out/patches.csv"));
+  ASSERT_EQ(patches.size(), 6u * 16);  // each face cut in 4 pieces of 2 x 2 patches
+  double worst = 0.0, mean = 0.0;
+  for (const auto& p : patches) {
+    worst = std::fmax(worst, std::fabs(p.b / 3.0 - exact) / exact);
+    mean += p.b / 3.0 / patches.size();
+  }
+  std::printf("closed box in 2x2x2, Method B R=50: mean B %.4f (exact %.4f), worst patch %.2f%%\n",
+              mean, exact, 100 * worst);
+  EXPECT_LT(worst, 0.02) << "mean B " << mean << ", exact " << exact;
+}
+
+// Power (B * area, channels summed) on the floor of the right-hand
+// environment (x < 278) where the tall block's shadow edge crosses into it:
+// 230 < x < 272, 350 < z < 550 (docs/DESIGN.md, "The light leak").
+double ShadowPower(const std::string& csv) {
+  double sum = 0.0;
+  for (const auto& p : ReadPatches(csv))
+    if (p.ny > 0.99 && p.cy < 1.0 && p.cx > 230.0 && p.cx < 272.0 && p.cz > 350.0 && p.cz < 550.0)
+      sum += p.b * p.area;
+  return sum;
+}
+
+TEST(EnvTest, MethodALeaksLightAtHighResolutionAndBDoesNot) {
+  // Direct light only: the light's patches shoot (42 of them in one
+  // environment; cut at x = 278 into 48, each shot again as a foreign
+  // shooter in the other half: 96 shots).
+  TempDir dir;
+  std::vector<std::string> base = {"scenes/cornell.obj", "--patch-size", "20", "--rays", "32768",
+                                   "--width", "16", "--height", "16"};
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    auto args = base;
+    args.insert(args.end(), {"--out", dir.File(out)});
+    args.insert(args.end(), extra.begin(), extra.end());
+    Render(args);
+    return ShadowPower(dir.File(out + "/patches.csv"));
+  };
+  double ref = run("ref", {"--max-shots", "42"});
+  auto two = [&](const char* method) {
+    return run(method, {"--max-shots", "96", "--envs", "2", "--mask-method", method, "--mask-res", "250"});
+  };
+  double a = two("A"), none = two("none"), b = two("B");
+  ASSERT_GT(ref, 0.0);
+  double leakA = a / ref - 1.0, leakNone = none / ref - 1.0, leakB = b / ref - 1.0;
+  std::printf("shadow-edge power against one environment: A %+.1f%%, none %+.1f%%, B %+.1f%%\n",
+              100 * leakA, 100 * leakNone, 100 * leakB);
+  EXPECT_GT(leakA, 0.20);         // the leak of the paper's Fig. 3
+  EXPECT_GT(leakNone, leakA);     // no mask at all is worse
+  EXPECT_LT(std::fabs(leakB), 0.10);
+}
+
+TEST(EnvTest, CompareReportsRelativeRmse) {
+  TempDir dir;
+  auto pfm = [](float scale) {
+    std::string s = "PF\n2 1\n-1.0\n";
+    float v[6] = {1, 2, 3, 4, 5, 6};
+    for (float& x : v) x *= scale;
+    s.append(reinterpret_cast<const char*>(v), sizeof v);
+    return s;
+  };
+  WriteFile(dir.File("a.pfm"), pfm(1.0f));
+  WriteFile(dir.File("b.pfm"), pfm(1.1f));
+  WriteFile(dir.File("c.pfm"), "PF\n1 1\n-1.0\n");
+  testing::internal::CaptureStdout();
+  auto r = RunMain({"compare", dir.File("b.pfm"), dir.File("a.pfm")});
+  std::string out = testing::internal::GetCapturedStdout();
+  ASSERT_EQ(r.code, 0) << r.err;
+  double rel = 0, maxAbs = 0;
+  ASSERT_EQ(std::sscanf(out.c_str(), "relative_rmse %lf\nmax_abs_error %lf", &rel, &maxAbs), 2) << out;
+  EXPECT_NEAR(rel, 0.1, 1e-6);
+  EXPECT_NEAR(maxAbs, 0.6, 1e-5);
+  EXPECT_EQ(RunMain({"compare", dir.File("a.pfm"), dir.File("c.pfm")}).code, 2);  // truncated
+  EXPECT_EQ(RunMain({"compare", dir.File("a.pfm")}).code, 2);
+}
+
+}  // namespace
+}  // namespace vismask
