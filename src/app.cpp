@@ -20,6 +20,7 @@
 #include "vismask/scene.h"
 #include "vismask/solver.h"
 #include "vismask/text_writer.h"
+#include "vismask/transport.h"
 
 namespace vismask {
 
@@ -35,32 +36,88 @@ enum OutputFile { kPng, kPfm, kPatchesCsv, kConvergenceCsv, kRunJson, kNumOutput
 const char* const kOutputNames[kNumOutputs] = {"image.png", "image.pfm", "patches.csv",
                                                "convergence.csv", "run.json"};
 
+// What rank 0 needs of every environment for run.json, gathered at output.
+struct EnvSummary {
+  EnergyLedger ledger;
+  EnvStats stats;
+  uint64_t arenaBytes;
+  uint64_t patches;
+  uint64_t vertices;
+  uint64_t gridCells;
+  uint64_t gridRefs;
+};
+
+// One row of patches.csv as a rank sends it to rank 0.
+struct PatchRecord {
+  uint32_t id;
+  uint32_t env;
+  float c[3];
+  float n[3];
+  float area;
+  float kd[3];
+  float ke[3];
+  double b[3];
+};
+constexpr size_t kPatchChunk = 2048;  // records per transfer to rank 0
+
 // Everything a render needs after init, carved from arenas at init.
 struct Render {
   Options options;
+  std::unique_ptr<Transport> transport;
+  RankEnvs layout;
   size_t numPolygons = 0;
   float patchSize = 0.0f;
-  std::vector<std::unique_ptr<Environment>> envs;  // made at init, never resized
+  std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
   std::vector<Environment*> envPtrs;
   View view;
-  Arena outputArena = Arena::Measure();
+  Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
+  ExchangeBuffers exchange;
   Framebuffer fb;
+  Framebuffer incoming;  // rank 0 with several ranks: another rank's image
   Span<uint8_t> rgb8;
   Span<uint8_t> pngScratch;
   Span<char> convBuffer;
   Span<char> textBuffer;
+  Span<PatchRecord> records;
+  Span<EnvSummary> summaryMine, summaryAll, summary;  // summary: by environment
+  Span<AmbientReport> ambientMine, ambientAll, ambient;
   os::OutFile files[kNumOutputs];
   TextWriter convergence;
   double initSeconds = 0.0;
 
-  void LayoutOutput(Arena& arena) {
+  bool isRoot() const { return transport->rank() == 0; }
+
+  void LayoutRank(Arena& arena, uint32_t packetBytes) {
+    int ranks = transport->size();
+    exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
     fb.Layout(arena, options.width, options.height);
+    records = arena.Alloc<PatchRecord>(kPatchChunk);
+    summaryMine = arena.Alloc<EnvSummary>(layout.perRank);
+    summaryAll = arena.Alloc<EnvSummary>(size_t(ranks) * layout.perRank);
+    summary = arena.Alloc<EnvSummary>(layout.total);
+    ambientMine = arena.Alloc<AmbientReport>(layout.perRank);
+    ambientAll = arena.Alloc<AmbientReport>(size_t(ranks) * layout.perRank);
+    ambient = arena.Alloc<AmbientReport>(layout.total);
+    if (!isRoot()) return;
+    if (ranks > 1) incoming.Layout(arena, options.width, options.height);
     rgb8 = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height) * 3);
     pngScratch = arena.Alloc<uint8_t>(PngScratchBytes(options.width, options.height));
     convBuffer = arena.Alloc<char>(kTextBufferBytes);
     textBuffer = arena.Alloc<char>(kTextBufferBytes);
   }
 };
+
+// Gathers one fixed-size record per environment from every rank into
+// `byEnv`, in environment order (rank blocks are padded to perRank).
+template <class T>
+void GatherByEnv(Render* r, Span<T> mine, Span<T> all, Span<T> byEnv) {
+  r->transport->AllGather(mine.data(), mine.bytes(), all.data());
+  int ranks = r->transport->size();
+  for (int k = 0; k < ranks; ++k) {
+    RankEnvs re = EnvsOfRank(r->layout.total, ranks, k);
+    for (uint32_t i = 0; i < re.count; ++i) byEnv[re.first + i] = all[size_t(k) * r->layout.perRank + i];
+  }
+}
 
 int Fail(const Status& s) {
   std::string text = s.ToString() + "\n";
@@ -87,12 +144,6 @@ int Init(Render* r) {
   s = PartitionScene(scene, grid, &part);
   if (!s.ok()) return Fail(s);
 
-  Mesh mesh;
-  std::vector<uint32_t> all(part.scene.polygons.size());
-  for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
-  s = MeshScene(part.scene, all, r->patchSize, kMaxPatches, &mesh);
-  if (!s.ok()) return Fail(Status::Error("vismask: --patch-size: " + s.message()));
-
   EnvOptions envOptions;
   envOptions.rayEpsilon = 1e-6f * glm::length(extent);
   envOptions.rays = o.rays;
@@ -101,12 +152,23 @@ int Init(Render* r) {
   envOptions.maskRes = o.maskRes;
   envOptions.roundShots = o.roundShots;
   envOptions.queueCapacity = o.queue;
-  std::vector<std::vector<uint32_t>> ids(grid.count());
-  for (uint32_t i = 0; i < mesh.patches.size(); ++i)
-    ids[part.env[mesh.patches[i].surface]].push_back(i);
-  for (int e = 0; e < grid.count(); ++e) {
+  r->layout = EnvsOfRank(static_cast<uint32_t>(grid.count()), r->transport->size(), r->transport->rank());
+  // Mesh one environment at a time; keep only this rank's. Patch ids are
+  // global (environment-major), so earlier environments are meshed to count.
+  std::vector<std::vector<uint32_t>> pieces(grid.count());
+  for (uint32_t i = 0; i < part.scene.polygons.size(); ++i) pieces[part.env[i]].push_back(i);
+  uint32_t nextId = 0;
+  for (uint32_t e = 0; e < r->layout.first + r->layout.count; ++e) {
+    Mesh mesh;
+    s = MeshScene(part.scene, pieces[e], r->patchSize, kMaxPatches, &mesh);
+    if (!s.ok()) return Fail(Status::Error("vismask: --patch-size: " + s.message()));
+    for (Patch& p : mesh.patches) p.globalId += nextId;
+    nextId += static_cast<uint32_t>(mesh.patches.size());
+    if (e < r->layout.first) continue;
+    std::vector<uint32_t> ids(mesh.patches.size());
+    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
     r->envs.push_back(std::make_unique<Environment>());
-    r->envs.back()->Init(grid, static_cast<uint32_t>(e), mesh, ids[e], envOptions);
+    r->envs.back()->Init(grid, e, mesh, ids, envOptions);
   }
   for (auto& e : r->envs) r->envPtrs.push_back(e.get());
 
@@ -114,10 +176,13 @@ int Init(Render* r) {
   if (!MakeView(camera, o.width, o.height, &r->view))
     return Fail(Status::Error("vismask: --camera: degenerate camera"));
 
+  MaskShape shape{o.maskMethod == MaskMethod::kNone ? 0u : o.maskRes};
+  uint32_t packetBytes = grid.count() > 1 ? PacketBytes(shape) : 0;
   Arena measure = Arena::Measure();
-  r->LayoutOutput(measure);
-  r->outputArena = Arena(measure.used());
-  r->LayoutOutput(r->outputArena);
+  r->LayoutRank(measure, packetBytes);
+  r->rankArena = Arena(measure.used());
+  r->LayoutRank(r->rankArena, packetBytes);
+  if (!r->isRoot()) return kExitOk;
 
   char why[os::kWhyBytes];
   if (!os::MakeDirs(o.outDir.c_str(), why)) {
@@ -135,21 +200,63 @@ int Init(Render* r) {
   return kExitOk;
 }
 
+PatchRecord RecordOf(const Environment& env, size_t i) {
+  const Patch& p = env.patches()[i];
+  PatchRecord rec{};
+  rec.id = p.globalId;
+  rec.env = env.index();
+  glm::vec3 c(0.0f);
+  for (uint32_t k = 0; k < p.numCorners; ++k) c += p.corner[k];
+  c /= static_cast<float>(p.numCorners);
+  for (int a = 0; a < 3; ++a) {
+    rec.c[a] = c[a];
+    rec.n[a] = p.normal[a];
+    rec.kd[a] = p.kd[a];
+    rec.ke[a] = p.ke[a];
+    rec.b[a] = env.energy()[i].b[a];
+  }
+  rec.area = p.area;
+  return rec;
+}
+
+void WriteRecord(TextWriter* w, const PatchRecord& p) {
+  w->Printf("%u,%u,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.17g,%.17g,%.17g\n",
+            p.id, p.env, p.c[0], p.c[1], p.c[2], p.n[0], p.n[1], p.n[2], p.area, p.kd[0], p.kd[1],
+            p.kd[2], p.ke[0], p.ke[1], p.ke[2], p.b[0], p.b[1], p.b[2]);
+}
+
+// patches.csv in id order: rank 0's environments, then every other rank's,
+// sent to rank 0 in chunks (ids rise with environment and rank).
 void WritePatchesCsv(Render* r) {
+  Transport* t = r->transport.get();
+  uint64_t count = 0;
+  for (Environment* env : r->envPtrs) count += env->patches().size();
+  if (!r->isRoot()) {
+    t->Send(0, &count, sizeof count);
+    size_t n = 0;
+    for (Environment* env : r->envPtrs) {
+      for (size_t i = 0; i < env->patches().size(); ++i) {
+        r->records[n++] = RecordOf(*env, i);
+        if (n == kPatchChunk) {
+          t->Send(0, r->records.data(), n * sizeof(PatchRecord));
+          n = 0;
+        }
+      }
+    }
+    if (n > 0) t->Send(0, r->records.data(), n * sizeof(PatchRecord));
+    return;
+  }
   TextWriter w(&r->files[kPatchesCsv], r->textBuffer);
   w.Printf("id,env,cx,cy,cz,nx,ny,nz,area,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b,b_r,b_g,b_b\n");
-  for (Environment* env : r->envPtrs) {
-    Span<const Patch> patches = env->patches();
-    Span<const PatchEnergy> energy = env->energy();
-    for (size_t i = 0; i < patches.size(); ++i) {
-      const Patch& p = patches[i];
-      glm::vec3 c(0.0f);
-      for (uint32_t k = 0; k < p.numCorners; ++k) c += p.corner[k];
-      c /= static_cast<float>(p.numCorners);
-      w.Printf("%u,%u,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.17g,%.17g,%.17g\n",
-               p.globalId, env->index(), c.x, c.y, c.z, p.normal.x, p.normal.y, p.normal.z, p.area,
-               p.kd.x, p.kd.y, p.kd.z, p.ke.x, p.ke.y, p.ke.z, energy[i].b[0], energy[i].b[1],
-               energy[i].b[2]);
+  for (Environment* env : r->envPtrs)
+    for (size_t i = 0; i < env->patches().size(); ++i) WriteRecord(&w, RecordOf(*env, i));
+  for (int src = 1; src < t->size(); ++src) {
+    t->Recv(src, &count, sizeof count);
+    while (count > 0) {
+      size_t n = count < kPatchChunk ? static_cast<size_t>(count) : kPatchChunk;
+      t->Recv(src, r->records.data(), n * sizeof(PatchRecord));
+      for (size_t i = 0; i < n; ++i) WriteRecord(&w, r->records[i]);
+      count -= n;
     }
   }
   w.Flush();
@@ -195,26 +302,29 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"queue\": %u\n  },\n",
            o.maskRes, o.roundShots, o.queue);
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
-  for (Environment* e : r->envPtrs) {
-    patches += e->patches().size();
-    vertices += e->vertices().size();
-    cells += e->grid().cellCount();
-    refs += e->grid().plan().refs;
+  for (const EnvSummary& e : r->summary) {
+    patches += e.patches;
+    vertices += e.vertices;
+    cells += e.gridCells;
+    refs += e.gridRefs;
   }
   w.Printf("  \"counts\": {\n    \"polygons\": %zu,\n    \"patches\": %zu,\n", r->numPolygons,
            patches);
-  w.Printf("    \"vertices\": %zu,\n    \"environments\": %zu,\n", vertices, r->envPtrs.size());
+  w.Printf("    \"vertices\": %zu,\n    \"environments\": %zu,\n", vertices, r->summary.size());
+  w.Printf("    \"ranks\": %d,\n    \"transport\": \"%s\",\n", r->transport->size(),
+           r->transport->name());
   w.Printf("    \"grid_cells\": %zu,\n    \"grid_refs\": %zu\n  },\n", cells, refs);
   EnvStats st;
-  for (Environment* e : r->envPtrs) {
-    st.shots += e->stats().shots;
-    st.foreignShots += e->stats().foreignShots;
-    st.rays += e->stats().rays;
-    st.maskRays += e->stats().maskRays;
-    st.hits += e->stats().hits;
-    st.packetsSent += e->stats().packetsSent;
+  for (const EnvSummary& e : r->summary) {
+    st.shots += e.stats.shots;
+    st.foreignShots += e.stats.foreignShots;
+    st.rays += e.stats.rays;
+    st.maskRays += e.stats.maskRays;
+    st.hits += e.stats.hits;
+    st.packetsSent += e.stats.packetsSent;
   }
-  uint32_t packetBytes = r->envPtrs.empty() ? 0 : r->envPtrs[0]->packetBytes();
+  uint32_t packetBytes = r->exchange.packetBytes > 0 || r->envPtrs.empty() ? r->exchange.packetBytes
+                                                                            : r->envPtrs[0]->packetBytes();
   w.Printf("  \"result\": {\n    \"stop_reason\": \"%s\",\n    \"rounds\": %llu,\n",
            StopReasonName(res.reason), static_cast<unsigned long long>(res.rounds));
   w.Printf("    \"shots\": %llu,\n    \"local_shots\": %llu,\n    \"foreign_shots\": %llu,\n",
@@ -228,12 +338,12 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
            static_cast<unsigned long long>(st.packetsSent * packetBytes));
   w.Printf("    \"unshot_fraction\": %.17g\n  },\n", res.unshotFraction);
   EnergyLedger total;
-  for (Environment* e : r->envPtrs) {
+  for (const EnvSummary& e : r->summary) {
     for (int c = 0; c < 3; ++c) {
-      total.emitted[c] += e->ledger().emitted[c];
-      total.absorbed[c] += e->ledger().absorbed[c];
-      total.escaped[c] += e->ledger().escaped[c];
-      total.unshot[c] += e->ledger().unshot[c];
+      total.emitted[c] += e.ledger.emitted[c];
+      total.absorbed[c] += e.ledger.absorbed[c];
+      total.escaped[c] += e.ledger.escaped[c];
+      total.unshot[c] += e.ledger.unshot[c];
     }
   }
   w.Printf("  \"energy\": {\n");
@@ -251,9 +361,9 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"solve_seconds\": %.6f,\n    \"output_seconds\": %.6f\n  },\n", res.seconds,
            outputSeconds);
   w.Printf("  \"memory\": {\n    \"environment_arena_bytes\": [");
-  for (size_t i = 0; i < r->envPtrs.size(); ++i)
-    w.Printf("%s%zu", i ? ", " : "", r->envPtrs[i]->arenaCapacity());
-  w.Printf("],\n    \"output_arena_bytes\": %zu,\n", r->outputArena.capacity());
+  for (size_t i = 0; i < r->summary.size(); ++i)
+    w.Printf("%s%llu", i ? ", " : "", static_cast<unsigned long long>(r->summary[i].arenaBytes));
+  w.Printf("],\n    \"rank0_arena_bytes\": %zu,\n", r->rankArena.capacity());
   w.Printf("    \"peak_rss_bytes\": %llu\n  }\n}\n",
            static_cast<unsigned long long>(os::PeakRssBytes()));
   w.Flush();
@@ -261,21 +371,47 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
 
 int WriteOutputs(Render* r, const SolveResult& res) {
   double start = os::Seconds();
+  Transport* t = r->transport.get();
+  // The ambient term from every environment, summed in environment order.
+  for (uint32_t i = 0; i < r->layout.perRank; ++i) r->ambientMine[i] = AmbientReport{};
+  for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
+  GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
   double ambient[3];
-  AmbientTerm(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), ambient);
+  AmbientTerm(r->ambient, ambient);
+  // Each rank draws its own patches; rank 0 depth-composites the others'.
   r->fb.Clear();
   for (Environment* env : r->envPtrs) {
     env->ComputeVertexRadiosity(ambient);
     RasterPatches(r->view, env->patches(), env->vertices(), env->vertexRadiosity(), &r->fb);
   }
+  for (int src = 1; src < t->size(); ++src) {
+    if (r->isRoot()) {
+      t->Recv(src, r->incoming.color.data(), r->incoming.color.bytes());
+      t->Recv(src, r->incoming.depth.data(), r->incoming.depth.bytes());
+      t->Recv(src, r->incoming.id.data(), r->incoming.id.bytes());
+      Composite(r->incoming, &r->fb);
+    } else if (t->rank() == src) {
+      t->Send(0, r->fb.color.data(), r->fb.color.bytes());
+      t->Send(0, r->fb.depth.data(), r->fb.depth.bytes());
+      t->Send(0, r->fb.id.data(), r->fb.id.bytes());
+    }
+  }
+  WritePatchesCsv(r);
+  for (uint32_t i = 0; i < r->layout.perRank; ++i) r->summaryMine[i] = EnvSummary{};
+  for (size_t i = 0; i < r->envPtrs.size(); ++i) {
+    const Environment& e = *r->envPtrs[i];
+    r->summaryMine[i] = EnvSummary{e.ledger(), e.stats(), e.arenaCapacity(), e.patches().size(),
+                                   e.vertices().size(), e.grid().cellCount(), e.grid().plan().refs};
+  }
+  GatherByEnv(r, r->summaryMine, r->summaryAll, r->summary);
+  if (!r->isRoot()) return kExitOk;
+
   float exposure = r->options.hasExposure ? r->options.exposure
                                           : AutoExposure(r->fb.color, r->fb.id, kNoPatch);
   ToneMap(r->fb.color, exposure, r->rgb8);
-
   char why[os::kWhyBytes] = "write failed";
   bool ok = WritePng(&r->files[kPng], r->options.width, r->options.height, r->rgb8, r->pngScratch, why);
   ok = ok && WritePfm(&r->files[kPfm], r->options.width, r->options.height, r->fb.color);
-  WritePatchesCsv(r);
   ok = ok && r->convergence.Flush();
   WriteRunJson(r, res, exposure, os::Seconds() - start);
   // Commit only when every file was written: all outputs appear, or none.
@@ -328,8 +464,11 @@ int Main(int argc, const char* const* argv) {
     return kExitOk;
   }
   if (r->options.command == "compare") return Compare(r->options);
+  // The pipe transport forks here: every rank carries on from this point.
+  r->transport = MakeTransport(TransportRequest{r->options.transport, r->options.ranks}, &s);
+  if (!r->transport) return Fail(s);
   int rc = Init(r.get());
-  if (rc != kExitOk) return rc;
+  if (rc != kExitOk) return r->transport->Finish(rc);
   r->initSeconds = os::Seconds() - start;
 
   SetPhase(Phase::kSolve);
@@ -341,12 +480,14 @@ int Main(int argc, const char* const* argv) {
   so.maxShots = r->options.maxShots;
   so.maxSeconds = r->options.maxSeconds;
   so.quiet = r->options.quiet;
-  SolveResult res = Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), so,
-                          &r->convergence);
+  SolveResult res = Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()),
+                          r->layout, r->transport.get(), &r->exchange, so,
+                          r->isRoot() ? &r->convergence : nullptr);
 
   SetPhase(Phase::kOutput);
   rc = WriteOutputs(r.get(), res);
   SetPhase(Phase::kDone);
+  rc = r->transport->Finish(rc);
   if (rc == kExitOk && !r->options.quiet)
     os::PrintErr("vismask: %llu shots, %.2f s solve; wrote %s/image.png\n",
                  static_cast<unsigned long long>(res.shots), res.seconds, r->options.outDir.c_str());

@@ -22,7 +22,7 @@ usage:
 render options:
   --out DIR            output directory (default out/); created if missing
   --patch-size L       longest patch edge, scene units (default: largest
-                       scene extent / 24)
+                       scene extent / 16)
   --rays N             Monte Carlo rays per shot (default 4096)
   --seed S             random seed, unsigned 64-bit (default 1)
   --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
@@ -50,6 +50,12 @@ local environments and visibility masks:
   --round-shots K      shots per environment per round (default 1)
   --queue Q            foreign shooters an environment holds at once
                        (default 64); a full queue holds back new ones
+  --ranks N            run on N processes on this host, connected by POSIX
+                       pipes (default 1); environments are dealt to ranks in
+                       contiguous blocks; N <= the number of environments
+  --transport T        loop | pipe | mpi: loop keeps every environment in
+                       one process; pipe is the default for --ranks > 1; mpi
+                       is what build/vismask-mpi uses (under mpirun)
   --env-order I,J,...  run the environments in this order within each round
                        (a permutation of 0..N-1); a check of determinism:
                        the results must not change
@@ -205,6 +211,12 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         o->envOrder.push_back(static_cast<uint32_t>(u));
         part.clear();
       }
+    } else if (a == "--ranks") {
+      if (!ParseU64(v, &u) || u < 1 || u > 256) return Bad(a, v, "an integer in [1, 256]");
+      o->ranks = static_cast<int>(u);
+    } else if (a == "--transport") {
+      if (v != "loop" && v != "pipe" && v != "mpi") return Bad(a, v, "loop, pipe or mpi");
+      o->transport = v;
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);
@@ -213,6 +225,12 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     }
   }
   if (o->scene.empty()) return Status::Error("vismask: render: no scene given (vismask render SCENE.obj)");
+  int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
+  if (o->ranks > numEnvs)
+    return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
+                         std::to_string(numEnvs) + " environments (each rank needs one; see --envs)");
+  if (o->transport == "loop" && o->ranks > 1)
+    return Status::Error("vismask: --transport loop runs one process; use --transport pipe with --ranks");
   if (!o->envOrder.empty()) {
     size_t n = size_t(o->envs[0]) * o->envs[1] * o->envs[2];
     std::vector<bool> seen(n, false);

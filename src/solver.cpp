@@ -1,6 +1,7 @@
 #include "vismask/solver.h"
 
 #include <cstdio>
+#include <cstring>
 
 #include "vismask/os.h"
 
@@ -38,34 +39,119 @@ uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_
   return static_cast<uint32_t>(left < roundShots ? left : roundShots);
 }
 
+RankEnvs EnvsOfRank(uint32_t total, int ranks, int rank) {
+  RankEnvs r;
+  r.total = total;
+  uint32_t n = static_cast<uint32_t>(ranks), k = static_cast<uint32_t>(rank);
+  uint32_t base = total / n, extra = total % n;  // the first `extra` ranks take one more
+  r.first = k * base + (k < extra ? k : extra);
+  r.count = base + (k < extra ? 1 : 0);
+  r.perRank = base + (extra > 0 ? 1 : 0);
+  return r;
+}
+
+void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t bytesPerPacket,
+                             uint32_t packetsPerEnvRound) {
+  packetBytes = bytesPerPacket;
+  blockBytes = size_t(envs.perRank) * packetsPerEnvRound * bytesPerPacket;
+  size_t n = static_cast<size_t>(ranks);
+  sendBytes = arena.Alloc<uint8_t>(n * blockBytes);
+  recvBytes = arena.Alloc<uint8_t>(n * blockBytes);
+  send = arena.Alloc<Span<const uint8_t>>(n);
+  recv = arena.Alloc<Span<uint8_t>>(n);
+  received = arena.Alloc<size_t>(n);
+  mine = arena.Alloc<EnvReport>(envs.perRank);
+  all = arena.Alloc<EnvReport>(n * envs.perRank);
+}
+
 namespace {
 
 double Sum3(const double v[3]) { return v[0] + v[1] + v[2]; }
 
-RoundTotals Totals(Span<Environment* const> envs) {
-  RoundTotals t;
-  for (Environment* e : envs) {
-    t.unshot += Sum3(e->ledger().unshot) + e->QueuedPower();
-    t.emitted += Sum3(e->ledger().emitted);
-    t.shots += e->stats().shots + e->stats().foreignShots;
-    t.recordsCreated += e->stats().recordsCreated;
+// Gathers every environment's report and sums them in environment order.
+RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+                   ExchangeBuffers* x, double elapsed) {
+  for (uint32_t i = 0; i < layout.perRank; ++i) x->mine[i] = EnvReport{};
+  for (uint32_t i = 0; i < envs.size(); ++i) {
+    const Environment* e = envs[i];
+    EnvReport& r = x->mine[i];
+    r.unshot = Sum3(e->ledger().unshot) + e->QueuedPower();
+    r.emitted = Sum3(e->ledger().emitted);
+    r.shots = e->stats().shots + e->stats().foreignShots;
+    r.recordsCreated = e->stats().recordsCreated;
+    r.foreignShots = e->stats().foreignShots;
   }
-  for (Environment* e : envs) {
-    uint64_t fromOthers = t.recordsCreated - e->stats().recordsCreated;
-    uint64_t outstanding = fromOthers - e->stats().foreignShots;
-    if (outstanding > t.maxOutstanding) t.maxOutstanding = outstanding;
+  x->mine[0].elapsed = elapsed;
+  t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data());
+  // Rank r's block holds its environments first; the rest is padding.
+  RoundTotals tot;
+  tot.elapsed = x->all[0].elapsed;
+  int ranks = t->size();
+  auto report = [&](uint32_t env) -> const EnvReport& {
+    for (int r = 0; r < ranks; ++r) {
+      RankEnvs re = EnvsOfRank(layout.total, ranks, r);
+      if (env < re.first + re.count) return x->all[size_t(r) * layout.perRank + (env - re.first)];
+    }
+    CHECK(false);
+    return x->all[0];
+  };
+  for (uint32_t env = 0; env < layout.total; ++env) {
+    const EnvReport& r = report(env);
+    tot.unshot += r.unshot;
+    tot.emitted += r.emitted;
+    tot.shots += r.shots;
+    tot.recordsCreated += r.recordsCreated;
   }
-  return t;
+  for (uint32_t env = 0; env < layout.total; ++env) {
+    const EnvReport& r = report(env);
+    uint64_t outstanding = tot.recordsCreated - r.recordsCreated - r.foreignShots;
+    if (outstanding > tot.maxOutstanding) tot.maxOutstanding = outstanding;
+  }
+  return tot;
 }
 
-// Delivers every outbox packet to its receiver: receivers in order, and for
-// each, senders in order and packets in the order they were sent.
-void Exchange(Span<Environment* const> envs) {
+// Moves the round's packets to their receivers and delivers them: for each
+// receiver, senders in environment order and packets in send order.
+void Exchange(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+              ExchangeBuffers* x) {
+  int ranks = t->size(), me = t->rank();
+  if (ranks > 1) {
+    for (int r = 0; r < ranks; ++r) {
+      RankEnvs re = EnvsOfRank(layout.total, ranks, r);
+      uint8_t* block = x->sendBytes.data() + size_t(r) * x->blockBytes;
+      size_t used = 0;
+      if (r != me) {
+        for (Environment* src : envs) {
+          for (uint32_t k = 0; k < src->outboxCount(); ++k) {
+            const uint8_t* packet = src->OutboxPacket(k);
+            uint32_t to = ReadHeader(packet).toEnv;
+            if (to < re.first || to >= re.first + re.count) continue;
+            CHECK(used + x->packetBytes <= x->blockBytes);
+            std::memcpy(block + used, packet, x->packetBytes);
+            used += x->packetBytes;
+          }
+        }
+      }
+      x->send[r] = Span<const uint8_t>(block, used);
+      x->recv[r] = Span<uint8_t>(x->recvBytes.data() + size_t(r) * x->blockBytes, x->blockBytes);
+    }
+    t->AllToAll(x->send.data(), x->recv.data(), x->received.data());
+  }
   for (Environment* dest : envs) {
-    for (Environment* src : envs) {
-      for (uint32_t k = 0; k < src->outboxCount(); ++k) {
-        const uint8_t* packet = src->OutboxPacket(k);
-        if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
+    for (int r = 0; r < ranks; ++r) {
+      if (r == me) {
+        for (Environment* src : envs) {
+          for (uint32_t k = 0; k < src->outboxCount(); ++k) {
+            const uint8_t* packet = src->OutboxPacket(k);
+            if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
+          }
+        }
+      } else {
+        CHECK(x->received[r] % x->packetBytes == 0);
+        for (size_t off = 0; off < x->received[r]; off += x->packetBytes) {
+          const uint8_t* packet = x->recv[r].data() + off;
+          if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
+        }
       }
     }
   }
@@ -93,20 +179,20 @@ class Progress {
 
 }  // namespace
 
-SolveResult Solve(Span<Environment* const> envs, const SolveOptions& options,
-                  TextWriter* convergence) {
-  const uint32_t n = static_cast<uint32_t>(envs.size());
-  for (uint32_t i = 0; i < n; ++i) CHECK(envs[i]->index() == i);
+SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transport* transport,
+                  ExchangeBuffers* buffers, const SolveOptions& options, TextWriter* convergence) {
+  const uint32_t n = layout.total;
+  CHECK(envs.size() == layout.count);
+  for (uint32_t i = 0; i < envs.size(); ++i) CHECK(envs[i]->index() == layout.first + i);
   SolveResult result;
-  Progress progress(options.quiet);
+  Progress progress(options.quiet || transport->rank() != 0);
   double start = os::Seconds();
-  RoundTotals totals = Totals(envs);
+  RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   if (convergence) convergence->Printf("shot,seconds,unshot_fraction\n");
 
   for (;;) {
-    double now = os::Seconds();
-    double elapsed = now - start;
+    // Every rank decides from the same gathered totals (and rank 0's clock).
     if (result.unshotFraction < options.stopUnshot) {
       result.reason = StopReason::kConverged;
       break;
@@ -115,47 +201,57 @@ SolveResult Solve(Span<Environment* const> envs, const SolveOptions& options,
       result.reason = StopReason::kMaxShots;
       break;
     }
-    if (options.maxSeconds > 0.0 && elapsed >= options.maxSeconds) {
+    if (options.maxSeconds > 0.0 && totals.elapsed >= options.maxSeconds) {
       result.reason = StopReason::kMaxSeconds;
       break;
     }
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
-      envs[i]->RunRound(
+      if (i < layout.first || i >= layout.first + layout.count) continue;
+      envs[i - layout.first]->RunRound(
           ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
           AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
     }
-    Exchange(envs);
+    Exchange(envs, layout, transport, buffers);
     ++result.rounds;
     uint64_t before = result.shots;
-    totals = Totals(envs);
+    double now = os::Seconds();
+    totals = Totals(envs, layout, transport, buffers, now - start);
     result.shots = totals.shots;
+    result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     // A ready foreign shooter exists whenever any queue holds one, so a round
     // without a shot means no power is left to shoot (--stop-unshot 0).
     if (result.shots == before) {
-      result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
       result.reason = StopReason::kConverged;
       break;
     }
-    result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
-    double t = os::Seconds() - start;
     if (convergence)
-      convergence->Printf("%llu,%.6f,%.9g\n", static_cast<unsigned long long>(result.shots), t,
-                          result.unshotFraction);
-    progress.Update(now, t, result.shots, result.unshotFraction, false);
+      convergence->Printf("%llu,%.6f,%.9g\n", static_cast<unsigned long long>(result.shots),
+                          totals.elapsed, result.unshotFraction);
+    progress.Update(now, now - start, result.shots, result.unshotFraction, false);
   }
   result.seconds = os::Seconds() - start;
   progress.Update(os::Seconds(), result.seconds, result.shots, result.unshotFraction, true);
   return result;
 }
 
-void AmbientTerm(Span<Environment* const> envs, double ambient[3]) {
+AmbientReport AmbientOf(const Environment& env) {
+  AmbientReport r{};
+  r.area = env.totalArea();
+  for (int c = 0; c < 3; ++c) r.unshot[c] = env.ledger().unshot[c];
+  for (const Patch& p : env.patches())
+    for (int c = 0; c < 3; ++c) r.kdArea[c] += static_cast<double>(p.kd[c]) * p.area;
+  return r;
+}
+
+void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]) {
   double area = 0.0, unshot[3] = {0, 0, 0}, kdArea[3] = {0, 0, 0};
-  for (Environment* env : envs) {
-    area += env->totalArea();
-    for (int c = 0; c < 3; ++c) unshot[c] += env->ledger().unshot[c];
-    for (const Patch& p : env->patches())
-      for (int c = 0; c < 3; ++c) kdArea[c] += static_cast<double>(p.kd[c]) * p.area;
+  for (const AmbientReport& r : reports) {
+    area += r.area;
+    for (int c = 0; c < 3; ++c) {
+      unshot[c] += r.unshot[c];
+      kdArea[c] += r.kdArea[c];
+    }
   }
   for (int c = 0; c < 3; ++c) {
     double meanKd = area > 0.0 ? kdArea[c] / area : 0.0;

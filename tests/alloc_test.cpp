@@ -2,6 +2,7 @@
 // replaced by counters, and a whole render (init, solve, output writing) must
 // perform no allocation while the phase is kSolve or kOutput.
 #include <malloc.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cstdlib>
@@ -20,11 +21,21 @@
 namespace {
 std::atomic<long> gAfterInit{0};
 std::atomic<bool> gArmed{false};
+pid_t gTestPid = 0;  // the gtest process; forked pipe ranks have other pids
 
 inline void Count() {
   if (!gArmed.load(std::memory_order_relaxed)) return;
   vismask::Phase p = vismask::CurrentPhase();
-  if (p == vismask::Phase::kSolve || p == vismask::Phase::kOutput) gAfterInit.fetch_add(1);
+  if (p == vismask::Phase::kSolve || p == vismask::Phase::kOutput) {
+    gAfterInit.fetch_add(1);
+    // A forked rank cannot report through our counter: it dies instead, and
+    // rank 0 then fails the run (exit 3) as for any lost rank.
+    if (getpid() != gTestPid) {
+      static const char kMsg[] = "alloc_test: heap allocation after init in a forked rank\n";
+      if (write(2, kMsg, sizeof kMsg - 1) < 0) _exit(97);
+      _exit(97);
+    }
+  }
 }
 }  // namespace
 
@@ -72,6 +83,7 @@ namespace vismask {
 namespace {
 
 long AllocationsAfterInit(const std::vector<std::string>& args, int* code) {
+  gTestPid = getpid();
   gAfterInit = 0;
   gArmed = true;
   test::RunResult r = test::RunMain(args);
@@ -86,6 +98,7 @@ TEST(AllocTest, CounterSeesAllocationsInSolvePhase) {
 #endif
   // The counter itself must be able to fail: an allocation made while the
   // phase is kSolve is counted.
+  gTestPid = getpid();
   gAfterInit = 0;
   gArmed = true;
   SetPhase(Phase::kSolve);
@@ -125,6 +138,23 @@ TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
                                 &code);
   ASSERT_EQ(code, 0);
   EXPECT_EQ(n, 0) << "heap allocations after init";
+}
+
+TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  // Four processes: this one (rank 0, counted) and three forked ranks, each
+  // of which dies on its first allocation after init.
+  test::TempDir dir;
+  int code = -1;
+  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
+                                 "2x1x2", "--ranks", "4", "--mask-res", "30", "--rays", "256",
+                                 "--max-shots", "1500", "--width", "96", "--height", "96",
+                                 "--patch-size", "50", "--quiet"},
+                                &code);
+  EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
+  EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
 }
 
 }  // namespace

@@ -36,12 +36,14 @@ struct Options {
   uint32_t maskRes = 50;
   uint32_t roundShots = 1;
   uint32_t queue = 64;
-  std::vector<uint32_t> envOrder;  // --env-order: the order environments run in a round
+  std::vector<uint32_t> envOrder;
+  std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
+  int ranks = 1;          // --ranks N (pipe)  // --env-order: the order environments run in a round
   // vismask compare A.pfm B.pfm
   std::string compareA, compareB;
 };
 
-constexpr float kAutoPatchDivisions = 24.0f;
+constexpr float kAutoPatchDivisions = 16.0f;
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.

@@ -14,6 +14,7 @@
 #include "vismask/environment.h"
 #include "vismask/span.h"
 #include "vismask/text_writer.h"
+#include "vismask/transport.h"
 
 namespace vismask {
 
@@ -38,14 +39,52 @@ struct SolveResult {
   double unshotFraction = 1.0;  // (unshot + queued) / emitted, channels summed
 };
 
-// What every environment reports between rounds; summed in environment
-// order, so the sums are the same whatever the grouping onto ranks.
+// Which environments live on a rank: contiguous blocks, [first, first+count)
+// of `total`; no rank holds more than `perRank`.
+struct RankEnvs {
+  uint32_t total = 1;
+  uint32_t first = 0;
+  uint32_t count = 1;
+  uint32_t perRank = 1;
+};
+RankEnvs EnvsOfRank(uint32_t total, int ranks, int rank);
+
+// What every environment reports between rounds, gathered from all ranks and
+// summed in environment order, so every rank takes the same decisions
+// whatever the grouping.
+struct EnvReport {
+  double unshot;     // local unshot power plus queued foreign power
+  double emitted;
+  double elapsed;    // seconds since the solve began, on this rank's clock
+  uint64_t shots;    // local and foreign
+  uint64_t recordsCreated;
+  uint64_t foreignShots;
+};
+
 struct RoundTotals {
-  double unshot = 0.0;   // local unshot power plus queued foreign power
+  double unshot = 0.0;
   double emitted = 0.0;
+  double elapsed = 0.0;  // rank 0's clock
   uint64_t shots = 0;
   uint64_t recordsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
+};
+
+// A rank's exchange buffers, carved from its arena at init: one send and one
+// receive block per rank, each large enough for every packet a rank's
+// environments can send in a round, and the gathered reports.
+struct ExchangeBuffers {
+  void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
+              uint32_t packetsPerEnvRound);
+  Span<uint8_t> sendBytes;   // ranks blocks of `blockBytes`
+  Span<uint8_t> recvBytes;
+  Span<Span<const uint8_t>> send;
+  Span<Span<uint8_t>> recv;
+  Span<size_t> received;
+  Span<EnvReport> mine;      // perRank entries
+  Span<EnvReport> all;       // ranks * perRank entries
+  size_t blockBytes = 0;
+  uint32_t packetBytes = 0;
 };
 
 // Per-environment admission: how many new records (local shots with
@@ -59,14 +98,23 @@ uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_
 uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
                     uint64_t maxShots);
 
-// Solves the environments in place (all in this process). `convergence` (may
-// be null) receives one row "shot,seconds,unshot_fraction" per round.
+// Solves this rank's environments `envs` (those of `layout`) in place,
+// exchanging with the other ranks through `transport`. `convergence` (may be
+// null; rank 0) receives one row "shot,seconds,unshot_fraction" per round.
 // Allocates nothing.
-SolveResult Solve(Span<Environment* const> envs, const SolveOptions& options,
-                  TextWriter* convergence);
+SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transport* transport,
+                  ExchangeBuffers* buffers, const SolveOptions& options, TextWriter* convergence);
 
-// Cohen's ambient radiosity estimate, per channel: the unshot power spread
-// over all area and amplified by the mean interreflection 1/(1 - mean kd).
-void AmbientTerm(Span<Environment* const> envs, double ambient[3]);
+// What an environment contributes to Cohen's ambient term.
+struct AmbientReport {
+  double area;
+  double unshot[3];
+  double kdArea[3];
+};
+AmbientReport AmbientOf(const Environment& env);
+// Cohen's ambient radiosity estimate, per channel, from every environment's
+// report (in environment order): the unshot power spread over all area and
+// amplified by the mean interreflection 1/(1 - mean kd).
+void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]);
 
 }  // namespace vismask

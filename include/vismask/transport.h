@@ -1,0 +1,62 @@
+// Transport: how the ranks of a run move bytes. The radiosity code packs and
+// unpacks everything itself; a transport only moves byte blocks between
+// ranks, with buffers the caller made at init (no allocation per message).
+// Implementations live in platform/ and are chosen by what the Makefile
+// links: build/vismask has `loop` (one process) and `pipe` (forked processes
+// over POSIX pipes); build/vismask-mpi has `mpi` (Open MPI).
+//
+// Failure: a rank that dies or a connection that closes is fatal. The
+// transport prints "vismask: rank R: lost rank K (...)" and ends the process
+// with exit status 3 (kExitLostRank), so no rank ever waits forever on a dead
+// one. Calls return only on success.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "vismask/span.h"
+#include "vismask/status.h"
+
+namespace vismask {
+
+constexpr int kExitLostRank = 3;
+
+class Transport {
+ public:
+  virtual ~Transport() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  virtual const char* name() const = 0;
+
+  // Every rank sends send[r].size() bytes to each rank r (send[rank()] is not
+  // sent) and receives into recv[r] what rank r sent it; recvBytes[r] gets
+  // the size. Each recv[r] must be large enough for what r can send.
+  virtual void AllToAll(const Span<const uint8_t>* send, const Span<uint8_t>* recv,
+                        size_t* recvBytes) = 0;
+  // Every rank contributes `bytes` bytes; `all` (size() * bytes) receives
+  // every rank's block in rank order, its own included.
+  virtual void AllGather(const void* mine, size_t bytes, void* all) = 0;
+  // Blocking point-to-point transfer of exactly `bytes` bytes.
+  virtual void Send(int to, const void* data, size_t bytes) = 0;
+  virtual void Recv(int from, void* data, size_t bytes) = 0;
+
+  // Ends this rank's part of the run with `exitCode`. On rank 0 it returns
+  // the status to report (the worst of all ranks'); on other ranks of a
+  // transport that made them (pipe), the process ends here.
+  virtual int Finish(int exitCode) = 0;
+};
+
+// What the command line asked for.
+struct TransportRequest {
+  std::string name;  // "loop", "pipe", "mpi" or "" (the binary's default)
+  int ranks = 1;     // --ranks (pipe)
+};
+
+// The transport this binary provides for `request` (platform/). Called once,
+// early in init: the pipe transport forks here, so every process carries on
+// from this call with its own rank. On error (an unknown or unavailable
+// transport) returns null and sets *error.
+std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status* error);
+
+}  // namespace vismask
