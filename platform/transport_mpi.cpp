@@ -1,7 +1,22 @@
 // The transport of build/vismask-mpi: `mpi`, over Open MPI's MPI_COMM_WORLD
 // (run under `mpirun -np N`; without mpirun it is a singleton of one rank).
 //
-// FAULT_NOTES
+// Faults. MPI_COMM_WORLD returns errors (MPI_ERRORS_RETURN) and Check turns
+// any error into "vismask: rank R: lost rank K (...)" and exit status 3
+// (K is "?" for a collective: MPI does not say which rank failed); mpirun
+// then ends the job with status 3. In practice Open MPI 4.1 (no ULFM) never
+// returns an error for a dead peer: its runtime handles it. Observed on
+// Open MPI 4.1.4 (Debian 12), one node, `mpirun -np 2..4 --oversubscribe`,
+// a rank killed with SIGKILL in the middle of AllToAll rounds, shared-memory
+// and `--mca btl tcp,self` alike: mpirun notices at once, sends the others
+// SIGCONT, then SIGTERM 1 s later; every survivor dies by SIGTERM 1.0-1.2 s
+// after the kill, without a "lost rank" line (over TCP the survivors first
+// print Open MPI's "peer process has unexpectedly disconnected"), and mpirun
+// prints "mpirun noticed that process rank K ... exited on signal 9" and
+// exits with 137 (128 + SIGKILL), not 3. A rank that exits on its own with
+// status 3 makes mpirun kill the rest and exit 3 (2.3 s). If mpirun itself is
+// killed, the ranks end within 3 s. Rank 0's outputs stay under their
+// temporary names in every case.
 #include <mpi.h>
 
 #include <climits>
@@ -85,7 +100,7 @@ Status MpiTransport::Start(const TransportRequest& request) {
     // Every rank sees the same request and world, so all of them end here.
     finished_ = true;
     MPI_Finalize();
-    return Status::Error("--ranks " + std::to_string(request.ranks) +
+    return Status::Error("vismask: --ranks " + std::to_string(request.ranks) +
                          " does not match the MPI world size " + std::to_string(size_) +
                          " (mpirun -np sets the number of ranks)");
   }
@@ -156,9 +171,9 @@ void MpiTransport::AllToAll(const Span<const uint8_t>* send, const Span<uint8_t>
       recvDispls_[p] = static_cast<int>(offset);
     }
   }
-  Check(MPI_Alltoallv(reinterpret_cast<const void*>(sendBase), sendCounts_.get(),
-                      sendDispls_.get(), MPI_BYTE, reinterpret_cast<void*>(recvBase),
-                      recvCounts_.get(), recvDispls_.get(), MPI_BYTE, MPI_COMM_WORLD),
+  Check(MPI_Alltoallv(reinterpret_cast<const void*>(sendBase), sendCounts_.get(), sendDispls_.get(),
+                      MPI_BYTE, reinterpret_cast<void*>(recvBase), recvCounts_.get(),
+                      recvDispls_.get(), MPI_BYTE, MPI_COMM_WORLD),
         -1, "MPI_Alltoallv");
   for (int p = 0; p < size_; ++p) recvBytes[p] = p == rank_ ? 0 : recvSizes_[p];
 }
@@ -209,8 +224,7 @@ void MpiTransport::Recv(int from, void* data, size_t bytes) {
 int MpiTransport::Finish(int exitCode) {
   CHECK_MSG(!finished_, "Finish called twice");
   int worst = exitCode;
-  Check(MPI_Allreduce(&exitCode, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), -1,
-        "MPI_Allreduce");
+  Check(MPI_Allreduce(&exitCode, &worst, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), -1, "MPI_Allreduce");
   finished_ = true;
   MPI_Finalize();
   return worst;
@@ -220,12 +234,12 @@ int MpiTransport::Finish(int exitCode) {
 
 std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status* error) {
   if (!request.name.empty() && request.name != "mpi") {
-    *error = Status::Error("--transport " + request.name +
+    *error = Status::Error("vismask: --transport " + request.name +
                            " is in build/vismask; this binary (vismask-mpi) has mpi");
     return nullptr;
   }
   if (request.ranks < 1) {
-    *error = Status::Error("--ranks must be at least 1");
+    *error = Status::Error("vismask: --ranks must be at least 1");
     return nullptr;
   }
   auto transport = std::make_unique<MpiTransport>();

@@ -212,7 +212,7 @@ Status PipeTransport::Start(int ranks) {
   rankZeroPid_ = ::getpid();
   if (ranks == 1) return Status::Ok();
 
-  // 2·N·(N−1) descriptors are open in rank 0 until every child is forked.
+  // 2*N*(N-1) descriptors are open in rank 0 until every child is forked.
   const uint64_t needFds = 2ull * ranks * (ranks - 1) + 64;
   rlimit lim;
   if (::getrlimit(RLIMIT_NOFILE, &lim) == 0 && lim.rlim_cur != RLIM_INFINITY &&
@@ -221,13 +221,13 @@ Status PipeTransport::Start(int ranks) {
     raised.rlim_cur =
         (lim.rlim_max == RLIM_INFINITY || lim.rlim_max >= needFds) ? needFds : lim.rlim_max;
     if (::setrlimit(RLIMIT_NOFILE, &raised) != 0 || raised.rlim_cur < needFds) {
-      return Status::Error("--ranks " + std::to_string(ranks) + " needs " +
+      return Status::Error("vismask: --ranks " + std::to_string(ranks) + " needs " +
                            std::to_string(needFds) + " open files for its pipes; the limit is " +
                            std::to_string(lim.rlim_max) + " (ulimit -n)");
     }
   }
 
-  // pipeFd[(from * N + to) * 2 + end]: the pipe that carries from → to.
+  // pipeFd[(from * N + to) * 2 + end]: the pipe that carries from -> to.
   std::vector<int> pipeFd(2u * ranks * ranks, -1);
   auto closeAllPipes = [&]() {
     for (int& fd : pipeFd) {
@@ -242,8 +242,8 @@ Status PipeTransport::Start(int ranks) {
       if (::pipe2(fds, O_CLOEXEC | O_NONBLOCK) != 0) {
         std::string why = std::strerror(errno);
         closeAllPipes();
-        return Status::Error("cannot create the pipes for --ranks " + std::to_string(ranks) +
-                             ": " + why);
+        return Status::Error("vismask: cannot create the pipes for --ranks " +
+                             std::to_string(ranks) + ": " + why);
       }
     }
   }
@@ -275,7 +275,7 @@ Status PipeTransport::Start(int ranks) {
       closeAllPipes();
       RestoreSigpipe();
       size_ = 1;
-      return Status::Error("cannot start rank " + std::to_string(r) + ": " + why);
+      return Status::Error("vismask: cannot start rank " + std::to_string(r) + ": " + why);
     }
     peers_[r].pid = pid;
   }
@@ -386,8 +386,8 @@ void PipeTransport::AcceptWord(int peer) {
     CHECK_MSG(false, "Send/Recv sizes disagree");
   }
   if (f.bytes > f.capacity) {
-    os::PrintErr("vismask: rank %d: rank %d sent %llu bytes, the buffer holds %llu\n", rank_,
-                 peer, static_cast<unsigned long long>(f.bytes),
+    os::PrintErr("vismask: rank %d: rank %d sent %llu bytes, the buffer holds %llu\n", rank_, peer,
+                 static_cast<unsigned long long>(f.bytes),
                  static_cast<unsigned long long>(f.capacity));
     CHECK_MSG(false, "receive buffer too small");
   }
@@ -623,19 +623,20 @@ void PipeTransport::RestoreSigpipe() {
 std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status* error) {
   const std::string& name = request.name;
   if (request.ranks < 1 || request.ranks > kMaxPipeRanks) {
-    *error = Status::Error("--ranks must be between 1 and " + std::to_string(kMaxPipeRanks) +
-                           " (got " + std::to_string(request.ranks) + ")");
+    *error =
+        Status::Error("vismask: --ranks must be between 1 and " + std::to_string(kMaxPipeRanks) +
+                      " (got " + std::to_string(request.ranks) + ")");
     return nullptr;
   }
   if (name == "mpi") {
     *error = Status::Error(
-        "--transport mpi is in build/vismask-mpi (run it under mpirun); this binary has loop "
-        "and pipe");
+        "vismask: --transport mpi is in build/vismask-mpi (run it under mpirun); this binary "
+        "has loop and pipe");
     return nullptr;
   }
   if (name == "loop" || (name.empty() && request.ranks == 1)) {
     if (request.ranks != 1) {
-      *error = Status::Error("--transport loop runs one rank (got --ranks " +
+      *error = Status::Error("vismask: --transport loop runs one rank (got --ranks " +
                              std::to_string(request.ranks) + "); use --transport pipe");
       return nullptr;
     }
@@ -650,7 +651,8 @@ std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status
     }
     return transport;
   }
-  *error = Status::Error("unknown --transport '" + name + "' (this binary has loop and pipe)");
+  *error =
+      Status::Error("vismask: unknown --transport '" + name + "' (this binary has loop and pipe)");
   return nullptr;
 }
 

@@ -1,5 +1,6 @@
 #include "vismask/app.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -125,13 +126,19 @@ int Fail(const Status& s) {
   return kExitUsage;
 }
 
+// A user error found at init: every rank finds it, rank 0 reports it.
+int FailInit(const Render* r, const Status& s) {
+  if (r->isRoot()) return Fail(s);
+  return kExitUsage;
+}
+
 // Init: load, mesh, build the environment and the output stage, open the
 // output files under temporary names. Heap allocation is allowed here only.
 int Init(Render* r) {
   const Options& o = r->options;
   Scene scene;
   Status s = LoadScene(o.scene, &scene);
-  if (!s.ok()) return Fail(s);
+  if (!s.ok()) return FailInit(r, s);
   r->numPolygons = scene.polygons.size();
   glm::vec3 extent = scene.bounds.hi - scene.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
@@ -142,7 +149,7 @@ int Init(Render* r) {
   grid.box = scene.bounds;
   Partition part;
   s = PartitionScene(scene, grid, &part);
-  if (!s.ok()) return Fail(s);
+  if (!s.ok()) return FailInit(r, s);
 
   EnvOptions envOptions;
   envOptions.rayEpsilon = 1e-6f * glm::length(extent);
@@ -161,7 +168,7 @@ int Init(Render* r) {
   for (uint32_t e = 0; e < r->layout.first + r->layout.count; ++e) {
     Mesh mesh;
     s = MeshScene(part.scene, pieces[e], r->patchSize, kMaxPatches, &mesh);
-    if (!s.ok()) return Fail(Status::Error("vismask: --patch-size: " + s.message()));
+    if (!s.ok()) return FailInit(r, Status::Error("vismask: --patch-size: " + s.message()));
     for (Patch& p : mesh.patches) p.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
     if (e < r->layout.first) continue;
@@ -174,7 +181,7 @@ int Init(Render* r) {
 
   Camera camera = o.hasCamera ? o.camera : DefaultCamera(scene.bounds);
   if (!MakeView(camera, o.width, o.height, &r->view))
-    return Fail(Status::Error("vismask: --camera: degenerate camera"));
+    return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));
 
   MaskShape shape{o.maskMethod == MaskMethod::kNone ? 0u : o.maskRes};
   uint32_t packetBytes = grid.count() > 1 ? PacketBytes(shape) : 0;
@@ -468,6 +475,12 @@ int Main(int argc, const char* const* argv) {
   r->transport = MakeTransport(TransportRequest{r->options.transport, r->options.ranks}, &s);
   if (!r->transport) return Fail(s);
   int rc = Init(r.get());
+  // Every rank learns whether every rank's init succeeded (rank 0 alone
+  // opens the outputs) before anyone starts the solve's collectives.
+  int32_t mine = rc, all[256] = {};
+  CHECK(r->transport->size() <= 256);
+  r->transport->AllGather(&mine, sizeof mine, all);
+  for (int k = 0; k < r->transport->size(); ++k) rc = std::max(rc, static_cast<int>(all[k]));
   if (rc != kExitOk) return r->transport->Finish(rc);
   r->initSeconds = os::Seconds() - start;
 
@@ -488,7 +501,7 @@ int Main(int argc, const char* const* argv) {
   rc = WriteOutputs(r.get(), res);
   SetPhase(Phase::kDone);
   rc = r->transport->Finish(rc);
-  if (rc == kExitOk && !r->options.quiet)
+  if (rc == kExitOk && !r->options.quiet && r->isRoot())
     os::PrintErr("vismask: %llu shots, %.2f s solve; wrote %s/image.png\n",
                  static_cast<unsigned long long>(res.shots), res.seconds, r->options.outDir.c_str());
   return rc;

@@ -31,19 +31,28 @@ class Transport {
 
   // Every rank sends send[r].size() bytes to each rank r (send[rank()] is not
   // sent) and receives into recv[r] what rank r sent it; recvBytes[r] gets
-  // the size. Each recv[r] must be large enough for what r can send.
+  // the size (recvBytes[rank()] = 0). The three arrays have size() entries.
+  // Each recv[r] must be large enough for what r can send (a bigger block is
+  // a CHECK failure). mpi: the send blocks must lie within 2 GiB of each
+  // other, and so must the receive blocks (one arena region does).
   virtual void AllToAll(const Span<const uint8_t>* send, const Span<uint8_t>* recv,
                         size_t* recvBytes) = 0;
-  // Every rank contributes `bytes` bytes; `all` (size() * bytes) receives
-  // every rank's block in rank order, its own included.
+  // Every rank contributes `bytes` bytes (the same on every rank); `all`
+  // (size() * bytes) receives every rank's block in rank order, its own
+  // included. `mine` may be the rank's own block of `all`.
   virtual void AllGather(const void* mine, size_t bytes, void* all) = 0;
-  // Blocking point-to-point transfer of exactly `bytes` bytes.
+  // Blocking point-to-point transfer of exactly `bytes` bytes; the sizes of
+  // a Send and its Recv must agree (CHECK). Send may wait until the receiver
+  // takes the bytes, so two ranks must not Send to each other at once.
   virtual void Send(int to, const void* data, size_t bytes) = 0;
   virtual void Recv(int from, void* data, size_t bytes) = 0;
 
-  // Ends this rank's part of the run with `exitCode`. On rank 0 it returns
-  // the status to report (the worst of all ranks'); on other ranks of a
-  // transport that made them (pipe), the process ends here.
+  // Ends this rank's part of the run with `exitCode`; no call may follow.
+  // Every rank must call it, on every path after MakeTransport succeeded. On
+  // rank 0 it returns the status to report (the worst of all ranks'; pipe:
+  // kExitLostRank if a child died or exited without Finish); on other ranks
+  // of a transport that made them (pipe), the process ends here; mpi: every
+  // rank returns the worst code.
   virtual int Finish(int exitCode) = 0;
 };
 
@@ -56,7 +65,8 @@ struct TransportRequest {
 // The transport this binary provides for `request` (platform/). Called once,
 // early in init: the pipe transport forks here, so every process carries on
 // from this call with its own rank. On error (an unknown or unavailable
-// transport) returns null and sets *error.
+// transport, or --ranks outside 1..256 for pipe) returns null and sets
+// *error.
 std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status* error);
 
 }  // namespace vismask
