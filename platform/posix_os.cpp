@@ -102,6 +102,28 @@ uint64_t PeakRssBytes() {
   return kb * 1024ull;
 }
 
+namespace {
+// The value in kB after `key` in a /proc file read into `text`, in bytes.
+uint64_t ProcField(const char* text, const char* key) {
+  const char* p = std::strstr(text, key);
+  unsigned long long kb = 0;
+  if (!p || std::sscanf(p + std::strlen(key), "%llu", &kb) != 1) return 0;
+  return kb * 1024ull;
+}
+}  // namespace
+
+uint64_t FileRssBytes() {
+  int fd = ::open("/proc/self/smaps_rollup", O_RDONLY);
+  if (fd < 0) return 0;
+  char buf[4096];
+  ssize_t n = ::read(fd, buf, sizeof buf - 1);
+  ::close(fd);
+  if (n <= 0) return 0;
+  buf[n] = '\0';
+  uint64_t rss = ProcField(buf, "\nRss:"), anon = ProcField(buf, "\nAnonymous:");
+  return rss > anon ? rss - anon : 0;
+}
+
 OutFile::~OutFile() { Discard(); }
 
 bool OutFile::Open(const char* path, char* why) {

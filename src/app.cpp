@@ -85,13 +85,25 @@ struct Render {
   os::OutFile files[kNumOutputs];
   TextWriter convergence;
   double initSeconds = 0.0;
+  uint64_t predictedBytes = 0;  // this rank's arenas, as measured before they were made
 
   bool isRoot() const { return transport->rank() == 0; }
 
-  void LayoutRank(Arena& arena, uint32_t packetBytes) {
-    int ranks = transport->size();
+  // The rank's own arena: exchange buffers, framebuffer, gathered reports;
+  // on rank 0 also the second framebuffer, the 8-bit image, the PNG scratch
+  // and the writers' buffers.
+  uint64_t rankExchangeBytes = 0, rankImageBytes = 0, rankOutputBytes = 0;
+  void LayoutRank(Arena& arena, uint32_t packetBytes, int ranks, bool root) {
+    size_t mark = arena.used();
+    auto part = [&](uint64_t* bytes) {
+      *bytes += arena.used() - mark;
+      mark = arena.used();
+    };
+    rankExchangeBytes = rankImageBytes = rankOutputBytes = 0;
     exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
+    part(&rankExchangeBytes);
     fb.Layout(arena, options.width, options.height);
+    part(&rankImageBytes);
     records = arena.Alloc<PatchRecord>(kPatchChunk);
     summaryMine = arena.Alloc<EnvSummary>(layout.perRank);
     summaryAll = arena.Alloc<EnvSummary>(size_t(ranks) * layout.perRank);
@@ -99,12 +111,15 @@ struct Render {
     ambientMine = arena.Alloc<AmbientReport>(layout.perRank);
     ambientAll = arena.Alloc<AmbientReport>(size_t(ranks) * layout.perRank);
     ambient = arena.Alloc<AmbientReport>(layout.total);
-    if (!isRoot()) return;
+    part(&rankOutputBytes);
+    if (!root) return;
     if (ranks > 1) incoming.Layout(arena, options.width, options.height);
     rgb8 = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height) * 3);
+    part(&rankImageBytes);
     pngScratch = arena.Alloc<uint8_t>(PngScratchBytes(options.width, options.height));
     convBuffer = arena.Alloc<char>(kTextBufferBytes);
     textBuffer = arena.Alloc<char>(kTextBufferBytes);
+    part(&rankOutputBytes);
   }
 };
 
@@ -132,63 +147,105 @@ int FailInit(const Render* r, const Status& s) {
   return kExitUsage;
 }
 
-// Init: load, mesh, build the environment and the output stage, open the
-// output files under temporary names. Heap allocation is allowed here only.
-int Init(Render* r) {
-  const Options& o = r->options;
+// The init work `render` and `footprint` share: the scene loaded, checked
+// and cut into environments. Heap; dropped at the end of init.
+struct Prepared {
   Scene scene;
-  Status s = LoadScene(o.scene, &scene);
-  if (!s.ok()) return FailInit(r, s);
-  r->numPolygons = scene.polygons.size();
-  glm::vec3 extent = scene.bounds.hi - scene.bounds.lo;
-  float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
-  r->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
-
   EnvGrid grid;
-  for (int a = 0; a < 3; ++a) grid.n[a] = o.envs[a];
-  grid.box = scene.bounds;
   Partition part;
-  s = PartitionScene(scene, grid, &part);
-  if (!s.ok()) return FailInit(r, s);
-
+  float patchSize = 0.0f;
+  std::vector<std::vector<uint32_t>> pieces;  // polygon pieces of each environment
   EnvOptions envOptions;
-  envOptions.rayEpsilon = 1e-6f * glm::length(extent);
-  envOptions.rays = o.rays;
-  envOptions.seed = o.seed;
-  envOptions.maskMethod = o.maskMethod;
-  envOptions.maskRes = o.maskRes;
-  envOptions.roundShots = o.roundShots;
-  envOptions.queueCapacity = o.queue;
-  r->layout = EnvsOfRank(static_cast<uint32_t>(grid.count()), r->transport->size(), r->transport->rank());
-  // Mesh one environment at a time; keep only this rank's. Patch ids are
-  // global (environment-major), so earlier environments are meshed to count.
-  std::vector<std::vector<uint32_t>> pieces(grid.count());
-  for (uint32_t i = 0; i < part.scene.polygons.size(); ++i) pieces[part.env[i]].push_back(i);
+  uint32_t packetBytes = 0;
+};
+
+Status PrepareScene(const Options& o, Prepared* p) {
+  Status s = LoadScene(o.scene, &p->scene);
+  if (!s.ok()) return s;
+  glm::vec3 extent = p->scene.bounds.hi - p->scene.bounds.lo;
+  float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
+  p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
+  for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
+  p->grid.box = p->scene.bounds;
+  s = PartitionScene(p->scene, p->grid, &p->part);
+  if (!s.ok()) return s;
+  p->pieces.assign(p->grid.count(), {});
+  for (uint32_t i = 0; i < p->part.scene.polygons.size(); ++i)
+    p->pieces[p->part.env[i]].push_back(i);
+  EnvOptions& e = p->envOptions;
+  e.rayEpsilon = 1e-6f * glm::length(extent);
+  e.rays = o.rays;
+  e.seed = o.seed;
+  e.maskMethod = o.maskMethod;
+  e.maskRes = o.maskRes;
+  e.roundShots = o.roundShots;
+  e.queueCapacity = o.queue;
+  MaskShape shape{o.maskMethod == MaskMethod::kNone ? 0u : o.maskRes};
+  p->packetBytes = p->grid.count() > 1 ? PacketBytes(shape) : 0;
+  return Status::Ok();
+}
+
+// Meshes environments 0..end-1 in order, one at a time, giving each patch
+// its global (environment-major) id, and prepares those from `first` on
+// into `envs` (the earlier ones are meshed only to count their patches).
+Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
+                   std::vector<std::unique_ptr<Environment>>* envs) {
   uint32_t nextId = 0;
-  for (uint32_t e = 0; e < r->layout.first + r->layout.count; ++e) {
+  for (uint32_t e = 0; e < end; ++e) {
     Mesh mesh;
-    s = MeshScene(part.scene, pieces[e], r->patchSize, kMaxPatches, &mesh);
-    if (!s.ok()) return FailInit(r, Status::Error("vismask: --patch-size: " + s.message()));
-    for (Patch& p : mesh.patches) p.globalId += nextId;
+    Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
+    if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
+    for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
-    if (e < r->layout.first) continue;
+    if (e < first) continue;
     std::vector<uint32_t> ids(mesh.patches.size());
     for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
-    r->envs.push_back(std::make_unique<Environment>());
-    r->envs.back()->Init(grid, e, mesh, ids, envOptions);
+    envs->push_back(std::make_unique<Environment>());
+    envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
   }
-  for (auto& e : r->envs) r->envPtrs.push_back(e.get());
+  return Status::Ok();
+}
 
-  Camera camera = o.hasCamera ? o.camera : DefaultCamera(scene.bounds);
+// Init: load, partition, mesh and measure this rank's environments, check
+// the memory budget, then make the arenas, build, and open the output files
+// under temporary names. Heap allocation is allowed here only.
+int Init(Render* r) {
+  const Options& o = r->options;
+  Prepared p;
+  Status s = PrepareScene(o, &p);
+  if (!s.ok()) return FailInit(r, s);
+  r->numPolygons = p.scene.polygons.size();
+  r->patchSize = p.patchSize;
+  r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
+  s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
+  if (!s.ok()) return FailInit(r, s);
+  Arena measure = Arena::Measure();
+  r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot());
+  uint64_t envBytes = 0;
+  for (auto& e : r->envs) envBytes += e->footprint().total;
+  uint64_t need = envBytes + ArenaRoundUp(measure.used());
+  r->predictedBytes = need;
+  if (o.memBudget > 0 && need > o.memBudget) {
+    // Every rank checks its own need; each that is over says so.
+    os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes (environment arenas %llu + rank "
+                 "buffers %llu), more than the budget of %llu bytes\n",
+                 r->transport->rank(), static_cast<unsigned long long>(need),
+                 static_cast<unsigned long long>(envBytes),
+                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())),
+                 static_cast<unsigned long long>(o.memBudget));
+    return kExitUsage;
+  }
+  for (auto& e : r->envs) {
+    e->Build();
+    r->envPtrs.push_back(e.get());
+  }
+
+  Camera camera = o.hasCamera ? o.camera : DefaultCamera(p.scene.bounds);
   if (!MakeView(camera, o.width, o.height, &r->view))
     return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));
 
-  MaskShape shape{o.maskMethod == MaskMethod::kNone ? 0u : o.maskRes};
-  uint32_t packetBytes = grid.count() > 1 ? PacketBytes(shape) : 0;
-  Arena measure = Arena::Measure();
-  r->LayoutRank(measure, packetBytes);
   r->rankArena = Arena(measure.used());
-  r->LayoutRank(r->rankArena, packetBytes);
+  r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot());
   if (!r->isRoot()) return kExitOk;
 
   char why[os::kWhyBytes];
@@ -370,9 +427,19 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("  \"memory\": {\n    \"environment_arena_bytes\": [");
   for (size_t i = 0; i < r->summary.size(); ++i)
     w.Printf("%s%llu", i ? ", " : "", static_cast<unsigned long long>(r->summary[i].arenaBytes));
+  uint64_t highWater = ArenaRoundUp(r->rankArena.used()), arenas = r->rankArena.capacity();
+  for (Environment* e : r->envPtrs) {
+    highWater += ArenaRoundUp(e->arenaUsed());
+    arenas += e->arenaCapacity();
+  }
+  uint64_t peak = os::PeakRssBytes(), files = os::FileRssBytes();
   w.Printf("],\n    \"rank0_arena_bytes\": %zu,\n", r->rankArena.capacity());
-  w.Printf("    \"peak_rss_bytes\": %llu\n  }\n}\n",
-           static_cast<unsigned long long>(os::PeakRssBytes()));
+  w.Printf("    \"predicted_bytes\": %llu,\n    \"arena_high_water_bytes\": %llu,\n",
+           static_cast<unsigned long long>(r->predictedBytes), static_cast<unsigned long long>(highWater));
+  w.Printf("    \"file_rss_bytes\": %llu,\n", static_cast<unsigned long long>(files));
+  w.Printf("    \"peak_rss_explained\": %.4f,\n",
+           peak > 0 ? static_cast<double>(arenas + files) / static_cast<double>(peak) : 0.0);
+  w.Printf("    \"peak_rss_bytes\": %llu\n  }\n}\n", static_cast<unsigned long long>(peak));
   w.Flush();
 }
 
@@ -431,6 +498,86 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   return kExitOk;
 }
 
+// vismask footprint: every environment's and every rank's arena bytes, by
+// part, from the same measuring layout a render uses, without solving.
+int Footprint(const Options& o) {
+  Prepared p;
+  Status s = PrepareScene(o, &p);
+  if (!s.ok()) return Fail(s);
+  uint32_t total = static_cast<uint32_t>(p.grid.count());
+  std::vector<std::unique_ptr<Environment>> envs;
+  s = PrepareEnvs(p, 0, total, &envs);
+  if (!s.ok()) return Fail(s);
+  int ranks = o.ranks;
+  std::string out;
+  char line[512];
+  auto add = [&](const char* fmt, auto... args) {
+    std::snprintf(line, sizeof line, fmt, args...);
+    out += line;
+  };
+  using ull = unsigned long long;
+  std::vector<uint64_t> rankTotal(ranks), rankEnvBytes(ranks), rankOwn(ranks);
+  std::vector<Render> probes(ranks);
+  for (int k = 0; k < ranks; ++k) {
+    Render& r = probes[k];
+    r.options = o;
+    r.layout = EnvsOfRank(total, ranks, k);
+    Arena measure = Arena::Measure();
+    r.LayoutRank(measure, p.packetBytes, ranks, k == 0);
+    rankOwn[k] = ArenaRoundUp(measure.used());
+    for (uint32_t e = r.layout.first; e < r.layout.first + r.layout.count; ++e)
+      rankEnvBytes[k] += envs[e]->footprint().total;
+    rankTotal[k] = rankEnvBytes[k] + rankOwn[k];
+  }
+  if (o.json) {
+    out += "{\n  \"scene\": \"" + o.scene + "\",\n  \"environments\": [\n";
+    for (uint32_t e = 0; e < total; ++e) {
+      const EnvFootprint& f = envs[e]->footprint();
+      add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"grid_cells\": %llu, "
+          "\"patch_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": %llu, "
+          "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"arena_bytes\": %llu}%s\n",
+          e, [&] { for (int k = 0; k < ranks; ++k) { RankEnvs re = EnvsOfRank(total, ranks, k); if (e < re.first + re.count) return k; } return 0; }(),
+          (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.vertices, (ull)f.grid,
+          (ull)f.queue, (ull)f.packets, (ull)f.total, e + 1 < total ? "," : "");
+    }
+    out += "  ],\n  \"ranks\": [\n";
+    for (int k = 0; k < ranks; ++k) {
+      const Render& r = probes[k];
+      add("    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
+          "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
+          "\"rank_arena_bytes\": %llu, \"total_bytes\": %llu}%s\n",
+          k, r.layout.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
+          (ull)r.rankOutputBytes, (ull)rankOwn[k], (ull)rankTotal[k], k + 1 < ranks ? "," : "");
+    }
+    out += "  ]\n}\n";
+  } else {
+    add("vismask footprint: %s, %u environment%s, %d rank%s, mask %s R=%u, %dx%d image\n\n",
+        o.scene.c_str(), total, total == 1 ? "" : "s", ranks, ranks == 1 ? "" : "s",
+        MaskMethodName(o.maskMethod), o.maskRes, o.width, o.height);
+    add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches", "grid_cells",
+        "patches_B", "vertices_B", "grid_B", "queue_B", "packets_B", "arena_B");
+    for (uint32_t e = 0; e < total; ++e) {
+      const EnvFootprint& f = envs[e]->footprint();
+      int k = 0;
+      while (e >= EnvsOfRank(total, ranks, k).first + EnvsOfRank(total, ranks, k).count) ++k;
+      add("%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
+          (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.vertices, (ull)f.grid,
+          (ull)f.queue, (ull)f.packets, (ull)f.total);
+    }
+    add("\n%4s %4s %14s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B", "exchange_B",
+        "image_B", "output_B", "total_B");
+    for (int k = 0; k < ranks; ++k) {
+      const Render& r = probes[k];
+      add("%4d %4u %14llu %12llu %12llu %12llu %13llu\n", k, r.layout.count, (ull)rankEnvBytes[k],
+          (ull)r.rankExchangeBytes, (ull)r.rankImageBytes, (ull)r.rankOutputBytes, (ull)rankTotal[k]);
+    }
+    add("\nbytes are arena reservations (the whole of a solve's memory after init); a rank's\n"
+        "process also holds its binary and libraries (see run.json's memory section)\n");
+  }
+  os::WriteOut(out.data(), out.size());
+  return kExitOk;
+}
+
 // vismask compare A.pfm B.pfm: the relative RMSE of A against B over all
 // pixels and channels, sqrt(sum (a - b)^2 / sum b^2), and the largest
 // absolute difference.
@@ -471,6 +618,7 @@ int Main(int argc, const char* const* argv) {
     return kExitOk;
   }
   if (r->options.command == "compare") return Compare(r->options);
+  if (r->options.command == "footprint") return Footprint(r->options);
   // The pipe transport forks here: every rank carries on from this point.
   r->transport = MakeTransport(TransportRequest{r->options.transport, r->options.ranks}, &s);
   if (!r->transport) return Fail(s);

@@ -31,6 +31,7 @@ Arena& Arena::operator=(Arena&& o) noexcept {
 
 void* Arena::AllocBytes(size_t bytes, size_t align) {
   CHECK(align != 0 && (align & (align - 1)) == 0 && align <= kAlign);
+  if (bytes == 0) return nullptr;  // nothing reserved, not even alignment padding
   size_t start = (used_ + align - 1) & ~(align - 1);
   if (measuring()) {
     used_ = start + bytes;

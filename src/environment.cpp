@@ -53,25 +53,39 @@ Patch PatchFromHeader(const PacketHeader& h) {
 
 void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices,
                          const Grid::Plan& plan) {
+  size_t mark = arena.used();
+  auto part = [&](uint64_t* bytes) {
+    *bytes = arena.used() - mark;
+    mark = arena.used();
+  };
   patches_ = arena.Alloc<Patch>(numPatches);
   geom_ = arena.Alloc<PatchGeom>(numPatches);
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
+  tree_.Layout(arena, numPatches);
+  part(&footprint_.patches);
   vertices_ = arena.Alloc<glm::vec3>(numVertices);
   vertexB_ = arena.Alloc<glm::vec3>(numVertices);
   vertexWeight_ = arena.Alloc<float>(numVertices);
-  tree_.Layout(arena, numPatches);
+  part(&footprint_.vertices);
   grid_.Layout(arena, plan);
+  part(&footprint_.grid);
   // Exchange buffers only where there is someone to exchange with.
   uint32_t q = numNeighbours_ > 0 ? options_.queueCapacity : 0;
   slots_ = arena.Alloc<Slot>(q);
   slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
+  part(&footprint_.queue);
   scratchWords_ = arena.Alloc<uint64_t>(numNeighbours_ > 0 ? 2 * size_t(shape_.words()) : 0);
   outbox_ = arena.Alloc<uint8_t>(size_t(outCapacity_) * packetBytes_);
+  part(&footprint_.packets);
+  footprint_.total = ArenaRoundUp(arena.used());
+  footprint_.numPatches = numPatches;
+  footprint_.gridCells = uint64_t(plan.res[0]) * plan.res[1] * plan.res[2];
 }
 
-void Environment::Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
-                       const std::vector<uint32_t>& ids, const EnvOptions& options) {
+const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
+                                         const std::vector<uint32_t>& ids,
+                                         const EnvOptions& options) {
   index_ = index;
   options_ = options;
   grid3_ = grid;
@@ -84,38 +98,44 @@ void Environment::Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
   outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
 
   // Local copies of the patches and a compact local vertex lattice.
-  std::vector<Patch> local;
-  local.reserve(ids.size());
+  staged_.clear();
+  stagedVertices_.clear();
+  staged_.reserve(ids.size());
   std::unordered_map<uint32_t, uint32_t> vertexMap;
-  std::vector<glm::vec3> verts;
   for (uint32_t id : ids) {
     Patch p = mesh.patches[id];
     for (int k = 0; k < 4; ++k) {
       auto it = vertexMap.find(p.vertex[k]);
       if (it == vertexMap.end()) {
-        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(verts.size())).first;
-        verts.push_back(mesh.vertices[p.vertex[k]]);
+        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(stagedVertices_.size())).first;
+        stagedVertices_.push_back(mesh.vertices[p.vertex[k]]);
       }
       p.vertex[k] = it->second;
     }
-    local.push_back(p);
+    staged_.push_back(p);
   }
-  uint32_t n = static_cast<uint32_t>(local.size());
-  Grid::Plan plan = Grid::MakePlan(Span<const Patch>(local.data(), n), options.gridDensity);
-
+  uint32_t n = static_cast<uint32_t>(staged_.size());
+  plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n), options.gridDensity);
   Arena measure = Arena::Measure();
-  Layout(measure, n, static_cast<uint32_t>(verts.size()), plan);
-  arena_ = Arena(measure.used());
-  Layout(arena_, n, static_cast<uint32_t>(verts.size()), plan);
+  Layout(measure, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  return footprint_;
+}
 
+void Environment::Build() {
+  uint32_t n = static_cast<uint32_t>(staged_.size());
+  arena_ = Arena(footprint_.total);
+  Layout(arena_, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
   totalArea_ = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
-    patches_[i] = local[i];
-    geom_[i] = MakePatchGeom(local[i]);
-    totalArea_ += local[i].area;
+    patches_[i] = staged_[i];
+    geom_[i] = MakePatchGeom(staged_[i]);
+    totalArea_ += staged_[i].area;
   }
-  for (size_t v = 0; v < verts.size(); ++v) vertices_[v] = verts[v];
+  for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
   grid_.Build(patches_, geom_);
+  std::vector<Patch>().swap(staged_);
+  std::vector<glm::vec3>().swap(stagedVertices_);
   Reset();
 }
 

@@ -15,6 +15,9 @@ const char* HelpText() {
 
 usage:
   vismask render SCENE.obj [options]     solve and render a scene
+  vismask footprint SCENE.obj [options]  the memory each environment and rank
+                                         would reserve, without solving
+                                         (render's options; --json for JSON)
   vismask compare A.pfm B.pfm            relative RMSE and max abs error of A
                                          against B
   vismask --help                         this text
@@ -56,6 +59,9 @@ local environments and visibility masks:
   --transport T        loop | pipe | mpi: loop keeps every environment in
                        one process; pipe is the default for --ranks > 1; mpi
                        is what build/vismask-mpi uses (under mpirun)
+  --mem-budget BYTES   refuse at init (exit 2, with the numbers) when a rank
+                       would reserve more than BYTES (suffix K, M or G for
+                       KiB, MiB, GiB); a run that starts never runs out
   --env-order I,J,...  run the environments in this order within each round
                        (a permutation of 0..N-1); a check of determinism:
                        the results must not change
@@ -117,7 +123,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     o->compareB = args[2];
     return Status::Ok();
   }
-  if (args[0] != "render")
+  if (args[0] != "render" && args[0] != "footprint")
     return Status::Error("vismask: unknown command '" + args[0] + "' (try 'vismask --help')");
   o->command = args[i++];
   for (; i < args.size(); ++i) {
@@ -128,6 +134,10 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     }
     if (a == "--quiet") {
       o->quiet = true;
+      continue;
+    }
+    if (a == "--json" && o->command == "footprint") {
+      o->json = true;
       continue;
     }
     if (a.rfind("--", 0) != 0) {
@@ -217,6 +227,16 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--transport") {
       if (v != "loop" && v != "pipe" && v != "mpi") return Bad(a, v, "loop, pipe or mpi");
       o->transport = v;
+    } else if (a == "--mem-budget") {
+      std::string digits = v;
+      uint64_t scale = 1;
+      if (!digits.empty() && (digits.back() == 'K' || digits.back() == 'M' || digits.back() == 'G')) {
+        scale = digits.back() == 'K' ? 1024ull : digits.back() == 'M' ? 1024ull * 1024 : 1024ull * 1024 * 1024;
+        digits.pop_back();
+      }
+      if (!ParseU64(digits, &u) || u < 1 || u > ~0ull / scale)
+        return Bad(a, v, "a number of bytes >= 1 (suffix K, M or G allowed)");
+      o->memBudget = u * scale;
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);
@@ -224,7 +244,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       return Status::Error("vismask: unknown option '" + a + "' (try 'vismask --help')");
     }
   }
-  if (o->scene.empty()) return Status::Error("vismask: render: no scene given (vismask render SCENE.obj)");
+  if (o->scene.empty())
+    return Status::Error("vismask: " + o->command + ": no scene given (vismask " + o->command + " SCENE.obj)");
   int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +

@@ -36,6 +36,7 @@ class Arena {
   size_t remaining() const { return capacity_ - used_; }
 
   // `bytes` bytes aligned to `align` (a power of two <= kAlign). Zeroed.
+  // Zero bytes reserve nothing (null).
   void* AllocBytes(size_t bytes, size_t align);
 
   // `n` value-initialised T. T must be trivially destructible: the arena never

@@ -45,6 +45,19 @@ struct EnvStats {
   uint64_t recordsCreated = 0;  // local shots that went on to neighbours
 };
 
+// What an environment's arena holds, in bytes, by part (from the measuring
+// pass of its layout; the parts sum to `total`).
+struct EnvFootprint {
+  uint64_t patches = 0;   // Patch, PatchGeom, PatchEnergy, shot counts, selection tree
+  uint64_t vertices = 0;  // display lattice and its radiosity
+  uint64_t grid = 0;      // cell offsets and patch references
+  uint64_t queue = 0;     // foreign-shooter slots and their masks
+  uint64_t packets = 0;   // outbox and working masks
+  uint64_t total = 0;     // the arena's size (rounded up to Arena::kAlign)
+  uint64_t numPatches = 0;
+  uint64_t gridCells = 0;
+};
+
 struct EnvOptions {
   float gridDensity = 4.0f;  // grid cells per patch (Cleary's lambda)
   float rayEpsilon = 0.0f;   // ray tMin in scene units
@@ -62,11 +75,21 @@ class Environment {
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
 
-  // Builds environment `index` of `grid` from the patches `ids` of `mesh`
-  // (init only): measures the layout, makes the arena, copies the patches
-  // in, remaps their display vertices to a local lattice and builds the grid.
+  // Init, first half: takes environment `index` of `grid` from the patches
+  // `ids` of `mesh` (copied to the heap, display vertices remapped to a local
+  // lattice), plans the grid and measures the arena. No arena yet.
+  const EnvFootprint& Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
+                              const std::vector<uint32_t>& ids, const EnvOptions& options);
+  // Init, second half: makes the arena of exactly the measured size, copies
+  // the patches in, builds the grid, and drops the heap copies.
+  void Build();
+  // Prepare and Build.
   void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
-            const std::vector<uint32_t>& ids, const EnvOptions& options);
+            const std::vector<uint32_t>& ids, const EnvOptions& options) {
+    Prepare(grid, index, mesh, ids, options);
+    Build();
+  }
+  const EnvFootprint& footprint() const { return footprint_; }
 
   // Emission: B = Ke, unshot power = Ke * area; ledger and queue restart.
   void Reset();
@@ -171,6 +194,11 @@ class Environment {
   EnergyLedger ledger_;
   EnvStats stats_;
   double totalArea_ = 0.0;
+  EnvFootprint footprint_;
+  // Between Prepare and Build only.
+  std::vector<Patch> staged_;
+  std::vector<glm::vec3> stagedVertices_;
+  Grid::Plan plan_;
 };
 
 }  // namespace vismask

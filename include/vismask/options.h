@@ -14,7 +14,7 @@
 namespace vismask {
 
 struct Options {
-  std::string command;  // "render"; empty with --help
+  std::string command;  // "render", "footprint" or "compare"; empty with --help
   bool help = false;
   std::string scene;
   std::string outDir = "out";
@@ -38,7 +38,9 @@ struct Options {
   uint32_t queue = 64;
   std::vector<uint32_t> envOrder;
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
-  int ranks = 1;          // --ranks N (pipe)  // --env-order: the order environments run in a round
+  int ranks = 1;          // --ranks N (pipe)
+  uint64_t memBudget = 0; // --mem-budget BYTES per rank; 0: none
+  bool json = false;      // footprint --json  // --env-order: the order environments run in a round
   // vismask compare A.pfm B.pfm
   std::string compareA, compareB;
 };

@@ -33,6 +33,9 @@ bool Exists(const char* path);
 
 // Peak resident set size of this process (VmHWM), bytes; 0 if unknown.
 uint64_t PeakRssBytes();
+// Resident bytes backed by files (the binary and its shared libraries):
+// Rss - Anonymous from /proc/self/smaps_rollup; 0 if unknown.
+uint64_t FileRssBytes();
 
 // An output file written under a temporary name ("NAME.tmp") and renamed to
 // its final name only by Commit(), so an interrupted run never leaves a file

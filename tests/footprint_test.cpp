@@ -1,0 +1,121 @@
+// Memory: footprint's predictions are what a render reserves and uses, one
+// environment pays for no exchange, and --mem-budget refuses at init.
+#include <regex>
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace vismask {
+namespace {
+
+using test::ReadFile;
+using test::RunMain;
+using test::TempDir;
+
+// The value of `"key": N` after position `from` in a JSON text.
+unsigned long long JsonNumber(const std::string& json, const std::string& key, size_t from = 0) {
+  size_t at = json.find("\"" + key + "\": ", from);
+  EXPECT_NE(at, std::string::npos) << key;
+  if (at == std::string::npos) return 0;
+  return std::stoull(json.substr(at + key.size() + 4));
+}
+
+std::string FootprintJson(const std::vector<std::string>& options) {
+  std::vector<std::string> args = {"footprint", "scenes/cornell.obj", "--json"};
+  args.insert(args.end(), options.begin(), options.end());
+  testing::internal::CaptureStdout();
+  auto r = RunMain(args);
+  std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_EQ(r.code, 0) << r.err;
+  return out;
+}
+
+TEST(FootprintTest, PredictionsMatchTheRendersHighWaterMark) {
+  TempDir dir;
+  const std::vector<std::vector<std::string>> configs = {
+      {"--envs", "1"},
+      {"--envs", "2", "--mask-res", "20"},
+      {"--envs", "2", "--mask-res", "250"},
+      {"--envs", "2x2x2", "--mask-res", "20"},
+      {"--envs", "2x2x2", "--mask-res", "250"},
+  };
+  int k = 0;
+  for (auto config : configs) {
+    config.insert(config.end(), {"--patch-size", "60", "--width", "64", "--height", "48"});
+    std::string fp = FootprintJson(config);
+    unsigned long long predicted = JsonNumber(fp, "total_bytes", fp.find("\"ranks\""));
+    std::vector<std::string> args = {"render", "scenes/cornell.obj", "--out",
+                                     dir.File(std::to_string(k++)), "--rays", "64",
+                                     "--max-shots", "40", "--quiet"};
+    args.insert(args.end(), config.begin(), config.end());
+    auto r = RunMain(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::string run = ReadFile(dir.File(std::to_string(k - 1) + "/run.json"));
+    EXPECT_EQ(JsonNumber(run, "predicted_bytes"), predicted) << config[1];
+    EXPECT_EQ(JsonNumber(run, "arena_high_water_bytes"), predicted) << config[1];
+    // Every environment's arena, one by one.
+    std::regex arena("\"arena_bytes\": (\\d+)"), number("\\d+");
+    std::string list = run.substr(run.find("\"environment_arena_bytes\""));
+    list = list.substr(list.find('['), list.find(']') - list.find('['));
+    std::vector<std::string> inRun, inFootprint;
+    for (auto it = std::sregex_iterator(list.begin(), list.end(), number); it != std::sregex_iterator(); ++it)
+      inRun.push_back((*it)[0]);
+    for (auto it = std::sregex_iterator(fp.begin(), fp.end(), arena); it != std::sregex_iterator(); ++it)
+      inFootprint.push_back((*it)[1]);
+    EXPECT_EQ(inRun, inFootprint) << config[1];
+    size_t env = inRun.size();
+    EXPECT_GE(env, 1u);
+  }
+}
+
+TEST(FootprintTest, OneEnvironmentReservesNoExchange) {
+  std::string fp = FootprintJson({"--envs", "1", "--mask-res", "250"});
+  EXPECT_EQ(JsonNumber(fp, "queue_bytes"), 0u);
+  EXPECT_EQ(JsonNumber(fp, "packet_bytes"), 0u);
+  // A neighbour makes them appear, growing with the mask resolution.
+  std::string two20 = FootprintJson({"--envs", "2", "--mask-res", "20"});
+  std::string two250 = FootprintJson({"--envs", "2", "--mask-res", "250"});
+  EXPECT_GT(JsonNumber(two20, "queue_bytes"), 0u);
+  EXPECT_GT(JsonNumber(two250, "queue_bytes"), JsonNumber(two20, "queue_bytes"));
+}
+
+TEST(FootprintTest, MemBudgetRefusesBelowTheNeedAndRunsAtIt) {
+  TempDir dir;
+  std::vector<std::string> config = {"--envs", "2", "--patch-size", "60", "--width", "64",
+                                     "--height", "48", "--rays", "64", "--max-shots", "20", "--quiet"};
+  std::string fp = FootprintJson(config);
+  unsigned long long need = JsonNumber(fp, "total_bytes", fp.find("\"ranks\""));
+  auto render = [&](unsigned long long budget, const std::string& out) {
+    std::vector<std::string> args = {"render", "scenes/cornell.obj", "--out", dir.File(out),
+                                     "--mem-budget", std::to_string(budget)};
+    args.insert(args.end(), config.begin(), config.end());
+    return RunMain(args);
+  };
+  auto under = render(need - 1, "under");
+  EXPECT_EQ(under.code, 2);
+  EXPECT_NE(under.err.find("needs " + std::to_string(need) + " bytes"), std::string::npos) << under.err;
+  EXPECT_NE(under.err.find("budget of " + std::to_string(need - 1)), std::string::npos) << under.err;
+  EXPECT_FALSE(test::FileExists(dir.File("under")));
+  auto exact = render(need, "exact");
+  EXPECT_EQ(exact.code, 0) << exact.err;
+  EXPECT_TRUE(test::FileExists(dir.File("exact/image.png")));
+}
+
+TEST(FootprintTest, PeakRssIsExplainedByArenasAndMappedFiles) {
+  TempDir dir;
+  // A child process so that the test binary's own heap does not count.
+  std::string bin = std::getenv("VISMASK_BIN") ? std::getenv("VISMASK_BIN") : "build/vismask";
+  std::string cmd = bin + " render scenes/cornell.obj --out " + dir.path() +
+                    " --rays 256 --max-shots 300 --quiet";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::string run = ReadFile(dir.File("run.json"));
+  size_t at = run.find("\"peak_rss_explained\": ");
+  ASSERT_NE(at, std::string::npos);
+  double explained = std::stod(run.substr(at + 22));
+  EXPECT_GT(explained, 0.90) << run;
+  EXPECT_LT(explained, 1.10) << run;
+}
+
+}  // namespace
+}  // namespace vismask
