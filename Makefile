@@ -4,7 +4,9 @@
 # fresh Debian 12 machine they are the whole set-up.
 #   make SAN=1 test     the suite under ASan + UBSan
 #   make MPI=0          without build/vismask-mpi
-#   make CROSS=aarch64-linux-gnu-   cross build (see docs/DEPLOY.md)
+#   make CROSS=aarch64-linux-gnu-   cross build into build/aarch64 (docs/DEPLOY.md)
+#   make CROSS=arm-linux-gnueabihf- 32-bit ARM, into build/armhf
+#   make test-cross     the aarch64 tests and a render under qemu, compared with native
 
 CROSS ?=
 CXX := $(CROSS)g++
@@ -14,8 +16,38 @@ MPI ?= 1
 MPICXX ?= mpicxx
 
 CXXFLAGS := -std=c++17 -O2 -Wall -Wextra -Werror -ffp-contract=off -fno-plt \
-            -Iinclude -Iplatform -I/usr/include/stb -MMD -MP
+            -Iinclude -Iplatform -MMD -MP
 LDLIBS := -lz
+
+# Cross builds (docs/DEPLOY.md). Objects and binaries go to build/aarch64 or
+# build/armhf, so the native ones are untouched. The target's zlib, GoogleTest,
+# GLM and stb come from a sysroot, build/sysroot-ARCH, that
+# tools/fetch-arm64-mpi fetches (apt-get download + dpkg -x, no system
+# change); make runs it when the sysroot is missing.
+ifeq ($(CROSS),)
+  CXXFLAGS += -I/usr/include/stb
+else
+  TRIPLET := $(CROSS:%-=%)
+  DEB_ARCH := $(or $(if $(filter aarch64-%,$(TRIPLET)),arm64), \
+                   $(if $(filter arm-%hf,$(TRIPLET)),armhf), \
+                   $(firstword $(subst -, ,$(TRIPLET))))
+  TARGET := $(if $(filter arm64,$(DEB_ARCH)),aarch64,$(DEB_ARCH))
+  ifeq ($(origin BUILD),file)
+    BUILD := build/$(TARGET)
+  endif
+  ifeq ($(shell command -v $(CXX) 2>/dev/null),)
+    $(error $(CXX) not found: tools/install-deps --cross installs the cross compilers)
+  endif
+  SYSROOT := build/sysroot-$(DEB_ARCH)
+  SYSROOT_LIB := $(SYSROOT)/usr/lib/$(TRIPLET)
+  CXXFLAGS += -I$(SYSROOT)/usr/include/stb -isystem $(SYSROOT)/usr/include
+  # 32-bit ARM: GCC notes that passing some structs changed ABI in GCC 7.1;
+  # everything here is built by one compiler, so the note is noise.
+  ifeq ($(DEB_ARCH),armhf)
+    CXXFLAGS += -Wno-psabi
+  endif
+  LDFLAGS += -L$(SYSROOT_LIB) -Wl,-rpath-link=$(SYSROOT)/lib/$(TRIPLET):$(SYSROOT_LIB)
+endif
 ifeq ($(SAN),1)
   BUILD := $(BUILD)/san
   CXXFLAGS += -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g
@@ -33,28 +65,51 @@ TEST_SRC := $(wildcard tests/*.cpp)
 TEST_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(TEST_SRC))
 HEADERS := $(wildcard include/vismask/*.h)
 
-# MPI=1 without mpicxx (tools/install-deps installs it) builds as MPI=0; so
-# does a cross build, unless MPICXX names a wrapper for the target.
+# MPI=1 without mpicxx (tools/install-deps installs it) builds as MPI=0.
+# A cross build has no mpicxx for the target: it compiles and links against
+# the target's Open MPI in the sysroot (tools/fetch-arm64-mpi), when that is
+# there or when MPI=1 is given on the command line (make then fetches it);
+# otherwise it builds without vismask-mpi. MPICXX=... naming a wrapper for
+# the target is used instead, as before.
+MPI_MODE := wrapper
 ifeq ($(MPI),1)
-  ifeq ($(shell command -v $(MPICXX) 2>/dev/null),)
-    $(info make: $(MPICXX) not found, building without build/vismask-mpi (MPI=0))
-    override MPI := 0
-  else ifneq ($(CROSS),)
+  ifneq ($(CROSS),)
     ifeq ($(origin MPICXX),file)
-      $(info make: cross build, building without build/vismask-mpi (set MPICXX for the target))
+      ifneq ($(wildcard $(SYSROOT)/.mpi-ok)$(filter command line,$(origin MPI)),)
+        MPI_MODE := sysroot
+      else
+        $(info make: cross build without $(BUILD)/vismask-mpi (make CROSS=$(CROSS) MPI=1 fetches the target's Open MPI))
+        override MPI := 0
+      endif
+    endif
+  endif
+  ifeq ($(MPI_MODE),wrapper)
+    ifeq ($(shell command -v $(MPICXX) 2>/dev/null),)
+      $(info make: $(MPICXX) not found, building without build/vismask-mpi (MPI=0))
       override MPI := 0
     endif
   endif
 endif
 MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
+MPI_INC := $(SYSROOT_LIB)/openmpi/include
+MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean
+.PHONY: all deps demo test headers clean test-cross
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
 	@tools/install-deps
 
-$(BUILD)/obj/%.o: %.cpp
+# A cross build needs the target's libraries before it compiles anything.
+ifneq ($(CROSS),)
+SYSROOT_DEP := | $(SYSROOT)/.base-ok
+$(SYSROOT)/.base-ok:
+	tools/fetch-arm64-mpi --arch $(DEB_ARCH) --no-mpi
+$(SYSROOT)/.mpi-ok:
+	tools/fetch-arm64-mpi --arch $(DEB_ARCH)
+endif
+
+$(BUILD)/obj/%.o: %.cpp $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
 	$(CXX) $(CXXFLAGS) -c $< -o $@
 
@@ -63,19 +118,32 @@ $(BUILD)/vismask: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(POSIX_OBJ)
 
 # Open MPI's wrapper around the same compiler (OMPI_CXX); only the mpi
 # transport sees <mpi.h>, without the deprecated C++ bindings.
+ifeq ($(MPI_MODE),wrapper)
 $(MPI_OBJ): platform/transport_mpi.cpp
 	@mkdir -p $(dir $@)
 	OMPI_CXX=$(CXX) $(MPICXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -c $< -o $@
 
 $(BUILD)/vismask-mpi: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(MPI_OBJ)
 	OMPI_CXX=$(CXX) $(MPICXX) $(LDFLAGS) $^ -o $@ $(LDLIBS)
+else
+# What mpicxx would add, for the target's Open MPI in the sysroot. Only libmpi
+# and the Open MPI libraries it names are in the sysroot; the rest of its
+# dependencies (pmix, hwloc, libevent, ...) are on the Pi, hence
+# --allow-shlib-undefined.
+$(MPI_OBJ): platform/transport_mpi.cpp | $(SYSROOT)/.base-ok $(SYSROOT)/.mpi-ok
+	@mkdir -p $(dir $@)
+	$(CXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -isystem $(MPI_INC) -c $< -o $@
+
+$(BUILD)/vismask-mpi: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(MPI_OBJ)
+	$(CXX) $(LDFLAGS) -L$(MPI_LIBDIR) -Wl,--allow-shlib-undefined $^ -o $@ $(LDLIBS) -lmpi
+endif
 
 $(BUILD)/vismask_tests: $(TEST_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
 	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lgtest -pthread
 
 # Every public header compiles on its own.
 headers: $(patsubst include/vismask/%.h,$(BUILD)/headers/%.ok,$(HEADERS))
-$(BUILD)/headers/%.ok: include/vismask/%.h
+$(BUILD)/headers/%.ok: include/vismask/%.h $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
 	@echo '#include "vismask/$*.h"' | $(CXX) $(CXXFLAGS) -x c++ -fsyntax-only - && touch $@
 
@@ -86,6 +154,62 @@ demo: deps
 test: deps
 	$(MAKE) headers all $(BUILD)/vismask_tests
 	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
+
+# make test-cross (after make CROSS=aarch64-linux-gnu-; CROSS defaults to
+# that): the unit tests under qemu-user, then one pipe-transport Cornell
+# render natively and under qemu with the same arguments, compared byte for
+# byte (and, if they differ, by relative RMSE and the largest relative
+# difference in B). qemu runs the target's binaries with its libc from
+# /usr/TRIPLET (the cross toolchain) and zlib from the sysroot. The tests run
+# the real binary through VISMASK_BIN: a script that starts it under qemu
+# (binfmt_misc is not needed), with no -mpi beside it, so the MPI runs are
+# skipped (the host's mpirun cannot start the target's vismask-mpi).
+# Left out under qemu by default (CROSS_TEST_FILTER= runs them all): the two
+# long convergence tests (~20x slower under qemu: 10 minutes), the peak-RSS
+# test (VmHWM is then qemu's own, translator included), and the two tests
+# that make the test process a child subreaper (qemu-user 7.2 answers
+# prctl(PR_SET_CHILD_SUBREAPER) with EINVAL).
+CROSS_TEST_FILTER ?= -EnvTest.ClosedBoxInEightEnvironmentsConverges:EnvTest.MethodALeaksLightAtHighResolutionAndBDoesNot:FootprintTest.PeakRssIsExplainedByArenasAndMappedFiles:TransportTest.PipeSurvivorsExitWhenAChildIsKilled:TransportTest.PipeChildrenExitWhenRankZeroIsKilled
+CROSS_ARGS := render scenes/cornell.obj --envs 2 --ranks 2 --rays 512 --max-shots 2000 \
+              --patch-size 50 --width 128 --height 128 --quiet
+ifeq ($(CROSS),)
+test-cross:
+	tools/install-deps --cross
+	$(MAKE) CROSS=aarch64-linux-gnu- test-cross
+else
+QEMU_ARCH := $(if $(filter arm64,$(DEB_ARCH)),aarch64,$(if $(filter armhf,$(DEB_ARCH)),arm,$(DEB_ARCH)))
+QEMU := qemu-$(QEMU_ARCH)-static
+QEMU_RUN := $(QEMU) -L /usr/$(TRIPLET) -E LD_LIBRARY_PATH=$(abspath $(SYSROOT))/lib/$(TRIPLET)
+CROSS_OUT := $(BUILD)/test-cross
+
+$(BUILD)/qemu/vismask: $(BUILD)/vismask
+	@mkdir -p $(dir $@)
+	printf '#!/bin/sh\nexec %s %s "$$@"\n' '$(QEMU_RUN)' '$(abspath $<)' > $@
+	chmod +x $@
+
+test-cross:
+	@command -v $(QEMU) >/dev/null || { echo "make: $(QEMU) not found: tools/install-deps --cross" >&2; exit 1; }
+	$(MAKE) $(BUILD)/vismask $(BUILD)/vismask_tests $(BUILD)/qemu/vismask
+	$(MAKE) CROSS= build/vismask
+	VISMASK_BIN=$(BUILD)/qemu/vismask $(QEMU_RUN) $(BUILD)/vismask_tests \
+	  $(if $(CROSS_TEST_FILTER),'--gtest_filter=$(CROSS_TEST_FILTER)')
+	@rm -rf $(CROSS_OUT) && mkdir -p $(CROSS_OUT)
+	build/vismask $(CROSS_ARGS) --out $(CROSS_OUT)/native
+	$(QEMU_RUN) $(BUILD)/vismask $(CROSS_ARGS) --out $(CROSS_OUT)/qemu
+	@same=1; for f in image.pfm patches.csv; do \
+	  if cmp -s $(CROSS_OUT)/native/$$f $(CROSS_OUT)/qemu/$$f; then \
+	    echo "test-cross: $$f: bit-identical, native x86-64 and $(TARGET) under qemu"; \
+	  else echo "test-cross: $$f: DIFFERS between native and $(TARGET) under qemu"; same=0; fi; \
+	done; \
+	if [ $$same = 0 ]; then \
+	  build/vismask compare $(CROSS_OUT)/qemu/image.pfm $(CROSS_OUT)/native/image.pfm; \
+	  paste -d, $(CROSS_OUT)/native/patches.csv $(CROSS_OUT)/qemu/patches.csv | awk -F, \
+	    'NR > 1 { n = NF / 2; for (i = n - 2; i <= n; ++i) { a = $$i; b = $$(i + n); \
+	      d = a - b; if (d < 0) d = -d; m = (a < 0 ? -a : a); if (m > 0 && d / m > r) r = d / m; } } \
+	     END { printf "test-cross: largest relative difference in B (patches.csv): %g\n", r }'; \
+	  exit 1; \
+	fi
+endif
 
 clean:
 	rm -rf build out

@@ -129,7 +129,7 @@ OutFile::~OutFile() { Discard(); }
 bool OutFile::Open(const char* path, char* why) {
   Discard();
   if (std::strlen(path) >= kMaxPath) {
-    if (why) std::snprintf(why, kWhyBytes, "path too long: %s", path);
+    if (why) std::snprintf(why, kWhyBytes, "path too long: %.200s...", path);
     return false;
   }
   std::strcpy(path_, path);

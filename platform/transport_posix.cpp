@@ -400,11 +400,11 @@ void PipeTransport::WriteSome(int peer) {
     iovec iov[2];
     int count = 0;
     if (f.done < kWordBytes) {
-      iov[count++] = {reinterpret_cast<uint8_t*>(&f.word) + f.done, kWordBytes - f.done};
-      if (f.bytes > 0) iov[count++] = {const_cast<uint8_t*>(f.data), f.bytes};
+      iov[count++] = {reinterpret_cast<uint8_t*>(&f.word) + f.done, static_cast<size_t>(kWordBytes - f.done)};
+      if (f.bytes > 0) iov[count++] = {const_cast<uint8_t*>(f.data), static_cast<size_t>(f.bytes)};
     } else {
       uint64_t sent = f.done - kWordBytes;
-      iov[count++] = {const_cast<uint8_t*>(f.data) + sent, f.bytes - sent};
+      iov[count++] = {const_cast<uint8_t*>(f.data) + sent, static_cast<size_t>(f.bytes - sent)};
     }
     ssize_t w = ::writev(peers_[peer].writeFd, iov, count);
     if (w < 0) {

@@ -25,6 +25,10 @@ constexpr double kBoundsRel = 1e-3;  // grid margin, relative to the largest ext
 constexpr double kClipRel = 1e4;     // half-size of the clip square, in patch sizes
 constexpr int kMaxPolyVerts = 8;     // a square clipped by four half-planes
 constexpr int kMaxAxes = 1 + 4 * kMaxPolyVerts + 3;
+constexpr double kWallReach = 0.25;  // a wall lies within this many cells of its face
+constexpr double kWallCos = 0.9;     // and faces along the axis (within ~25 degrees)
+constexpr size_t kWallShare = 64;    // a face is a wall's when 1/64 of the patches are on it
+constexpr double kWallPast = 8.0;    // pads between a wall and the next cell plane
 
 // Padding and far limit, from the corners' extent and distance from the origin.
 struct Scale {
@@ -289,6 +293,46 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
       plan.res[a] = std::max(1, static_cast<int>(std::floor(plan.res[a] * shrink)));
   }
 
+  // Walls on the box: a face of the box that many patches lie on (a floor,
+  // a wall, not necessarily flat) is put just inside an outer layer of cells,
+  // keeping the number of cells, so that those patches are registered in that
+  // layer only and a ray leaving or reaching one of them crosses a sliver of
+  // it, instead of a whole layer of cells each holding several of the wall's
+  // patches. Only speed depends on this: registration is conservative
+  // whatever the bounds.
+  for (int a = 0; a < 3; ++a) {
+    double reach = kWallReach * (hi[a] - lo[a]) / plan.res[a];
+    size_t onLo = 0, onHi = 0;
+    double deepLo = lo[a], deepHi = hi[a];  // how far in those patches reach
+    for (const Patch& p : patches) {
+      if (!(std::fabs(p.normal[a]) >= kWallCos)) continue;
+      float cLo = p.corner[0][a], cHi = cLo;
+      for (uint32_t k = 1; k < p.numCorners && k < 4; ++k) {
+        cLo = std::min(cLo, p.corner[k][a]);
+        cHi = std::max(cHi, p.corner[k][a]);
+      }
+      if (cHi <= lo[a] + reach) {
+        ++onLo;
+        deepLo = std::max(deepLo, double{cHi});
+      }
+      if (cLo >= hi[a] - reach) {
+        ++onHi;
+        deepHi = std::min(deepHi, double{cLo});
+      }
+    }
+    int wallLo = onLo * kWallShare >= n, wallHi = onHi * kWallShare >= n;
+    if (wallLo + wallHi == 0 || plan.res[a] <= wallLo + wallHi) continue;
+    // The interior cells start just past the walls' registration (a few
+    // pads and the margin); each wall's layer is one more cell beyond.
+    double past = kWallPast * scale.pad + margin;
+    double inLo = wallLo ? deepLo + past : lo[a] - margin;
+    double inHi = wallHi ? deepHi - past : hi[a] + margin;
+    double size = (inHi - inLo) / (plan.res[a] - wallLo - wallHi);
+    if (!(size > 2.0 * past)) continue;
+    plan.bounds.lo[a] = std::nextafter(static_cast<float>(inLo - wallLo * size), -HUGE_VALF);
+    plan.bounds.hi[a] = std::nextafter(static_cast<float>(inHi + wallHi * size), HUGE_VALF);
+  }
+
   // Exact reference count, by the same rule Build uses.
   Frame frame = FrameOf(plan);
   uint64_t refs = 0;
@@ -383,7 +427,8 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
     return TestAll<kAnyHit>(ray, skip, hit);
 
   // Clip (tMin, tMax) to the grid box; an axis the ray does not move along
-  // must already hold the origin.
+  // must already hold the origin. A direction so small that its inverse
+  // overflows has no usable DDA: every patch is tested instead.
   const glm::vec3& lo = plan_.bounds.lo;
   const glm::vec3& hi = plan_.bounds.hi;
   float invD[3];
@@ -395,6 +440,8 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
       continue;
     }
     invD[a] = 1.0f / d[a];
+    if (!(std::fabs(invD[a]) <= std::numeric_limits<float>::max()))
+      return TestAll<kAnyHit>(ray, skip, hit);
     float tNear = (lo[a] - o[a]) * invD[a];
     float tFar = (hi[a] - o[a]) * invD[a];
     if (tNear > tFar) std::swap(tNear, tFar);
@@ -403,42 +450,46 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
   }
   if (!(t0 <= t1)) return false;
 
-  // Entry cell and, per axis, the t of the next cell plane (recomputed from
-  // the plane each step rather than accumulated, so the error stays ~1 ulp).
+  // Entry cell, and per axis the cell planes ahead: the k-th (k = 0, 1, ...)
+  // is crossed at first + k * delta, a product and a sum per step that is
+  // never accumulated, so its error stays a few ulps of the scene magnitude,
+  // far inside the registration padding. The plane where the ray leaves the
+  // grid bounds t1 by the same formula (same bits, and the formula grows with
+  // k), so no step can take the walk out of the grid.
   const int* res = plan_.res;
   const int stride[3] = {1, res[0], res[0] * res[1]};
-  int cell[3], step[3], stop[3], next[3], move[3];
-  float tNext[3];
+  float first[3], delta[3];
+  int move[3];
   int index = 0;
   for (int a = 0; a < 3; ++a) {
     float p = d[a] == 0.0f ? o[a] : o[a] + t0 * d[a];
     float f = (p - lo[a]) * invCellSize_[a];
     int c = f >= 0.0f ? (f < static_cast<float>(res[a]) ? static_cast<int>(f) : res[a] - 1) : 0;
-    cell[a] = c;
     index += c * stride[a];
-    if (d[a] > 0.0f) {
-      step[a] = 1;
-      stop[a] = res[a];
-      next[a] = 1;
-    } else if (d[a] < 0.0f) {
-      step[a] = -1;
-      stop[a] = -1;
-      next[a] = 0;
-    } else {
-      step[a] = 0;
-      stop[a] = -1;
-      next[a] = 0;
+    if (d[a] == 0.0f) {
+      first[a] = std::numeric_limits<float>::infinity();
+      delta[a] = 0.0f;
+      move[a] = 0;
+      continue;
     }
-    move[a] = step[a] * stride[a];
-    tNext[a] = step[a] == 0
-                   ? std::numeric_limits<float>::infinity()
-                   : (lo[a] + static_cast<float>(c + next[a]) * cellSize_[a] - o[a]) * invD[a];
+    bool up = d[a] > 0.0f;
+    first[a] = (lo[a] + static_cast<float>(up ? c + 1 : c) * cellSize_[a] - o[a]) * invD[a];
+    delta[a] = cellSize_[a] * std::fabs(invD[a]);
+    move[a] = up ? stride[a] : -stride[a];
+    float exit = first[a] + static_cast<float>(up ? res[a] - 1 - c : c) * delta[a];
+    if (exit < t1) t1 = exit;
   }
+  // Per axis in registers: the next plane's t, and how many were crossed.
+  const float fx = first[0], fy = first[1], fz = first[2];
+  const float dx = delta[0], dy = delta[1], dz = delta[2];
+  float tx = fx, ty = fy, tz = fz;
+  float kx = 0.0f, ky = 0.0f, kz = 0.0f;
 
   const uint32_t* start = cellStart_.data();
   const uint32_t* refs = refs_.data();
   const PatchGeom* geom = geom_.data();
-  Ray r = ray;  // tMax shrinks to just past the best hit so far
+  Ray r = ray;       // tMax shrinks to just past the best hit so far
+  float limit = t1;  // no step into a cell beyond this: the ray's end or the best hit
   uint32_t bestPatch = kNoPatch;
   float bestT = 0.0f;
   bool bestFront = false;
@@ -455,18 +506,27 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
         bestT = t;
         bestFront = front;
         r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+        limit = std::min(t1, t);
       }
     }
-    int axis = tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2) : (tNext[1] < tNext[2] ? 1 : 2);
-    float tExit = tNext[axis];
-    if (bestPatch != kNoPatch && bestT <= tExit) break;  // nothing beyond can be closer
-    if (tExit >= t1) break;                              // the ray ends in this cell
-    cell[axis] += step[axis];
-    if (cell[axis] == stop[axis]) break;
-    index += move[axis];
-    tNext[axis] =
-        (lo[axis] + static_cast<float>(cell[axis] + next[axis]) * cellSize_[axis] - o[axis]) *
-        invD[axis];
+    // Step across the plane that comes first (ties: y before x, z before
+    // both), unless the ray ends, or its best hit is, before that plane.
+    if (tx < ty && tx < tz) {
+      if (!(tx < limit)) break;
+      index += move[0];
+      kx += 1.0f;
+      tx = fx + kx * dx;
+    } else if (ty < tz) {
+      if (!(ty < limit)) break;
+      index += move[1];
+      ky += 1.0f;
+      ty = fy + ky * dy;
+    } else {
+      if (!(tz < limit)) break;
+      index += move[2];
+      kz += 1.0f;
+      tz = fz + kz * dz;
+    }
   }
   if (bestPatch == kNoPatch) return false;
   hit->patch = bestPatch;

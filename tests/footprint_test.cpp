@@ -1,6 +1,7 @@
 // Memory: footprint's predictions are what a render reserves and uses, one
 // environment pays for no exchange, and --mem-budget refuses at init.
-#include <regex>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -55,14 +56,13 @@ TEST(FootprintTest, PredictionsMatchTheRendersHighWaterMark) {
     EXPECT_EQ(JsonNumber(run, "predicted_bytes"), predicted) << config[1];
     EXPECT_EQ(JsonNumber(run, "arena_high_water_bytes"), predicted) << config[1];
     // Every environment's arena, one by one.
-    std::regex arena("\"arena_bytes\": (\\d+)"), number("\\d+");
+    std::vector<unsigned long long> inRun, inFootprint;
     std::string list = run.substr(run.find("\"environment_arena_bytes\""));
-    list = list.substr(list.find('['), list.find(']') - list.find('['));
-    std::vector<std::string> inRun, inFootprint;
-    for (auto it = std::sregex_iterator(list.begin(), list.end(), number); it != std::sregex_iterator(); ++it)
-      inRun.push_back((*it)[0]);
-    for (auto it = std::sregex_iterator(fp.begin(), fp.end(), arena); it != std::sregex_iterator(); ++it)
-      inFootprint.push_back((*it)[1]);
+    list = list.substr(list.find('[') + 1, list.find(']') - list.find('[') - 1);
+    for (size_t at = 0; at < list.size(); at = list.find(',', at) == std::string::npos ? list.size() : list.find(',', at) + 1)
+      inRun.push_back(std::stoull(list.substr(at)));
+    for (size_t at = fp.find("\"arena_bytes\": "); at != std::string::npos; at = fp.find("\"arena_bytes\": ", at + 1))
+      inFootprint.push_back(JsonNumber(fp, "arena_bytes", at));
     EXPECT_EQ(inRun, inFootprint) << config[1];
     size_t env = inRun.size();
     EXPECT_GE(env, 1u);

@@ -380,7 +380,7 @@ void KillOneRankMidAllToAll(int ranks, int victim) {
       send[p] = Span<const uint8_t>(out.data() + p * bytes, bytes);
       recv[p] = Span<uint8_t>(in.data() + p * bytes, bytes);
     }
-    for (long call = 0; call < (1L << 40); ++call) {
+    for (long long call = 0; call < (1LL << 40); ++call) {
       t->AllToAll(send.data(), recv.data(), recvBytes.data());
       if (call == 5) {
         note.pid = 0;

@@ -3,7 +3,8 @@
 // refs (patch indices, cell by cell). Rays walk it with a 3D-DDA (Amanatides &
 // Woo). Intersect finds the closest hit, Occluded stops at the first.
 // The resolution follows the patch count and the extent (Cleary et al.:
-// cells per axis = extent * cbrt(density * N / volume)).
+// cells per axis = extent * cbrt(density * N / volume)); a face of the box
+// that walls lie on is placed just inside an outer layer of cells.
 #pragma once
 #include <cstdint>
 

@@ -74,10 +74,13 @@ inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* f
   float tt = num / denom;
   if (!(tt > ray.tMin && tt < ray.tMax)) return false;
   glm::vec3 x = ray.o + tt * ray.d;
-  for (int i = 0; i < 4; ++i) {
-    const glm::vec4& e = g.edge[i];
-    if (e.x * x.x + e.y * x.y + e.z * x.z < e.w) return false;
-  }
+  // All four edge tests, then one branch: which edge fails is unpredictable.
+  const glm::vec4* e = g.edge;
+  bool outside = (e[0].x * x.x + e[0].y * x.y + e[0].z * x.z < e[0].w) |
+                 (e[1].x * x.x + e[1].y * x.y + e[1].z * x.z < e[1].w) |
+                 (e[2].x * x.x + e[2].y * x.y + e[2].z * x.z < e[2].w) |
+                 (e[3].x * x.x + e[3].y * x.y + e[3].z * x.z < e[3].w);
+  if (outside) return false;
   *t = tt;
   *front = denom < 0.0f;
   return true;
