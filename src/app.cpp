@@ -387,8 +387,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
     st.hits += e.stats.hits;
     st.packetsSent += e.stats.packetsSent;
   }
-  uint32_t packetBytes = r->exchange.packetBytes > 0 || r->envPtrs.empty() ? r->exchange.packetBytes
-                                                                            : r->envPtrs[0]->packetBytes();
+  uint32_t packetBytes = r->exchange.packetBytes;  // 0 with one environment
   w.Printf("  \"result\": {\n    \"stop_reason\": \"%s\",\n    \"rounds\": %llu,\n",
            StopReasonName(res.reason), static_cast<unsigned long long>(res.rounds));
   w.Printf("    \"shots\": %llu,\n    \"local_shots\": %llu,\n    \"foreign_shots\": %llu,\n",

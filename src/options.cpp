@@ -256,7 +256,10 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     size_t n = size_t(o->envs[0]) * o->envs[1] * o->envs[2];
     std::vector<bool> seen(n, false);
     bool ok = o->envOrder.size() == n;
-    for (uint32_t e : o->envOrder) ok = ok && e < n && !seen[e] && (seen[e] = true);
+    for (uint32_t e : o->envOrder) {
+      if (e >= n || seen[e]) ok = false;
+      else seen[e] = true;
+    }
     if (!ok) return Status::Error("vismask: --env-order: expected a permutation of 0.." + std::to_string(n - 1));
   }
   return Status::Ok();

@@ -28,9 +28,7 @@ uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_
   return mine > 0xffffffffu ? 0xffffffffu : static_cast<uint32_t>(mine);
 }
 
-uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
-                    uint64_t maxShots) {
-  (void)numEnvs;
+uint32_t ShotBudget(uint32_t env, uint32_t roundShots, uint64_t shotsSoFar, uint64_t maxShots) {
   if (maxShots == 0) return roundShots;
   uint64_t remaining = maxShots > shotsSoFar ? maxShots - shotsSoFar : 0;
   uint64_t before = uint64_t(env) * roundShots;  // environments earlier in order go first
@@ -209,7 +207,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
       uint32_t i = options.order.empty() ? k : options.order[k];
       if (i < layout.first || i >= layout.first + layout.count) continue;
       envs[i - layout.first]->RunRound(
-          ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
+          ShotBudget(i, options.roundShots, result.shots, options.maxShots),
           AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
     }
     Exchange(envs, layout, transport, buffers);

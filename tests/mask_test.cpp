@@ -123,13 +123,13 @@ TEST(SolverTest, AdmissionNeverOverfillsAQueue) {
 }
 
 TEST(SolverTest, ShotBudgetHonoursMaxShots) {
-  EXPECT_EQ(ShotBudget(3, 4, 5, 0, 0), 5u);
+  EXPECT_EQ(ShotBudget(3, 5, 0, 0), 5u);
   uint64_t sum = 0;
-  for (uint32_t e = 0; e < 4; ++e) sum += ShotBudget(e, 4, 5, 93, 100);
+  for (uint32_t e = 0; e < 4; ++e) sum += ShotBudget(e, 5, 93, 100);
   EXPECT_EQ(sum, 7u);
-  EXPECT_EQ(ShotBudget(0, 4, 5, 93, 100), 5u);
-  EXPECT_EQ(ShotBudget(1, 4, 5, 93, 100), 2u);
-  EXPECT_EQ(ShotBudget(2, 4, 5, 93, 100), 0u);
+  EXPECT_EQ(ShotBudget(0, 5, 93, 100), 5u);
+  EXPECT_EQ(ShotBudget(1, 5, 93, 100), 2u);
+  EXPECT_EQ(ShotBudget(2, 5, 93, 100), 0u);
 }
 
 }  // namespace

@@ -95,8 +95,7 @@ uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_
                          uint64_t maxOutstanding);
 
 // The shot budget of environment `env` this round under --max-shots.
-uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
-                    uint64_t maxShots);
+uint32_t ShotBudget(uint32_t env, uint32_t roundShots, uint64_t shotsSoFar, uint64_t maxShots);
 
 // Solves this rank's environments `envs` (those of `layout`) in place,
 // exchanging with the other ranks through `transport`. `convergence` (may be
