@@ -87,23 +87,19 @@ bool Exists(const char* path) {
   return ::stat(path, &st) == 0;
 }
 
-uint64_t PeakRssBytes() {
-  int fd = ::open("/proc/self/status", O_RDONLY);
-  if (fd < 0) return 0;
-  char buf[8192];
-  ssize_t n = ::read(fd, buf, sizeof buf - 1);
+namespace {
+// Reads a small /proc file into `buf` (NUL-terminated). False if unreadable.
+bool ReadProcFile(const char* path, char* buf, size_t size) {
+  int fd = ::open(path, O_RDONLY);
+  if (fd < 0) return false;
+  ssize_t n = ::read(fd, buf, size - 1);
   ::close(fd);
-  if (n <= 0) return 0;
+  if (n <= 0) return false;
   buf[n] = '\0';
-  const char* p = std::strstr(buf, "VmHWM:");
-  if (!p) return 0;
-  unsigned long long kb = 0;
-  if (std::sscanf(p + 6, "%llu", &kb) != 1) return 0;
-  return kb * 1024ull;
+  return true;
 }
 
-namespace {
-// The value in kB after `key` in a /proc file read into `text`, in bytes.
+// The value in kB after `key` in /proc text, in bytes; 0 if absent.
 uint64_t ProcField(const char* text, const char* key) {
   const char* p = std::strstr(text, key);
   unsigned long long kb = 0;
@@ -112,14 +108,14 @@ uint64_t ProcField(const char* text, const char* key) {
 }
 }  // namespace
 
+uint64_t PeakRssBytes() {
+  char buf[8192];
+  return ReadProcFile("/proc/self/status", buf, sizeof buf) ? ProcField(buf, "VmHWM:") : 0;
+}
+
 uint64_t FileRssBytes() {
-  int fd = ::open("/proc/self/smaps_rollup", O_RDONLY);
-  if (fd < 0) return 0;
   char buf[4096];
-  ssize_t n = ::read(fd, buf, sizeof buf - 1);
-  ::close(fd);
-  if (n <= 0) return 0;
-  buf[n] = '\0';
+  if (!ReadProcFile("/proc/self/smaps_rollup", buf, sizeof buf)) return 0;
   uint64_t rss = ProcField(buf, "\nRss:"), anon = ProcField(buf, "\nAnonymous:");
   return rss > anon ? rss - anon : 0;
 }
