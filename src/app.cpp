@@ -75,6 +75,7 @@ struct Render {
   ExchangeBuffers exchange;
   Framebuffer fb;
   Framebuffer incoming;  // rank 0 with several ranks: another rank's image
+  Span<float> reference;  // rank 0 with --reference: the reference image, RGB floats
   Span<uint8_t> rgb8;
   Span<uint8_t> pngScratch;
   Span<char> convBuffer;
@@ -114,6 +115,8 @@ struct Render {
     part(&rankOutputBytes);
     if (!root) return;
     if (ranks > 1) incoming.Layout(arena, options.width, options.height);
+    if (!options.reference.empty())
+      reference = arena.Alloc<float>(size_t(options.width) * size_t(options.height) * 3);
     rgb8 = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height) * 3);
     part(&rankImageBytes);
     pngScratch = arena.Alloc<uint8_t>(PngScratchBytes(options.width, options.height));
@@ -240,6 +243,18 @@ int Init(Render* r) {
     r->envPtrs.push_back(e.get());
   }
 
+  // The reference image, read (heap, init) before anything is written.
+  PfmImage ref;
+  if (r->isRoot() && !o.reference.empty()) {
+    s = ReadPfm(o.reference, &ref);
+    if (!s.ok()) return FailInit(r, Status::Error("vismask: --reference: " + s.ToString()));
+    if (ref.width != o.width || ref.height != o.height)
+      return FailInit(r, Status::Error("vismask: --reference: " + o.reference + " is " +
+                                       std::to_string(ref.width) + "x" + std::to_string(ref.height) +
+                                       ", the image is " + std::to_string(o.width) + "x" +
+                                       std::to_string(o.height) + " (--width, --height)"));
+  }
+
   Camera camera = o.hasCamera ? o.camera : DefaultCamera(p.scene.bounds);
   if (!MakeView(camera, o.width, o.height, &r->view))
     return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));
@@ -247,6 +262,7 @@ int Init(Render* r) {
   r->rankArena = Arena(measure.used());
   r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot());
   if (!r->isRoot()) return kExitOk;
+  for (size_t i = 0; i < r->reference.size(); ++i) r->reference[i] = ref.pixels[i];
 
   char why[os::kWhyBytes];
   if (!os::MakeDirs(o.outDir.c_str(), why)) {
@@ -363,8 +379,12 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"exposure_auto\": %s,\n", o.hasExposure ? "false" : "true");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
-  w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"queue\": %u\n  },\n",
+  w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"queue\": %u,\n",
            o.maskRes, o.roundShots, o.queue);
+  w.Printf("    \"reference\": ");
+  if (o.reference.empty()) w.Printf("null");
+  else JsonString(&w, o.reference.c_str());
+  w.Printf(",\n    \"error_every\": %llu\n  },\n", static_cast<unsigned long long>(o.errorEvery));
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {
     patches += e.patches;
@@ -399,7 +419,12 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"packets\": %llu,\n    \"packet_bytes\": %u,\n    \"bytes_sent\": %llu,\n",
            static_cast<unsigned long long>(st.packetsSent), packetBytes,
            static_cast<unsigned long long>(st.packetsSent * packetBytes));
-  w.Printf("    \"unshot_fraction\": %.17g\n  },\n", res.unshotFraction);
+  w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
+  // Against --reference (null without one): the final image's relative RMSE.
+  if (o.reference.empty()) w.Printf("    \"relative_rmse\": null,\n");
+  else w.Printf("    \"relative_rmse\": %.17g,\n", res.relativeRmse);
+  w.Printf("    \"error_measurements\": %llu\n  },\n",
+           static_cast<unsigned long long>(res.errorMeasurements));
   EnergyLedger total;
   for (const EnvSummary& e : r->summary) {
     for (int c = 0; c < 3; ++c) {
@@ -421,8 +446,9 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
     residual[c] = total.emitted[c] - total.absorbed[c] - total.escaped[c] - total.unshot[c];
   JsonTriple(&w, "residual", residual, false);
   w.Printf("  },\n  \"timings\": {\n    \"init_seconds\": %.6f,\n", r->initSeconds);
-  w.Printf("    \"solve_seconds\": %.6f,\n    \"output_seconds\": %.6f\n  },\n", res.seconds,
-           outputSeconds);
+  w.Printf("    \"solve_seconds\": %.6f,\n    \"error_seconds\": %.6f,\n", res.seconds,
+           res.errorSeconds);
+  w.Printf("    \"output_seconds\": %.6f\n  },\n", outputSeconds);
   w.Printf("  \"memory\": {\n    \"environment_arena_bytes\": [");
   for (size_t i = 0; i < r->summary.size(); ++i)
     w.Printf("%s%llu", i ? ", " : "", static_cast<unsigned long long>(r->summary[i].arenaBytes));
@@ -442,16 +468,16 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Flush();
 }
 
-int WriteOutputs(Render* r, const SolveResult& res) {
-  double start = os::Seconds();
+// Draws the current solution into rank 0's framebuffer: the ambient term
+// from every environment (summed in environment order), each rank's patches
+// drawn by that rank, and rank 0 depth-compositing the others'. Collective.
+void RenderImage(Render* r) {
   Transport* t = r->transport.get();
-  // The ambient term from every environment, summed in environment order.
   for (uint32_t i = 0; i < r->layout.perRank; ++i) r->ambientMine[i] = AmbientReport{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
   GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
   double ambient[3];
   AmbientTerm(r->ambient, ambient);
-  // Each rank draws its own patches; rank 0 depth-composites the others'.
   r->fb.Clear();
   for (Environment* env : r->envPtrs) {
     env->ComputeVertexRadiosity(ambient);
@@ -469,6 +495,29 @@ int WriteOutputs(Render* r, const SolveResult& res) {
       t->Send(0, r->fb.id.data(), r->fb.id.bytes());
     }
   }
+}
+
+// --reference: the image of the solution so far against the reference, on
+// rank 0 (the other ranks only help draw it).
+class ReferenceProbe : public ErrorProbe {
+ public:
+  explicit ReferenceProbe(Render* r) : r_(r) {}
+  double Measure() override {
+    RenderImage(r_);
+    if (!r_->isRoot()) return 0.0;
+    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "colour is packed RGB floats");
+    Span<const float> image(reinterpret_cast<const float*>(r_->fb.color.data()),
+                            r_->fb.color.size() * 3);
+    return CompareImages(image, r_->reference).relativeRmse;
+  }
+
+ private:
+  Render* r_;
+};
+
+int WriteOutputs(Render* r, const SolveResult& res) {
+  double start = os::Seconds();
+  RenderImage(r);
   WritePatchesCsv(r);
   for (uint32_t i = 0; i < r->layout.perRank; ++i) r->summaryMine[i] = EnvSummary{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) {
@@ -589,16 +638,11 @@ int Compare(const Options& o) {
     return Fail(Status::Error("vismask: compare: the images differ in size (" +
                               std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
                               std::to_string(b.width) + "x" + std::to_string(b.height) + ")"));
-  double num = 0.0, den = 0.0, maxAbs = 0.0;
-  for (size_t i = 0; i < a.pixels.size(); ++i) {
-    double d = static_cast<double>(a.pixels[i]) - b.pixels[i];
-    num += d * d;
-    den += static_cast<double>(b.pixels[i]) * b.pixels[i];
-    maxAbs = std::fmax(maxAbs, std::fabs(d));
-  }
-  double rel = den > 0.0 ? std::sqrt(num / den) : (num > 0.0 ? INFINITY : 0.0);
+  ImageError e = CompareImages(Span<const float>(a.pixels.data(), a.pixels.size()),
+                               Span<const float>(b.pixels.data(), b.pixels.size()));
   char line[256];
-  int n = std::snprintf(line, sizeof line, "relative_rmse %.9g\nmax_abs_error %.9g\n", rel, maxAbs);
+  int n = std::snprintf(line, sizeof line, "relative_rmse %.9g\nmax_abs_error %.9g\n", e.relativeRmse,
+                        e.maxAbs);
   os::WriteOut(line, static_cast<size_t>(n));
   return kExitOk;
 }
@@ -640,6 +684,9 @@ int Main(int argc, const char* const* argv) {
   so.maxShots = r->options.maxShots;
   so.maxSeconds = r->options.maxSeconds;
   so.quiet = r->options.quiet;
+  ReferenceProbe probe(r.get());
+  if (!r->options.reference.empty()) so.probe = &probe;
+  so.errorEvery = r->options.errorEvery;
   SolveResult res = Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()),
                           r->layout, r->transport.get(), &r->exchange, so,
                           r->isRoot() ? &r->convergence : nullptr);

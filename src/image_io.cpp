@@ -147,6 +147,20 @@ bool WritePfm(os::OutFile* file, int width, int height, Span<const glm::vec3> co
   return ok;
 }
 
+ImageError CompareImages(Span<const float> a, Span<const float> b) {
+  CHECK(a.size() == b.size());
+  double num = 0.0, den = 0.0;
+  ImageError e;
+  for (size_t i = 0; i < a.size(); ++i) {
+    double d = static_cast<double>(a[i]) - b[i];
+    num += d * d;
+    den += static_cast<double>(b[i]) * b[i];
+    e.maxAbs = std::fmax(e.maxAbs, std::fabs(d));
+  }
+  e.relativeRmse = den > 0.0 ? std::sqrt(num / den) : (num > 0.0 ? INFINITY : 0.0);
+  return e;
+}
+
 Status ReadPfm(const std::string& path, PfmImage* image) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::At(path, 0, "cannot open");

@@ -39,6 +39,10 @@ render options:
                        frame the scene's bounding box from -z, looking +z)
   --exposure E         linear exposure for image.png (default: automatic)
   --quiet              no progress line on stderr
+  --reference REF.pfm  measure the image's relative RMSE against REF.pfm
+                       (same size) when the solve ends, in convergence.csv
+                       and run.json; the time it takes is not solve time
+  --error-every K      with --reference: also every K shots during the solve
 
 local environments and visibility masks:
   --envs NX[xNY[xNZ]]  split the scene's box into a grid of environments
@@ -71,7 +75,11 @@ outputs (in --out DIR):
   image.pfm         linear float RGB radiance (B/pi, with the ambient term)
   patches.csv       id,env,cx,cy,cz,nx,ny,nz,area,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b,b_r,b_g,b_b
                     (b = solved radiosity, without the ambient term)
-  convergence.csv   shot,seconds,unshot_fraction (one row per shot)
+  convergence.csv   shot,seconds,unshot_fraction (one row per round: each
+                    environment's shots of that round); with --reference two
+                    more columns, relative_rmse,error_seconds (filled on the
+                    rows where the error was measured; error_seconds is the
+                    total spent measuring so far, not part of seconds)
   run.json          options, counts, energy balance, timings, memory
 
 exit status: 0 success; 1 an output could not be written; 2 bad input or
@@ -237,6 +245,12 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (!ParseU64(digits, &u) || u < 1 || u > ~0ull / scale)
         return Bad(a, v, "a number of bytes >= 1 (suffix K, M or G allowed)");
       o->memBudget = u * scale;
+    } else if (a == "--reference") {
+      if (v.empty()) return Bad(a, v, "a PFM file");
+      o->reference = v;
+    } else if (a == "--error-every") {
+      if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive number of shots");
+      o->errorEvery = u;
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);
@@ -246,6 +260,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   }
   if (o->scene.empty())
     return Status::Error("vismask: " + o->command + ": no scene given (vismask " + o->command + " SCENE.obj)");
+  if (o->errorEvery > 0 && o->reference.empty())
+    return Status::Error("vismask: --error-every: needs --reference REF.pfm to measure against");
   int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +

@@ -175,6 +175,23 @@ class Progress {
   double next_ = 0.0;
 };
 
+// The stop rules, checked between rounds from the gathered totals.
+bool ShouldStop(const RoundTotals& totals, const SolveOptions& options, SolveResult* result) {
+  if (result->unshotFraction < options.stopUnshot) {
+    result->reason = StopReason::kConverged;
+    return true;
+  }
+  if (options.maxShots > 0 && result->shots >= options.maxShots) {
+    result->reason = StopReason::kMaxShots;
+    return true;
+  }
+  if (options.maxSeconds > 0.0 && totals.elapsed >= options.maxSeconds) {
+    result->reason = StopReason::kMaxSeconds;
+    return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transport* transport,
@@ -184,25 +201,35 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   for (uint32_t i = 0; i < envs.size(); ++i) CHECK(envs[i]->index() == layout.first + i);
   SolveResult result;
   Progress progress(options.quiet || transport->rank() != 0);
-  double start = os::Seconds();
+  ErrorProbe* probe = options.probe;
+  const double start = os::Seconds();
+  double excluded = 0.0;  // seconds spent measuring the error
+  auto clock = [&] { return os::Seconds() - start - excluded; };
+  auto measure = [&] {
+    double t0 = os::Seconds();
+    result.relativeRmse = probe->Measure();
+    ++result.errorMeasurements;
+    excluded += os::Seconds() - t0;
+    result.errorSeconds = excluded;
+  };
+  uint64_t measuredAt = ~0ull;  // the shot count last measured
   RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
-  if (convergence) convergence->Printf("shot,seconds,unshot_fraction\n");
+  if (convergence)
+    convergence->Printf("shot,seconds,unshot_fraction%s\n",
+                        probe ? ",relative_rmse,error_seconds" : "");
+  auto row = [&](bool measured) {
+    if (!convergence) return;
+    convergence->Printf("%llu,%.6f,%.9g", static_cast<unsigned long long>(result.shots),
+                        totals.elapsed, result.unshotFraction);
+    if (probe && measured)
+      convergence->Printf(",%.9g,%.6f\n", result.relativeRmse, result.errorSeconds);
+    else
+      convergence->Printf(probe ? ",,\n" : "\n");
+  };
 
-  for (;;) {
-    // Every rank decides from the same gathered totals (and rank 0's clock).
-    if (result.unshotFraction < options.stopUnshot) {
-      result.reason = StopReason::kConverged;
-      break;
-    }
-    if (options.maxShots > 0 && result.shots >= options.maxShots) {
-      result.reason = StopReason::kMaxShots;
-      break;
-    }
-    if (options.maxSeconds > 0.0 && totals.elapsed >= options.maxSeconds) {
-      result.reason = StopReason::kMaxSeconds;
-      break;
-    }
+  bool done = ShouldStop(totals, options, &result);
+  while (!done) {
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
       if (i < layout.first || i >= layout.first + layout.count) continue;
@@ -213,8 +240,8 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     Exchange(envs, layout, transport, buffers);
     ++result.rounds;
     uint64_t before = result.shots;
-    double now = os::Seconds();
-    totals = Totals(envs, layout, transport, buffers, now - start);
+    double elapsed = clock();
+    totals = Totals(envs, layout, transport, buffers, elapsed);
     result.shots = totals.shots;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     // A ready foreign shooter exists whenever any queue holds one, so a round
@@ -223,12 +250,21 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
       result.reason = StopReason::kConverged;
       break;
     }
-    if (convergence)
-      convergence->Printf("%llu,%.6f,%.9g\n", static_cast<unsigned long long>(result.shots),
-                          totals.elapsed, result.unshotFraction);
-    progress.Update(now, now - start, result.shots, result.unshotFraction, false);
+    done = ShouldStop(totals, options, &result);
+    bool due = probe && (done || (options.errorEvery > 0 &&
+                                  result.shots / options.errorEvery > before / options.errorEvery));
+    if (due) {
+      measure();
+      measuredAt = result.shots;
+    }
+    row(due);
+    progress.Update(os::Seconds(), elapsed, result.shots, result.unshotFraction, false);
   }
-  result.seconds = os::Seconds() - start;
+  if (probe && measuredAt != result.shots) {
+    measure();
+    row(true);
+  }
+  result.seconds = clock();
   progress.Update(os::Seconds(), result.seconds, result.shots, result.unshotFraction, true);
   return result;
 }

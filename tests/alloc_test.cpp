@@ -140,6 +140,27 @@ TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
   EXPECT_EQ(n, 0) << "heap allocations after init";
 }
 
+TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  test::TempDir dir;
+  std::vector<std::string> args = {"render", "scenes/cornell.obj", "--envs", "2", "--rays", "256",
+                                   "--max-shots", "600", "--width", "64", "--height", "64",
+                                   "--patch-size", "60", "--quiet"};
+  auto ref = args;
+  ref.insert(ref.end(), {"--out", dir.File("ref")});
+  ASSERT_EQ(test::RunMain(ref).code, 0);
+  args.insert(args.end(), {"--out", dir.File("out"), "--reference", dir.File("ref/image.pfm"),
+                           "--error-every", "50", "--seed", "2"});
+  int code = -1;
+  long n = AllocationsAfterInit(args, &code);
+  ASSERT_EQ(code, 0);
+  EXPECT_NE(test::ReadFile(dir.File("out/run.json")).find("\"error_measurements\": 12"),
+            std::string::npos);
+  EXPECT_EQ(n, 0) << "heap allocations after init";
+}
+
 TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
 #if !VISMASK_ALLOC_HOOKS
   GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";

@@ -37,6 +37,16 @@ struct PfmImage {
 // Reads a colour PFM ("PF"), either byte order. Errors name the file.
 Status ReadPfm(const std::string& path, PfmImage* image);
 
+// How far image `a` is from image `b` (same size, floats in any layout as
+// long as both share it): the relative RMSE sqrt(sum (a-b)^2 / sum b^2) over
+// every value (inf if b is all zero and a is not, 0 if both are), and the
+// largest absolute difference. Summed in double, in index order.
+struct ImageError {
+  double relativeRmse = 0.0;
+  double maxAbs = 0.0;
+};
+ImageError CompareImages(Span<const float> a, Span<const float> b);
+
 // An exposure that maps the log-average luminance of the covered pixels
 // (mask[i] != 0) to middle grey. 1 if nothing is covered.
 float AutoExposure(Span<const glm::vec3> color, Span<const uint32_t> coverage, uint32_t emptyId);

@@ -40,7 +40,9 @@ struct Options {
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
   int ranks = 1;          // --ranks N (pipe)
   uint64_t memBudget = 0; // --mem-budget BYTES per rank; 0: none
-  bool json = false;      // footprint --json  // --env-order: the order environments run in a round
+  bool json = false;      // footprint --json
+  std::string reference;  // --reference REF.pfm: the error of the image against it
+  uint64_t errorEvery = 0;  // --error-every K shots (with --reference); 0: at the end only
   // vismask compare A.pfm B.pfm
   std::string compareA, compareB;
 };

@@ -18,6 +18,17 @@
 
 namespace vismask {
 
+// Measures the image against a reference between rounds (--reference).
+// Called on every rank at the same rounds (it may use the transport); the
+// time it takes is kept out of the solve's clock.
+class ErrorProbe {
+ public:
+  virtual ~ErrorProbe() = default;
+  // The relative RMSE of the current solution's image (rank 0's value is
+  // the one reported). Must not change the solution and must not allocate.
+  virtual double Measure() = 0;
+};
+
 struct SolveOptions {
   double stopUnshot = 1e-3;  // stop when unshot/emitted power < this
   uint64_t maxShots = 0;     // 0: no limit
@@ -26,6 +37,8 @@ struct SolveOptions {
   uint32_t queueCapacity = 64;  // foreign shooters an environment can hold
   bool quiet = false;        // no progress line on stderr
   Span<const uint32_t> order;  // the order environments run in a round (empty: 0..n-1)
+  ErrorProbe* probe = nullptr;  // measures after the last round, and
+  uint64_t errorEvery = 0;      // after every round that crosses a multiple of this many shots
 };
 
 enum class StopReason { kConverged, kMaxShots, kMaxSeconds };
@@ -37,6 +50,11 @@ struct SolveResult {
   uint64_t shots = 0;         // local and foreign
   double seconds = 0.0;
   double unshotFraction = 1.0;  // (unshot + queued) / emitted, channels summed
+  // With a probe: how often it measured, the seconds that took (not in
+  // `seconds`), and the last measurement (of the final solution).
+  uint64_t errorMeasurements = 0;
+  double errorSeconds = 0.0;
+  double relativeRmse = 0.0;
 };
 
 // Which environments live on a rank: contiguous blocks, [first, first+count)
@@ -99,8 +117,11 @@ uint32_t ShotBudget(uint32_t env, uint32_t roundShots, uint64_t shotsSoFar, uint
 
 // Solves this rank's environments `envs` (those of `layout`) in place,
 // exchanging with the other ranks through `transport`. `convergence` (may be
-// null; rank 0) receives one row "shot,seconds,unshot_fraction" per round.
-// Allocates nothing.
+// null; rank 0) receives one row "shot,seconds,unshot_fraction" per round,
+// and with a probe ",relative_rmse,error_seconds", filled where measured
+// (always on the last row, which repeats the shot count when the solve ended
+// on a round with nothing left to shoot and that state was not yet
+// measured). Allocates nothing.
 SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transport* transport,
                   ExchangeBuffers* buffers, const SolveOptions& options, TextWriter* convergence);
 
