@@ -70,6 +70,7 @@ struct Render {
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
   std::vector<Environment*> envPtrs;
+  Camera camera;  // the one used (--camera or the default)
   View view;
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
   ExchangeBuffers exchange;
@@ -255,8 +256,8 @@ int Init(Render* r) {
                                        std::to_string(o.height) + " (--width, --height)"));
   }
 
-  Camera camera = o.hasCamera ? o.camera : DefaultCamera(p.scene.bounds);
-  if (!MakeView(camera, o.width, o.height, &r->view))
+  r->camera = o.hasCamera ? o.camera : DefaultCamera(p.scene.bounds);
+  if (!MakeView(r->camera, o.width, o.height, &r->view))
     return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));
 
   r->rankArena = Arena(measure.used());
@@ -377,6 +378,9 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"width\": %d,\n    \"height\": %d,\n    \"exposure\": %.9g,\n", o.width, o.height,
            exposure);
   w.Printf("    \"exposure_auto\": %s,\n", o.hasExposure ? "false" : "true");
+  const Camera& c = r->camera;  // as --camera takes it: eye, target, up, fovy
+  w.Printf("    \"camera\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g],\n", c.eye.x,
+           c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fovyDeg);
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"queue\": %u,\n",

@@ -273,10 +273,10 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
   }
 }
 
-void Environment::Forward(PacketHeader h, const MaskBits& mask) {
+int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
   int source[3];
-  grid3_.Cell(static_cast<int>(h.sourceEnv), source);
-  h.fromEnv = index_;
+  grid3_.Cell(static_cast<int>(sourceEnv), source);
+  int count = 0;
   for (int a = 0; a < 3; ++a) {
     // Downstream: away from the source; both ways on an axis the source shares.
     for (int step : {-1, 1}) {
@@ -284,14 +284,26 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
       int c[3] = {cell_[0], cell_[1], cell_[2]};
       c[a] += step;
       if (c[a] < 0 || c[a] >= grid3_.n[a]) continue;
-      CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
-      uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
-      h.toEnv = static_cast<uint32_t>(grid3_.Index(c[0], c[1], c[2]));
-      h.sequence = outCount_++;
-      WriteHeader(packet, h);
-      if (shape_.res > 0) mask.Pack(MaskBytes(packet));
-      ++stats_.packetsSent;
+      for (int k = 0; k < 3; ++k) next[count][k] = c[k];
+      ++count;
     }
+  }
+  return count;
+}
+
+void Environment::Forward(PacketHeader h, const MaskBits& mask) {
+  int next[6][3];
+  int count = Downstream(h.sourceEnv, next);
+  h.fromEnv = index_;
+  for (int k = 0; k < count; ++k) {
+    const int* c = next[k];
+    CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
+    uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
+    h.toEnv = static_cast<uint32_t>(grid3_.Index(c[0], c[1], c[2]));
+    h.sequence = outCount_++;
+    WriteHeader(packet, h);
+    if (shape_.res > 0) mask.Pack(MaskBytes(packet));
+    ++stats_.packetsSent;
   }
 }
 
@@ -339,10 +351,13 @@ void Environment::ShootForeign(uint32_t s) {
   MaskBits out(scratchWords_.subspan(0, shape_.words()), shape_.res);
   out.CopyFrom(in);
   Patch shooter = PatchFromHeader(slot.header);
+  // The outgoing mask only where there is someone downstream to send it to.
+  int next[6][3];
+  bool forward = Downstream(slot.header.sourceEnv, next) > 0;
   Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_), &in,
-             &out);
+             forward ? &out : nullptr);
   ++stats_.foreignShots;
-  Forward(slot.header, out);
+  if (forward) Forward(slot.header, out);
   slot = Slot();
   --queued_;
 }

@@ -160,6 +160,9 @@ class Environment {
   // Sends the shooter's record and `mask` to the neighbours downstream from
   // the source environment.
   void Forward(PacketHeader header, const MaskBits& mask);
+  // The grid cells downstream of this environment for a shooter from
+  // `sourceEnv` (at most 6, into `next`), and how many there are.
+  int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
   int FindSlot(uint32_t shooterId, uint32_t shotIndex) const;
   int BestReadySlot() const;
   MaskBits SlotMask(uint32_t slot) const;
