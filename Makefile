@@ -7,6 +7,7 @@
 #   make CROSS=aarch64-linux-gnu-   cross build into build/aarch64 (docs/DEPLOY.md)
 #   make CROSS=arm-linux-gnueabihf- 32-bit ARM, into build/armhf
 #   make test-cross     the aarch64 tests and a render under qemu, compared with native
+#   make experiments    the paper's figures and table as numbers: docs/RESULTS.md
 
 CROSS ?=
 CXX := $(CROSS)g++
@@ -94,7 +95,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross
+.PHONY: all deps demo test headers clean test-cross experiments
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -154,6 +155,14 @@ demo: deps
 test: deps
 	$(MAKE) headers all $(BUILD)/vismask_tests
 	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
+
+# docs/RESULTS.md and docs/results/ from one run of every step in
+# tools/experiments (runs under build/experiments/full; about 15 minutes on
+# 2 cores). Timed runs are always rerun; the others are reused when their
+# command line is unchanged (rm -rf build/experiments to start afresh).
+experiments: deps
+	$(MAKE) $(BUILD)/vismask
+	VISMASK_BIN=$(BUILD)/vismask tools/experiments/all
 
 # make test-cross (after make CROSS=aarch64-linux-gnu-; CROSS defaults to
 # that): the unit tests under qemu-user, then one pipe-transport Cornell

@@ -1,0 +1,494 @@
+"""The experiment steps of issue #6 (see docs/RESULTS.md). Each step runs
+what it needs (runs are cached by their command line under the runs
+directory) and writes its CSV tables and images into the results directory.
+Run them through the wrappers beside this file: references, quality, timing,
+leak, error-time, report, or all."""
+
+import math
+import os
+import shutil
+import sys
+import time
+
+import lib
+
+METHODS_CURVES = ["A", "B"]  # with masks; "none" is one run
+
+
+def mask_args(method, res):
+    return lib.SPLIT + ["--mask-method", method] + (["--mask-res", str(res)] if method != "none" else [])
+
+
+# --- references ---------------------------------------------------------------
+
+def references(ctx):
+    """(b) the converged single-environment solution: two seeds, averaged;
+    its own noise from the difference of the two. (a) is the paper's: Method
+    B at R = ref_res, which is also that curve's run (curves())."""
+    s = ctx.s
+    seeds = s["ref_seeds"]
+    jsons = [ctx.run(f"ref-b-seed{k}", ["--envs", "1"] + s["ref_b"] + ["--seed", str(k)])
+             for k in seeds]
+    ref_b = ref_b_path(ctx)
+    lib.average_pfm([ctx.path(f"ref-b-seed{k}", "image.pfm") for k in seeds], ref_b)
+    _, _, a = lib.read_pfm(ctx.path(f"ref-b-seed{seeds[0]}", "image.pfm"))
+    _, _, b = lib.read_pfm(ctx.path(f"ref-b-seed{seeds[1]}", "image.pfm"))
+    mask = region_mask(ctx, jsons[0])
+    # Two independent solves differ by sqrt(2) sigma; their mean has sigma/sqrt(2).
+    d_whole, d_region = lib.rel_rmse(a, b), lib.rel_rmse(a, b, mask)
+    rows = [["b", "1 environment " + " ".join(s["ref_b"]) + f" seeds {seeds[0]} and {seeds[1]} averaged",
+             sum(j["result"]["shots"] for j in jsons), sum(j["timings"]["solve_seconds"] for j in jsons),
+             d_whole / 2, d_region / 2]]
+    lib.write_csv(ctx.result("references.csv"),
+                  ["reference", "what", "shots", "solve_seconds", "noise_whole", "noise_region"], rows)
+    # The reference images themselves.
+    os.makedirs(ctx.result("img"), exist_ok=True)
+    shutil.copy(ctx.path(f"ref-b-seed{seeds[0]}", "image.png"), ctx.result("img/ref-b.png"))
+    return ref_b
+
+
+def ref_b_path(ctx):
+    return os.path.join(ctx.runs, "ref-b.pfm")
+
+
+def region_mask(ctx, run_json):
+    w, h = run_json["options"]["width"], run_json["options"]["height"]
+    cache = os.path.join(ctx.runs, f"region-{w}x{h}.txt")
+    mask = lib.ShadowRegion().pixel_mask(run_json["options"]["camera"], w, h, cache)
+    return mask
+
+
+def ensure_references(ctx):
+    if not os.path.exists(ctx.result("references.csv")) or not os.path.exists(ref_b_path(ctx)):
+        references(ctx)
+    return ref_b_path(ctx)
+
+
+# --- the runs with error curves -----------------------------------------------
+
+def curve_run(ctx, method, res):
+    """The run of a method (and R) with its error against reference (b) every
+    error_every shots: the error-time curve, and Fig. 2 / Fig. 3's image."""
+    ref_b = ensure_references(ctx)
+    name = "none" if method == "none" else f"{method}-{res}"
+    j = ctx.run(name, mask_args(method, res) + ["--reference", ref_b, "--error-every",
+                                                 str(ctx.s["error_every"])])
+    return name, j
+
+
+def curve_runs(ctx):
+    out = [curve_run(ctx, "none", 0)]
+    for m in METHODS_CURVES:
+        for r in ctx.s["curve_res"]:
+            out.append(curve_run(ctx, m, r))
+    return out
+
+
+# --- Fig. 2 -> table ------------------------------------------------------------
+
+def quality(ctx):
+    s = ctx.s
+    ref_b = ensure_references(ctx)
+    ref_a_name, ref_a_json = curve_run(ctx, "B", s["ref_res"])
+    mask = region_mask(ctx, ref_a_json)
+    _, _, ra = lib.read_pfm(ctx.path(ref_a_name, "image.pfm"))
+    w, h, rb = lib.read_pfm(ref_b)
+    rows = []
+    os.makedirs(ctx.result("img"), exist_ok=True)
+    for r in s["table_res"] + [s["ref_res"]]:
+        name, j = curve_run(ctx, "B", r)
+        _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
+        rows.append([r, "" if r == s["ref_res"] else lib.rel_rmse(img, ra),
+                     "" if r == s["ref_res"] else lib.rel_rmse(img, ra, mask),
+                     lib.rel_rmse(img, rb), lib.rel_rmse(img, rb, mask),
+                     j["timings"]["solve_seconds"]])
+        shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig2-B-{r}.png"))
+        lib.diff_png(ctx.result(f"img/fig2-B-{r}-diff.png"), w, h, img, rb, 10, mask)
+    # The noise floor of a comparison between two 2-environment runs: the
+    # lowest R again with another seed.
+    low = s["table_res"][0]
+    j2 = ctx.run(f"B-{low}-seed2", mask_args("B", low) + ["--seed", "2"])
+    _, _, x1 = lib.read_pfm(ctx.path(f"B-{low}", "image.pfm"))
+    _, _, x2 = lib.read_pfm(ctx.path(f"B-{low}-seed2", "image.pfm"))
+    rows.append([f"{low} (seed 2 vs seed 1)", lib.rel_rmse(x2, x1), lib.rel_rmse(x2, x1, mask), "", "",
+                 j2["timings"]["solve_seconds"]])
+    lib.write_csv(ctx.result("fig2-quality.csv"),
+                  ["mask_res", "vs_ref_a_whole", "vs_ref_a_region", "vs_ref_b_whole",
+                   "vs_ref_b_region", "solve_seconds"], rows)
+    # The region itself, for the doc.
+    region_png(ctx, w, h, rb, mask)
+
+
+def region_png(ctx, w, h, ref, mask):
+    """The reference image, darkened outside the shadow region."""
+    out = []
+    mean = sum(ref) / len(ref)
+    ex = 0.18 / mean if mean > 0 else 1
+    for i in range(w * h):
+        k = 1.0 if mask[i] else 0.25
+        for c in range(3):
+            v = max(0.0, min(1.0, ref[3 * i + c] * ex * k))
+            out.append(int(255 * (v ** (1 / 2.2))))
+    lib.write_png(ctx.result("img/region.png"), w, h, out)
+
+
+# --- Table 1 -> table -----------------------------------------------------------
+
+def timing(ctx):
+    s = ctx.s
+    rows = []
+    for m in ["none", "A", "B"]:
+        for r in ([0] if m == "none" else s["table_res"]):
+            secs, j = [], None
+            for k in range(s["reps"]):
+                name = f"time-{m}-{r}-{k}"
+                j = ctx.run(name, mask_args(m, r), fresh=True)
+                secs.append(j["timings"]["solve_seconds"])
+            res = j["result"]
+            seed = lib.SEED_MINUTES.get((m, r))
+            med = lib.median(secs)
+            rows.append([m, "" if m == "none" else r, med, min(secs), max(secs), res["shots"],
+                         res["rays"], res["mask_rays"], res["bytes_sent"],
+                         "" if seed is None else f"{seed:.2f}",
+                         "" if seed is None else med / (seed * 60)])
+    lib.write_csv(ctx.result("table1-time.csv"),
+                  ["method", "mask_res", "median_solve_seconds", "min_seconds", "max_seconds",
+                   "shots", "rays", "mask_rays", "bytes_sent", "seed_minutes",
+                   "ratio_to_seed"], rows)
+
+
+# --- Fig. 3 -> number -----------------------------------------------------------
+
+def leak(ctx):
+    s = ctx.s
+    ensure_references(ctx)
+    region = lib.ShadowRegion()
+    seeds = s["ref_seeds"]
+    refs = [lib.region_patch_mean(ctx.path(f"ref-b-seed{k}", "patches.csv"), region, True)
+            for k in seeds]
+    ref_mean = sum(m for m, _ in refs) / len(refs)
+    rows = [["reference (b) seed spread", "",
+             100 * (refs[1][0] - refs[0][0]) / ref_mean, refs[0][1]]]
+    for m in ["none"] + METHODS_CURVES:
+        for r in ([0] if m == "none" else s["curve_res"]):
+            name, _ = curve_run(ctx, m, r)
+            mean, area = lib.region_patch_mean(ctx.path(name, "patches.csv"), region, True)
+            rows.append([m, "" if m == "none" else r, 100 * (mean - ref_mean) / ref_mean, area])
+    lib.write_csv(ctx.result("fig3-leak.csv"),
+                  ["method", "mask_res", "leak_percent", "region_area"], rows)
+    os.makedirs(ctx.result("img"), exist_ok=True)
+    name = f"A-{s['leak_res']}"
+    shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig3-{name}.png"))
+    w, h, rb = lib.read_pfm(ref_b_path(ctx))
+    _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
+    j = lib.load_json(ctx.path(name, "run.json"))
+    lib.diff_png(ctx.result(f"img/fig3-{name}-diff.png"), w, h, img, rb, 10, region_mask(ctx, j))
+
+
+# --- error against run time -------------------------------------------------------
+
+def error_time(ctx):
+    runs = curve_runs(ctx)
+    points, series = [], []
+    for name, j in runs:
+        header, rows = lib.read_csv(ctx.path(name, "convergence.csv"))
+        ix = {k: i for i, k in enumerate(header)}
+        data = [(float(r[ix["seconds"]]), float(r[ix["relative_rmse"]]), int(r[ix["shot"]]))
+                for r in rows if len(r) > ix["relative_rmse"] and r[ix["relative_rmse"]]]
+        dat = ctx.result(f"curves/{name}.dat")
+        os.makedirs(os.path.dirname(dat), exist_ok=True)
+        with open(dat, "w") as f:
+            f.write("# seconds relative_rmse shot\n")
+            for t, e, k in data:
+                f.write(f"{t:.6f} {e:.9g} {k}\n")
+        series.append((name, dat, j))
+        points += [(t, e, name) for t, e, _ in data]
+    # Pareto front: the lowest error reached by any run within each budget.
+    points.sort()
+    front, best = [], float("inf")
+    for t, e, name in points:
+        if e < best:
+            best = e
+            front.append((t, e, name))
+    with open(ctx.result("curves/pareto.dat"), "w") as f:
+        f.write("# seconds relative_rmse run\n")
+        for t, e, name in front:
+            f.write(f"{t:.6f} {e:.9g} {name}\n")
+    # The front at round budgets, and which run gives it.
+    horizon = max(t for t, _, _ in points)
+    budgets = [b for b in (0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500) if b <= horizon * 1.01] + [horizon]
+    rows = []
+    for b in budgets:
+        reach = [p for p in front if p[0] <= b]
+        if reach:
+            t, e, name = reach[-1]
+            rows.append([b, e, name, t])
+    lib.write_csv(ctx.result("pareto.csv"), ["budget_seconds", "lowest_relative_rmse", "run", "at_seconds"],
+                  rows)
+    # Per run: the final error, its time, what measuring cost.
+    rows = []
+    for name, _, j in series:
+        rows.append([name, j["result"]["shots"], j["timings"]["solve_seconds"],
+                     j["result"]["relative_rmse"], j["result"]["error_measurements"],
+                     j["timings"]["error_seconds"]])
+    lib.write_csv(ctx.result("curves.csv"), ["run", "shots", "solve_seconds", "final_relative_rmse",
+                                             "error_measurements", "error_seconds"], rows)
+    plot_curves(ctx, series)
+
+
+def plot_curves(ctx, series):
+    colours = {"none": "#000000", "A": "#d62728", "B": "#1f77b4", "C": "#2ca02c", "R": "#9467bd"}
+    dashes = {}
+    plots = []
+    for name, dat, _ in series:
+        m = name.split("-")[0]
+        k = dashes.setdefault(m, 0)
+        dashes[m] += 1
+        plots.append(f"'{dat}' using 1:2 with lines lw 2 lc rgb '{colours.get(m, '#888888')}' "
+                     f"dt {1 + k} title '{name}'")
+    front = ctx.result("curves/pareto.dat")
+    plots.append(f"'{front}' using 1:2 with steps lw 3 lc rgb '#ff7f0e' title 'Pareto front'")
+    png = ctx.result("error-time.png")
+    lib.gnuplot(f"""set terminal pngcairo size 900,600 noenhanced font ',11'
+set output '{png}'
+set logscale xy
+set grid
+set key outside right
+set xlabel 'solve time, seconds (error measuring excluded)'
+set ylabel 'relative RMSE against reference (b)'
+set title 'Cornell box, 2 environments: error against run time'
+plot {', '.join(plots)}
+""")
+
+
+# --- docs/RESULTS.md --------------------------------------------------------------
+
+def table_md(path, header_map=None, digits=None):
+    header, rows = lib.read_csv(path)
+    names = [header_map.get(h, h) if header_map else h for h in header]
+    out = ["| " + " | ".join(names) + " |", "|" + "---|" * len(names)]
+    for r in rows:
+        cells = []
+        for h, v in zip(header, r):
+            cells.append(pretty(v, h))
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def pretty(v, h):
+    try:
+        x = float(v)
+    except ValueError:
+        return v
+    if v.isdigit():
+        return f"{int(v):,}".replace(",", " ")
+    if "percent" in h:
+        return f"{x:+.1f}%"
+    if "rmse" in h or h.startswith("vs_") or h.startswith("noise"):
+        return f"{100 * x:.3f}%"
+    if "ratio" in h:
+        return f"{x:.2e}"
+    return f"{x:.3g}"
+
+
+def rows_of(ctx, f):
+    header, rows = lib.read_csv(ctx.result(f))
+    return [dict(zip(header, r)) for r in rows]
+
+
+def report(ctx, meta=None):
+    s = ctx.s
+    meta = meta or {}
+    doc = os.path.join(os.path.dirname(ctx.out), "RESULTS.md") if ctx.out.endswith(
+        os.path.join("docs", "results")) else os.path.join(ctx.out, "RESULTS.md")
+    rel = os.path.relpath(ctx.out, os.path.dirname(doc))
+    link = lambda f: f"{rel}/{f}" if rel != "." else f
+
+    q = rows_of(ctx, "fig2-quality.csv")
+    t = rows_of(ctx, "table1-time.csv")
+    lk = rows_of(ctx, "fig3-leak.csv")
+    pareto = rows_of(ctx, "pareto.csv")
+    ref = rows_of(ctx, "references.csv")[0]
+    pct = lambda x: f"{100 * float(x):.2f}%"
+    floor = q[-1]
+    by_r = {r["mask_res"]: r for r in q}
+    tm = {(r["method"], r["mask_res"]): float(r["median_solve_seconds"]) for r in t}
+    none_s = tm[("none", "")]
+    leak_of = {(r["method"], r["mask_res"]): float(r["leak_percent"]) for r in lk}
+    spread = abs(float(lk[0]["leak_percent"]))
+    hi = str(s["leak_res"])
+
+    L = []
+    w = L.append
+    w("# Results: the paper's figures and table as numbers\n")
+    w("Generated by `make experiments` (tools/experiments/all); every figure below comes from "
+      "that run. Do not edit by hand.\n")
+    if meta:
+        w(f"- command: `{meta.get('command', 'tools/experiments/all')}`, scale `{ctx.scale}`")
+        w(f"- commit {meta.get('commit', '?')}, {meta.get('date', '?')}")
+        w(f"- machine: {meta.get('cpu', '?')}, {meta.get('cores', '?')} cores; load average "
+          f"{meta.get('load_start', '?')} at the start, {meta.get('load_end', '?')} at the end")
+        w(f"- wall time of the whole run: {meta.get('seconds', 0):.0f} s\n")
+    common = " ".join(s["common"])
+    w("## Set-up\n")
+    w(f"The Cornell box (scenes/cornell.obj) split into two environments at x = 278 (`--envs 2`), "
+      f"rendered with `{common}` unless a row says otherwise. Times are `solve_seconds` from run.json: "
+      "the solve alone, without init, output, or the error measurements of `--error-every` "
+      "(their cost is in the last table).\n")
+    w("**References.** (a) the paper's: Method B at R = "
+      f"{s['ref_res']}, two environments, the same settings. (b) a converged single-environment "
+      "solution (no masks): " + ref["what"] + ". Its own noise is estimated from the two seeds: "
+      "two independent solves differ by √2 σ, so one has σ = RMSE(seed 1, seed 2)/√2 and their "
+      "mean σ/√2 = RMSE/2.\n")
+    w(table_md(ctx.result("references.csv")) + "\n")
+    lowest = min(float(r["vs_ref_b_whole"]) for r in q if r["vs_ref_b_whole"])
+    w(f"Reference (b)'s noise, {pct(ref['noise_whole'])} over the image and "
+      f"{pct(ref['noise_region'])} in the shadow region, against the smallest difference measured "
+      f"against it below, {pct(lowest)}: "
+      + ("well below (under a third)." if float(ref["noise_whole"]) < lowest / 3 else
+         "NOT well below: the differences against (b) below include its noise.") + "\n")
+    w("**The shadow region** (below, bright): the points of the floor and back wall from which at "
+      "least one of 5 × 5 points spread over the light is hidden by the tall block (umbra and "
+      "penumbra), as seen from the camera: the pixels whose visible surface is such a point. The "
+      "right environment's part is its x < 278 side (the image's right half looks at x < 278).\n")
+    w(f"![shadow region]({link('img/region.png')})\n")
+
+    w("## Fig. 2 → table: quality against mask resolution (Method B)\n")
+    w(table_md(ctx.result("fig2-quality.csv")) + "\n")
+    w("Relative RMSE = √(Σ(a−b)²/Σb²) over all channels of the pixels (whole image, or the region). "
+      "The last row is the noise floor of any comparison between two two-environment runs: the "
+      "lowest R again with another seed.\n")
+    imgs = " ".join(f"![B R={r}]({link(f'img/fig2-B-{r}.png')})" for r in s["table_res"] + [s["ref_res"]])
+    w("Images, R = " + ", ".join(str(r) for r in s["table_res"]) + f" and reference (a), R = {s['ref_res']}:\n")
+    w(imgs + "\n")
+    w("|x - reference (b)| × 10 (black = equal, white = 10% of the mean), the region outlined in blue:\n")
+    w(" ".join(f"![diff R={r}]({link(f'img/fig2-B-{r}-diff.png')})" for r in s["table_res"] + [s["ref_res"]]) + "\n")
+
+    w("## Table 1 → table: time of Method A and Method B\n")
+    w(table_md(ctx.result("table1-time.csv")) + "\n")
+    w(f"Median of {s['reps']} runs each (min and max beside it), one after another on this machine. "
+      "`mask_rays` are Method B's centre rays; `bytes_sent` the packet bytes (128-byte header and "
+      "the mask) sent between the environments. `ratio_to_seed` is our median time over the seed's.\n")
+
+    w("## Fig. 3 → number: light leaking through Method A's masks\n")
+    w(table_md(ctx.result("fig3-leak.csv")) + "\n")
+    w("`leak_percent`: the area-weighted mean radiosity of the patches in the right environment's "
+      "shadow region (patch centre in the region, x < 278), above reference (b)'s, in percent "
+      "(power received = mean radiosity × area). The first row is the difference between reference "
+      "(b)'s two seeds: the noise of this measure.\n")
+    w(f"![A R={hi}]({link(f'img/fig3-A-{hi}.png')}) ![A R={hi} diff]({link(f'img/fig3-A-{hi}-diff.png')})\n")
+
+    w("## Error against run time\n")
+    w(f"Every curve run measured its image against reference (b) every {s['error_every']} shots "
+      "(`--reference`, `--error-every`).\n")
+    w(f"![error against time]({link('error-time.png')})\n")
+    w("The Pareto front: the lowest error any run had reached within each time budget.\n")
+    w(table_md(ctx.result("pareto.csv")) + "\n")
+    w("What measuring cost (not in the solve times):\n")
+    w(table_md(ctx.result("curves.csv")) + "\n")
+
+    w("## Reading\n")
+    res = [str(r) for r in s["table_res"]]
+    r_lo, r_hi = res[0], res[-1]
+    fl = float(floor["vs_ref_a_region"])
+
+    def vs(r):
+        return float(by_r[r]["vs_ref_a_region"])
+    w("- **Quality against resolution (Fig. 2).** In the shadow region Method B differs from "
+      "reference (a) by " + ", ".join(f"{pct(vs(r))} at R = {r}" for r in res) +
+      f"; two runs that differ only in their seed differ by {pct(fl)}. " +
+      ("So the paper's ordering holds: the error falls with R and R = "
+       f"{r_hi} is within the noise of R = {s['ref_res']}." if vs(r_lo) > vs(r_hi) and vs(r_hi) <= 1.2 * fl
+       else "The paper's ordering does not show clearly above the Monte Carlo noise here.")
+      + " Over the whole image the mask's effect is swamped by that noise: the shadow edge is a "
+      "small part of the picture.")
+    ratio = [tm[("B", int_or(r))] / tm[("A", int_or(r))] for r in s["table_res"]]
+    seed_ratio = [lib.SEED_MINUTES[("B", r)] / lib.SEED_MINUTES[("A", r)]
+                  for r in s["table_res"] if ("B", r) in lib.SEED_MINUTES]
+    b_slower = all(x > 1.0 for x in ratio)
+    w(f"- **Time (Table 1).** Method A costs {fmt_pct(tm[('A', int_or(r_lo))] / none_s - 1)} to "
+      f"{fmt_pct(tm[('A', int_or(r_hi))] / none_s - 1)} over no mask (marking a pixel is one bit "
+      "per form-factor ray that hits). Method B's time over A's is " +
+      ", ".join(f"{x:.2f}×" for x in ratio) + " at R = " + ", ".join(str(r) for r in s["table_res"]) +
+      ("; in the paper it was " + ", ".join(f"{x:.2f}×" for x in seed_ratio) + ". "
+       if seed_ratio else " (the paper has no times at these R). ") +
+      ("Here B is the slower at every R: the paper's A paid for wasteful marking (\"pixels may be "
+       "marked off multiple times\"), which costs one bit write here, while B's one extra ray per "
+       "open pixel (4R² per shot that sends a mask) remains. The paper's finding that B is faster "
+       "does not carry over; its finding that B's cost grows with R does."
+       if b_slower else "B is not the slower at every R here; see the table."))
+    a_hi, b_hi = leak_of.get(("A", hi)), leak_of.get(("B", hi))
+    if a_hi is not None and b_hi is not None:
+        w(f"- **Leak (Fig. 3).** At R = {hi}, Method A puts {a_hi:+.1f}% more light in the right "
+          f"environment's shadow than reference (b); Method B {b_hi:+.1f}%; the reference's own "
+          f"seed-to-seed spread is {spread:.1f}%. " +
+          ("The paper's light leak is reproduced and measured." if a_hi > max(3 * spread, b_hi + 3 * spread)
+           else "The leak is not clearly above the noise at this scale."))
+    if pareto:
+        names = []
+        for p in pareto:
+            if p["run"] not in names:
+                names.append(p["run"])
+        curves = rows_of(ctx, "curves.csv")
+        best = min(curves, key=lambda r: float(r["final_relative_rmse"]))
+        w(f"- **Error against time.** The Pareto front is made of {', '.join(names)}: at each "
+          "budget, the lowest whole-image error any run had reached came from these. The lowest "
+          f"final error is {best['run']}'s, {pct(best['final_relative_rmse'])} after "
+          f"{float(best['solve_seconds']):.1f} s; the final errors range from "
+          f"{pct(min(float(r['final_relative_rmse']) for r in curves))} to "
+          f"{pct(max(float(r['final_relative_rmse']) for r in curves))}, against reference (b)'s "
+          f"own noise of {pct(ref['noise_whole'])}.")
+    w("")
+    with open(doc, "w") as f:
+        f.write("\n".join(L) + "\n")
+    lib.log(f"wrote {doc}")
+    return doc
+
+
+def int_or(r):
+    try:
+        return str(int(r))
+    except (TypeError, ValueError):
+        return r
+
+
+def fmt_pct(x):
+    return f"{100 * x:+.0f}%"
+
+
+# --- all ----------------------------------------------------------------------------
+
+def meta_info(ctx, start, load_start):
+    import subprocess
+    def sh(cmd):
+        try:
+            return subprocess.run(cmd, shell=True, capture_output=True, text=True).stdout.strip()
+        except OSError:
+            return "?"
+    return dict(command="make experiments" if ctx.scale == "full" else "tools/experiments/all --mini",
+                commit=sh(f"git -C {lib.ROOT} rev-parse --short HEAD") + (
+                    " (with local changes)" if sh(f"git -C {lib.ROOT} status --porcelain -- src include platform") else ""),
+                date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+                cpu=sh("lscpu | sed -n 's/^Model name: *//p'") or "?",
+                cores=os.cpu_count(), load_start=load_start,
+                load_end=" ".join(f"{x:.2f}" for x in os.getloadavg()),
+                seconds=time.time() - start)
+
+
+STEPS = {"references": references, "quality": quality, "timing": timing, "leak": leak,
+         "error-time": error_time, "report": report}
+
+
+def main(step, doc):
+    ctx = lib.context_from_argv(sys.argv, doc)
+    if step != "all":
+        STEPS[step](ctx)
+        return
+    start = time.time()
+    load_start = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    for name in ["references", "quality", "leak", "error-time", "timing"]:
+        t0 = time.time()
+        lib.log(f"experiments: {name}")
+        STEPS[name](ctx)
+        lib.log(f"experiments: {name} done in {time.time() - t0:.0f} s")
+    report(ctx, meta_info(ctx, start, load_start))
