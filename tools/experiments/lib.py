@@ -315,7 +315,8 @@ class ShadowRegion:
         return (floor or back) and self.shadowed(p)
 
     def pixel_mask(self, camera, w, h, cache=None):
-        """1 for the pixels whose visible surface is in the region."""
+        """Per pixel: 0 outside the region, 1 in it at x >= 278 (the first
+        environment), 2 in it at x < 278 (the second)."""
         if cache and os.path.exists(cache):
             with open(cache) as f:
                 return [int(c) for c in f.read().strip()]
@@ -337,7 +338,7 @@ class ShadowRegion:
                     continue
                 p = tuple(eye[k] + t * d[k] for k in range(3))
                 n = (0, 1, 0) if what == "floor" else (0, 0, -1)
-                mask.append(1 if self.in_region(p, n) else 0)
+                mask.append((2 if p[0] < 278 else 1) if self.in_region(p, n) else 0)
         if cache:
             with open(cache, "w") as f_:
                 f_.write("".join(str(m) for m in mask))
