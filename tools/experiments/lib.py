@@ -32,7 +32,7 @@ CAMERA = ["--camera", "278,545,300,278,0,300,0,0,1,76"]
 SCALES = {
     "full": dict(common=CAMERA + ["--patch-size", "70", "--rays", "4096", "--stop-unshot", "1e-2",
                          "--width", "256", "--height", "256"],
-                 ref_b=["--rays", "16384", "--stop-unshot", "1e-3"],
+                 ref_b=["--rays", "8192", "--stop-unshot", "1e-3"],
                  ref_seeds=[1001, 1002],
                  ref_res=250, table_res=[20, 50, 100], curve_res=[20, 50, 100, 250],
                  leak_res=250, reps=3, error_every=100),
