@@ -103,6 +103,11 @@ def context_from_argv(argv, doc):
     return Context(scale, out, runs)
 
 
+def arg(args, flag):
+    """The value after the last `flag` in an argument list."""
+    return [args[i + 1] for i, a in enumerate(args[:-1]) if a == flag][-1]
+
+
 def log(msg):
     print(msg, file=sys.stderr, flush=True)
 
