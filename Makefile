@@ -8,6 +8,7 @@
 #   make CROSS=arm-linux-gnueabihf- 32-bit ARM, into build/armhf
 #   make test-cross     the aarch64 tests and a render under qemu, compared with native
 #   make experiments    the paper's figures and table as numbers: docs/RESULTS.md
+#   make cluster-experiments  (root) simulated Pi clusters, docs/CLUSTER.md
 
 CROSS ?=
 CXX := $(CROSS)g++
@@ -95,7 +96,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross experiments
+.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -219,6 +220,19 @@ test-cross:
 	  exit 1; \
 	fi
 endif
+
+# make cluster-experiments (root; not part of make test): vismask-mpi on 2..16
+# simulated boards (tools/cluster-sim: network namespaces, tc-shaped links,
+# the real mpirun), writes docs/CLUSTER.md and docs/img/cluster-time.png.
+# build/mpi-wait.so is a PMPI shim that times each rank's MPI calls.
+$(BUILD)/mpi-wait.so: tools/mpi-wait.c
+	@mkdir -p $(dir $@)
+	mpicc -O2 -Wall -Wextra -Werror -shared -fPIC $< -o $@
+
+cluster-experiments:
+	tools/install-deps --cluster
+	$(MAKE) all $(BUILD)/mpi-wait.so
+	tools/cluster-experiments
 
 clean:
 	rm -rf build out
