@@ -464,7 +464,9 @@ def report(ctx, meta=None):
       "region, where the occluder (the tall block) is in the shooter's environment and only the mask "
       "stands for it, Method B differs from "
       "reference (a) by " + ", ".join(f"{pct(vs(r))} at R = {r}" for r in res) +
-      f"; two runs that differ only in their seed differ by {pct(fl)}. " +
+      f". Every run uses seed 1, so their Monte Carlo noise is largely shared (common random "
+      f"numbers) and these differences are mostly the masks'; two runs that differ only in their "
+      f"seed differ by {pct(fl)}. " +
       ("So the paper's ordering holds: the error falls with R and R = "
        f"{r_hi} is within the noise of R = {s['ref_res']}." if vs(r_lo) > vs(r_hi) and vs(r_hi) <= 1.2 * fl
        else "The paper's ordering does not show clearly above the Monte Carlo noise here.")
@@ -475,8 +477,8 @@ def report(ctx, meta=None):
                   for r in s["table_res"] if ("B", r) in lib.SEED_MINUTES]
     b_slower = all(x > 1.0 for x in ratio)
     w(f"- **Time (Table 1).** Method A costs {fmt_pct(tm[('A', int_or(r_lo))] / none_s - 1)} to "
-      f"{fmt_pct(tm[('A', int_or(r_hi))] / none_s - 1)} over no mask (marking a pixel is one bit "
-      "per form-factor ray that hits). Method B's time over A's is " +
+      f"{fmt_pct(tm[('A', int_or(r_hi))] / none_s - 1)} over no mask (marking, packing, sending, "
+      "merging and reading the masks). Method B's time over A's is " +
       ", ".join(f"{x:.2f}×" for x in ratio) + " at R = " + ", ".join(str(r) for r in s["table_res"]) +
       ("; in the paper it was " + ", ".join(f"{x:.2f}×" for x in seed_ratio) + ". "
        if seed_ratio else " (the paper has no times at these R). ") +
@@ -507,6 +509,12 @@ def report(ctx, meta=None):
         line = (f"- **Method R** has {float(rr['leak_percent']):+.1f}% in the same region (the "
                 f"reference's seed spread is {spread:.1f}%): it has no mask; every ray is traced "
                 "until it is absorbed in exactly one environment or escapes.")
+        curves = {r["run"]: r for r in rows_of(ctx, "curves.csv")}
+        if "R" in curves and f"B-{hi}" in curves:
+            line += (f" Its whole-image error, {pct(curves['R']['final_relative_rmse'])} against "
+                     f"B-{hi}'s {pct(curves[f'B-{hi}']['final_relative_rmse'])}, is noise: R traces "
+                     "each ray once, so the second environment receives only the rays that reach "
+                     "it, where the other methods draw --rays fresh rays in every environment.")
         if os.path.exists(ctx.result("closed-box.csv")):
             cb = {r["method"]: r for r in rows_of(ctx, "closed-box.csv")}
             if "R" in cb and "B" in cb:
