@@ -160,11 +160,11 @@ def timing(ctx):
         med = lib.median(secs)
         rows.append([m, "" if m in SINGLE else r, med, min(secs), max(secs), res["shots"],
                      res["rays"], res["mask_rays"], res["bytes_sent"],
-                     "" if seed is None else f"{seed:.2f}",
+                     "" if seed is None else f"{int(seed)}m {round(60 * (seed - int(seed)))}s",
                      "" if seed is None else med / (seed * 60)])
     lib.write_csv(ctx.result("table1-time.csv"),
                   ["method", "mask_res", "median_solve_seconds", "min_seconds", "max_seconds",
-                   "shots", "rays", "mask_rays", "bytes_sent", "seed_minutes",
+                   "shots", "rays", "mask_rays", "bytes_sent", "seed_time",
                    "ratio_to_seed"], rows)
 
 
@@ -402,7 +402,7 @@ def report(ctx, meta=None):
     w(f"Median of {s['reps']} runs each (min and max beside it), one after another on this machine; "
       "the first of each is the error-curve run below, whose measurements are off its clock. "
       "`mask_rays` are Method B's centre rays; `bytes_sent` the packet bytes (128-byte header and "
-      "the mask) sent between the environments. `ratio_to_seed` is our median time over the seed's.\n")
+      "the mask) sent between the environments. `seed_time` is the paper's Table 1 and `ratio_to_seed` our median time over it.\n")
 
     w("## Fig. 3 → number: light leaking through Method A's masks\n")
     w(table_md(ctx.result("fig3-leak.csv")) + "\n")
@@ -483,9 +483,9 @@ def report(ctx, meta=None):
       ("; in the paper it was " + ", ".join(f"{x:.2f}×" for x in seed_ratio) + ". "
        if seed_ratio else " (the paper has no times at these R). ") +
       ("Here B is the slower at every R: the paper's A paid for wasteful marking (\"pixels may be "
-       "marked off multiple times\"), which costs one bit write here, while B's one extra ray per "
-       "open pixel (4R² per shot that sends a mask) remains. The paper's finding that B is faster "
-       "does not carry over; its finding that B's cost grows with R does."
+       "marked off multiple times\"), which here is one bit write per ray that hits, while B's one "
+       "extra ray per open pixel (4R² per shot that sends a mask) outweighs it. The paper's finding "
+       "that B is faster does not carry over; its finding that B's cost grows with R does."
        if b_slower else "B is not the slower at every R here; see the table."))
     a_hi, b_hi = leak_of.get(("A", hi)), leak_of.get(("B", hi))
     if a_hi is not None and b_hi is not None:
@@ -499,12 +499,15 @@ def report(ctx, meta=None):
     if cs:
         fewer = [r for r, b, c in cs if int(c["mask_rays"]) < int(b["mask_rays"])]
         leak_gap = max(abs(float(c["leak_percent"]) - float(b["leak_percent"])) for _, b, c in cs)
+        darker = all(float(c["leak_percent"]) <= float(b["leak_percent"]) + spread for _, b, c in cs)
         w(f"- **Method C** cast fewer centre rays than B at R = {', '.join(str(r) for r in fewer) or 'none'} "
           f"(C/B from {min(int(c['mask_rays']) / max(1, int(b['mask_rays'])) for _, b, c in cs):.2f} to "
           f"{max(int(c['mask_rays']) / max(1, int(b['mask_rays'])) for _, b, c in cs):.2f}; the saving "
           "shrinks as R grows, because pixels then outnumber the rays and most get no mark). Its leak "
           f"differs from B's by at most {leak_gap:.1f} points, against the reference's seed spread of "
-          f"{spread:.1f}%.")
+          f"{spread:.1f}%" + (": no leak beyond B's; where it differs it is darker (a pixel whose "
+                              "rays all hit is closed, even where its centre ray would pass)."
+                              if darker else "; at some R it lets more light through than B."))
     if rr:
         line = (f"- **Method R** has {float(rr['leak_percent']):+.1f}% in the same region (the "
                 f"reference's seed spread is {spread:.1f}%): it has no mask; every ray is traced "
@@ -512,7 +515,8 @@ def report(ctx, meta=None):
         curves = {r["run"]: r for r in rows_of(ctx, "curves.csv")}
         if "R" in curves and f"B-{hi}" in curves:
             line += (f" Its whole-image error, {pct(curves['R']['final_relative_rmse'])} against "
-                     f"B-{hi}'s {pct(curves[f'B-{hi}']['final_relative_rmse'])}, is noise: R traces "
+                     f"B-{hi}'s {pct(curves[f'B-{hi}']['final_relative_rmse'])}, is most likely noise (the "
+                     "region and the closed box show no bias): R traces "
                      "each ray once, so the second environment receives only the rays that reach "
                      "it, where the other methods draw --rays fresh rays in every environment.")
         if os.path.exists(ctx.result("closed-box.csv")):
