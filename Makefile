@@ -94,7 +94,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross
+.PHONY: all deps demo test headers clean test-cross bench
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -140,6 +140,19 @@ endif
 
 $(BUILD)/vismask_tests: $(TEST_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
 	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lgtest -pthread
+
+# The benchmark binary: the only one that links Embree and Google Benchmark
+# (tools/install-deps --bench installs them). make bench runs it and the
+# solve benchmarks and writes docs/BENCHMARKS.md (bench/run).
+BENCH_SRC := $(wildcard bench/*.cpp)
+BENCH_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(BENCH_SRC))
+$(BUILD)/vismask_bench: $(BENCH_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
+	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lembree3 -lbenchmark -pthread
+
+bench:
+	tools/install-deps --bench
+	$(MAKE) all $(BUILD)/vismask_bench
+	BUILD=$(BUILD) bench/run
 
 # Every public header compiles on its own.
 headers: $(patsubst include/vismask/%.h,$(BUILD)/headers/%.ok,$(HEADERS))
