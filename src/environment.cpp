@@ -295,6 +295,17 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
   }
 }
 
+bool Environment::HasDownstream(uint32_t sourceEnv) const {
+  int source[3];
+  grid3_.Cell(static_cast<int>(sourceEnv), source);
+  for (int a = 0; a < 3; ++a) {
+    // As in Forward: away from the source; both ways on an axis the source shares.
+    bool down = cell_[a] + 1 < grid3_.n[a], up = cell_[a] > 0;
+    if (cell_[a] == source[a] ? (down || up) : (cell_[a] > source[a] ? down : up)) return true;
+  }
+  return false;
+}
+
 void Environment::ShootLocal(uint32_t i) {
   PatchEnergy& src = energy_[i];
   double power[3];
@@ -339,8 +350,10 @@ void Environment::ShootForeign(uint32_t s) {
   MaskBits out(scratchWords_.subspan(0, shape_.words()), shape_.res);
   out.CopyFrom(in);
   Patch shooter = PatchFromHeader(slot.header);
+  // No neighbour downstream: the outgoing mask would never be sent, so none
+  // is made (Method B's centre rays were half of a 2-environment solve).
   Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_), &in,
-             &out);
+             HasDownstream(slot.header.sourceEnv) ? &out : nullptr);
   ++stats_.foreignShots;
   Forward(slot.header, out);
   slot = Slot();

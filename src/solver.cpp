@@ -66,9 +66,18 @@ namespace {
 
 double Sum3(const double v[3]) { return v[0] + v[1] + v[2]; }
 
+// Runs a transport collective, adding the time it takes to *waited.
+template <class Call>
+void Timed(double* waited, Call&& call) {
+  double t0 = os::Seconds();
+  call();
+  *waited += os::Seconds() - t0;
+}
+
 // Gathers every environment's report and sums them in environment order.
+
 RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
-                   ExchangeBuffers* x, double elapsed) {
+                   ExchangeBuffers* x, double elapsed, double* waited) {
   for (uint32_t i = 0; i < layout.perRank; ++i) x->mine[i] = EnvReport{};
   for (uint32_t i = 0; i < envs.size(); ++i) {
     const Environment* e = envs[i];
@@ -80,11 +89,15 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
     r.foreignShots = e->stats().foreignShots;
   }
   x->mine[0].elapsed = elapsed;
-  t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data());
+  x->mine[0].waited = *waited;
+  Timed(waited, [&] { t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data()); });
   // Rank r's block holds its environments first; the rest is padding.
   RoundTotals tot;
   tot.elapsed = x->all[0].elapsed;
   int ranks = t->size();
+  for (int r = 0; r < ranks; ++r)
+    if (x->all[size_t(r) * layout.perRank].waited > tot.waitedMax)
+      tot.waitedMax = x->all[size_t(r) * layout.perRank].waited;
   auto report = [&](uint32_t env) -> const EnvReport& {
     for (int r = 0; r < ranks; ++r) {
       RankEnvs re = EnvsOfRank(layout.total, ranks, r);
@@ -111,7 +124,7 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
 // Moves the round's packets to their receivers and delivers them: for each
 // receiver, senders in environment order and packets in send order.
 void Exchange(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
-              ExchangeBuffers* x) {
+              ExchangeBuffers* x, double* waited) {
   int ranks = t->size(), me = t->rank();
   if (ranks > 1) {
     for (int r = 0; r < ranks; ++r) {
@@ -133,7 +146,7 @@ void Exchange(Span<Environment* const> envs, const RankEnvs& layout, Transport* 
       x->send[r] = Span<const uint8_t>(block, used);
       x->recv[r] = Span<uint8_t>(x->recvBytes.data() + size_t(r) * x->blockBytes, x->blockBytes);
     }
-    t->AllToAll(x->send.data(), x->recv.data(), x->received.data());
+    Timed(waited, [&] { t->AllToAll(x->send.data(), x->recv.data(), x->received.data()); });
   }
   for (Environment* dest : envs) {
     for (int r = 0; r < ranks; ++r) {
@@ -185,7 +198,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   SolveResult result;
   Progress progress(options.quiet || transport->rank() != 0);
   double start = os::Seconds();
-  RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0);
+  RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0, &result.waitSeconds);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   if (convergence) convergence->Printf("shot,seconds,unshot_fraction\n");
 
@@ -210,11 +223,12 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
           ShotBudget(i, options.roundShots, result.shots, options.maxShots),
           AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
     }
-    Exchange(envs, layout, transport, buffers);
+    Exchange(envs, layout, transport, buffers, &result.waitSeconds);
     ++result.rounds;
     uint64_t before = result.shots;
     double now = os::Seconds();
-    totals = Totals(envs, layout, transport, buffers, now - start);
+    totals = Totals(envs, layout, transport, buffers, now - start, &result.waitSeconds);
+    result.waitSecondsMax = totals.waitedMax;
     result.shots = totals.shots;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     // A ready foreign shooter exists whenever any queue holds one, so a round

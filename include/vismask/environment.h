@@ -160,6 +160,8 @@ class Environment {
   // Sends the shooter's record and `mask` to the neighbours downstream from
   // the source environment.
   void Forward(PacketHeader header, const MaskBits& mask);
+  // True if Forward would send a shooter from `sourceEnv` anywhere.
+  bool HasDownstream(uint32_t sourceEnv) const;
   int FindSlot(uint32_t shooterId, uint32_t shotIndex) const;
   int BestReadySlot() const;
   MaskBits SlotMask(uint32_t slot) const;

@@ -37,6 +37,11 @@ struct SolveResult {
   uint64_t shots = 0;         // local and foreign
   double seconds = 0.0;
   double unshotFraction = 1.0;  // (unshot + queued) / emitted, channels summed
+  // Seconds this rank spent inside the transport's AllToAll and AllGather:
+  // blocked until the slowest rank arrives, plus the transfer itself. With
+  // one rank the loop transport returns at once, so it is about zero.
+  double waitSeconds = 0.0;
+  double waitSecondsMax = 0.0;  // the most any rank spent there (as of the last gather)
 };
 
 // Which environments live on a rank: contiguous blocks, [first, first+count)
@@ -56,6 +61,7 @@ struct EnvReport {
   double unshot;     // local unshot power plus queued foreign power
   double emitted;
   double elapsed;    // seconds since the solve began, on this rank's clock
+  double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
   uint64_t shots;    // local and foreign
   uint64_t recordsCreated;
   uint64_t foreignShots;
@@ -65,6 +71,7 @@ struct RoundTotals {
   double unshot = 0.0;
   double emitted = 0.0;
   double elapsed = 0.0;  // rank 0's clock
+  double waitedMax = 0.0;  // the most any rank has waited
   uint64_t shots = 0;
   uint64_t recordsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
