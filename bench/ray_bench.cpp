@@ -17,7 +17,7 @@
 // hit is compared (patch id and t).
 //
 // Usage: vismask_bench [--md FILE] [--sizes L1,L2,...] [--rays N]
-//                      [--shooters N] [--reps N] [google-benchmark flags]
+//                      [--shooters N] [--reps N] [--density D] [google-benchmark flags]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -53,9 +53,10 @@ struct Args {
   std::string md;
   std::string scene = "scenes/cornell.obj";
   std::vector<float> sizes = {80.0f, 19.5f, 4.7f};
-  int rays = 1 << 18;
+  int rays = 1 << 17;
   int shooters = 256;
   int reps = 5;
+  float density = EnvOptions().gridDensity;  // as an environment plans its grid
 };
 
 // ---- Embree: a device with a memory monitor, and one scene per geometry ----
@@ -183,7 +184,7 @@ struct VisScene {
   Bounds bounds;
 };
 
-void BuildVis(const Scene& scene, float patchSize, VisScene* v) {
+void BuildVis(const Scene& scene, float patchSize, float density, VisScene* v) {
   Mesh mesh;
   std::vector<uint32_t> all(scene.polygons.size());
   for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
@@ -199,7 +200,7 @@ void BuildVis(const Scene& scene, float patchSize, VisScene* v) {
   v->geom.resize(v->patches.size());
   for (size_t i = 0; i < v->patches.size(); ++i) v->geom[i] = MakePatchGeom(v->patches[i]);
   Span<const Patch> ps(v->patches.data(), v->patches.size());
-  v->plan = Grid::MakePlan(ps, EnvOptions().gridDensity);  // as an environment plans it
+  v->plan = Grid::MakePlan(ps, density);
   Arena measure = Arena::Measure();
   Grid probe;
   probe.Layout(measure, v->plan);
@@ -372,6 +373,8 @@ Args ParseArgs(int* argc, char** argv) {
       a.rays = std::atoi(value("--rays"));
     } else if (s == "--shooters") {
       a.shooters = std::atoi(value("--shooters"));
+    } else if (s == "--density") {
+      a.density = std::strtof(value("--density"), nullptr);
     } else if (s == "--reps") {
       a.reps = std::atoi(value("--reps"));
     } else {
@@ -412,7 +415,7 @@ int main(int argc, char** argv) {
   std::vector<std::unique_ptr<Case>> cases;
   for (float size : args.sizes) {
     auto c = std::make_unique<Case>();
-    BuildVis(scene, size, &c->vis);
+    BuildVis(scene, size, args.density, &c->vis);
     BuildEmbree(&dev, c->vis.patches, false, &c->tri);
     BuildEmbree(&dev, c->vis.patches, true, &c->quad);
     UniformRays(c->vis, args.rays, &c->sets[0]);
