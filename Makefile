@@ -151,7 +151,7 @@ $(BUILD)/vismask_bench: $(BENCH_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
 
 bench:
 	tools/install-deps --bench
-	$(MAKE) all $(BUILD)/vismask_bench
+	$(MAKE) -j$$(nproc) all $(BUILD)/vismask_bench
 	BUILD=$(BUILD) bench/run
 
 # Every public header compiles on its own.
