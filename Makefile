@@ -164,8 +164,11 @@ demo: deps
 	$(MAKE) $(BUILD)/vismask
 	$(BUILD)/vismask render scenes/cornell.obj --out out
 
+# The bench binary too, when its libraries are there (tools/install-deps
+# --bench), so that make test keeps it compiling; make bench runs it.
+BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildcard /usr/include/benchmark/benchmark.h)),$(BUILD)/vismask_bench)
 test: deps
-	$(MAKE) headers all $(BUILD)/vismask_tests
+	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT)
 	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
 
 # make test-cross (after make CROSS=aarch64-linux-gnu-; CROSS defaults to
