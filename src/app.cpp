@@ -399,8 +399,9 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"packets\": %llu,\n    \"packet_bytes\": %u,\n    \"bytes_sent\": %llu,\n",
            static_cast<unsigned long long>(st.packetsSent), packetBytes,
            static_cast<unsigned long long>(st.packetsSent * packetBytes));
-  w.Printf("    \"wait_seconds\": %.6f,\n    \"wait_seconds_max_rank\": %.6f,\n", res.waitSeconds,
-           res.waitSecondsMax);
+  w.Printf("    \"wait_seconds\": %.6f,\n    \"wait_seconds_max_rank\": %.6f,\n"
+           "    \"compute_cpu_seconds\": %.6f,\n    \"critical_cpu_seconds\": %.6f,\n",
+           res.waitSeconds, res.waitSecondsMax, res.computeSeconds, res.criticalSeconds);
   w.Printf("    \"unshot_fraction\": %.17g\n  },\n", res.unshotFraction);
   EnergyLedger total;
   for (const EnvSummary& e : r->summary) {

@@ -77,7 +77,7 @@ void Timed(double* waited, Call&& call) {
 // Gathers every environment's report and sums them in environment order.
 
 RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
-                   ExchangeBuffers* x, double elapsed, double* waited) {
+                   ExchangeBuffers* x, double elapsed, double roundCpu, double* waited) {
   for (uint32_t i = 0; i < layout.perRank; ++i) x->mine[i] = EnvReport{};
   for (uint32_t i = 0; i < envs.size(); ++i) {
     const Environment* e = envs[i];
@@ -90,14 +90,17 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
   }
   x->mine[0].elapsed = elapsed;
   x->mine[0].waited = *waited;
+  x->mine[0].roundCpu = roundCpu;
   Timed(waited, [&] { t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data()); });
   // Rank r's block holds its environments first; the rest is padding.
   RoundTotals tot;
   tot.elapsed = x->all[0].elapsed;
   int ranks = t->size();
-  for (int r = 0; r < ranks; ++r)
-    if (x->all[size_t(r) * layout.perRank].waited > tot.waitedMax)
-      tot.waitedMax = x->all[size_t(r) * layout.perRank].waited;
+  for (int r = 0; r < ranks; ++r) {
+    const EnvReport& first = x->all[size_t(r) * layout.perRank];
+    if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
+    if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
+  }
   auto report = [&](uint32_t env) -> const EnvReport& {
     for (int r = 0; r < ranks; ++r) {
       RankEnvs re = EnvsOfRank(layout.total, ranks, r);
@@ -198,7 +201,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   SolveResult result;
   Progress progress(options.quiet || transport->rank() != 0);
   double start = os::Seconds();
-  RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0, &result.waitSeconds);
+  RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   if (convergence) convergence->Printf("shot,seconds,unshot_fraction\n");
 
@@ -216,6 +219,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
       result.reason = StopReason::kMaxSeconds;
       break;
     }
+    double cpu0 = os::CpuSeconds();
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
       if (i < layout.first || i >= layout.first + layout.count) continue;
@@ -223,12 +227,15 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
           ShotBudget(i, options.roundShots, result.shots, options.maxShots),
           AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
     }
+    double roundCpu = os::CpuSeconds() - cpu0;
+    result.computeSeconds += roundCpu;
     Exchange(envs, layout, transport, buffers, &result.waitSeconds);
     ++result.rounds;
     uint64_t before = result.shots;
     double now = os::Seconds();
-    totals = Totals(envs, layout, transport, buffers, now - start, &result.waitSeconds);
+    totals = Totals(envs, layout, transport, buffers, now - start, roundCpu, &result.waitSeconds);
     result.waitSecondsMax = totals.waitedMax;
+    result.criticalSeconds += totals.roundCpuMax;
     result.shots = totals.shots;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     // A ready foreign shooter exists whenever any queue holds one, so a round

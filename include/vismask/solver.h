@@ -42,6 +42,11 @@ struct SolveResult {
   // one rank the loop transport returns at once, so it is about zero.
   double waitSeconds = 0.0;
   double waitSecondsMax = 0.0;  // the most any rank spent there (as of the last gather)
+  // CPU seconds of the rounds' shots (RunRound): this rank's, and the sum
+  // over rounds of the most any rank used in that round, which is what the
+  // solve would take with a core per rank and free communication.
+  double computeSeconds = 0.0;
+  double criticalSeconds = 0.0;
 };
 
 // Which environments live on a rank: contiguous blocks, [first, first+count)
@@ -62,6 +67,7 @@ struct EnvReport {
   double emitted;
   double elapsed;    // seconds since the solve began, on this rank's clock
   double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
+  double roundCpu;   // CPU seconds of this rank's shots in the last round (first entry)
   uint64_t shots;    // local and foreign
   uint64_t recordsCreated;
   uint64_t foreignShots;
@@ -72,6 +78,7 @@ struct RoundTotals {
   double emitted = 0.0;
   double elapsed = 0.0;  // rank 0's clock
   double waitedMax = 0.0;  // the most any rank has waited
+  double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
   uint64_t shots = 0;
   uint64_t recordsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
