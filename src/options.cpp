@@ -43,6 +43,10 @@ render options:
                        (same size) when the solve ends, in convergence.csv
                        and run.json; the time it takes is not solve time
   --error-every K      with --reference: also every K shots during the solve
+  --correct-unshot on|off
+                       on: patches.csv's b includes kd * the ambient term
+                       (Cohen's estimate of what the still-unshot power will
+                       add, which the image always shows); default off
 
 local environments and visibility masks:
   --envs NX[xNY[xNZ]]  split the scene's box into a grid of environments
@@ -251,6 +255,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--error-every") {
       if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive number of shots");
       o->errorEvery = u;
+    } else if (a == "--correct-unshot") {
+      if (v != "on" && v != "off") return Bad(a, v, "on or off");
+      o->correctUnshot = v == "on";
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <set>
@@ -61,13 +62,25 @@ std::string Num(double x) {
   return buf;
 }
 
-// Reads all lines of `path`; returns an error message, empty on success.
-std::string ReadLines(const std::string& path, std::vector<std::string>* lines) {
+// Splits text into lines as std::getline does: at '\n', the last line kept
+// even without one, no empty line after a final '\n'.
+void SplitLines(const std::string& text, std::vector<std::string>* lines) {
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    lines->push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+}
+
+// Reads a whole file; returns an error message, empty on success.
+std::string ReadText(const std::string& path, std::string* text) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "cannot open";
-  std::string line;
-  while (std::getline(in, line)) lines->push_back(line);
+  std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad()) return "cannot read";
+  *text = std::move(all);
   return "";
 }
 
@@ -192,23 +205,26 @@ std::string FinishPolygon(Polygon* p) {
 
 class Loader {
  public:
-  explicit Loader(Scene* scene) : scene_(scene) {}
-  Status LoadObj(const std::string& path);
+  Loader(Scene* scene, const SceneFileReader& readMtl, std::vector<std::string>* warnings)
+      : scene_(scene), readMtl_(readMtl), warnings_(warnings) {}
+  Status LoadObj(const std::string& path, const std::string& text);
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
 
   Scene* scene_;
+  const SceneFileReader& readMtl_;
+  std::vector<std::string>* warnings_;  // null: print to stderr
   std::vector<glm::vec3> vertices_;
   std::map<std::string, std::pair<uint32_t, std::string>> materials_;  // index, "file:line"
   std::set<std::string> loadedMtls_;
   std::set<std::string> warnedKeys_;
 };
 
-Status Loader::LoadObj(const std::string& path) {
+Status Loader::LoadObj(const std::string& path, const std::string& text) {
   std::vector<std::string> lines;
-  std::string err = ReadLines(path, &lines);
-  if (!err.empty()) return Status::At(path, 0, err + " file");
+  SplitLines(text, &lines);
+  std::string err;
   bool haveMaterial = false;
   uint32_t material = 0;
   for (size_t i = 0; i < lines.size(); ++i) {
@@ -264,9 +280,11 @@ Status Loader::LoadObj(const std::string& path) {
 
 Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int objLine) {
   if (!loadedMtls_.insert(path).second) return Status::Ok();
-  std::vector<std::string> lines;
-  std::string err = ReadLines(path, &lines);
+  std::string text;
+  std::string err = readMtl_(path, &text);
   if (!err.empty()) return Status::At(objPath, objLine, err + " MTL file '" + path + "'");
+  std::vector<std::string> lines;
+  SplitLines(text, &lines);
   std::vector<Material>& materials = scene_->materials;
   bool haveMaterial = false;
   for (size_t i = 0; i < lines.size(); ++i) {
@@ -300,8 +318,9 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       }
       (key == "Kd" ? materials.back().kd : materials.back().ke) = glm::vec3(rgb[0], rgb[1], rgb[2]);
     } else if (warnedKeys_.insert(key).second) {
-      std::fprintf(stderr, "%s:%d: warning: ignoring MTL key '%s'\n", path.c_str(), line,
-                   key.c_str());
+      std::string w = path + ":" + std::to_string(line) + ": warning: ignoring MTL key '" + key + "'";
+      if (warnings_) warnings_->push_back(w);
+      else std::fprintf(stderr, "%s\n", w.c_str());
     }
   }
   return Status::Ok();
@@ -310,10 +329,19 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
 }  // namespace
 
 Status LoadScene(const std::string& objPath, Scene* scene) {
+  std::string text;
+  std::string err = ReadText(objPath, &text);
+  if (!err.empty()) return Status::At(objPath, 0, err + " file");
+  return LoadSceneFromText(objPath, text, ReadText, scene);
+}
+
+Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
+                         const SceneFileReader& readMtl, Scene* scene,
+                         std::vector<std::string>* warnings) {
   Scene result;
   result.objPath = objPath;
-  Loader loader(&result);
-  Status s = loader.LoadObj(objPath);
+  Loader loader(&result, readMtl, warnings);
+  Status s = loader.LoadObj(objPath, objText);
   if (!s.ok()) return s;
   bool emits = false;
   for (const Polygon& p : result.polygons) {

@@ -60,7 +60,7 @@ struct EnvFootprint {
 
 struct EnvOptions {
   float gridDensity = 4.0f;  // grid cells per patch (Cleary's lambda)
-  float rayEpsilon = 0.0f;   // ray tMin in scene units
+  float rayEpsilon = 0.0f;   // ray origins lifted this far off the shooter's plane (scene units)
   uint32_t rays = 4096;      // rays per shot
   uint64_t seed = 1;         // run seed
   MaskMethod maskMethod = MaskMethod::kB;
