@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <set>
@@ -32,6 +31,17 @@ constexpr double kPlanarTol = 1e-4;     // max corner distance from the plane
 constexpr double kRepeatTol = 1e-6;     // min distance between two corners
 constexpr double kAreaTol = 1e-6;       // min area, times size^2
 constexpr double kCollinearTol = 1e-5;  // min |sin| of the angle at a corner
+
+// What float geometry and float images can carry (docs/STABILITY.md). Ray
+// tests multiply coordinates and square lengths in float (max 3.4e38, least
+// normal 1.2e-38), so coordinates stay within 1e15 and faces above 1e-15 in
+// size; radiosity is bounded by max Ke / (1 - max Kd), and the image holds it
+// in float, so that bound stays within 1e36, and above 1e-30 so that the
+// image is not all denormals.
+constexpr double kMaxCoordinate = 1e15;
+constexpr double kMinFaceSize = 1e-15;
+constexpr double kMaxRadiosity = 1e36;
+constexpr double kMinRadiosity = 1e-30;
 
 using Tokens = std::vector<std::string>;
 
@@ -78,7 +88,11 @@ void SplitLines(const std::string& text, std::vector<std::string>* lines) {
 std::string ReadText(const std::string& path, std::string* text) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "cannot open";
-  std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // istream::read, not istreambuf_iterator: a read error (a directory)
+  // sets badbit instead of throwing.
+  std::string all;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) all.append(buf, static_cast<size_t>(in.gcount()));
   if (in.bad()) return "cannot read";
   *text = std::move(all);
   return "";
@@ -349,6 +363,38 @@ Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
     emits = emits || ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
   }
   if (!emits) return Status::At(objPath, 0, "no emitter: no face has a material with Ke > 0");
+  // Ranges: refused here, at init, rather than solved into Inf or zeros.
+  double maxKd = 0.0, maxKe = 0.0;
+  int keLine = 0;
+  for (const Polygon& p : result.polygons) {
+    for (const glm::vec3& v : p.corners)
+      for (int a = 0; a < 3; ++a)
+        if (std::fabs(v[a]) > kMaxCoordinate)
+          return Status::At(objPath, p.line,
+                            "coordinate " + Num(v[a]) + " is beyond +-" + Num(kMaxCoordinate) +
+                                " (float ray tests would overflow); scale the scene down");
+    if (std::sqrt(p.area) < kMinFaceSize)
+      return Status::At(objPath, p.line,
+                        "face of area " + Num(p.area) + " is below " + Num(kMinFaceSize) +
+                            " squared (float ray tests would underflow); scale the scene up");
+    const Material& m = result.materials[p.material];
+    for (int c = 0; c < 3; ++c) {
+      maxKd = std::max(maxKd, static_cast<double>(m.kd[c]));
+      if (m.ke[c] > maxKe) {
+        maxKe = m.ke[c];
+        keLine = p.line;
+      }
+    }
+  }
+  double bound = maxKe / (1.0 - maxKd);
+  if (bound > kMaxRadiosity)
+    return Status::At(objPath, keLine,
+                      "radiosity may reach " + Num(bound) + " (max Ke / (1 - max Kd)), beyond " +
+                          Num(kMaxRadiosity) + " that the float image can hold; scale Ke down");
+  if (maxKe < kMinRadiosity)
+    return Status::At(objPath, keLine,
+                      "brightest Ke " + Num(maxKe) + " is below " + Num(kMinRadiosity) +
+                          " (the float image would underflow); scale Ke up");
   result.bounds.lo = result.bounds.hi = result.polygons[0].corners[0];
   for (const Polygon& p : result.polygons) {
     for (const glm::vec3& v : p.corners) {
