@@ -427,7 +427,8 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   if (o.reference.empty()) w.Printf("null");
   else JsonString(&w, o.reference.c_str());
   w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
-  w.Printf("    \"correct_unshot\": %s\n  },\n", o.correctUnshot ? "true" : "false");
+  w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
+  w.Printf("    \"stop_error\": %.17g\n  },\n", o.stopError);
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {
     patches += e.patches;
@@ -485,8 +486,13 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"ambient\": [%.17g, %.17g, %.17g],\n", r->ambientB[0], r->ambientB[1],
            r->ambientB[2]);
   w.Printf("    \"ambient_share\": %.17g,\n", radiosity > 0.0 ? ambientArea / radiosity : 0.0);
-  w.Printf("    \"mc_relative_error\": %.17g\n  },\n",
-           weight > 0.0 ? std::sqrt(relVarArea / weight) : 0.0);
+  double mc = weight > 0.0 ? std::sqrt(relVarArea / weight) : 0.0;
+  w.Printf("    \"mc_relative_error\": %.17g,\n", mc);
+  // The stated error: the Monte Carlo error and the bias estimate of the
+  // power not yet shot (BiasEstimate), combined in quadrature.
+  w.Printf("    \"bias_estimate\": %.17g,\n", res.biasEstimate);
+  w.Printf("    \"stated_error\": %.17g\n  },\n",
+           std::sqrt(mc * mc + res.biasEstimate * res.biasEstimate));
   EnergyLedger total;
   for (const EnvSummary& e : r->summary) {
     for (int c = 0; c < 3; ++c) {
@@ -753,6 +759,8 @@ int Main(int argc, const char* const* argv) {
   so.stopUnshot = r->options.stopUnshot;
   so.maxShots = r->options.maxShots;
   so.maxSeconds = r->options.maxSeconds;
+  so.stopError = r->options.stopError;
+  so.correctUnshot = r->options.correctUnshot;
   so.quiet = r->options.quiet;
   ReferenceProbe probe(r.get());
   if (!r->options.reference.empty()) so.probe = &probe;

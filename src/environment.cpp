@@ -127,10 +127,13 @@ void Environment::Build() {
   Layout(arena_, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
   CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
   totalArea_ = 0.0;
+  kdArea_ = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
     patches_[i] = staged_[i];
     geom_[i] = MakePatchGeom(staged_[i]);
     totalArea_ += staged_[i].area;
+    const glm::vec3& kd = staged_[i].kd;
+    kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
   }
   for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
   grid_.Build(patches_, geom_);
@@ -152,6 +155,7 @@ void Environment::Reset() {
       e.unshot[c] = static_cast<double>(p.ke[c]) * p.area;
       ledger_.emitted[c] += e.unshot[c];
       ledger_.unshot[c] += e.unshot[c];
+      ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
     tree_.Set(i, KeyOf(e));
@@ -171,6 +175,7 @@ void Environment::Receive(uint32_t j, const double share[3]) {
     e.var[c] += (reflected * invArea) * (reflected * invArea);  // one ray's term
     e.unshot[c] += reflected;
     ledger_.unshot[c] += reflected;
+    ledger_.radiosity[c] += reflected;
     ledger_.absorbed[c] += share[c] - reflected;
   }
   tree_.Increase(j, KeyOf(e));

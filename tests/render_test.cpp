@@ -156,6 +156,11 @@ TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
       {{"render", "scenes/cornell.obj", "--camera", "1,2,3"}, "--camera"},
       {{"render", "scenes/cornell.obj", "--camera", "0,0,-5,0,0,0,0,1,0,40,1"}, "--camera"},
       {{"render", "scenes/cornell.obj", "--seed", "-1"}, "--seed"},
+      {{"render", "scenes/cornell.obj", "--correct-unshot", "maybe"}, "--correct-unshot"},
+      {{"render", "scenes/cornell.obj", "--stop-error", "0"}, "--stop-error"},
+      {{"render", "scenes/cornell.obj", "--stop-error", "1"}, "--stop-error"},
+      {{"render", "scenes/cornell.obj", "--stop-error", "nan"}, "--stop-error"},
+      {{"render", "scenes/cornell.obj", "--stop-error"}, "missing value"},
       {{"render"}, "no scene"},
       {{"frobnicate"}, "unknown command"},
       {{"render", dir.File("missing.obj")}, "missing.obj"},
@@ -189,7 +194,7 @@ TEST(RenderTest, HelpListsEveryOption) {
   EXPECT_EQ(r.code, 0);
   for (const char* flag : {"--out", "--patch-size", "--rays", "--seed", "--stop-unshot",
                            "--max-shots", "--max-seconds", "--width", "--height", "--camera",
-                           "--exposure", "--quiet"})
+                           "--exposure", "--quiet", "--correct-unshot", "--stop-error"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag;
 }
 

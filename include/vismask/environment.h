@@ -32,6 +32,7 @@ struct EnergyLedger {
   double absorbed[3] = {0, 0, 0};  // by receivers (1 - kd) and by back faces
   double escaped[3] = {0, 0, 0};   // rays that left the scene
   double unshot[3] = {0, 0, 0};    // local patches' unshot power, kept current
+  double radiosity[3] = {0, 0, 0}; // sum of b * area over local patches (emitted + reflected)
 };
 
 // Counters of one environment's work.
@@ -129,6 +130,7 @@ class Environment {
   const EnergyLedger& ledger() const { return ledger_; }
   const EnvStats& stats() const { return stats_; }
   double totalArea() const { return totalArea_; }
+  double kdArea() const { return kdArea_; }  // sum of kd * area, channels averaged
   size_t arenaCapacity() const { return arena_.capacity(); }
   size_t arenaUsed() const { return arena_.used(); }
 
@@ -197,6 +199,7 @@ class Environment {
   EnergyLedger ledger_;
   EnvStats stats_;
   double totalArea_ = 0.0;
+  double kdArea_ = 0.0;
   EnvFootprint footprint_;
   // Between Prepare and Build only.
   std::vector<Patch> staged_;
