@@ -8,6 +8,7 @@
 #   make CROSS=arm-linux-gnueabihf- 32-bit ARM, into build/armhf
 #   make test-cross     the aarch64 tests and a render under qemu, compared with native
 #   make experiments    the paper's figures and table as numbers: docs/RESULTS.md
+#   make cluster-experiments  (root) simulated Pi clusters, docs/CLUSTER.md
 #   make fuzz FUZZ_SECONDS=N   libFuzzer on the scene loader (clang)
 #   make stability      the stiff and extreme suites: docs/STABILITY.md
 
@@ -97,7 +98,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross experiments fuzz stability
+.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments fuzz stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -221,6 +222,19 @@ test-cross:
 	  exit 1; \
 	fi
 endif
+
+# make cluster-experiments (root; not part of make test): vismask-mpi on 2..16
+# simulated boards (tools/cluster-sim: network namespaces, tc-shaped links,
+# the real mpirun), writes docs/CLUSTER.md and docs/img/cluster-time.png.
+# build/mpi-wait.so is a PMPI shim that times each rank's MPI calls.
+$(BUILD)/mpi-wait.so: tools/mpi-wait.c
+	@mkdir -p $(dir $@)
+	mpicc -O2 -Wall -Wextra -Werror -shared -fPIC $< -o $@
+
+cluster-experiments:
+	tools/install-deps --cluster
+	$(MAKE) all $(BUILD)/mpi-wait.so
+	tools/cluster-experiments
 
 # The scene loader under libFuzzer with ASan + UBSan (clang; tests/fuzz/).
 # New inputs go to build/fuzz/corpus, seeds are read from tests/fuzz/corpus,

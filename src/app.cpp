@@ -196,8 +196,8 @@ Status PrepareScene(const Options& o, Prepared* p) {
   e.maskRes = o.maskRes;
   e.roundShots = o.roundShots;
   e.queueCapacity = o.queue;
-  MaskShape shape{o.maskMethod == MaskMethod::kNone ? 0u : o.maskRes};
-  p->packetBytes = p->grid.count() > 1 ? PacketBytes(shape) : 0;
+  p->packetBytes =
+      p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, o.rays)) : 0;
   return Status::Ok();
 }
 
@@ -500,6 +500,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
       total.absorbed[c] += e.ledger.absorbed[c];
       total.escaped[c] += e.ledger.escaped[c];
       total.unshot[c] += e.ledger.unshot[c];
+      total.inFlight[c] += e.ledger.inFlight[c];
     }
   }
   w.Printf("  \"energy\": {\n");
@@ -507,11 +508,14 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   JsonTriple(&w, "absorbed", total.absorbed, true);
   JsonTriple(&w, "escaped", total.escaped, true);
   JsonTriple(&w, "unshot", total.unshot, true);
-  // What the ledger cannot place: power in flight between environments, and
-  // what masks lost (negative: leaked). Zero up to rounding for one environment.
+  JsonTriple(&w, "in_flight", total.inFlight, true);
+  // What the ledger cannot place: power in flight between environments
+  // (except Method R's, booked in in_flight), and what masks lost (negative:
+  // leaked). Zero up to rounding for one environment and for Method R.
   double residual[3];
   for (int c = 0; c < 3; ++c)
-    residual[c] = total.emitted[c] - total.absorbed[c] - total.escaped[c] - total.unshot[c];
+    residual[c] = total.emitted[c] - total.absorbed[c] - total.escaped[c] - total.unshot[c] -
+                  total.inFlight[c];
   JsonTriple(&w, "residual", residual, false);
   w.Printf("  },\n  \"timings\": {\n    \"init_seconds\": %.6f,\n", r->initSeconds);
   w.Printf("    \"solve_seconds\": %.6f,\n    \"error_seconds\": %.6f,\n", res.seconds,
@@ -654,7 +658,10 @@ int Footprint(const Options& o) {
     rankTotal[k] = rankEnvBytes[k] + rankOwn[k];
   }
   if (o.json) {
-    out += "{\n  \"scene\": \"" + o.scene + "\",\n  \"environments\": [\n";
+    out += "{\n  \"scene\": \"" + o.scene + "\",\n";
+    add("  \"mask_method\": \"%s\",\n  \"packet_size_bytes\": %u,\n", MaskMethodName(o.maskMethod),
+        p.packetBytes);
+    out += "  \"environments\": [\n";
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
       add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"grid_cells\": %llu, "
@@ -675,9 +682,11 @@ int Footprint(const Options& o) {
     }
     out += "  ]\n}\n";
   } else {
-    add("vismask footprint: %s, %u environment%s, %d rank%s, mask %s R=%u, %dx%d image\n\n",
+    add("vismask footprint: %s, %u environment%s, %d rank%s, mask %s %s=%u (%u-byte packets), "
+        "%dx%d image\n\n",
         o.scene.c_str(), total, total == 1 ? "" : "s", ranks, ranks == 1 ? "" : "s",
-        MaskMethodName(o.maskMethod), o.maskRes, o.width, o.height);
+        MaskMethodName(o.maskMethod), o.maskMethod == MaskMethod::kR ? "N" : "R",
+        o.maskMethod == MaskMethod::kR ? o.rays : o.maskRes, p.packetBytes, o.width, o.height);
     add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches", "grid_cells",
         "patches_B", "vertices_B", "grid_B", "queue_B", "packets_B", "arena_B");
     for (uint32_t e = 0; e < total; ++e) {

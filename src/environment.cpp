@@ -39,16 +39,6 @@ uint64_t ForeignStream(uint64_t shotKey, uint32_t env) {
   return Mix64(shotKey ^ (0x9e3779b97f4a7c15ull * (uint64_t(env) + 1)));
 }
 
-Patch PatchFromHeader(const PacketHeader& h) {
-  Patch p{};
-  for (int k = 0; k < 4; ++k) p.corner[k] = glm::vec3(h.corner[k][0], h.corner[k][1], h.corner[k][2]);
-  p.normal = glm::vec3(h.normal[0], h.normal[1], h.normal[2]);
-  p.area = h.area;
-  p.numCorners = h.numCorners;
-  p.globalId = h.shooterId;
-  return p;
-}
-
 }  // namespace
 
 void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices,
@@ -75,7 +65,8 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   slots_ = arena.Alloc<Slot>(q);
   slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
   part(&footprint_.queue);
-  scratchWords_ = arena.Alloc<uint64_t>(numNeighbours_ > 0 ? 2 * size_t(shape_.words()) : 0);
+  size_t scratchMasks = numNeighbours_ == 0 ? 0 : options_.maskMethod == MaskMethod::kC ? 4 : 2;
+  scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
   outbox_ = arena.Alloc<uint8_t>(size_t(outCapacity_) * packetBytes_);
   part(&footprint_.packets);
   footprint_.total = ArenaRoundUp(arena.used());
@@ -93,7 +84,8 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   box_ = grid.EnvBox(static_cast<int>(index));
   numNeighbours_ = 0;
   for (int a = 0; a < 3; ++a) numNeighbours_ += (cell_[a] > 0) + (cell_[a] + 1 < grid.n[a]);
-  shape_.res = numNeighbours_ > 0 && options.maskMethod != MaskMethod::kNone ? options.maskRes : 0;
+  shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
+                             : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
 
@@ -203,6 +195,15 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
   const uint32_t rays = options_.rays;
   const bool masks = shape_.res > 0;
   const bool foreign = in != nullptr || skip == kNoPatch;
+  // Method C: which open pixels the rays hit in, and which they passed.
+  const bool methodC = masks && out && options_.maskMethod == MaskMethod::kC;
+  MaskBits hitPixels, passedPixels;
+  if (methodC) {
+    hitPixels = ScratchMask(2);
+    passedPixels = ScratchMask(3);
+    hitPixels.SetAllClosed();
+    passedPixels.SetAllClosed();
+  }
   PatchSampler sampler = MakePatchSampler(shooter);
   Rng rng = ShotRng(stream);
   double share[3];
@@ -249,12 +250,14 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
     ++traced;
     Hit hit;
     if (!grid_.Intersect(ray, skip, &hit)) {
+      if (methodC) passedPixels.Open(pixel);
       if (LeavesScene(ray))
         for (int c = 0; c < 3; ++c) lost[c] += share[c];
       continue;
     }
     ++hits;
     if (masks && out && options_.maskMethod == MaskMethod::kA) out->Close(pixel);
+    if (methodC) hitPixels.Open(pixel);
     if (!hit.front) {
       for (int c = 0; c < 3; ++c) backHit[c] += share[c];
       continue;
@@ -272,10 +275,16 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
   // still open upstream (the paper's B). Mixing in A's marks would close
   // every pixel where any off-centre ray hit, losing the rays of that pixel
   // that pass on: about 14% of the power of the closed box in 2x2x2.
-  if (masks && out && options_.maskMethod == MaskMethod::kB) {
+  // Method C: a pixel whose rays all hit closes, one whose rays all passed
+  // stays open; only pixels with both, or with no ray, take the centre ray.
+  if (masks && out && (options_.maskMethod == MaskMethod::kB || methodC)) {
     uint32_t pixels = shape_.pixels(), cast = 0;
     for (uint32_t p = 0; p < pixels; ++p) {
       if (!out->IsOpen(p)) continue;
+      if (methodC && hitPixels.IsOpen(p) != passedPixels.IsOpen(p)) {
+        if (hitPixels.IsOpen(p)) out->Close(p);
+        continue;
+      }
       Ray ray{centre + options_.rayEpsilon * sampler.frame.n,
               sampler.frame.ToWorld(MaskPixelCentre(p, shape_.res)), 0.0f,
               std::numeric_limits<float>::infinity()};
@@ -284,6 +293,66 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
     }
     stats_.maskRays += cast;
   }
+}
+
+void Environment::TraceAlive(const Patch& shooter, uint32_t skip, const double power[3],
+                             uint64_t shotKey, bool foreign, MaskBits* alive) {
+  const uint32_t rays = options_.rays;
+  DCHECK(alive->bits() == rays);
+  PatchSampler sampler = MakePatchSampler(shooter);
+  Rng rng = ShotRng(shotKey);
+  double share[3];
+  for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
+  uint64_t traced = 0, hits = 0, entered = 0, left = 0;
+  double lost[3] = {0, 0, 0}, backHit[3] = {0, 0, 0};
+  for (uint32_t r = 0; r < rays; ++r) {
+    // Every environment draws every ray, so ray r is the same ray everywhere.
+    float u0 = rng.NextFloat(), u1 = rng.NextFloat(), u2 = rng.NextFloat();
+    float v1 = rng.NextFloat(), v2 = rng.NextFloat();
+    if (!alive->IsOpen(r)) continue;  // absorbed or escaped upstream
+    Ray ray;  // lifted off the shooter's plane, hits from t = 0, as in Distribute
+    ray.o = sampler.Point(u0, u1, u2) + options_.rayEpsilon * sampler.frame.n;
+    ray.d = sampler.frame.ToWorld(CosineDirection(v1, v2));
+    ray.tMin = 0.0f;
+    ray.tMax = std::numeric_limits<float>::infinity();
+    if (foreign) {
+      // Every environment the ray crossed before this one is upstream, and
+      // its bit is the AND of theirs: a hit here is the ray's first.
+      float t0, t1;
+      if (!Slabs(ray, box_, &t0, &t1)) continue;
+      ++entered;
+    }
+    ++traced;
+    Hit hit;
+    if (!grid_.Intersect(ray, skip, &hit)) {
+      if (LeavesScene(ray)) {
+        for (int c = 0; c < 3; ++c) lost[c] += share[c];
+        alive->Close(r);
+      } else {
+        ++left;  // on to the neighbour across the face it leaves by
+      }
+      continue;
+    }
+    ++hits;
+    alive->Close(r);
+    if (!hit.front) {
+      for (int c = 0; c < 3; ++c) backHit[c] += share[c];
+      continue;
+    }
+    Receive(hit.patch, share);
+  }
+  for (int c = 0; c < 3; ++c) {
+    ledger_.escaped[c] += lost[c];
+    ledger_.absorbed[c] += backHit[c];
+    ledger_.inFlight[c] += (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
+  }
+  stats_.rays += traced;
+  stats_.hits += hits;
+}
+
+MaskBits Environment::ScratchMask(uint32_t k) const {
+  size_t w = shape_.words();
+  return MaskBits(scratchWords_.subspan(k * w, w), shape_);
 }
 
 int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
@@ -315,7 +384,7 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
     h.toEnv = static_cast<uint32_t>(grid3_.Index(c[0], c[1], c[2]));
     h.sequence = outCount_++;
     WriteHeader(packet, h);
-    if (shape_.res > 0) mask.Pack(MaskBytes(packet));
+    if (!shape_.empty()) mask.Pack(MaskBytes(packet));
     ++stats_.packetsSent;
   }
 }
@@ -332,43 +401,42 @@ void Environment::ShootLocal(uint32_t i) {
   const Patch& p = patches_[i];
   uint32_t shotIndex = shotCount_[i]++;
   uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
-  MaskBits out(scratchWords_.subspan(0, numNeighbours_ ? shape_.words() : 0), shape_.res);
-  if (numNeighbours_ > 0) out.SetAllOpen();
-  Distribute(p, i, power, key, nullptr, numNeighbours_ > 0 ? &out : nullptr);
   ++stats_.shots;
-  if (numNeighbours_ == 0) return;
-  PacketHeader h{};
-  h.shotKey = key;
-  for (int c = 0; c < 3; ++c) h.power[c] = power[c];
-  for (int k = 0; k < 4; ++k)
-    for (int a = 0; a < 3; ++a) h.corner[k][a] = p.corner[k][a];
-  for (int a = 0; a < 3; ++a) h.normal[a] = p.normal[a];
-  h.area = p.area;
-  h.numCorners = p.numCorners;
-  h.shooterId = p.globalId;
-  h.shotIndex = shotIndex;
-  h.sourceEnv = index_;
-  Forward(h, out);
+  if (numNeighbours_ == 0) {
+    Distribute(p, i, power, key, nullptr, nullptr);
+    return;
+  }
+  MaskBits out = ScratchMask(0);
+  out.SetAllOpen();
+  if (options_.maskMethod == MaskMethod::kR)
+    TraceAlive(p, i, power, key, false, &out);
+  else
+    Distribute(p, i, power, key, nullptr, &out);
+  Forward(ShotHeader(p, power, key, shotIndex, index_), out);
   ++stats_.recordsCreated;
   --newRecords_;
 }
 
 MaskBits Environment::SlotMask(uint32_t slot) const {
   size_t w = shape_.words();
-  return MaskBits(slotWords_.subspan(slot * w, w), shape_.res);
+  return MaskBits(slotWords_.subspan(slot * w, w), shape_);
 }
 
 void Environment::ShootForeign(uint32_t s) {
   Slot& slot = slots_[s];
   MaskBits in = SlotMask(s);
-  MaskBits out(scratchWords_.subspan(0, shape_.words()), shape_.res);
+  MaskBits out = ScratchMask(0);
   out.CopyFrom(in);
   Patch shooter = PatchFromHeader(slot.header);
-  // The outgoing mask only where there is someone downstream to send it to.
+  // The outgoing mask only where there is someone downstream to send it to
+  // (R's bits are also its input: it always keeps them).
   int next[6][3];
   bool forward = Downstream(slot.header.sourceEnv, next) > 0;
-  Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_), &in,
-             forward ? &out : nullptr);
+  if (options_.maskMethod == MaskMethod::kR)
+    TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, true, &out);
+  else
+    Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_),
+               &in, forward ? &out : nullptr);
   ++stats_.foreignShots;
   if (forward) Forward(slot.header, out);
   slot = Slot();
@@ -421,18 +489,18 @@ void Environment::Deliver(const uint8_t* packet) {
   }
   Slot& slot = slots_[s];
   MaskBits mask = SlotMask(static_cast<uint32_t>(s));
-  if (shape_.res > 0) {
+  if (!shape_.empty()) {
     if (fresh) {
       mask.Unpack(MaskBytes(packet));
     } else {
-      MaskBits incoming(scratchWords_.subspan(shape_.words(), shape_.words()), shape_.res);
+      MaskBits incoming = ScratchMask(1);
       incoming.Unpack(MaskBytes(packet));
       mask.And(incoming);
     }
   }
   ++slot.received;
   double power = h.power[0] + h.power[1] + h.power[2];
-  slot.key = shape_.res > 0 ? power * mask.OpenFraction() : power;
+  slot.key = shape_.empty() ? power : power * mask.OpenFraction();
 }
 
 void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords) {

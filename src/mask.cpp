@@ -15,8 +15,18 @@ const char* MaskMethodName(MaskMethod m) {
     case MaskMethod::kNone: return "none";
     case MaskMethod::kA: return "A";
     case MaskMethod::kB: return "B";
+    case MaskMethod::kC: return "C";
+    case MaskMethod::kR: return "R";
   }
   return "?";
+}
+
+MaskShape MaskShapeOf(MaskMethod m, uint32_t maskRes, uint32_t rays) {
+  switch (m) {
+    case MaskMethod::kNone: return MaskShape{};
+    case MaskMethod::kR: return MaskShape{0, rays};
+    default: return MaskShape{maskRes, 0};
+  }
 }
 
 uint32_t MaskPixel(const glm::vec3& d, uint32_t res) {
@@ -41,9 +51,12 @@ glm::vec3 MaskPixelCentre(uint32_t pixel, uint32_t res) {
 }
 
 void MaskBits::SetAllOpen() {
-  uint32_t pixels = 4 * res_ * res_;
   for (size_t w = 0; w < words_.size(); ++w) words_[w] = ~uint64_t(0);
-  if (pixels % 64) words_[words_.size() - 1] = (uint64_t(1) << (pixels % 64)) - 1;
+  if (bits_ % 64) words_[words_.size() - 1] = (uint64_t(1) << (bits_ % 64)) - 1;
+}
+
+void MaskBits::SetAllClosed() {
+  for (size_t w = 0; w < words_.size(); ++w) words_[w] = 0;
 }
 
 void MaskBits::And(const MaskBits& other) {
@@ -57,6 +70,7 @@ void MaskBits::CopyFrom(const MaskBits& other) {
 }
 
 double MaskBits::OpenFraction() const {
+  if (res_ == 0) return bits_ > 0 ? static_cast<double>(CountOpen()) / bits_ : 0.0;
   // Row i spans theta in [i, i+1) * (pi/2) / R; its cosine-weighted share of
   // the hemisphere is sin^2(theta1) - sin^2(theta0), split over 4R pixels.
   double total = 0.0;
@@ -77,12 +91,12 @@ uint32_t MaskBits::CountOpen() const {
 }
 
 void MaskBits::Pack(uint8_t* out) const {
-  uint32_t bytes = (4 * res_ * res_ + 7) / 8;
+  uint32_t bytes = (bits_ + 7) / 8;
   for (uint32_t b = 0; b < bytes; ++b) out[b] = static_cast<uint8_t>(words_[b >> 3] >> (8 * (b & 7)));
 }
 
 void MaskBits::Unpack(const uint8_t* in) {
-  uint32_t bytes = (4 * res_ * res_ + 7) / 8;
+  uint32_t bytes = (bits_ + 7) / 8;
   for (size_t w = 0; w < words_.size(); ++w) words_[w] = 0;
   for (uint32_t b = 0; b < bytes; ++b) words_[b >> 3] |= uint64_t(in[b]) << (8 * (b & 7));
 }

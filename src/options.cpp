@@ -57,13 +57,17 @@ render options:
 local environments and visibility masks:
   --envs NX[xNY[xNZ]]  split the scene's box into a grid of environments
                        (default 1); each owns only its own patches and grid
-  --mask-method M      none | A | B (default B): how a shooter's visibility
-                       mask is filled. A: from the form-factor rays that hit
-                       (cheap, leaks light where no ray hit); B: one ray from
-                       the shooter's centre per open pixel (exact at its
-                       resolution); none: no mask (light passes occluders)
+  --mask-method M      none | A | B | C | R (default B): how a shooter's
+                       visibility mask is filled. A: from the form-factor rays
+                       that hit (cheap, leaks light where no ray hit); B: one
+                       ray from the shooter's centre per open pixel (exact at
+                       its resolution); C: pixels the rays only hit close,
+                       only passed stay open, B's ray for the rest; R: one bit
+                       per ray of the shot (--rays bits), every ray absorbed
+                       in exactly one environment; none: no mask (light
+                       passes occluders)
   --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
-                       1 <= R <= 4096 (default 50)
+                       1 <= R <= 4096 (default 50; not used by R)
   --round-shots K      shots per environment per round (default 1)
   --queue Q            foreign shooters an environment holds at once
                        (default 64); a full queue holds back new ones
@@ -220,7 +224,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (v == "none") o->maskMethod = MaskMethod::kNone;
       else if (v == "A") o->maskMethod = MaskMethod::kA;
       else if (v == "B") o->maskMethod = MaskMethod::kB;
-      else return Bad(a, v, "none, A or B");
+      else if (v == "C") o->maskMethod = MaskMethod::kC;
+      else if (v == "R") o->maskMethod = MaskMethod::kR;
+      else return Bad(a, v, "none, A, B, C or R");
     } else if (a == "--mask-res") {
       if (!ParseU64(v, &u) || u < 1 || u > 4096) return Bad(a, v, "an integer in [1, 4096]");
       o->maskRes = static_cast<uint32_t>(u);

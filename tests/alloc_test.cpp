@@ -161,6 +161,23 @@ TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
   EXPECT_EQ(n, 0) << "heap allocations after init";
 }
 
+TEST(AllocTest, MethodsCAndRAllocateNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  for (const char* method : {"C", "R"}) {
+    test::TempDir dir;
+    int code = -1;
+    long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
+                                   "2x2x2", "--mask-method", method, "--mask-res", "30", "--rays",
+                                   "300", "--max-shots", "1500", "--width", "96", "--height", "96",
+                                   "--patch-size", "50"},
+                                  &code);
+    ASSERT_EQ(code, 0) << method;
+    EXPECT_EQ(n, 0) << method << ": heap allocations after init";
+  }
+}
+
 TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
 #if !VISMASK_ALLOC_HOOKS
   GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";

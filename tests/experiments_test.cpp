@@ -39,11 +39,12 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
     std::vector<int> numericColumns;
   } tables[] = {
       {"references.csv", 1, {2, 3, 4, 5}},
-      {"fig2-quality.csv", 4, {3, 4, 5}},           // R = 4, 8, 16 and the seed floor
-      {"table1-time.csv", 5, {2, 3, 4, 5, 6, 7, 8}},  // none, A and B at R = 4, 8
-      {"fig3-leak.csv", 8, {2, 3}},
+      {"fig2-quality.csv", 4, {4, 5, 6, 7}},        // R = 4, 8, 16 and the seed floor
+      {"table1-time.csv", 8, {2, 3, 4, 5, 6, 7, 8}},
+      {"fig3-leak.csv", 12, {2, 3}},
+      {"closed-box.csv", 3, {3, 4, 5, 6, 7, 8}},
       {"pareto.csv", 1, {0, 1, 3}},
-      {"curves.csv", 7, {1, 2, 3, 4, 5}},
+      {"curves.csv", 11, {1, 2, 3, 4, 5}},
   };
   for (const Table& t : tables) {
     auto rows = ReadCsv(dir.File(t.file));
@@ -62,9 +63,10 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
     EXPECT_LE(std::stod(t1[r][3]), std::stod(t1[r][2]));
     EXPECT_LE(std::stod(t1[r][2]), std::stod(t1[r][4]));
   }
-  // Method B casts mask rays, A and none do not.
+  // Methods B and C cast centre rays; none, A and R do not.
+  ASSERT_EQ(t1.size(), 1u + 8);  // none, A, B and C at R = 4 and 8, R
   for (size_t r = 1; r < t1.size(); ++r)
-    EXPECT_EQ(t1[r][0] == "B", std::stod(t1[r][7]) > 0) << t1[r][0];
+    EXPECT_EQ(t1[r][0] == "B" || t1[r][0] == "C", std::stod(t1[r][7]) > 0) << t1[r][0];
 
   for (const char* png : {"error-time.png", "img/region.png", "img/ref-b.png", "img/fig2-B-4.png",
                           "img/fig2-B-16.png", "img/fig2-B-8-diff.png", "img/fig3-A-16.png",
@@ -75,7 +77,7 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   }
   // The shadow region is not empty: some pixel differs from the darkened rest.
   std::string region = ReadFile(dir.File("runs/region-48x48.txt"));
-  EXPECT_NE(region.find('1'), std::string::npos);
+  EXPECT_NE(region.find_first_of("12"), std::string::npos);
 
   std::string doc = ReadFile(dir.File("RESULTS.md"));
   for (const char* heading : {"## Fig. 2", "## Table 1", "## Fig. 3", "## Error against run time",

@@ -40,6 +40,9 @@ TEST(FootprintTest, PredictionsMatchTheRendersHighWaterMark) {
       {"--envs", "2", "--mask-res", "250"},
       {"--envs", "2x2x2", "--mask-res", "20"},
       {"--envs", "2x2x2", "--mask-res", "250"},
+      {"--envs", "2x2x2", "--mask-method", "C", "--mask-res", "40"},
+      {"--envs", "2x2x2", "--mask-method", "R", "--rays", "100"},
+      {"--envs", "2x2x2", "--mask-method", "R", "--rays", "30000"},
   };
   int k = 0;
   for (auto config : configs) {
@@ -78,6 +81,22 @@ TEST(FootprintTest, OneEnvironmentReservesNoExchange) {
   std::string two250 = FootprintJson({"--envs", "2", "--mask-res", "250"});
   EXPECT_GT(JsonNumber(two20, "queue_bytes"), 0u);
   EXPECT_GT(JsonNumber(two250, "queue_bytes"), JsonNumber(two20, "queue_bytes"));
+}
+
+TEST(FootprintTest, MethodRSlotsHoldOneBitPerRay) {
+  // --envs 2: each environment has one neighbour, so 64 slots of N bits.
+  std::string small = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800"});
+  std::string large = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "80000"});
+  EXPECT_EQ(JsonNumber(small, "packet_size_bytes"), 128u + 104u);  // 100 bytes padded to 8
+  EXPECT_EQ(JsonNumber(large, "packet_size_bytes"), 128u + 10000u);
+  // 64 slots, 13 words each against 1250: 64 * (1250 - 13) * 8 bytes more,
+  // up to the arena's alignment of each part.
+  unsigned long long grow = JsonNumber(large, "queue_bytes") - JsonNumber(small, "queue_bytes");
+  EXPECT_GE(grow, 64ull * (1250 - 13) * 8);
+  EXPECT_LE(grow, 64ull * (1250 - 13) * 8 + 128);
+  // The mask's resolution plays no part.
+  EXPECT_EQ(FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--mask-res", "250"}),
+            small);
 }
 
 TEST(FootprintTest, MemBudgetRefusesBelowTheNeedAndRunsAtIt) {

@@ -1,5 +1,6 @@
 // Visibility masks, packets and the exchange's admission rule.
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -7,9 +8,11 @@
 #include <gtest/gtest.h>
 
 #include "vismask/mask.h"
+#include "vismask/mesh.h"
 #include "vismask/packet.h"
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
+#include "vismask/scene.h"
 #include "vismask/solver.h"
 
 namespace vismask {
@@ -92,6 +95,75 @@ TEST(PacketTest, SizeIsFixedByTheMaskResolution) {
   EXPECT_EQ(g.power[1], 2.5);
   EXPECT_EQ(g.corner[3][2], -7.0f);
   EXPECT_EQ(g.shooterId, 42u);
+}
+
+TEST(PacketTest, MethodRCarriesOneBitPerRay) {
+  // N rays: ceil(N / 8) bytes padded to 8, whatever --mask-res says.
+  EXPECT_EQ(MaskShapeOf(MaskMethod::kR, 250, 1000).bytes(), 125u);
+  EXPECT_EQ(PacketBytes(MaskShapeOf(MaskMethod::kR, 250, 1000)), sizeof(PacketHeader) + 128);
+  EXPECT_EQ(PacketBytes(MaskShapeOf(MaskMethod::kR, 50, 8192)), sizeof(PacketHeader) + 1024);
+  EXPECT_EQ(PacketBytes(MaskShapeOf(MaskMethod::kC, 50, 8192)), PacketBytes(MaskShape{50}));
+  EXPECT_EQ(PacketBytes(MaskShapeOf(MaskMethod::kNone, 50, 8192)), sizeof(PacketHeader));
+  // 100 bits: not a multiple of 8 or 64; the open share is the share of rays.
+  MaskShape shape = MaskShapeOf(MaskMethod::kR, 7, 100);
+  std::vector<uint64_t> wa(shape.words()), wb(shape.words());
+  MaskBits a = MaskBits::PerRay(Span<uint64_t>(wa.data(), wa.size()), 100);
+  MaskBits b = MaskBits::PerRay(Span<uint64_t>(wb.data(), wb.size()), 100);
+  a.SetAllOpen();
+  EXPECT_EQ(a.CountOpen(), 100u);
+  EXPECT_DOUBLE_EQ(a.OpenFraction(), 1.0);
+  for (uint32_t r = 0; r < 100; r += 3) a.Close(r);
+  EXPECT_EQ(a.CountOpen(), 66u);
+  EXPECT_DOUBLE_EQ(a.OpenFraction(), 0.66);
+  std::vector<uint8_t> bytes(shape.bytes());
+  a.Pack(bytes.data());
+  b.Unpack(bytes.data());
+  for (uint32_t r = 0; r < 100; ++r) ASSERT_EQ(a.IsOpen(r), r % 3 != 0) << r;
+  for (uint32_t r = 0; r < 100; ++r) ASSERT_EQ(b.IsOpen(r), a.IsOpen(r)) << r;
+  b.SetAllClosed();
+  b.Open(5);
+  EXPECT_EQ(b.CountOpen(), 1u);
+}
+
+// Method R needs every environment to regenerate the source's rays bit for
+// bit from the packet: the header's patch must give the same sampler, and
+// the shot's stream the same floats.
+TEST(PacketTest, ForeignEnvironmentsRegenerateTheSourcesRaysExactly) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene("scenes/cornell.obj", &scene).ok());
+  std::vector<uint32_t> all(scene.polygons.size());
+  for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+  Mesh mesh;
+  ASSERT_TRUE(MeshScene(scene, all, 45.0f, 1u << 20, &mesh).ok());
+  ASSERT_GT(mesh.patches.size(), 100u);
+  bool sawTriangle = false;
+  for (const Patch& p : mesh.patches) {
+    sawTriangle |= p.numCorners == 3;
+    double power[3] = {1.0, 2.0, 3.0};
+    uint64_t key = ShotKey(17, p.globalId, 3);
+    uint8_t packet[sizeof(PacketHeader)];
+    WriteHeader(packet, ShotHeader(p, power, key, 3, 1));
+    PacketHeader h = ReadHeader(packet);
+    Patch q = PatchFromHeader(h);
+    EXPECT_EQ(h.shotKey, key);
+    EXPECT_EQ(q.globalId, p.globalId);
+    PatchSampler a = MakePatchSampler(p), b = MakePatchSampler(q);
+    ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << "patch " << p.globalId;
+    Rng ra = ShotRng(key), rb = ShotRng(h.shotKey);
+    for (int r = 0; r < 64; ++r) {
+      float u[5], v[5];
+      for (int k = 0; k < 5; ++k) {
+        u[k] = ra.NextFloat();
+        v[k] = rb.NextFloat();
+      }
+      glm::vec3 oa = a.Point(u[0], u[1], u[2]), ob = b.Point(v[0], v[1], v[2]);
+      glm::vec3 da = a.frame.ToWorld(CosineDirection(u[3], u[4]));
+      glm::vec3 db = b.frame.ToWorld(CosineDirection(v[3], v[4]));
+      ASSERT_EQ(std::memcmp(&oa, &ob, sizeof oa), 0);
+      ASSERT_EQ(std::memcmp(&da, &db, sizeof da), 0);
+    }
+  }
+  EXPECT_TRUE(sawTriangle) << "the Cornell box's blocks mesh into quads only?";
 }
 
 TEST(SolverTest, AdmissionNeverOverfillsAQueue) {

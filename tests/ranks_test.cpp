@@ -29,28 +29,50 @@ std::string Bin() {
   return b ? b : "build/vismask";
 }
 
+// `kBase` with --mask-method `method`: the same bytes on one process, on
+// forked processes (`pipeRanks`) and under mpirun (`mpiRanks`, when built).
+void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,
+                               std::vector<const char*> mpiRanks);
+
 TEST(RanksTest, EveryTransportAndRankCountGivesTheSameBytes) {
+  ExpectSameBytesEverywhere("B", {"1", "2", "4", "8"}, {"1", "2", "4"});
+}
+
+// Method C fills its masks from the rays' hits and passes, Method R carries
+// one bit per ray: neither may depend on where an environment runs.
+TEST(RanksTest, MethodsCAndRGiveTheSameBytesEverywhere) {
+  ExpectSameBytesEverywhere("C", {"4"}, {"2"});
+  ExpectSameBytesEverywhere("R", {"2", "8"}, {"4"});
+}
+
+void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,
+                               std::vector<const char*> mpiRanks) {
   TempDir dir;
+  std::vector<std::string> base = kBase;
+  base.insert(base.end(), {"--mask-method", method});
   auto run = [&](const std::string& out, std::vector<std::string> extra) {
-    auto args = kBase;
+    auto args = base;
     args.insert(args.end(), {"--out", dir.File(out)});
     args.insert(args.end(), extra.begin(), extra.end());
     auto r = RunMain(args);
     ASSERT_EQ(r.code, 0) << out << ": " << r.err;
   };
   run("loop", {"--transport", "loop"});
-  for (const char* n : {"1", "2", "4", "8"}) run(std::string("pipe") + n, {"--ranks", n});
-  std::vector<std::string> outs = {"pipe1", "pipe2", "pipe4", "pipe8"};
+  std::vector<std::string> outs;
+  for (const char* n : pipeRanks) {
+    run(std::string("pipe") + n, {"--ranks", n});
+    outs.push_back(std::string("pipe") + n);
+  }
   // Under Open MPI too, when build/vismask-mpi exists (make MPI=1).
   std::string mpiBin = Bin() + "-mpi";
   bool mpi = FileExists(mpiBin) && std::system("command -v mpirun >/dev/null 2>&1") == 0;
   if (mpi) {
-    for (const char* n : {"1", "2", "4"}) {
+    for (const char* n : mpiRanks) {
       // detect_leaks=0: under SAN=1, LeakSanitizer reports Open MPI's own
       // allocations from MPI_Init, which it never frees.
       std::string cmd = "ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun -np " +
                         std::string(n) + " --oversubscribe " + mpiBin;
-      for (const auto& a : kBase) cmd += " " + a;
+      for (const auto& a : base) cmd += " " + a;
       cmd += " --out " + dir.File(std::string("mpi") + n) + " >" + dir.File("mpi.log") + " 2>&1";
       ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << ReadFile(dir.File("mpi.log"));
       outs.push_back(std::string("mpi") + n);
@@ -59,10 +81,13 @@ TEST(RanksTest, EveryTransportAndRankCountGivesTheSameBytes) {
   for (const char* f : {"image.pfm", "patches.csv"}) {
     std::string ref = ReadFile(dir.File(std::string("loop/") + f));
     ASSERT_GT(ref.size(), 100u);
-    for (const auto& o : outs) EXPECT_EQ(ref, ReadFile(dir.File(o + "/" + f))) << o << "/" << f;
+    for (const auto& o : outs)
+      EXPECT_EQ(ref, ReadFile(dir.File(o + "/" + f))) << method << ": " << o << "/" << f;
   }
-  std::string json = ReadFile(dir.File("pipe4/run.json"));
-  EXPECT_NE(json.find("\"ranks\": 4"), std::string::npos) << json;
+  std::string last = outs.front();
+  std::string json = ReadFile(dir.File(last + "/run.json"));
+  EXPECT_NE(json.find("\"ranks\": " + last.substr(4)), std::string::npos) << json;
+  EXPECT_NE(json.find(std::string("\"mask_method\": \"") + method + "\""), std::string::npos);
   if (!mpi) std::printf("note: build/vismask-mpi or mpirun missing; the MPI runs were skipped\n");
 }
 

@@ -150,3 +150,25 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
 
 }  // namespace
 }  // namespace vismask
+
+namespace vismask {
+namespace {
+
+// run.json's camera is the one the image was drawn with: given back as
+// --camera, it draws the same bytes (the experiments use it to find pixels).
+TEST(ReferenceTest, RunJsonCameraReproducesTheImage) {
+  TempDir dir;
+  Render(dir.File("a"), {"--max-shots", "50"});
+  std::string json = ReadFile(dir.File("a/run.json"));
+  size_t at = json.find("\"camera\": [");
+  ASSERT_NE(at, std::string::npos);
+  std::string list = json.substr(at + 11, json.find(']', at) - at - 11);
+  std::string camera;
+  for (char ch : list)
+    if (ch != ' ') camera += ch;
+  Render(dir.File("b"), {"--max-shots", "50", "--camera", camera});
+  EXPECT_EQ(ReadFile(dir.File("a/image.pfm")), ReadFile(dir.File("b/image.pfm"))) << camera;
+}
+
+}  // namespace
+}  // namespace vismask

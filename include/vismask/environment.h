@@ -26,12 +26,19 @@ namespace vismask {
 // Per-channel energy bookkeeping, in W (double). For one environment with no
 // neighbours, emitted == absorbed + escaped + unshot up to rounding; with
 // several, the difference is the power still in flight between environments
-// plus what the masks lost or let leak.
+// plus what the masks lost or let leak. Method R books its power in flight
+// exactly (summed over all environments, emitted == absorbed + escaped +
+// unshot + inFlight up to rounding); the hemisphere masks cannot, and leave
+// inFlight at 0.
 struct EnergyLedger {
   double emitted[3] = {0, 0, 0};
   double absorbed[3] = {0, 0, 0};  // by receivers (1 - kd) and by back faces
   double escaped[3] = {0, 0, 0};   // rays that left the scene
   double unshot[3] = {0, 0, 0};    // local patches' unshot power, kept current
+  // Method R: + the rays that left this environment for a neighbour, - those
+  // that entered it from one (a ray enters exactly the next environment on
+  // its path, so the sum over environments is the power not yet traced).
+  double inFlight[3] = {0, 0, 0};
   double radiosity[3] = {0, 0, 0}; // sum of b * area over local patches (emitted + reflected)
 };
 
@@ -40,7 +47,7 @@ struct EnvStats {
   uint64_t shots = 0;         // local shots
   uint64_t foreignShots = 0;  // queued foreign shooters distributed here
   uint64_t rays = 0;          // form-factor rays traced
-  uint64_t maskRays = 0;      // Method B's centre rays
+  uint64_t maskRays = 0;      // Method B's and C's centre rays
   uint64_t hits = 0;
   uint64_t packetsSent = 0;
   uint64_t recordsCreated = 0;  // local shots that went on to neighbours
@@ -153,9 +160,18 @@ class Environment {
   void ShootForeign(uint32_t slot);
   // Traces `rays` rays of one shooter through this environment. Rays whose
   // pixel is closed in `in` are skipped; with a mask method, `out` loses the
-  // pixels of rays that hit here (and, for B, of centre rays that hit).
+  // pixels of rays that hit here (A), of centre rays that hit (B), or of
+  // pixels the rays only hit and those whose centre ray hits (C).
   void Distribute(const Patch& shooter, uint32_t skip, const double power[3], uint64_t stream,
                   const MaskBits* in, MaskBits* out);
+  // Method R: regenerates the shot's rays from its key, traces those whose
+  // bit is set in `alive` (restricted to this box when `foreign`), and
+  // clears the bits of the rays it absorbs or lets escape the scene.
+  void TraceAlive(const Patch& shooter, uint32_t skip, const double power[3], uint64_t shotKey,
+                  bool foreign, MaskBits* alive);
+  // Method C's two working masks: pixels some ray hit in, and pixels some ray
+  // passed unoccluded.
+  MaskBits ScratchMask(uint32_t k) const;
   void Receive(uint32_t j, const double share[3]);
   // True if a ray that leaves this environment's box leaves the scene.
   bool LeavesScene(const Ray& ray) const;
@@ -190,7 +206,7 @@ class Environment {
   // Exchange state: empty for an environment without neighbours.
   Span<Slot> slots_;
   Span<uint64_t> slotWords_;  // slot s's mask: words [s * shape_.words(), ...)
-  Span<uint64_t> scratchWords_;  // a working mask
+  Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
   Span<uint8_t> outbox_;
   uint32_t outCapacity_ = 0;
   uint32_t outCount_ = 0;

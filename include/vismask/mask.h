@@ -3,6 +3,9 @@
 // steps from the normal to the horizon), phi in 4R columns (uniform from the
 // patch's tangent), one bit per pixel: 1 = open, 0 = occluded. Directions are
 // in the patch's local frame (sampling.h's Frame: z = normal).
+//
+// Method R replaces the hemisphere by one bit per Monte Carlo ray of the
+// shot (1 = the ray is still in flight); the same bit array carries it.
 #pragma once
 #include <cstdint>
 
@@ -16,39 +19,58 @@ enum class MaskMethod : uint8_t {
   kNone,  // no mask: foreign energy passes other environments' occluders
   kA,     // clear the pixels of form-factor rays that hit
   kB,     // one ray from the centre through every pixel open upstream
+  kC,     // pixels the form-factor rays only hit close, only passed stay
+          // open; B's centre ray decides the rest (both or neither)
+  kR,     // one bit per ray of the shot: exact, no hemisphere
 };
 const char* MaskMethodName(MaskMethod m);
 
 struct MaskShape {
-  uint32_t res = 0;  // R; 0 = no mask
+  uint32_t res = 0;   // R; 0 = no hemisphere
+  uint32_t rays = 0;  // Method R: one bit per ray of a shot (then res is 0)
   uint32_t pixels() const { return 4 * res * res; }
-  uint32_t bytes() const { return (pixels() + 7) / 8; }  // what a packet carries
-  uint32_t words() const { return (pixels() + 63) / 64; }
+  uint32_t bits() const { return rays > 0 ? rays : pixels(); }
+  bool empty() const { return bits() == 0; }
+  uint32_t bytes() const { return (bits() + 7) / 8; }  // what a packet carries
+  uint32_t words() const { return (bits() + 63) / 64; }
 };
+
+// The shape a run's packets and queue slots carry: nothing for `none`, the
+// R x 4R hemisphere for A, B and C, `rays` bits for R.
+MaskShape MaskShapeOf(MaskMethod m, uint32_t maskRes, uint32_t rays);
 
 // The pixel of local direction `d` (unit, d.z >= 0).
 uint32_t MaskPixel(const glm::vec3& d, uint32_t res);
 // The unit local direction through the centre of `pixel`.
 glm::vec3 MaskPixelCentre(uint32_t pixel, uint32_t res);
 
-// A mask over 64-bit words (bit p of word p / 64), `res` rows.
+// A mask over 64-bit words (bit p of word p / 64): `res` rows of a
+// hemisphere, or (PerRay) one bit per ray.
 class MaskBits {
  public:
   MaskBits() = default;
-  MaskBits(Span<uint64_t> words, uint32_t res) : words_(words), res_(res) {}
+  MaskBits(Span<uint64_t> words, uint32_t res) : words_(words), res_(res), bits_(4 * res * res) {}
+  MaskBits(Span<uint64_t> words, const MaskShape& shape)
+      : words_(words), res_(shape.res), bits_(shape.bits()) {}
+  static MaskBits PerRay(Span<uint64_t> words, uint32_t rays) {
+    return MaskBits(words, MaskShape{0, rays});
+  }
 
   uint32_t res() const { return res_; }
+  uint32_t bits() const { return bits_; }
   void SetAllOpen();
+  void SetAllClosed();
   bool IsOpen(uint32_t p) const { return (words_[p >> 6] >> (p & 63)) & 1u; }
   void Close(uint32_t p) { words_[p >> 6] &= ~(uint64_t(1) << (p & 63)); }
+  void Open(uint32_t p) { words_[p >> 6] |= uint64_t(1) << (p & 63); }
   // Keeps a pixel open only if it is open in `other` too.
   void And(const MaskBits& other);
   void CopyFrom(const MaskBits& other);
   // The cosine-weighted fraction of the hemisphere that is open: the share of
-  // a patch's power its open pixels carry.
+  // a patch's power its open pixels carry. Per ray: the share of rays open.
   double OpenFraction() const;
   uint32_t CountOpen() const;
-  // Packing to and from the packet's ceil(4R^2 / 8) bytes (little-endian).
+  // Packing to and from the packet's ceil(bits / 8) bytes (little-endian).
   void Pack(uint8_t* out) const;
   void Unpack(const uint8_t* in);
   Span<uint64_t> words() const { return words_; }
@@ -56,6 +78,7 @@ class MaskBits {
  private:
   Span<uint64_t> words_;
   uint32_t res_ = 0;
+  uint32_t bits_ = 0;
 };
 
 }  // namespace vismask

@@ -1,7 +1,8 @@
 // Packet: what crosses from one environment to a neighbour when a patch has
 // shot: the shooter's geometry, its power, the shot's key and the visibility
-// mask so far. A fixed-size record once --mask-res is known: a trivially
-// copyable header followed by ceil(4R^2 / 8) mask bytes, padded to 8. The
+// mask so far. A fixed-size record once the mask's shape is known: a
+// trivially copyable header followed by the mask's bytes (ceil(4R^2 / 8) for
+// a hemisphere, ceil(N / 8) for Method R's N rays), padded to 8. The
 // radiosity code packs and unpacks it; transports only move the bytes.
 #pragma once
 #include <cstdint>
@@ -9,6 +10,7 @@
 #include <type_traits>
 
 #include "vismask/mask.h"
+#include "vismask/patch.h"
 
 namespace vismask {
 
@@ -35,6 +37,15 @@ static_assert(sizeof(PacketHeader) % 8 == 0, "mask bytes start 8-aligned");
 inline uint32_t PacketBytes(const MaskShape& shape) {
   return static_cast<uint32_t>(sizeof(PacketHeader)) + ((shape.bytes() + 7) & ~7u);
 }
+
+// The header of a shot of `p` (power, key and ids; the routing fields
+// fromEnv, toEnv and sequence are left 0).
+PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey, uint32_t shotIndex,
+                        uint32_t sourceEnv);
+// The shooter as a foreign environment sees it: corners, normal, area, corner
+// count and global id, the very floats of the source's patch, so that
+// MakePatchSampler and the shot's stream regenerate its rays bit for bit.
+Patch PatchFromHeader(const PacketHeader& h);
 
 inline void WriteHeader(uint8_t* packet, const PacketHeader& h) { std::memcpy(packet, &h, sizeof h); }
 inline PacketHeader ReadHeader(const uint8_t* packet) {

@@ -32,7 +32,7 @@ CAMERA = ["--camera", "278,545,300,278,0,300,0,0,1,76"]
 SCALES = {
     "full": dict(common=CAMERA + ["--patch-size", "70", "--rays", "4096", "--stop-unshot", "1e-2",
                          "--width", "256", "--height", "256"],
-                 ref_b=["--rays", "16384", "--stop-unshot", "1e-3"],
+                 ref_b=["--rays", "8192", "--stop-unshot", "1e-3"],
                  ref_seeds=[1001, 1002],
                  ref_res=250, table_res=[20, 50, 100], curve_res=[20, 50, 100, 250],
                  leak_res=250, reps=3, error_every=100),
@@ -101,6 +101,11 @@ def context_from_argv(argv, doc):
     runs = os.path.join(ROOT, "build", "experiments", scale) if out.startswith(
         os.path.join(ROOT, "docs")) else os.path.join(out, "runs")
     return Context(scale, out, runs)
+
+
+def arg(args, flag):
+    """The value after the last `flag` in an argument list."""
+    return [args[i + 1] for i, a in enumerate(args[:-1]) if a == flag][-1]
 
 
 def log(msg):
@@ -315,7 +320,8 @@ class ShadowRegion:
         return (floor or back) and self.shadowed(p)
 
     def pixel_mask(self, camera, w, h, cache=None):
-        """1 for the pixels whose visible surface is in the region."""
+        """Per pixel: 0 outside the region, 1 in it at x >= 278 (the first
+        environment), 2 in it at x < 278 (the second)."""
         if cache and os.path.exists(cache):
             with open(cache) as f:
                 return [int(c) for c in f.read().strip()]
@@ -337,7 +343,7 @@ class ShadowRegion:
                     continue
                 p = tuple(eye[k] + t * d[k] for k in range(3))
                 n = (0, 1, 0) if what == "floor" else (0, 0, -1)
-                mask.append(1 if self.in_region(p, n) else 0)
+                mask.append((2 if p[0] < 278 else 1) if self.in_region(p, n) else 0)
         if cache:
             with open(cache, "w") as f_:
                 f_.write("".join(str(m) for m in mask))

@@ -12,11 +12,18 @@ import time
 
 import lib
 
-METHODS_CURVES = ["A", "B"]  # with masks; "none" is one run
+METHODS_CURVES = ["A", "B", "C"]  # masks of R x 4R pixels, at each R
+SINGLE = ("none", "R")  # no resolution: one run each
 
 
 def mask_args(method, res):
-    return lib.SPLIT + ["--mask-method", method] + (["--mask-res", str(res)] if method != "none" else [])
+    return lib.SPLIT + ["--mask-method", method] + (
+        [] if method in SINGLE else ["--mask-res", str(res)])
+
+
+def configs(resolutions, methods=METHODS_CURVES):
+    """(method, R) in table order: none, the masks at each R, then R."""
+    return [("none", 0)] + [(m, r) for m in methods for r in resolutions] + [("R", 0)]
 
 
 # --- references ---------------------------------------------------------------
@@ -51,11 +58,13 @@ def ref_b_path(ctx):
     return os.path.join(ctx.runs, "ref-b.pfm")
 
 
-def region_mask(ctx, run_json):
+def region_mask(ctx, run_json, right_only=False):
+    """The shadow region's pixels (1) for this run's camera and size; with
+    right_only, only its part in the second environment (x < 278)."""
     w, h = run_json["options"]["width"], run_json["options"]["height"]
     cache = os.path.join(ctx.runs, f"region-{w}x{h}.txt")
     mask = lib.ShadowRegion().pixel_mask(run_json["options"]["camera"], w, h, cache)
-    return mask
+    return [1 if (m == 2 if right_only else m > 0) else 0 for m in mask]
 
 
 def ensure_references(ctx):
@@ -70,18 +79,14 @@ def curve_run(ctx, method, res):
     """The run of a method (and R) with its error against reference (b) every
     error_every shots: the error-time curve, and Fig. 2 / Fig. 3's image."""
     ref_b = ensure_references(ctx)
-    name = "none" if method == "none" else f"{method}-{res}"
+    name = method if method in SINGLE else f"{method}-{res}"
     j = ctx.run(name, mask_args(method, res) + ["--reference", ref_b, "--error-every",
                                                  str(ctx.s["error_every"])])
     return name, j
 
 
 def curve_runs(ctx):
-    out = [curve_run(ctx, "none", 0)]
-    for m in METHODS_CURVES:
-        for r in ctx.s["curve_res"]:
-            out.append(curve_run(ctx, m, r))
-    return out
+    return [curve_run(ctx, m, r) for m, r in configs(ctx.s["curve_res"])]
 
 
 # --- Fig. 2 -> table ------------------------------------------------------------
@@ -91,6 +96,7 @@ def quality(ctx):
     ref_b = ensure_references(ctx)
     ref_a_name, ref_a_json = curve_run(ctx, "B", s["ref_res"])
     mask = region_mask(ctx, ref_a_json)
+    right = region_mask(ctx, ref_a_json, right_only=True)
     _, _, ra = lib.read_pfm(ctx.path(ref_a_name, "image.pfm"))
     w, h, rb = lib.read_pfm(ref_b)
     rows = []
@@ -98,9 +104,11 @@ def quality(ctx):
     for r in s["table_res"] + [s["ref_res"]]:
         name, j = curve_run(ctx, "B", r)
         _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
-        rows.append([r, "" if r == s["ref_res"] else lib.rel_rmse(img, ra),
-                     "" if r == s["ref_res"] else lib.rel_rmse(img, ra, mask),
-                     lib.rel_rmse(img, rb), lib.rel_rmse(img, rb, mask),
+        ref = r == s["ref_res"]
+        rows.append([r, "" if ref else lib.rel_rmse(img, ra),
+                     "" if ref else lib.rel_rmse(img, ra, mask),
+                     "" if ref else lib.rel_rmse(img, ra, right),
+                     lib.rel_rmse(img, rb), lib.rel_rmse(img, rb, mask), lib.rel_rmse(img, rb, right),
                      j["timings"]["solve_seconds"]])
         shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig2-B-{r}.png"))
         lib.diff_png(ctx.result(f"img/fig2-B-{r}-diff.png"), w, h, img, rb, 10, mask)
@@ -110,11 +118,11 @@ def quality(ctx):
     j2 = ctx.run(f"B-{low}-seed2", mask_args("B", low) + ["--seed", "2"])
     _, _, x1 = lib.read_pfm(ctx.path(f"B-{low}", "image.pfm"))
     _, _, x2 = lib.read_pfm(ctx.path(f"B-{low}-seed2", "image.pfm"))
-    rows.append([f"{low} (seed 2 vs seed 1)", lib.rel_rmse(x2, x1), lib.rel_rmse(x2, x1, mask), "", "",
-                 j2["timings"]["solve_seconds"]])
+    rows.append([f"{low} (seed 2 vs seed 1)", lib.rel_rmse(x2, x1), lib.rel_rmse(x2, x1, mask),
+                 lib.rel_rmse(x2, x1, right), "", "", "", j2["timings"]["solve_seconds"]])
     lib.write_csv(ctx.result("fig2-quality.csv"),
-                  ["mask_res", "vs_ref_a_whole", "vs_ref_a_region", "vs_ref_b_whole",
-                   "vs_ref_b_region", "solve_seconds"], rows)
+                  ["mask_res", "vs_ref_a_whole", "vs_ref_a_region", "vs_ref_a_right",
+                   "vs_ref_b_whole", "vs_ref_b_region", "vs_ref_b_right", "solve_seconds"], rows)
     # The region itself, for the doc.
     region_png(ctx, w, h, rb, mask)
 
@@ -137,23 +145,26 @@ def region_png(ctx, w, h, ref, mask):
 def timing(ctx):
     s = ctx.s
     rows = []
-    for m in ["none", "A", "B"]:
-        for r in ([0] if m == "none" else s["table_res"]):
-            secs, j = [], None
-            for k in range(s["reps"]):
-                name = f"time-{m}-{r}-{k}"
-                j = ctx.run(name, mask_args(m, r), fresh=True)
-                secs.append(j["timings"]["solve_seconds"])
-            res = j["result"]
-            seed = lib.SEED_MINUTES.get((m, r))
-            med = lib.median(secs)
-            rows.append([m, "" if m == "none" else r, med, min(secs), max(secs), res["shots"],
-                         res["rays"], res["mask_rays"], res["bytes_sent"],
-                         "" if seed is None else f"{seed:.2f}",
-                         "" if seed is None else med / (seed * 60)])
+    for m, r in configs(s["table_res"]):
+        secs, j = [], None
+        for k in range(s["reps"]):
+            # The first is the curve run (its error measurements are off
+            # the clock); the others are plain runs, always rerun.
+            if k == 0:
+                _, j = curve_run(ctx, m, r)
+            else:
+                j = ctx.run(f"time-{m}-{r}-{k}", mask_args(m, r), fresh=True)
+            secs.append(j["timings"]["solve_seconds"])
+        res = j["result"]
+        seed = lib.SEED_MINUTES.get((m, r))
+        med = lib.median(secs)
+        rows.append([m, "" if m in SINGLE else r, med, min(secs), max(secs), res["shots"],
+                     res["rays"], res["mask_rays"], res["bytes_sent"],
+                     "" if seed is None else f"{int(seed)}m {round(60 * (seed - int(seed)))}s",
+                     "" if seed is None else med / (seed * 60)])
     lib.write_csv(ctx.result("table1-time.csv"),
                   ["method", "mask_res", "median_solve_seconds", "min_seconds", "max_seconds",
-                   "shots", "rays", "mask_rays", "bytes_sent", "seed_minutes",
+                   "shots", "rays", "mask_rays", "bytes_sent", "seed_time",
                    "ratio_to_seed"], rows)
 
 
@@ -169,13 +180,16 @@ def leak(ctx):
     ref_mean = sum(m for m, _ in refs) / len(refs)
     rows = [["reference (b) seed spread", "",
              100 * (refs[1][0] - refs[0][0]) / ref_mean, refs[0][1]]]
-    for m in ["none"] + METHODS_CURVES:
-        for r in ([0] if m == "none" else s["curve_res"]):
-            name, _ = curve_run(ctx, m, r)
-            mean, area = lib.region_patch_mean(ctx.path(name, "patches.csv"), region, True)
-            rows.append([m, "" if m == "none" else r, 100 * (mean - ref_mean) / ref_mean, area])
+    for m, r in configs(s["curve_res"]):
+        name, j = curve_run(ctx, m, r)
+        mean, area = lib.region_patch_mean(ctx.path(name, "patches.csv"), region, True)
+        res = j["result"]
+        rows.append([m, "" if m in SINGLE else r, 100 * (mean - ref_mean) / ref_mean, area,
+                     res["rays"], res["mask_rays"], res["bytes_sent"],
+                     j["timings"]["solve_seconds"]])
     lib.write_csv(ctx.result("fig3-leak.csv"),
-                  ["method", "mask_res", "leak_percent", "region_area"], rows)
+                  ["method", "mask_res", "leak_percent", "region_area", "rays", "mask_rays",
+                   "bytes_sent", "solve_seconds"], rows)
     os.makedirs(ctx.result("img"), exist_ok=True)
     name = f"A-{s['leak_res']}"
     shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig3-{name}.png"))
@@ -261,6 +275,22 @@ plot {', '.join(plots)}
 """)
 
 
+# --- Methods C and R in the closed box ----------------------------------------------
+
+def closed_box(ctx):
+    """tools/experiments/closed-box-methods (issue #10): a closed box of one
+    material around a block, split 2x2x2: mean B against E/(1-rho) over
+    several seeds, with its standard error, for none (1 env), B and R."""
+    import subprocess
+    seeds, rays = ("4", "500") if ctx.scale == "full" else ("2", "100")
+    env = dict(os.environ, RAYS=rays, VISMASK_BIN=ctx.bin)
+    out = subprocess.run([os.path.join(lib.ROOT, "tools", "experiments", "closed-box-methods"),
+                          os.path.join(ctx.runs, "closed-box"), seeds], env=env, check=True,
+                         capture_output=True, text=True).stdout
+    with open(ctx.result("closed-box.csv"), "w") as f:
+        f.write(out)
+
+
 # --- docs/RESULTS.md --------------------------------------------------------------
 
 def table_md(path, header_map=None, digits=None):
@@ -282,6 +312,8 @@ def pretty(v, h):
         return v
     if v.isdigit():
         return f"{int(v):,}".replace(",", " ")
+    if h.startswith("mean_b") or h == "std_error":
+        return f"{x:.6f}"
     if "percent" in h:
         return f"{x:+.1f}%"
     if "rmse" in h or h.startswith("vs_") or h.startswith("noise"):
@@ -355,7 +387,8 @@ def report(ctx, meta=None):
 
     w("## Fig. 2 → table: quality against mask resolution (Method B)\n")
     w(table_md(ctx.result("fig2-quality.csv")) + "\n")
-    w("Relative RMSE = √(Σ(a−b)²/Σb²) over all channels of the pixels (whole image, or the region). "
+    w("Relative RMSE = √(Σ(a−b)²/Σb²) over all channels of the pixels: the whole image, the shadow "
+      "region, or its part in the second environment (`right`, x < 278). "
       "The last row is the noise floor of any comparison between two two-environment runs: the "
       "lowest R again with another seed.\n")
     imgs = " ".join(f"![B R={r}]({link(f'img/fig2-B-{r}.png')})" for r in s["table_res"] + [s["ref_res"]])
@@ -366,9 +399,10 @@ def report(ctx, meta=None):
 
     w("## Table 1 → table: time of Method A and Method B\n")
     w(table_md(ctx.result("table1-time.csv")) + "\n")
-    w(f"Median of {s['reps']} runs each (min and max beside it), one after another on this machine. "
+    w(f"Median of {s['reps']} runs each (min and max beside it), one after another on this machine; "
+      "the first of each is the error-curve run below, whose measurements are off its clock. "
       "`mask_rays` are Method B's centre rays; `bytes_sent` the packet bytes (128-byte header and "
-      "the mask) sent between the environments. `ratio_to_seed` is our median time over the seed's.\n")
+      "the mask) sent between the environments. `seed_time` is the paper's Table 1 and `ratio_to_seed` our median time over it.\n")
 
     w("## Fig. 3 → number: light leaking through Method A's masks\n")
     w(table_md(ctx.result("fig3-leak.csv")) + "\n")
@@ -387,16 +421,52 @@ def report(ctx, meta=None):
     w("What measuring cost (not in the solve times):\n")
     w(table_md(ctx.result("curves.csv")) + "\n")
 
+    w("## Beyond the paper: Methods C and R\n")
+    w("Method C marks, per pixel, whether a form-factor ray hit or passed, and casts B's centre ray "
+      "only where the marks disagree or no ray came; Method R sends one bit per Monte Carlo ray "
+      "(docs/DESIGN.md). From the curve runs above (one run each):\n")
+    by = {(r["method"], r["mask_res"]): r for r in lk}
+    cmp_rows = ["| R | B mask rays | C mask rays | C / B | B leak | C leak | B s | C s |",
+                "|---|---|---|---|---|---|---|---|"]
+    for r in s["curve_res"]:
+        b, c = by.get(("B", str(r))), by.get(("C", str(r)))
+        if b and c:
+            cmp_rows.append(f"| {r} | {num(b['mask_rays'])} | {num(c['mask_rays'])} | "
+                            f"{int(c['mask_rays']) / max(1, int(b['mask_rays'])):.2f} | "
+                            f"{float(b['leak_percent']):+.1f}% | {float(c['leak_percent']):+.1f}% | "
+                            f"{float(b['solve_seconds']):.1f} | {float(c['solve_seconds']):.1f} |")
+    w("\n".join(cmp_rows) + "\n")
+    rr = by.get(("R", ""))
+    if rr:
+        n = int(lib.arg(s["common"], "--rays"))
+        w(f"Method R: leak {float(rr['leak_percent']):+.1f}%, {num(rr['bytes_sent'])} bytes sent "
+          f"({num(rr['rays'])} rays traced, no mask rays), {float(rr['solve_seconds']):.1f} s. Its "
+          "packet is 128 + N/8 bytes for N rays a shot, a mask's 128 + 4R²/8: here N = "
+          f"{n}, so R's packet is the size of a mask of R = {math.sqrt(n / 4):.0f}, smaller than "
+          "the masks above it and larger than those below.\n")
+    if os.path.exists(ctx.result("closed-box.csv")):
+        w("**The closed box** (tools/experiments/closed-box-methods): a unit cube around a block "
+          "[0.3, 0.7]³, one material (kd 0.5, Ke 2, so B = 4 everywhere), split 2×2×2; the mean of B "
+          "over the patches against 4, with its standard error over the seeds, the noise of one "
+          "patch (RMS), and the ledger's largest residual (emitted − absorbed − escaped − unshot − "
+          "in flight, over emitted). A closed box of one material fixes the mean by conservation, "
+          "so a bias beyond the standard error is rays lost or counted twice.\n")
+        w(table_md(ctx.result("closed-box.csv")) + "\n")
+
     w("## Reading\n")
     res = [str(r) for r in s["table_res"]]
     r_lo, r_hi = res[0], res[-1]
-    fl = float(floor["vs_ref_a_region"])
+    fl = float(floor["vs_ref_a_right"])
 
     def vs(r):
-        return float(by_r[r]["vs_ref_a_region"])
-    w("- **Quality against resolution (Fig. 2).** In the shadow region Method B differs from "
+        return float(by_r[r]["vs_ref_a_right"])
+    w("- **Quality against resolution (Fig. 2).** In the second environment's part of the shadow "
+      "region, where the occluder (the tall block) is in the shooter's environment and only the mask "
+      "stands for it, Method B differs from "
       "reference (a) by " + ", ".join(f"{pct(vs(r))} at R = {r}" for r in res) +
-      f"; two runs that differ only in their seed differ by {pct(fl)}. " +
+      f". Every run uses seed 1, so their Monte Carlo noise is largely shared (common random "
+      f"numbers) and these differences are mostly the masks'; two runs that differ only in their "
+      f"seed differ by {pct(fl)}. " +
       ("So the paper's ordering holds: the error falls with R and R = "
        f"{r_hi} is within the noise of R = {s['ref_res']}." if vs(r_lo) > vs(r_hi) and vs(r_hi) <= 1.2 * fl
        else "The paper's ordering does not show clearly above the Monte Carlo noise here.")
@@ -407,15 +477,15 @@ def report(ctx, meta=None):
                   for r in s["table_res"] if ("B", r) in lib.SEED_MINUTES]
     b_slower = all(x > 1.0 for x in ratio)
     w(f"- **Time (Table 1).** Method A costs {fmt_pct(tm[('A', int_or(r_lo))] / none_s - 1)} to "
-      f"{fmt_pct(tm[('A', int_or(r_hi))] / none_s - 1)} over no mask (marking a pixel is one bit "
-      "per form-factor ray that hits). Method B's time over A's is " +
+      f"{fmt_pct(tm[('A', int_or(r_hi))] / none_s - 1)} over no mask (marking, packing, sending, "
+      "merging and reading the masks). Method B's time over A's is " +
       ", ".join(f"{x:.2f}×" for x in ratio) + " at R = " + ", ".join(str(r) for r in s["table_res"]) +
       ("; in the paper it was " + ", ".join(f"{x:.2f}×" for x in seed_ratio) + ". "
        if seed_ratio else " (the paper has no times at these R). ") +
       ("Here B is the slower at every R: the paper's A paid for wasteful marking (\"pixels may be "
-       "marked off multiple times\"), which costs one bit write here, while B's one extra ray per "
-       "open pixel (4R² per shot that sends a mask) remains. The paper's finding that B is faster "
-       "does not carry over; its finding that B's cost grows with R does."
+       "marked off multiple times\"), which here is one bit write per ray that hits, while B's one "
+       "extra ray per open pixel (4R² per shot that sends a mask) outweighs it. The paper's finding "
+       "that B is faster does not carry over; its finding that B's cost grows with R does."
        if b_slower else "B is not the slower at every R here; see the table."))
     a_hi, b_hi = leak_of.get(("A", hi)), leak_of.get(("B", hi))
     if a_hi is not None and b_hi is not None:
@@ -424,6 +494,39 @@ def report(ctx, meta=None):
           f"seed-to-seed spread is {spread:.1f}%. " +
           ("The paper's light leak is reproduced and measured." if a_hi > max(3 * spread, b_hi + 3 * spread)
            else "The leak is not clearly above the noise at this scale."))
+    cs = [(r, by.get(("B", str(r))), by.get(("C", str(r)))) for r in s["curve_res"]]
+    cs = [(r, b, c) for r, b, c in cs if b and c]
+    if cs:
+        fewer = [r for r, b, c in cs if int(c["mask_rays"]) < int(b["mask_rays"])]
+        leak_gap = max(abs(float(c["leak_percent"]) - float(b["leak_percent"])) for _, b, c in cs)
+        darker = all(float(c["leak_percent"]) <= float(b["leak_percent"]) + spread for _, b, c in cs)
+        w(f"- **Method C** cast fewer centre rays than B at R = {', '.join(str(r) for r in fewer) or 'none'} "
+          f"(C/B from {min(int(c['mask_rays']) / max(1, int(b['mask_rays'])) for _, b, c in cs):.2f} to "
+          f"{max(int(c['mask_rays']) / max(1, int(b['mask_rays'])) for _, b, c in cs):.2f}; the saving "
+          "shrinks as R grows, because pixels then outnumber the rays and most get no mark). Its leak "
+          f"differs from B's by at most {leak_gap:.1f} points, against the reference's seed spread of "
+          f"{spread:.1f}%" + (": no leak beyond B's; where it differs it is darker (a pixel whose "
+                              "rays all hit is closed, even where its centre ray would pass)."
+                              if darker else "; at some R it lets more light through than B."))
+    if rr:
+        line = (f"- **Method R** has {float(rr['leak_percent']):+.1f}% in the same region (the "
+                f"reference's seed spread is {spread:.1f}%): it has no mask; every ray is traced "
+                "until it is absorbed in exactly one environment or escapes.")
+        curves = {r["run"]: r for r in rows_of(ctx, "curves.csv")}
+        if "R" in curves and f"B-{hi}" in curves:
+            line += (f" Its whole-image error, {pct(curves['R']['final_relative_rmse'])} against "
+                     f"B-{hi}'s {pct(curves[f'B-{hi}']['final_relative_rmse'])}, is most likely noise (the "
+                     "region and the closed box show no bias): R traces "
+                     "each ray once, so the second environment receives only the rays that reach "
+                     "it, where the other methods draw --rays fresh rays in every environment.")
+        if os.path.exists(ctx.result("closed-box.csv")):
+            cb = {r["method"]: r for r in rows_of(ctx, "closed-box.csv")}
+            if "R" in cb and "B" in cb:
+                f = lambda r: (f"{float(r['mean_b_over_analytic']):.6f} ± {float(r['std_error']):.6f} "
+                               f"(ledger residual {float(r['max_ledger_residual']):.2g})")
+                line += (f" In the closed box split 2×2×2 its mean B over the analytic value is "
+                         f"{f(cb['R'])}, B's {f(cb['B'])}, one environment's {f(cb['none'])}.")
+        w(line)
     if pareto:
         names = []
         for p in pareto:
@@ -443,6 +546,17 @@ def report(ctx, meta=None):
         f.write("\n".join(L) + "\n")
     lib.log(f"wrote {doc}")
     return doc
+
+
+def num(v):
+    return f"{int(v):,}".replace(",", " ")
+
+
+def int_or_none(v):
+    try:
+        return int(v)
+    except ValueError:
+        return None
 
 
 def int_or(r):
@@ -476,7 +590,7 @@ def meta_info(ctx, start, load_start):
 
 
 STEPS = {"references": references, "quality": quality, "timing": timing, "leak": leak,
-         "error-time": error_time, "report": report}
+         "error-time": error_time, "closed-box": closed_box, "report": report}
 
 
 def main(step, doc):
@@ -486,7 +600,10 @@ def main(step, doc):
         return
     start = time.time()
     load_start = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    for name in ["references", "quality", "leak", "error-time", "timing"]:
+    # Every figure from this run: no run is reused from an earlier one.
+    shutil.rmtree(ctx.runs, ignore_errors=True)
+    os.makedirs(ctx.runs)
+    for name in ["references", "quality", "leak", "error-time", "timing", "closed-box"]:
         t0 = time.time()
         lib.log(f"experiments: {name}")
         STEPS[name](ctx)
