@@ -441,6 +441,18 @@ TEST_F(SceneTest, CoordinatesBeyondFloatRangeAreRefused) {
                   .ok());
 }
 
+TEST_F(SceneTest, SceneFarFromTheOriginForItsSizeIsRefused) {
+  Write("m.mtl", kMtl);
+  Scene scene;
+  // Float steps of 0.25 at 3e6: more than 2.5e-4 of a 600-unit scene.
+  std::string far = "mtllib m.mtl\nusemtl light\nv 3000000 0 0\nv 3000600 0 0\n"
+                    "v 3000000 600 0\nf 1 2 3\n";
+  ExpectError(LoadScene(Write("s.obj", far), &scene), obj(), 6, "far from the origin");
+  std::string near = "mtllib m.mtl\nusemtl light\nv 1000000 0 0\nv 1000600 0 0\n"
+                     "v 1000000 600 0\nf 1 2 3\n";
+  EXPECT_TRUE(LoadScene(Write("s.obj", near), &scene).ok());
+}
+
 TEST_F(SceneTest, RadiosityBeyondFloatRangeIsRefused) {
   Scene scene;
   std::string body = "f 1 2 3 4\n";
