@@ -164,7 +164,7 @@ TEST(StabilityTest, ExtremeCasesStayFiniteAndBalanced) {
       {"ke1e30", Args({"scenes/extreme/cornell-ke1e30.obj"}, few)},
       {"sliver", Args({"scenes/extreme/sliver.obj"}, few)},
       {"grazing", Args({"scenes/extreme/grazing.obj"}, few)},
-      {"one-patch", Args({"scenes/extreme/one-patch.obj"}, few)},
+      {"one-patch", Args({"scenes/extreme/one-patch.obj", "--patch-size", "2"}, few)},
       {"one-ray", {"scenes/cornell.obj", "--rays", "1", "--max-shots", "3000"}},
       {"on-plane", Args({"scenes/extreme/cornell-on-plane.obj", "--envs", "2"}, few)},
       {"mask-r1", Args({"scenes/cornell.obj", "--envs", "2", "--mask-res", "1"}, few)},
