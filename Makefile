@@ -9,6 +9,8 @@
 #   make test-cross     the aarch64 tests and a render under qemu, compared with native
 #   make experiments    the paper's figures and table as numbers: docs/RESULTS.md
 #   make cluster-experiments  (root) simulated Pi clusters, docs/CLUSTER.md
+#   make fuzz FUZZ_SECONDS=N   libFuzzer on the scene loader (clang)
+#   make stability      the stiff and extreme suites: docs/STABILITY.md
 
 CROSS ?=
 CXX := $(CROSS)g++
@@ -96,7 +98,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments bench
+.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments bench fuzz stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -249,6 +251,27 @@ cluster-experiments:
 	tools/install-deps --cluster
 	$(MAKE) all $(BUILD)/mpi-wait.so
 	tools/cluster-experiments
+
+# The scene loader under libFuzzer with ASan + UBSan (clang; tests/fuzz/).
+# New inputs go to build/fuzz/corpus, seeds are read from tests/fuzz/corpus,
+# a crash is written to build/fuzz/crash-* (and make fails).
+FUZZ_SECONDS ?= 30
+FUZZ_CXX ?= clang++
+FUZZ_SRC := tests/fuzz/scene_fuzz.cpp src/scene.cpp src/status.cpp
+build/fuzz/scene_fuzz: $(FUZZ_SRC) include/vismask/scene.h include/vismask/status.h src/geometry_util.h
+	@mkdir -p $(dir $@)
+	$(FUZZ_CXX) -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+	  -Iinclude $(FUZZ_SRC) -o $@
+fuzz: build/fuzz/scene_fuzz
+	@mkdir -p build/fuzz/corpus
+	build/fuzz/scene_fuzz build/fuzz/corpus tests/fuzz/corpus -max_total_time=$(FUZZ_SECONDS) \
+	  -max_len=8192 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=build/fuzz/ -print_final_stats=1
+
+# docs/STABILITY.md and docs/stability/ from one run of the stiff and extreme
+# suites (tools/stability; about 10 minutes on 2 cores).
+stability: deps
+	$(MAKE) $(BUILD)/vismask
+	VISMASK_BIN=$(BUILD)/vismask tools/stability
 
 clean:
 	rm -rf build out

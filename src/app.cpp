@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -41,6 +42,11 @@ const char* const kOutputNames[kNumOutputs] = {"image.png", "image.pfm", "patche
 struct EnvSummary {
   EnergyLedger ledger;
   EnvStats stats;
+  // The stated error of patches.csv's b (see ErrorSums).
+  double relVarArea;   // sum over patches and channels with b > 0 of area * var / b^2
+  double weight;       // sum of the areas counted there
+  double bArea[3];     // sum of b * area, as written (with the correction when on)
+  double ambientArea[3];  // sum of kd * ambient * area
   uint64_t arenaBytes;
   uint64_t patches;
   uint64_t vertices;
@@ -87,6 +93,7 @@ struct Render {
   os::OutFile files[kNumOutputs];
   TextWriter convergence;
   double initSeconds = 0.0;
+  double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
   uint64_t predictedBytes = 0;  // this rank's arenas, as measured before they were made
 
   bool isRoot() const { return transport->rank() == 0; }
@@ -177,7 +184,12 @@ Status PrepareScene(const Options& o, Prepared* p) {
   for (uint32_t i = 0; i < p->part.scene.polygons.size(); ++i)
     p->pieces[p->part.env[i]].push_back(i);
   EnvOptions& e = p->envOptions;
-  e.rayEpsilon = 1e-6f * glm::length(extent);
+  // 1e-6 of the scene's size, and at least 8 float steps of its largest
+  // coordinate, so that the lift survives rounding far from the origin.
+  glm::vec3 mag = glm::max(glm::abs(p->scene.bounds.lo), glm::abs(p->scene.bounds.hi));
+  float largest = std::fmax(mag.x, std::fmax(mag.y, mag.z));
+  e.rayEpsilon = std::fmax(1e-6f * glm::length(extent),
+                           8.0f * std::numeric_limits<float>::epsilon() * largest);
   e.rays = o.rays;
   e.seed = o.seed;
   e.maskMethod = o.maskMethod;
@@ -281,7 +293,33 @@ int Init(Render* r) {
   return kExitOk;
 }
 
-PatchRecord RecordOf(const Environment& env, size_t i) {
+// The radiosity patches.csv holds for patch i: the solved b, plus kd times
+// the ambient term with --correct-unshot on.
+double OutputB(const Render& r, const Environment& env, size_t i, int c) {
+  double b = env.energy()[i].b[c];
+  if (r.options.correctUnshot) b += static_cast<double>(env.patches()[i].kd[c]) * r.ambientB[c];
+  return b;
+}
+
+// The stated error's sums over one environment's patches: the Monte Carlo
+// variance of each b relative to b (area-weighted), b * area, and the
+// ambient term's share.
+void ErrorSums(const Render& r, const Environment& env, EnvSummary* s) {
+  for (size_t i = 0; i < env.patches().size(); ++i) {
+    const Patch& p = env.patches()[i];
+    for (int c = 0; c < 3; ++c) {
+      double b = OutputB(r, env, i, c);
+      s->bArea[c] += b * p.area;
+      s->ambientArea[c] += static_cast<double>(p.kd[c]) * r.ambientB[c] * p.area;
+      if (b > 0.0) {
+        s->relVarArea += p.area * env.energy()[i].var[c] / (b * b);
+        s->weight += p.area;
+      }
+    }
+  }
+}
+
+PatchRecord RecordOf(const Render& r, const Environment& env, size_t i) {
   const Patch& p = env.patches()[i];
   PatchRecord rec{};
   rec.id = p.globalId;
@@ -294,7 +332,7 @@ PatchRecord RecordOf(const Environment& env, size_t i) {
     rec.n[a] = p.normal[a];
     rec.kd[a] = p.kd[a];
     rec.ke[a] = p.ke[a];
-    rec.b[a] = env.energy()[i].b[a];
+    rec.b[a] = OutputB(r, env, i, a);
   }
   rec.area = p.area;
   return rec;
@@ -317,7 +355,7 @@ void WritePatchesCsv(Render* r) {
     size_t n = 0;
     for (Environment* env : r->envPtrs) {
       for (size_t i = 0; i < env->patches().size(); ++i) {
-        r->records[n++] = RecordOf(*env, i);
+        r->records[n++] = RecordOf(*r, *env, i);
         if (n == kPatchChunk) {
           t->Send(0, r->records.data(), n * sizeof(PatchRecord));
           n = 0;
@@ -330,7 +368,7 @@ void WritePatchesCsv(Render* r) {
   TextWriter w(&r->files[kPatchesCsv], r->textBuffer);
   w.Printf("id,env,cx,cy,cz,nx,ny,nz,area,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b,b_r,b_g,b_b\n");
   for (Environment* env : r->envPtrs)
-    for (size_t i = 0; i < env->patches().size(); ++i) WriteRecord(&w, RecordOf(*env, i));
+    for (size_t i = 0; i < env->patches().size(); ++i) WriteRecord(&w, RecordOf(*r, *env, i));
   for (int src = 1; src < t->size(); ++src) {
     t->Recv(src, &count, sizeof count);
     while (count > 0) {
@@ -388,7 +426,9 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"reference\": ");
   if (o.reference.empty()) w.Printf("null");
   else JsonString(&w, o.reference.c_str());
-  w.Printf(",\n    \"error_every\": %llu\n  },\n", static_cast<unsigned long long>(o.errorEvery));
+  w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
+  w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
+  w.Printf("    \"stop_error\": %.17g\n  },\n", o.stopError);
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {
     patches += e.patches;
@@ -430,8 +470,32 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   // Against --reference (null without one): the final image's relative RMSE.
   if (o.reference.empty()) w.Printf("    \"relative_rmse\": null,\n");
   else w.Printf("    \"relative_rmse\": %.17g,\n", res.relativeRmse);
-  w.Printf("    \"error_measurements\": %llu\n  },\n",
+  w.Printf("    \"error_measurements\": %llu,\n",
            static_cast<unsigned long long>(res.errorMeasurements));
+  // The stated error of patches.csv's b: the Monte Carlo standard error
+  // relative to b (area-weighted RMS over patches and channels), and the
+  // ambient term's share of the total radiosity (what the still-unshot power
+  // adds: added to b with --correct-unshot on, missing from it otherwise).
+  double relVarArea = 0.0, weight = 0.0, bArea = 0.0, ambientArea = 0.0;
+  for (const EnvSummary& e : r->summary) {
+    relVarArea += e.relVarArea;
+    weight += e.weight;
+    for (int c = 0; c < 3; ++c) {
+      bArea += e.bArea[c];
+      ambientArea += e.ambientArea[c];
+    }
+  }
+  double radiosity = o.correctUnshot ? bArea : bArea + ambientArea;
+  w.Printf("    \"ambient\": [%.17g, %.17g, %.17g],\n", r->ambientB[0], r->ambientB[1],
+           r->ambientB[2]);
+  w.Printf("    \"ambient_share\": %.17g,\n", radiosity > 0.0 ? ambientArea / radiosity : 0.0);
+  double mc = weight > 0.0 ? std::sqrt(relVarArea / weight) : 0.0;
+  w.Printf("    \"mc_relative_error\": %.17g,\n", mc);
+  // The stated error: the Monte Carlo error and the bias estimate of the
+  // power not yet shot (BiasEstimate), combined in quadrature.
+  w.Printf("    \"bias_estimate\": %.17g,\n", res.biasEstimate);
+  w.Printf("    \"stated_error\": %.17g\n  },\n",
+           std::sqrt(mc * mc + res.biasEstimate * res.biasEstimate));
   EnergyLedger total;
   for (const EnvSummary& e : r->summary) {
     for (int c = 0; c < 3; ++c) {
@@ -487,7 +551,7 @@ void RenderImage(Render* r) {
   for (uint32_t i = 0; i < r->layout.perRank; ++i) r->ambientMine[i] = AmbientReport{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
   GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
-  double ambient[3];
+  double* ambient = r->ambientB;
   AmbientTerm(r->ambient, ambient);
   r->fb.Clear();
   for (Environment* env : r->envPtrs) {
@@ -533,8 +597,16 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   for (uint32_t i = 0; i < r->layout.perRank; ++i) r->summaryMine[i] = EnvSummary{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) {
     const Environment& e = *r->envPtrs[i];
-    r->summaryMine[i] = EnvSummary{e.ledger(), e.stats(), e.arenaCapacity(), e.patches().size(),
-                                   e.vertices().size(), e.grid().cellCount(), e.grid().plan().refs};
+    EnvSummary& s = r->summaryMine[i];
+    s = EnvSummary{};
+    s.ledger = e.ledger();
+    s.stats = e.stats();
+    ErrorSums(*r, e, &s);
+    s.arenaBytes = e.arenaCapacity();
+    s.patches = e.patches().size();
+    s.vertices = e.vertices().size();
+    s.gridCells = e.grid().cellCount();
+    s.gridRefs = e.grid().plan().refs;
   }
   GatherByEnv(r, r->summaryMine, r->summaryAll, r->summary);
   if (!r->isRoot()) return kExitOk;
@@ -699,6 +771,8 @@ int Main(int argc, const char* const* argv) {
   so.stopUnshot = r->options.stopUnshot;
   so.maxShots = r->options.maxShots;
   so.maxSeconds = r->options.maxSeconds;
+  so.stopError = r->options.stopError;
+  so.correctUnshot = r->options.correctUnshot;
   so.quiet = r->options.quiet;
   ReferenceProbe probe(r.get());
   if (!r->options.reference.empty()) so.probe = &probe;

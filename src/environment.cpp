@@ -119,10 +119,13 @@ void Environment::Build() {
   Layout(arena_, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
   CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
   totalArea_ = 0.0;
+  kdArea_ = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
     patches_[i] = staged_[i];
     geom_[i] = MakePatchGeom(staged_[i]);
     totalArea_ += staged_[i].area;
+    const glm::vec3& kd = staged_[i].kd;
+    kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
   }
   for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
   grid_.Build(patches_, geom_);
@@ -140,9 +143,11 @@ void Environment::Reset() {
     PatchEnergy& e = energy_[i];
     for (int c = 0; c < 3; ++c) {
       e.b[c] = p.ke[c];
+      e.var[c] = 0.0;
       e.unshot[c] = static_cast<double>(p.ke[c]) * p.area;
       ledger_.emitted[c] += e.unshot[c];
       ledger_.unshot[c] += e.unshot[c];
+      ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
     tree_.Set(i, KeyOf(e));
@@ -159,8 +164,10 @@ void Environment::Receive(uint32_t j, const double share[3]) {
   for (int c = 0; c < 3; ++c) {
     double reflected = share[c] * p.kd[c];
     e.b[c] += reflected * invArea;
+    e.var[c] += (reflected * invArea) * (reflected * invArea);  // one ray's term
     e.unshot[c] += reflected;
     ledger_.unshot[c] += reflected;
+    ledger_.radiosity[c] += reflected;
     ledger_.absorbed[c] += share[c] - reflected;
   }
   tree_.Increase(j, KeyOf(e));
@@ -212,9 +219,14 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
     float v1 = rng.NextFloat(), v2 = rng.NextFloat();
     glm::vec3 local = CosineDirection(v1, v2);
     Ray ray;
-    ray.o = sampler.Point(u0, u1, u2);
+    // The origin is lifted off the shooter's plane and every hit from t = 0
+    // counts (the shooter itself is skipped): a ray from near a corner hits
+    // the wall beside it however close. A tMin > 0 instead let such rays
+    // through the wall and out of a closed box, a bias of ~4e-6 of the shot
+    // power a bounce, which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
+    ray.o = sampler.Point(u0, u1, u2) + options_.rayEpsilon * sampler.frame.n;
     ray.d = sampler.frame.ToWorld(local);
-    ray.tMin = options_.rayEpsilon;
+    ray.tMin = 0.0f;
     ray.tMax = std::numeric_limits<float>::infinity();
     uint32_t pixel = 0;
     if (foreign) {
@@ -273,7 +285,8 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
         if (hitPixels.IsOpen(p)) out->Close(p);
         continue;
       }
-      Ray ray{centre, sampler.frame.ToWorld(MaskPixelCentre(p, shape_.res)), options_.rayEpsilon,
+      Ray ray{centre + options_.rayEpsilon * sampler.frame.n,
+              sampler.frame.ToWorld(MaskPixelCentre(p, shape_.res)), 0.0f,
               std::numeric_limits<float>::infinity()};
       ++cast;
       if (grid_.Occluded(ray, skip)) out->Close(p);
@@ -297,10 +310,10 @@ void Environment::TraceAlive(const Patch& shooter, uint32_t skip, const double p
     float u0 = rng.NextFloat(), u1 = rng.NextFloat(), u2 = rng.NextFloat();
     float v1 = rng.NextFloat(), v2 = rng.NextFloat();
     if (!alive->IsOpen(r)) continue;  // absorbed or escaped upstream
-    Ray ray;
-    ray.o = sampler.Point(u0, u1, u2);
+    Ray ray;  // lifted off the shooter's plane, hits from t = 0, as in Distribute
+    ray.o = sampler.Point(u0, u1, u2) + options_.rayEpsilon * sampler.frame.n;
     ray.d = sampler.frame.ToWorld(CosineDirection(v1, v2));
-    ray.tMin = options_.rayEpsilon;
+    ray.tMin = 0.0f;
     ray.tMax = std::numeric_limits<float>::infinity();
     if (foreign) {
       // Every environment the ray crossed before this one is upstream, and

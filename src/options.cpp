@@ -43,6 +43,16 @@ render options:
                        (same size) when the solve ends, in convergence.csv
                        and run.json; the time it takes is not solve time
   --error-every K      with --reference: also every K shots during the solve
+  --correct-unshot on|off
+                       on: patches.csv's b includes kd * the ambient term
+                       (Cohen's estimate of what the still-unshot power will
+                       add, which the image always shows); default off
+  --stop-error E       also stop when the estimated relative bias of b from
+                       the power not yet shot is below E, 0 < E < 1: the
+                       share rho*U/(1-rho) of the radiosity power still to
+                       come (times 1-rho with --correct-unshot on), which
+                       unlike --stop-unshot counts the 1/(1-rho)
+                       amplification of stiff scenes (default: off)
 
 local environments and visibility masks:
   --envs NX[xNY[xNZ]]  split the scene's box into a grid of environments
@@ -257,6 +267,12 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--error-every") {
       if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive number of shots");
       o->errorEvery = u;
+    } else if (a == "--stop-error") {
+      if (!ParseDouble(v, &d) || !(d > 0.0) || d >= 1.0) return Bad(a, v, "a number in (0, 1)");
+      o->stopError = d;
+    } else if (a == "--correct-unshot") {
+      if (v != "on" && v != "off") return Bad(a, v, "on or off");
+      o->correctUnshot = v == "on";
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);

@@ -32,6 +32,21 @@ constexpr double kRepeatTol = 1e-6;     // min distance between two corners
 constexpr double kAreaTol = 1e-6;       // min area, times size^2
 constexpr double kCollinearTol = 1e-5;  // min |sin| of the angle at a corner
 
+// What float geometry and float images can carry (docs/STABILITY.md). Ray
+// tests multiply coordinates and square lengths in float (max 3.4e38, least
+// normal 1.2e-38), so coordinates stay within 1e15 and faces above 1e-15 in
+// size; radiosity is bounded by max Ke / (1 - max Kd), and the image holds it
+// in float, so that bound stays within 1e36, and above 1e-30 so that the
+// image is not all denormals.
+constexpr double kMaxCoordinate = 1e15;
+// A scene far from the origin for its size: its float coordinates step by
+// more than this share of its extent (Cornell moved by 3e6 in each axis:
+// steps of 0.25 on a 559 box, image 0.56% off; by 1e7: 55% off).
+constexpr double kMaxStepShare = 2.5e-4;
+constexpr double kMinFaceSize = 1e-15;
+constexpr double kMaxRadiosity = 1e36;
+constexpr double kMinRadiosity = 1e-30;
+
 using Tokens = std::vector<std::string>;
 
 bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
@@ -61,13 +76,29 @@ std::string Num(double x) {
   return buf;
 }
 
-// Reads all lines of `path`; returns an error message, empty on success.
-std::string ReadLines(const std::string& path, std::vector<std::string>* lines) {
+// Splits text into lines as std::getline does: at '\n', the last line kept
+// even without one, no empty line after a final '\n'.
+void SplitLines(const std::string& text, std::vector<std::string>* lines) {
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    lines->push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+}
+
+// Reads a whole file; returns an error message, empty on success.
+std::string ReadText(const std::string& path, std::string* text) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return "cannot open";
-  std::string line;
-  while (std::getline(in, line)) lines->push_back(line);
+  // istream::read, not istreambuf_iterator: a read error (a directory)
+  // sets badbit instead of throwing.
+  std::string all;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) all.append(buf, static_cast<size_t>(in.gcount()));
   if (in.bad()) return "cannot read";
+  *text = std::move(all);
   return "";
 }
 
@@ -192,23 +223,26 @@ std::string FinishPolygon(Polygon* p) {
 
 class Loader {
  public:
-  explicit Loader(Scene* scene) : scene_(scene) {}
-  Status LoadObj(const std::string& path);
+  Loader(Scene* scene, const SceneFileReader& readMtl, std::vector<std::string>* warnings)
+      : scene_(scene), readMtl_(readMtl), warnings_(warnings) {}
+  Status LoadObj(const std::string& path, const std::string& text);
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
 
   Scene* scene_;
+  const SceneFileReader& readMtl_;
+  std::vector<std::string>* warnings_;  // null: print to stderr
   std::vector<glm::vec3> vertices_;
   std::map<std::string, std::pair<uint32_t, std::string>> materials_;  // index, "file:line"
   std::set<std::string> loadedMtls_;
   std::set<std::string> warnedKeys_;
 };
 
-Status Loader::LoadObj(const std::string& path) {
+Status Loader::LoadObj(const std::string& path, const std::string& text) {
   std::vector<std::string> lines;
-  std::string err = ReadLines(path, &lines);
-  if (!err.empty()) return Status::At(path, 0, err + " file");
+  SplitLines(text, &lines);
+  std::string err;
   bool haveMaterial = false;
   uint32_t material = 0;
   for (size_t i = 0; i < lines.size(); ++i) {
@@ -264,9 +298,11 @@ Status Loader::LoadObj(const std::string& path) {
 
 Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int objLine) {
   if (!loadedMtls_.insert(path).second) return Status::Ok();
-  std::vector<std::string> lines;
-  std::string err = ReadLines(path, &lines);
+  std::string text;
+  std::string err = readMtl_(path, &text);
   if (!err.empty()) return Status::At(objPath, objLine, err + " MTL file '" + path + "'");
+  std::vector<std::string> lines;
+  SplitLines(text, &lines);
   std::vector<Material>& materials = scene_->materials;
   bool haveMaterial = false;
   for (size_t i = 0; i < lines.size(); ++i) {
@@ -300,8 +336,9 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       }
       (key == "Kd" ? materials.back().kd : materials.back().ke) = glm::vec3(rgb[0], rgb[1], rgb[2]);
     } else if (warnedKeys_.insert(key).second) {
-      std::fprintf(stderr, "%s:%d: warning: ignoring MTL key '%s'\n", path.c_str(), line,
-                   key.c_str());
+      std::string w = path + ":" + std::to_string(line) + ": warning: ignoring MTL key '" + key + "'";
+      if (warnings_) warnings_->push_back(w);
+      else std::fprintf(stderr, "%s\n", w.c_str());
     }
   }
   return Status::Ok();
@@ -310,10 +347,19 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
 }  // namespace
 
 Status LoadScene(const std::string& objPath, Scene* scene) {
+  std::string text;
+  std::string err = ReadText(objPath, &text);
+  if (!err.empty()) return Status::At(objPath, 0, err + " file");
+  return LoadSceneFromText(objPath, text, ReadText, scene);
+}
+
+Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
+                         const SceneFileReader& readMtl, Scene* scene,
+                         std::vector<std::string>* warnings) {
   Scene result;
   result.objPath = objPath;
-  Loader loader(&result);
-  Status s = loader.LoadObj(objPath);
+  Loader loader(&result, readMtl, warnings);
+  Status s = loader.LoadObj(objPath, objText);
   if (!s.ok()) return s;
   bool emits = false;
   for (const Polygon& p : result.polygons) {
@@ -321,6 +367,29 @@ Status LoadScene(const std::string& objPath, Scene* scene) {
     emits = emits || ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
   }
   if (!emits) return Status::At(objPath, 0, "no emitter: no face has a material with Ke > 0");
+  // Ranges: refused here, at init, rather than solved into Inf or zeros.
+  double maxKd = 0.0, maxKe = 0.0;
+  int keLine = 0;
+  for (const Polygon& p : result.polygons) {
+    for (const glm::vec3& v : p.corners)
+      for (int a = 0; a < 3; ++a)
+        if (std::fabs(v[a]) > kMaxCoordinate)
+          return Status::At(objPath, p.line,
+                            "coordinate " + Num(v[a]) + " is beyond +-" + Num(kMaxCoordinate) +
+                                " (float ray tests would overflow); scale the scene down");
+    if (std::sqrt(p.area) < kMinFaceSize)
+      return Status::At(objPath, p.line,
+                        "face of area " + Num(p.area) + " is below " + Num(kMinFaceSize) +
+                            " squared (float ray tests would underflow); scale the scene up");
+    const Material& m = result.materials[p.material];
+    for (int c = 0; c < 3; ++c) {
+      maxKd = std::max(maxKd, static_cast<double>(m.kd[c]));
+      if (m.ke[c] > maxKe) {
+        maxKe = m.ke[c];
+        keLine = p.line;
+      }
+    }
+  }
   result.bounds.lo = result.bounds.hi = result.polygons[0].corners[0];
   for (const Polygon& p : result.polygons) {
     for (const glm::vec3& v : p.corners) {
@@ -328,6 +397,33 @@ Status LoadScene(const std::string& objPath, Scene* scene) {
       result.bounds.hi = glm::max(result.bounds.hi, v);
     }
   }
+  glm::vec3 size = result.bounds.hi - result.bounds.lo;
+  double extent = std::max(size.x, std::max(size.y, size.z));
+  float largest = 0.0f;
+  int farLine = 0;
+  for (const Polygon& p : result.polygons)
+    for (const glm::vec3& v : p.corners)
+      for (int a = 0; a < 3; ++a)
+        if (std::fabs(v[a]) > largest) {
+          largest = std::fabs(v[a]);
+          farLine = p.line;
+        }
+  double step = std::nextafter(largest, std::numeric_limits<float>::infinity()) - largest;
+  if (step > kMaxStepShare * extent)
+    return Status::At(objPath, farLine,
+                      "the scene is far from the origin for its size: coordinates up to " +
+                          Num(largest) + " step by " + Num(step) + " in float, more than " +
+                          Num(kMaxStepShare) + " of its extent " + Num(extent) +
+                          "; move it towards the origin");
+  double bound = maxKe / (1.0 - maxKd);
+  if (bound > kMaxRadiosity)
+    return Status::At(objPath, keLine,
+                      "radiosity may reach " + Num(bound) + " (max Ke / (1 - max Kd)), beyond " +
+                          Num(kMaxRadiosity) + " that the float image can hold; scale Ke down");
+  if (maxKe < kMinRadiosity)
+    return Status::At(objPath, keLine,
+                      "brightest Ke " + Num(maxKe) + " is below " + Num(kMinRadiosity) +
+                          " (the float image would underflow); scale Ke up");
   *scene = std::move(result);
   return Status::Ok();
 }

@@ -87,6 +87,9 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
     r.shots = e->stats().shots + e->stats().foreignShots;
     r.recordsCreated = e->stats().recordsCreated;
     r.foreignShots = e->stats().foreignShots;
+    r.radiosity = Sum3(e->ledger().radiosity);
+    r.area = e->totalArea();
+    r.kdArea = e->kdArea();
   }
   x->mine[0].elapsed = elapsed;
   x->mine[0].waited = *waited;
@@ -115,6 +118,9 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
     tot.emitted += r.emitted;
     tot.shots += r.shots;
     tot.recordsCreated += r.recordsCreated;
+    tot.radiosity += r.radiosity;
+    tot.kdArea += r.kdArea;
+    tot.area += r.area;
   }
   for (uint32_t env = 0; env < layout.total; ++env) {
     const EnvReport& r = report(env);
@@ -197,6 +203,10 @@ bool ShouldStop(const RoundTotals& totals, const SolveOptions& options, SolveRes
     result->reason = StopReason::kConverged;
     return true;
   }
+  if (options.stopError > 0.0 && result->biasEstimate < options.stopError) {
+    result->reason = StopReason::kConverged;
+    return true;
+  }
   if (options.maxShots > 0 && result->shots >= options.maxShots) {
     result->reason = StopReason::kMaxShots;
     return true;
@@ -231,6 +241,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   uint64_t measuredAt = ~0ull;  // the shot count last measured
   RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
+  result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
   if (convergence)
     convergence->Printf("shot,seconds,unshot_fraction%s\n",
                         probe ? ",relative_rmse,error_seconds" : "");
@@ -265,6 +276,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     result.criticalSeconds += totals.roundCpuMax;
     result.shots = totals.shots;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
+    result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
     // A ready foreign shooter exists whenever any queue holds one, so a round
     // without a shot means no power is left to shoot (--stop-unshot 0).
     if (result.shots == before) {
@@ -288,6 +300,14 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   result.seconds = clock();
   progress.Update(os::Seconds(), result.seconds, result.shots, result.unshotFraction, true);
   return result;
+}
+
+double BiasEstimate(const RoundTotals& t, bool corrected) {
+  double rho = t.area > 0.0 ? t.kdArea / t.area : 0.0;
+  double future = t.unshot * rho / (1.0 - rho);
+  double total = t.radiosity + future;
+  double share = total > 0.0 ? future / total : 0.0;
+  return corrected ? share * (1.0 - rho) : share;
 }
 
 AmbientReport AmbientOf(const Environment& env) {

@@ -156,6 +156,11 @@ TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
       {{"render", "scenes/cornell.obj", "--camera", "1,2,3"}, "--camera"},
       {{"render", "scenes/cornell.obj", "--camera", "0,0,-5,0,0,0,0,1,0,40,1"}, "--camera"},
       {{"render", "scenes/cornell.obj", "--seed", "-1"}, "--seed"},
+      {{"render", "scenes/cornell.obj", "--correct-unshot", "maybe"}, "--correct-unshot"},
+      {{"render", "scenes/cornell.obj", "--stop-error", "0"}, "--stop-error"},
+      {{"render", "scenes/cornell.obj", "--stop-error", "1"}, "--stop-error"},
+      {{"render", "scenes/cornell.obj", "--stop-error", "nan"}, "--stop-error"},
+      {{"render", "scenes/cornell.obj", "--stop-error"}, "missing value"},
       {{"render"}, "no scene"},
       {{"frobnicate"}, "unknown command"},
       {{"render", dir.File("missing.obj")}, "missing.obj"},
@@ -182,6 +187,35 @@ TEST(RenderTest, MalformedSceneNamesFileAndLine) {
   EXPECT_FALSE(FileExists(dir.File("out")));
 }
 
+// A truncated MTL, an OBJ cut mid-face and an unsolvable range: each names
+// its file and line, exits 2 and writes nothing.
+TEST(RenderTest, TruncatedFilesNameFileAndLine) {
+  TempDir dir;
+  struct Case {
+    const char* mtl;
+    const char* obj;
+    const char* file;  // "obj" or "mtl"
+    int line;
+  };
+  const char* head = "mtllib s.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  const Case cases[] = {
+      {"newmtl a\nKd 0.5 0.5 0.5\nKe 1 1", "f 1 2 3\n", "mtl", 3},
+      {"newmtl a\nKd 0.5 0", "f 1 2 3\n", "mtl", 2},
+      {"newmtl a\nKd 0.5 0.5 0.5\nKe 1 1 1\n", "f 1 2", "obj", 6},
+      {"newmtl a\nKd 0.5 0.5 0.5\nKe 1 1 1\n", "f 1 2 3/", "obj", 6},
+      {"newmtl a\nKd 0.99 0.5 0.5\nKe 1e35 1 1\n", "f 1 2 3\n", "obj", 6},
+  };
+  for (const Case& c : cases) {
+    test::WriteFile(dir.File("s.mtl"), c.mtl);
+    test::WriteFile(dir.File("s.obj"), std::string(head) + c.obj);
+    auto r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out")});
+    EXPECT_EQ(r.code, 2) << c.obj;
+    std::string where = dir.File(std::string("s.") + c.file) + ":" + std::to_string(c.line) + ": ";
+    EXPECT_EQ(r.err.rfind(where, 0), 0u) << r.err;
+    EXPECT_FALSE(FileExists(dir.File("out")));
+  }
+}
+
 TEST(RenderTest, HelpListsEveryOption) {
   testing::internal::CaptureStdout();
   auto r = RunMain({"--help"});
@@ -189,7 +223,7 @@ TEST(RenderTest, HelpListsEveryOption) {
   EXPECT_EQ(r.code, 0);
   for (const char* flag : {"--out", "--patch-size", "--rays", "--seed", "--stop-unshot",
                            "--max-shots", "--max-seconds", "--width", "--height", "--camera",
-                           "--exposure", "--quiet"})
+                           "--exposure", "--quiet", "--correct-unshot", "--stop-error"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag;
 }
 

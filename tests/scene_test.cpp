@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -350,6 +351,139 @@ TEST_F(SceneTest, DuplicateMaterial) {
 TEST_F(SceneTest, NoEmitter) {
   Scene scene;
   ExpectError(LoadBody("usemtl white\nf 1 2 3\n", &scene), obj(), 0, "emitter");
+}
+
+}  // namespace
+}  // namespace vismask
+
+// --- In-memory loading, ranges, hostile input (issue #8) ---------------------
+
+namespace vismask {
+namespace {
+
+// The fuzz target's split: OBJ text, then NUL and the text every MTL reads as.
+Status LoadFuzzInput(const std::string& input, Scene* scene) {
+  size_t nul = input.find('\0');
+  std::string obj = input.substr(0, nul), mtl;
+  bool haveMtl = nul != std::string::npos;
+  if (haveMtl) mtl = input.substr(nul + 1);
+  std::vector<std::string> warnings;
+  return LoadSceneFromText(
+      "fuzz.obj", obj,
+      [&](const std::string&, std::string* text) -> std::string {
+        if (!haveMtl) return "cannot open";
+        *text = mtl;
+        return "";
+      },
+      scene, &warnings);
+}
+
+TEST_F(SceneTest, FromTextMatchesTheFile) {
+  Scene a, b;
+  ASSERT_TRUE(LoadScene("scenes/cornell.obj", &a).ok());
+  std::ifstream in("scenes/cornell.obj", std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::string> asked;
+  Status s = LoadSceneFromText(
+      "scenes/cornell.obj", text,
+      [&](const std::string& path, std::string* t) -> std::string {
+        asked.push_back(path);
+        std::ifstream m(path, std::ios::binary);
+        t->assign((std::istreambuf_iterator<char>(m)), std::istreambuf_iterator<char>());
+        return "";
+      },
+      &b);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_EQ(asked, std::vector<std::string>{"scenes/cornell.mtl"});
+  ASSERT_EQ(a.polygons.size(), b.polygons.size());
+  for (size_t i = 0; i < a.polygons.size(); ++i) {
+    EXPECT_EQ(a.polygons[i].corners, b.polygons[i].corners);
+    EXPECT_EQ(a.polygons[i].line, b.polygons[i].line);
+  }
+}
+
+TEST_F(SceneTest, TruncatedMtlNamesItsLine) {
+  Write("m.mtl", "newmtl light\nKd 0.5 0.5");  // cut off mid-statement, no final newline
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", kHead + std::string("f 1 2 3\n")), &scene), mtl(), 2,
+              "Kd");
+  Write("m.mtl", "newmtl");  // cut off before the name
+  ExpectError(LoadScene(obj(), &scene), mtl(), 1, "newmtl");
+  Write("m.mtl", "newmtl other\nKd 0.5 0.5 0.5\n");  // cut off before 'light'
+  ExpectError(LoadScene(obj(), &scene), obj(), 2, "undefined material");
+}
+
+TEST_F(SceneTest, DirectoryIsUnreadableNotAnException) {
+  std::filesystem::create_directory(dir_ + "d.obj");
+  Scene scene;
+  ExpectError(LoadScene(dir_ + "d.obj", &scene), dir_ + "d.obj", 0, "cannot");
+  std::filesystem::create_directory(dir_ + "m.mtl");
+  ExpectError(LoadScene(Write("s.obj", kHead + std::string("f 1 2 3\n")), &scene), obj(), 1,
+              "cannot");
+}
+
+// Ranges float geometry and float images cannot carry are refused at the
+// face that exceeds them (docs/STABILITY.md).
+TEST_F(SceneTest, CoordinatesBeyondFloatRangeAreRefused) {
+  Write("m.mtl", kMtl);
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 2e15 0 0\n"
+                                       "v 0 2e15 0\nf 1 2 3\n"),
+                        &scene),
+              obj(), 6, "beyond");
+  ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1e-16 0 0\n"
+                                       "v 0 1e-16 0\nf 1 2 3\n"),
+                        &scene),
+              obj(), 6, "below");
+  ASSERT_TRUE(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1e14 0 0\n"
+                                       "v 0 1e14 0\nf 1 2 3\n"),
+                        &scene)
+                  .ok());
+}
+
+TEST_F(SceneTest, SceneFarFromTheOriginForItsSizeIsRefused) {
+  Write("m.mtl", kMtl);
+  Scene scene;
+  // Float steps of 0.25 at 3e6: more than 2.5e-4 of a 600-unit scene.
+  std::string far = "mtllib m.mtl\nusemtl light\nv 3000000 0 0\nv 3000600 0 0\n"
+                    "v 3000000 600 0\nf 1 2 3\n";
+  ExpectError(LoadScene(Write("s.obj", far), &scene), obj(), 6, "far from the origin");
+  std::string near = "mtllib m.mtl\nusemtl light\nv 1000000 0 0\nv 1000600 0 0\n"
+                     "v 1000000 600 0\nf 1 2 3\n";
+  EXPECT_TRUE(LoadScene(Write("s.obj", near), &scene).ok());
+}
+
+TEST_F(SceneTest, RadiosityBeyondFloatRangeIsRefused) {
+  Scene scene;
+  std::string body = "f 1 2 3 4\n";
+  Write("m.mtl", "newmtl light\nKd 0.9 0.9 0.9\nKe 1e35 1 1\n");  // bound 1e36: accepted
+  EXPECT_TRUE(LoadScene(Write("s.obj", kHead + body), &scene).ok());
+  Write("m.mtl", "newmtl light\nKd 0.99 0.5 0.5\nKe 1e35 1 1\n");  // 1e37
+  ExpectError(LoadScene(obj(), &scene), obj(), 7, "radiosity may reach");
+  Write("m.mtl", "newmtl light\nKd 0.5 0.5 0.5\nKe 1e-31 0 0\n");
+  ExpectError(LoadScene(obj(), &scene), obj(), 7, "below");
+}
+
+// Every seed of the fuzz corpus through the fuzz target's entry: loaded, or
+// refused with a line (0 only for scene-wide errors), never a crash.
+TEST_F(SceneTest, FuzzCorpusLoadsOrFailsWithALine) {
+  int loaded = 0, refused = 0;
+  for (const auto& entry : std::filesystem::directory_iterator("tests/fuzz/corpus")) {
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::string input((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    Scene scene;
+    Status s = LoadFuzzInput(input, &scene);
+    if (s.ok()) {
+      ++loaded;
+      EXPECT_FALSE(scene.polygons.empty()) << entry.path();
+    } else {
+      ++refused;
+      EXPECT_FALSE(s.file().empty()) << entry.path() << ": " << s.ToString();
+      EXPECT_NE(s.ToString().find(s.file() + ":"), std::string::npos) << s.ToString();
+    }
+  }
+  EXPECT_GE(loaded, 5);
+  EXPECT_GE(refused, 10);
 }
 
 }  // namespace

@@ -39,6 +39,7 @@ struct EnergyLedger {
   // that entered it from one (a ray enters exactly the next environment on
   // its path, so the sum over environments is the power not yet traced).
   double inFlight[3] = {0, 0, 0};
+  double radiosity[3] = {0, 0, 0}; // sum of b * area over local patches (emitted + reflected)
 };
 
 // Counters of one environment's work.
@@ -67,7 +68,7 @@ struct EnvFootprint {
 
 struct EnvOptions {
   float gridDensity = 4.0f;  // grid cells per patch (Cleary's lambda)
-  float rayEpsilon = 0.0f;   // ray tMin in scene units
+  float rayEpsilon = 0.0f;   // ray origins lifted this far off the shooter's plane (scene units)
   uint32_t rays = 4096;      // rays per shot
   uint64_t seed = 1;         // run seed
   MaskMethod maskMethod = MaskMethod::kB;
@@ -136,6 +137,7 @@ class Environment {
   const EnergyLedger& ledger() const { return ledger_; }
   const EnvStats& stats() const { return stats_; }
   double totalArea() const { return totalArea_; }
+  double kdArea() const { return kdArea_; }  // sum of kd * area, channels averaged
   size_t arenaCapacity() const { return arena_.capacity(); }
   size_t arenaUsed() const { return arena_.used(); }
 
@@ -213,6 +215,7 @@ class Environment {
   EnergyLedger ledger_;
   EnvStats stats_;
   double totalArea_ = 0.0;
+  double kdArea_ = 0.0;
   EnvFootprint footprint_;
   // Between Prepare and Build only.
   std::vector<Patch> staged_;

@@ -60,6 +60,8 @@ struct Patch {
 struct PatchEnergy {
   double b[3];       // radiosity (W/m^2): emitted + received and reflected
   double unshot[3];  // unshot power (W): B*area not yet distributed
+  double var[3];     // Monte Carlo variance of b: the sum over the rays it
+                     // received of (kd * share / area)^2 (docs/DESIGN.md)
 };
 
 // Builds a patch's ray-test data from its corners and normal.

@@ -4,6 +4,7 @@
 // have taken their patches.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,5 +51,19 @@ struct Scene {
 // no emitter at all (line 0). Unknown MTL keys are ignored with one warning
 // each on stderr.
 Status LoadScene(const std::string& objPath, Scene* scene);
+
+// Reads the file at `path` into *text; returns an error message ("cannot
+// open", ...), empty on success.
+using SceneFileReader = std::function<std::string(const std::string& path, std::string* text)>;
+
+// LoadScene on text already in memory: `objText` is the OBJ named `objPath`
+// (the name errors carry; MTL paths are relative to its directory), and
+// `readMtl` supplies each MTL file it names. The same parser and checks as
+// LoadScene, which is this with the file's text and a file reader (the
+// fuzz target, tests/fuzz/, feeds it arbitrary bytes). Warnings go to
+// `warnings` when given, else to stderr.
+Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
+                         const SceneFileReader& readMtl, Scene* scene,
+                         std::vector<std::string>* warnings = nullptr);
 
 }  // namespace vismask

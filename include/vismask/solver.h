@@ -39,6 +39,10 @@ struct SolveOptions {
   Span<const uint32_t> order;  // the order environments run in a round (empty: 0..n-1)
   ErrorProbe* probe = nullptr;  // measures after the last round, and
   uint64_t errorEvery = 0;      // after every round that crosses a multiple of this many shots
+  // --stop-error: stop when BiasEstimate falls below this (0: off), with
+  // --correct-unshot's choice of what the estimate is of.
+  double stopError = 0.0;
+  bool correctUnshot = false;
 };
 
 enum class StopReason { kConverged, kMaxShots, kMaxSeconds };
@@ -65,6 +69,7 @@ struct SolveResult {
   // solve would take with a core per rank and free communication.
   double computeSeconds = 0.0;
   double criticalSeconds = 0.0;
+  double biasEstimate = 0.0;  // BiasEstimate of the final totals
 };
 
 // Which environments live on a rank: contiguous blocks, [first, first+count)
@@ -89,6 +94,9 @@ struct EnvReport {
   uint64_t shots;    // local and foreign
   uint64_t recordsCreated;
   uint64_t foreignShots;
+  double radiosity;  // sum of b * area, channels summed
+  double kdArea;     // sum of kd * area, channels averaged (constant)
+  double area;       // (constant)
 };
 
 struct RoundTotals {
@@ -100,7 +108,21 @@ struct RoundTotals {
   uint64_t shots = 0;
   uint64_t recordsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
+  double radiosity = 0.0;
+  double kdArea = 0.0;
+  double area = 0.0;
 };
+
+// The relative bias of the radiosity from the power not yet shot, estimated
+// from the totals with Cohen's ambient argument: the unshot power U will
+// add rho*U/(1-rho) of radiosity power (rho the area-mean kd) to the
+// radiosity power so far, R. Uncorrected b misses that share,
+// s = rho*U/(1-rho) / (R + rho*U/(1-rho)): the 1/(1-rho) amplification that
+// makes stiff scenes slow. With the ambient correction (--correct-unshot on)
+// the share is added as if spread uniformly; only its first bounce, a
+// fraction (1-rho) of it, lands where the unshot power is, not uniformly,
+// so the estimate is s*(1-rho) (docs/DESIGN.md).
+double BiasEstimate(const RoundTotals& totals, bool corrected);
 
 // A rank's exchange buffers, carved from its arena at init: one send and one
 // receive block per rank, each large enough for every packet a rank's

@@ -1,0 +1,222 @@
+// The fast members of the stiff and extreme suites (docs/STABILITY.md; the
+// whole suites are `make stability`): renders through the command line whose
+// outputs must hold no NaN, Inf or negative radiosity, whose energy ledger
+// must close, and which reach the analytic radiosity of a closed box within
+// the error they state.
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace vismask {
+namespace {
+
+using test::FileExists;
+using test::ReadCsv;
+using test::ReadFile;
+using test::RunMain;
+using test::TempDir;
+
+// A number from run.json: the first "key": value (or the first element of
+// an array value).
+double JsonNumber(const std::string& json, const std::string& key, int index = 0) {
+  size_t at = json.find("\"" + key + "\": ");
+  EXPECT_NE(at, std::string::npos) << key;
+  if (at == std::string::npos) return NAN;
+  at += key.size() + 4;
+  if (json[at] == '[') {
+    ++at;
+    for (int k = 0; k < index; ++k) at = json.find(',', at) + 1;
+  }
+  return std::strtod(json.c_str() + at, nullptr);
+}
+
+struct Checked {
+  int badB = 0;       // non-finite or negative b in patches.csv
+  int badPixels = 0;  // non-finite or negative values in image.pfm
+  double ledger = 0;  // max over channels of |emitted - absorbed - escaped - unshot| / emitted
+  double escaped = 0; // escaped / emitted, channel 0
+  std::vector<double> b;  // channel 0 of each patch
+  std::string json;
+};
+
+Checked Check(const std::string& out) {
+  Checked c;
+  auto rows = ReadCsv(out + "/patches.csv");
+  EXPECT_GT(rows.size(), 1u);
+  for (size_t i = 1; i < rows.size(); ++i) {
+    for (int k = 15; k < 18; ++k) {
+      double v = std::strtod(rows[i][k].c_str(), nullptr);
+      if (!std::isfinite(v) || v < 0.0) ++c.badB;
+    }
+    c.b.push_back(std::strtod(rows[i][15].c_str(), nullptr));
+  }
+  std::string pfm = ReadFile(out + "/image.pfm");
+  std::istringstream head(pfm);
+  std::string magic;
+  int w = 0, h = 0;
+  double scale = 0;
+  head >> magic >> w >> h >> scale;
+  size_t data = pfm.size() - size_t(w) * h * 12;
+  EXPECT_EQ(magic, "PF");
+  for (size_t i = 0; i < size_t(w) * h * 3; ++i) {
+    float v;
+    std::memcpy(&v, pfm.data() + data + 4 * i, 4);
+    if (!std::isfinite(v) || v < 0.0f) ++c.badPixels;
+  }
+  c.json = ReadFile(out + "/run.json");
+  for (int ch = 0; ch < 3; ++ch) {
+    double em = JsonNumber(c.json, "emitted", ch);
+    double res = em - JsonNumber(c.json, "absorbed", ch) - JsonNumber(c.json, "escaped", ch) -
+                 JsonNumber(c.json, "unshot", ch);
+    c.ledger = std::fmax(c.ledger, std::fabs(res) / em);
+  }
+  c.escaped = JsonNumber(c.json, "escaped", 0) / JsonNumber(c.json, "emitted", 0);
+  return c;
+}
+
+std::vector<std::string> Small() {
+  return {"--width", "32", "--height", "32", "--quiet"};
+}
+
+std::vector<std::string> Args(std::vector<std::string> a, const std::vector<std::string>& more) {
+  a.insert(a.end(), more.begin(), more.end());
+  return a;
+}
+
+// rho = 0.999, uniform emission E = 1: b must reach E/(1-rho) within the
+// error run.json states, in a few thousand shots, with a stop rule that
+// knows the amplification; the closed box leaks nothing.
+TEST(StabilityTest, StiffBoxReachesAnalyticWithinStatedError) {
+  TempDir dir;
+  const double exact = 1.0 / (1.0 - static_cast<double>(0.999f));
+  auto r = RunMain(Args({"render", "scenes/stiff/box-rho0.999.obj", "--out", dir.File("on"),
+                         "--patch-size", "0.34", "--rays", "1024", "--correct-unshot", "on",
+                         "--stop-error", "5e-4", "--max-shots", "100000"},
+                        Small()));
+  ASSERT_EQ(r.code, 0) << r.err;
+  Checked c = Check(dir.File("on"));
+  EXPECT_EQ(c.badB + c.badPixels, 0);
+  EXPECT_LT(c.ledger, 1e-9);
+  EXPECT_EQ(c.escaped, 0.0) << "rays left a closed box";
+  ASSERT_EQ(c.b.size(), 54u);
+  double sum2 = 0.0;
+  for (double b : c.b) sum2 += (b - exact) * (b - exact) / (exact * exact);
+  double rms = std::sqrt(sum2 / c.b.size());
+  double stated = JsonNumber(c.json, "stated_error");
+  EXPECT_GT(stated, 0.0);
+  EXPECT_LE(rms, stated) << "RMS relative error against E/(1-rho)";
+  EXPECT_LT(stated, 2e-3);
+  EXPECT_NE(c.json.find("\"stop_reason\": \"converged\""), std::string::npos);
+  EXPECT_LT(JsonNumber(c.json, "bias_estimate"), 5e-4);
+}
+
+// --correct-unshot off writes the same solve's b minus kd * ambient: the
+// option changes the output, not the solve. Without the correction,
+// --stop-error holds b to its bias estimate (rho = 0.9).
+TEST(StabilityTest, StopErrorBoundsTheUncorrectedBias) {
+  TempDir dir;
+  const double exact = 1.0 / (1.0 - static_cast<double>(0.9f));
+  std::vector<std::string> base = {"render", "scenes/stiff/box-rho0.9.obj", "--patch-size", "0.34",
+                                   "--rays", "1024"};
+  for (const char* mode : {"off", "on"}) {
+    auto r = RunMain(Args(base, Args({"--out", dir.File(mode), "--correct-unshot", mode,
+                                      "--max-shots", "300"},
+                                     Small())));
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  Checked off = Check(dir.File("off")), on = Check(dir.File("on"));
+  double ambient = JsonNumber(off.json, "ambient", 0);
+  EXPECT_GT(ambient, 0.0);
+  EXPECT_EQ(ambient, JsonNumber(on.json, "ambient", 0));
+  ASSERT_EQ(off.b.size(), on.b.size());
+  for (size_t i = 0; i < off.b.size(); ++i)
+    EXPECT_NEAR(on.b[i], off.b[i] + static_cast<double>(0.9f) * ambient, 1e-12 * exact) << i;
+
+  auto r = RunMain(Args(base, Args({"--out", dir.File("stop"), "--stop-error", "0.02"}, Small())));
+  ASSERT_EQ(r.code, 0) << r.err;
+  Checked stop = Check(dir.File("stop"));
+  double mean = 0.0;
+  for (double b : stop.b) mean += (b - exact) / exact / stop.b.size();
+  // The uncorrected b is low by about the estimated bias, and within it.
+  double bias = JsonNumber(stop.json, "bias_estimate");
+  EXPECT_LT(bias, 0.02);
+  EXPECT_GT(bias, 0.01);  // stopped as soon as it was below, not much later
+  EXPECT_LT(mean, 0.0);
+  EXPECT_LE(-mean, bias + JsonNumber(stop.json, "mc_relative_error"));
+}
+
+struct ExtremeCase {
+  const char* name;
+  std::vector<std::string> args;
+};
+
+TEST(StabilityTest, ExtremeCasesStayFiniteAndBalanced) {
+  TempDir dir;
+  const std::vector<std::string> few = {"--rays", "256", "--max-shots", "300"};
+  const ExtremeCase cases[] = {
+      {"scale1e-3", Args({"scenes/extreme/cornell-scale1e-3.obj"}, few)},
+      {"scale1e6", Args({"scenes/extreme/cornell-scale1e6.obj"}, few)},
+      {"ke1e-6", Args({"scenes/extreme/cornell-ke1e-6.obj"}, few)},
+      {"ke1e30", Args({"scenes/extreme/cornell-ke1e30.obj"}, few)},
+      {"sliver", Args({"scenes/extreme/sliver.obj"}, few)},
+      {"grazing", Args({"scenes/extreme/grazing.obj"}, few)},
+      {"one-patch", Args({"scenes/extreme/one-patch.obj", "--patch-size", "2"}, few)},
+      {"one-ray", {"scenes/cornell.obj", "--rays", "1", "--max-shots", "3000"}},
+      {"on-plane", Args({"scenes/extreme/cornell-on-plane.obj", "--envs", "2"}, few)},
+      {"mask-r1", Args({"scenes/cornell.obj", "--envs", "2", "--mask-res", "1"}, few)},
+  };
+  for (const ExtremeCase& c : cases) {
+    std::vector<std::string> args = Args({"render", "--out", dir.File(c.name)}, c.args);
+    auto r = RunMain(Args(args, Small()));
+    ASSERT_EQ(r.code, 0) << c.name << ": " << r.err;
+    Checked k = Check(dir.File(c.name));
+    EXPECT_EQ(k.badB, 0) << c.name;
+    EXPECT_EQ(k.badPixels, 0) << c.name;
+    bool single = k.json.find("\"environments\": 1,") != std::string::npos;
+    if (single) {
+      EXPECT_LT(k.ledger, 1e-9) << c.name;
+    }
+  }
+}
+
+// Scales and a move the radiosity is invariant to give the same image
+// (the move to within float's steps there: 1/16 on a 559 box).
+TEST(StabilityTest, ScaledCornellBoxesGiveTheSameImage) {
+  TempDir dir;
+  std::vector<std::string> tail = {"--rays", "256", "--max-shots", "200"};
+  for (const char* s : {"cornell", "extreme/cornell-scale1e-3", "extreme/cornell-scale1e6",
+                        "extreme/cornell-moved1e6"}) {
+    std::string out = dir.File(std::string(s).substr(std::string(s).rfind('/') + 1));
+    auto r = RunMain(Args(Args({"render", std::string("scenes/") + s + ".obj", "--out", out}, tail),
+                          Small()));
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  for (const char* s : {"cornell-scale1e-3", "cornell-scale1e6", "cornell-moved1e6"}) {
+    testing::internal::CaptureStdout();
+    auto r = RunMain({"compare", dir.File(s) + "/image.pfm", dir.File("cornell") + "/image.pfm"});
+    std::string out = testing::internal::GetCapturedStdout();
+    ASSERT_EQ(r.code, 0);
+    double rmse = std::strtod(out.c_str() + out.find(' ') + 1, nullptr);
+    EXPECT_LT(rmse, 0.02) << s << ": " << out;
+  }
+}
+
+TEST(StabilityTest, UnsolvableRangesAreRefusedAtInit) {
+  TempDir dir;
+  const char* scenes[] = {"cornell-ke3e38", "cornell-ke1e-32", "cornell-scale1e13",
+                          "cornell-scale1e-18", "cornell-moved3e6"};
+  for (const char* s : scenes) {
+    std::string path = std::string("scenes/extreme/") + s + ".obj";
+    auto r = RunMain({"render", path, "--out", dir.File(s), "--quiet"});
+    EXPECT_EQ(r.code, 2) << s;
+    EXPECT_EQ(r.err.rfind(path + ":", 0), 0u) << r.err;
+    EXPECT_FALSE(FileExists(dir.File(s))) << s;
+  }
+}
+
+}  // namespace
+}  // namespace vismask
