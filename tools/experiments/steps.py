@@ -4,6 +4,7 @@ directory) and writes its CSV tables and images into the results directory.
 Run them through the wrappers beside this file: references, quality, timing,
 leak, error-time, report, or all."""
 
+import json
 import math
 import os
 import shutil
@@ -111,7 +112,7 @@ def quality(ctx):
                      lib.rel_rmse(img, rb), lib.rel_rmse(img, rb, mask), lib.rel_rmse(img, rb, right),
                      j["timings"]["solve_seconds"]])
         shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig2-B-{r}.png"))
-        lib.diff_png(ctx.result(f"img/fig2-B-{r}-diff.png"), w, h, img, rb, 10, mask)
+        lib.diff_png(ctx.result(f"img/fig2-B-{r}-diff.png"), w, h, img, ra, 10, mask)
     # The noise floor of a comparison between two 2-environment runs: the
     # lowest R again with another seed.
     low = s["table_res"][0]
@@ -193,10 +194,14 @@ def leak(ctx):
     os.makedirs(ctx.result("img"), exist_ok=True)
     name = f"A-{s['leak_res']}"
     shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig3-{name}.png"))
-    w, h, rb = lib.read_pfm(ref_b_path(ctx))
+    # Against B at the same R and seed: the same Monte Carlo rays, so what
+    # differs is the mask.
+    b_name, _ = curve_run(ctx, "B", s["leak_res"])
+    w, h, rb = lib.read_pfm(ctx.path(b_name, "image.pfm"))
     _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
     j = lib.load_json(ctx.path(name, "run.json"))
-    lib.diff_png(ctx.result(f"img/fig3-{name}-diff.png"), w, h, img, rb, 10, region_mask(ctx, j))
+    lib.diff_png(ctx.result(f"img/fig3-{name}-diff.png"), w, h, img, rb, 10,
+                 region_mask(ctx, j, right_only=True))
 
 
 # --- error against run time -------------------------------------------------------
@@ -263,9 +268,15 @@ def plot_curves(ctx, series):
     front = ctx.result("curves/pareto.dat")
     plots.append(f"'{front}' using 1:2 with steps lw 3 lc rgb '#ff7f0e' title 'Pareto front'")
     png = ctx.result("error-time.png")
+    errs = [float(line.split()[1]) for _, dat, _ in series for line in open(dat) if not line.startswith("#")]
+    lo, hi = min(errs) / 1.15, max(errs) * 1.15
+    step = 10 ** math.floor(math.log10(hi - lo))  # a tick every step, as a list
+    ticks = ", ".join(f"'{k * step:g}' {k * step:g}" for k in range(int(lo / step) + 1, int(hi / step) + 1))
     lib.gnuplot(f"""set terminal pngcairo size 900,600 noenhanced font ',11'
 set output '{png}'
 set logscale xy
+set yrange [{lo}:{hi}]
+set ytics ({ticks})
 set grid
 set key outside right
 set xlabel 'solve time, seconds (error measuring excluded)'
@@ -330,6 +341,13 @@ def rows_of(ctx, f):
 
 def report(ctx, meta=None):
     s = ctx.s
+    # The run's facts, kept from `all` so that the report can be remade alone.
+    meta_path = ctx.result("meta.json")
+    if meta:
+        with open(meta_path, "w") as f:
+            json.dump(meta, f, indent=1)
+    elif os.path.exists(meta_path):
+        meta = lib.load_json(meta_path)
     meta = meta or {}
     doc = os.path.join(os.path.dirname(ctx.out), "RESULTS.md") if ctx.out.endswith(
         os.path.join("docs", "results")) else os.path.join(ctx.out, "RESULTS.md")
@@ -394,7 +412,8 @@ def report(ctx, meta=None):
     imgs = " ".join(f"![B R={r}]({link(f'img/fig2-B-{r}.png')})" for r in s["table_res"] + [s["ref_res"]])
     w("Images, R = " + ", ".join(str(r) for r in s["table_res"]) + f" and reference (a), R = {s['ref_res']}:\n")
     w(imgs + "\n")
-    w("|x - reference (b)| × 10 (black = equal, white = 10% of the mean), the region outlined in blue:\n")
+    w("|x − reference (a)| (same seed: what differs is the mask; black = equal, white = 10% of the "
+      "image's mean), the shadow region outlined in blue:\n")
     w(" ".join(f"![diff R={r}]({link(f'img/fig2-B-{r}-diff.png')})" for r in s["table_res"] + [s["ref_res"]]) + "\n")
 
     w("## Table 1 → table: time of Method A and Method B\n")
@@ -410,6 +429,9 @@ def report(ctx, meta=None):
       "shadow region (patch centre in the region, x < 278), above reference (b)'s, in percent "
       "(power received = mean radiosity × area). The first row is the difference between reference "
       "(b)'s two seeds: the noise of this measure.\n")
+    w(f"Method A at R = {hi}, and |A − B| at R = {hi} with the same seed (what differs is the mask; "
+      "white = 10% of the image's mean), the right environment's part of the shadow region outlined "
+      "in blue:\n")
     w(f"![A R={hi}]({link(f'img/fig3-A-{hi}.png')}) ![A R={hi} diff]({link(f'img/fig3-A-{hi}-diff.png')})\n")
 
     w("## Error against run time\n")
