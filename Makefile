@@ -98,7 +98,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments fuzz stability
+.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments bench fuzz stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -145,6 +145,19 @@ endif
 $(BUILD)/vismask_tests: $(TEST_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
 	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lgtest -pthread
 
+# The benchmark binary: the only one that links Embree and Google Benchmark
+# (tools/install-deps --bench installs them). make bench runs it and the
+# solve benchmarks and writes docs/BENCHMARKS.md (bench/run).
+BENCH_SRC := $(wildcard bench/*.cpp)
+BENCH_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(BENCH_SRC))
+$(BUILD)/vismask_bench: $(BENCH_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
+	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lembree3 -lbenchmark -pthread
+
+bench:
+	tools/install-deps --bench
+	$(MAKE) -j$$(nproc) all $(BUILD)/vismask_bench
+	BUILD=$(BUILD) bench/run
+
 # Every public header compiles on its own.
 headers: $(patsubst include/vismask/%.h,$(BUILD)/headers/%.ok,$(HEADERS))
 $(BUILD)/headers/%.ok: include/vismask/%.h $(SYSROOT_DEP)
@@ -155,8 +168,11 @@ demo: deps
 	$(MAKE) $(BUILD)/vismask
 	$(BUILD)/vismask render scenes/cornell.obj --out out
 
+# The bench binary too, when its libraries are there (tools/install-deps
+# --bench), so that make test keeps it compiling; make bench runs it.
+BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildcard /usr/include/benchmark/benchmark.h)),$(BUILD)/vismask_bench)
 test: deps
-	$(MAKE) headers all $(BUILD)/vismask_tests
+	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT)
 	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
 
 # docs/RESULTS.md and docs/results/ from one run of every step in

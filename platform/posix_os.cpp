@@ -39,6 +39,12 @@ double Seconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+double CpuSeconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 void WriteErr(const char* s, size_t n) { WriteAll(2, s, n); }
 void WriteOut(const char* s, size_t n) { WriteAll(1, s, n); }
 

@@ -463,6 +463,9 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"packets\": %llu,\n    \"packet_bytes\": %u,\n    \"bytes_sent\": %llu,\n",
            static_cast<unsigned long long>(st.packetsSent), packetBytes,
            static_cast<unsigned long long>(st.packetsSent * packetBytes));
+  w.Printf("    \"wait_seconds\": %.6f,\n    \"wait_seconds_max_rank\": %.6f,\n"
+           "    \"compute_cpu_seconds\": %.6f,\n    \"critical_cpu_seconds\": %.6f,\n",
+           res.waitSeconds, res.waitSecondsMax, res.computeSeconds, res.criticalSeconds);
   w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
   // Against --reference (null without one): the final image's relative RMSE.
   if (o.reference.empty()) w.Printf("    \"relative_rmse\": null,\n");

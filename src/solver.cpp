@@ -66,9 +66,18 @@ namespace {
 
 double Sum3(const double v[3]) { return v[0] + v[1] + v[2]; }
 
+// Runs a transport collective, adding the time it takes to *waited.
+template <class Call>
+void Timed(double* waited, Call&& call) {
+  double t0 = os::Seconds();
+  call();
+  *waited += os::Seconds() - t0;
+}
+
 // Gathers every environment's report and sums them in environment order.
+
 RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
-                   ExchangeBuffers* x, double elapsed) {
+                   ExchangeBuffers* x, double elapsed, double roundCpu, double* waited) {
   for (uint32_t i = 0; i < layout.perRank; ++i) x->mine[i] = EnvReport{};
   for (uint32_t i = 0; i < envs.size(); ++i) {
     const Environment* e = envs[i];
@@ -83,11 +92,18 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
     r.kdArea = e->kdArea();
   }
   x->mine[0].elapsed = elapsed;
-  t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data());
+  x->mine[0].waited = *waited;
+  x->mine[0].roundCpu = roundCpu;
+  Timed(waited, [&] { t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data()); });
   // Rank r's block holds its environments first; the rest is padding.
   RoundTotals tot;
   tot.elapsed = x->all[0].elapsed;
   int ranks = t->size();
+  for (int r = 0; r < ranks; ++r) {
+    const EnvReport& first = x->all[size_t(r) * layout.perRank];
+    if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
+    if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
+  }
   auto report = [&](uint32_t env) -> const EnvReport& {
     for (int r = 0; r < ranks; ++r) {
       RankEnvs re = EnvsOfRank(layout.total, ranks, r);
@@ -117,7 +133,7 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
 // Moves the round's packets to their receivers and delivers them: for each
 // receiver, senders in environment order and packets in send order.
 void Exchange(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
-              ExchangeBuffers* x) {
+              ExchangeBuffers* x, double* waited) {
   int ranks = t->size(), me = t->rank();
   if (ranks > 1) {
     for (int r = 0; r < ranks; ++r) {
@@ -139,7 +155,7 @@ void Exchange(Span<Environment* const> envs, const RankEnvs& layout, Transport* 
       x->send[r] = Span<const uint8_t>(block, used);
       x->recv[r] = Span<uint8_t>(x->recvBytes.data() + size_t(r) * x->blockBytes, x->blockBytes);
     }
-    t->AllToAll(x->send.data(), x->recv.data(), x->received.data());
+    Timed(waited, [&] { t->AllToAll(x->send.data(), x->recv.data(), x->received.data()); });
   }
   for (Environment* dest : envs) {
     for (int r = 0; r < ranks; ++r) {
@@ -223,7 +239,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     result.errorSeconds = excluded;
   };
   uint64_t measuredAt = ~0ull;  // the shot count last measured
-  RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0);
+  RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
   if (convergence)
@@ -241,6 +257,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
 
   bool done = ShouldStop(totals, options, &result);
   while (!done) {
+    double cpu0 = os::CpuSeconds();
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
       if (i < layout.first || i >= layout.first + layout.count) continue;
@@ -248,11 +265,15 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
           ShotBudget(i, options.roundShots, result.shots, options.maxShots),
           AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
     }
-    Exchange(envs, layout, transport, buffers);
+    double roundCpu = os::CpuSeconds() - cpu0;
+    result.computeSeconds += roundCpu;
+    Exchange(envs, layout, transport, buffers, &result.waitSeconds);
     ++result.rounds;
     uint64_t before = result.shots;
     double elapsed = clock();
-    totals = Totals(envs, layout, transport, buffers, elapsed);
+    totals = Totals(envs, layout, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
+    result.waitSecondsMax = totals.waitedMax;
+    result.criticalSeconds += totals.roundCpuMax;
     result.shots = totals.shots;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     result.biasEstimate = BiasEstimate(totals, options.correctUnshot);

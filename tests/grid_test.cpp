@@ -470,7 +470,8 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
   grid.Layout(arena, plan);
   EXPECT_EQ(arena.used(), measure.used());
   EXPECT_EQ(grid.bytes(), probe.bytes());
-  EXPECT_EQ(grid.bytes(), (grid.cellCount() + 1 + plan.refs) * sizeof(uint32_t));
+  EXPECT_EQ(grid.bytes(), (grid.cellCount() + 1 + plan.refs) * sizeof(uint32_t) +
+                              (grid.cellCount() + 63) / 64 * sizeof(uint64_t));
   grid.Build(Span<const Patch>(s.patches.data(), 700), Span<const PatchGeom>(s.geom.data(), 700));
   EXPECT_EQ(arena.used(), measure.used());
 
@@ -478,6 +479,15 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
   // and every patch is in the cell of its centroid.
   Span<const uint32_t> start = grid.cellStart();
   Span<const uint32_t> refs = grid.refs();
+  // The occupancy bitmap marks exactly the cells that hold a reference.
+  size_t occupiedCells = 0;
+  for (size_t c = 0; c < grid.cellCount(); ++c) {
+    bool bit = (grid.occupied()[c / 64] >> (c % 64)) & 1;
+    ASSERT_EQ(bit, start[c + 1] > start[c]) << "cell " << c;
+    occupiedCells += bit;
+  }
+  EXPECT_GT(occupiedCells, 0u);
+  EXPECT_LT(occupiedCells, grid.cellCount());
   ASSERT_EQ(start.size(), grid.cellCount() + 1);
   EXPECT_EQ(start[0], 0u);
   EXPECT_EQ(start[grid.cellCount()], plan.refs);

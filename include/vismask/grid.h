@@ -1,6 +1,7 @@
 // Grid: the SEADS-style uniform grid over one environment's patches.
 // Two flat arrays built once at init: cellStart (numCells + 1 offsets) and
-// refs (patch indices, cell by cell). Rays walk it with a 3D-DDA (Amanatides &
+// refs (patch indices, cell by cell), and a bitmap of the cells that hold
+// any patch (so the walk reads an empty cell's bit, not its offsets). Rays walk it with a 3D-DDA (Amanatides &
 // Woo). Intersect finds the closest hit, Occluded stops at the first.
 // The resolution follows the patch count and the extent (Cleary et al.:
 // cells per axis = extent * cbrt(density * N / volume)); a face of the box
@@ -41,11 +42,13 @@ class Grid {
 
   const Plan& plan() const { return plan_; }
   size_t cellCount() const { return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2]; }
-  size_t bytes() const { return cellStart_.bytes() + refs_.bytes(); }
+  size_t bytes() const { return cellStart_.bytes() + refs_.bytes() + occupied_.bytes(); }
   // The built arrays, read-only (tests, statistics): cell c holds
   // refs()[cellStart()[c] .. cellStart()[c + 1]), in ascending patch order.
   Span<const uint32_t> cellStart() const { return cellStart_; }
   Span<const uint32_t> refs() const { return refs_; }
+  // Bit c of word c / 64: cell c holds at least one reference.
+  Span<const uint64_t> occupied() const { return occupied_; }
 
  private:
   // The DDA walk behind Intersect (kAnyHit false) and Occluded (true).
@@ -60,6 +63,7 @@ class Grid {
   glm::vec3 invCellSize_{1.0f};
   Span<uint32_t> cellStart_;
   Span<uint32_t> refs_;
+  Span<uint64_t> occupied_;  // bit c: cell c holds a patch
   Span<const PatchGeom> geom_;
   float farLimit_ = 0.0f;  // origins with a coordinate beyond this skip the grid
 };

@@ -14,6 +14,9 @@ constexpr size_t kWhyBytes = 2048;
 
 // Seconds from an arbitrary fixed point (monotonic clock).
 double Seconds();
+// CPU seconds the calling thread has used (not counting time it was
+// descheduled: what a rank would take on a core of its own).
+double CpuSeconds();
 
 // Writes all of `s` to standard error / standard output (no buffering).
 void WriteErr(const char* s, size_t n);

@@ -59,6 +59,16 @@ struct SolveResult {
   uint64_t errorMeasurements = 0;
   double errorSeconds = 0.0;
   double relativeRmse = 0.0;
+  // Seconds this rank spent inside the transport's AllToAll and AllGather:
+  // blocked until the slowest rank arrives, plus the transfer itself. With
+  // one rank the loop transport returns at once, so it is about zero.
+  double waitSeconds = 0.0;
+  double waitSecondsMax = 0.0;  // the most any rank spent there (as of the last gather)
+  // CPU seconds of the rounds' shots (RunRound): this rank's, and the sum
+  // over rounds of the most any rank used in that round, which is what the
+  // solve would take with a core per rank and free communication.
+  double computeSeconds = 0.0;
+  double criticalSeconds = 0.0;
   double biasEstimate = 0.0;  // BiasEstimate of the final totals
 };
 
@@ -79,6 +89,8 @@ struct EnvReport {
   double unshot;     // local unshot power plus queued foreign power
   double emitted;
   double elapsed;    // seconds since the solve began, on this rank's clock
+  double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
+  double roundCpu;   // CPU seconds of this rank's shots in the last round (first entry)
   uint64_t shots;    // local and foreign
   uint64_t recordsCreated;
   uint64_t foreignShots;
@@ -91,6 +103,8 @@ struct RoundTotals {
   double unshot = 0.0;
   double emitted = 0.0;
   double elapsed = 0.0;  // rank 0's clock
+  double waitedMax = 0.0;  // the most any rank has waited
+  double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
   uint64_t shots = 0;
   uint64_t recordsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
