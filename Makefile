@@ -268,7 +268,7 @@ fuzz: build/fuzz/scene_fuzz
 	  -max_len=8192 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=build/fuzz/ -print_final_stats=1
 
 # docs/STABILITY.md and docs/stability/ from one run of the stiff and extreme
-# suites (tools/stability; about 10 minutes on 2 cores).
+# suites (tools/stability; 2 to 5 minutes on 2 shared cores).
 stability: deps
 	$(MAKE) $(BUILD)/vismask
 	VISMASK_BIN=$(BUILD)/vismask tools/stability
