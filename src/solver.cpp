@@ -229,14 +229,13 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   Progress progress(options.quiet || transport->rank() != 0);
   ErrorProbe* probe = options.probe;
   const double start = os::Seconds();
-  double excluded = 0.0;  // seconds spent measuring the error
-  auto clock = [&] { return os::Seconds() - start - excluded; };
+  // The solve's clock leaves out the seconds spent measuring the error.
+  auto clock = [&] { return os::Seconds() - start - result.errorSeconds; };
   auto measure = [&] {
     double t0 = os::Seconds();
     result.relativeRmse = probe->Measure();
     ++result.errorMeasurements;
-    excluded += os::Seconds() - t0;
-    result.errorSeconds = excluded;
+    result.errorSeconds += os::Seconds() - t0;
   };
   uint64_t measuredAt = ~0ull;  // the shot count last measured
   RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
