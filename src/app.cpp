@@ -227,6 +227,18 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
 // under temporary names. Heap allocation is allowed here only.
 int Init(Render* r) {
   const Options& o = r->options;
+  // The reference image, read (heap, init) first: a bad one is refused
+  // before the scene is loaded and built.
+  PfmImage ref;
+  if (r->isRoot() && !o.reference.empty()) {
+    Status s = ReadPfm(o.reference, &ref);
+    if (!s.ok()) return FailInit(r, Status::Error("vismask: --reference: " + s.ToString()));
+    if (ref.width != o.width || ref.height != o.height)
+      return FailInit(r, Status::Error("vismask: --reference: " + o.reference + " is " +
+                                       std::to_string(ref.width) + "x" + std::to_string(ref.height) +
+                                       ", the image is " + std::to_string(o.width) + "x" +
+                                       std::to_string(o.height) + " (--width, --height)"));
+  }
   Prepared p;
   Status s = PrepareScene(o, &p);
   if (!s.ok()) return FailInit(r, s);
@@ -254,18 +266,6 @@ int Init(Render* r) {
   for (auto& e : r->envs) {
     e->Build();
     r->envPtrs.push_back(e.get());
-  }
-
-  // The reference image, read (heap, init) before anything is written.
-  PfmImage ref;
-  if (r->isRoot() && !o.reference.empty()) {
-    s = ReadPfm(o.reference, &ref);
-    if (!s.ok()) return FailInit(r, Status::Error("vismask: --reference: " + s.ToString()));
-    if (ref.width != o.width || ref.height != o.height)
-      return FailInit(r, Status::Error("vismask: --reference: " + o.reference + " is " +
-                                       std::to_string(ref.width) + "x" + std::to_string(ref.height) +
-                                       ", the image is " + std::to_string(o.width) + "x" +
-                                       std::to_string(o.height) + " (--width, --height)"));
   }
 
   r->camera = o.hasCamera ? o.camera : DefaultCamera(p.scene.bounds);
