@@ -8,6 +8,7 @@ import json
 import math
 import os
 import shutil
+import subprocess
 import sys
 import time
 
@@ -292,7 +293,6 @@ def closed_box(ctx):
     """tools/experiments/closed-box-methods (issue #10): a closed box of one
     material around a block, split 2x2x2: mean B against E/(1-rho) over
     several seeds, with its standard error, for none (1 env), B and R."""
-    import subprocess
     seeds, rays = ("4", "500") if ctx.scale == "full" else ("2", "100")
     env = dict(os.environ, RAYS=rays, VISMASK_BIN=ctx.bin)
     out = subprocess.run([os.path.join(lib.ROOT, "tools", "experiments", "closed-box-methods"),
@@ -574,13 +574,6 @@ def num(v):
     return f"{int(v):,}".replace(",", " ")
 
 
-def int_or_none(v):
-    try:
-        return int(v)
-    except ValueError:
-        return None
-
-
 def int_or(r):
     try:
         return str(int(r))
@@ -595,7 +588,6 @@ def fmt_pct(x):
 # --- all ----------------------------------------------------------------------------
 
 def meta_info(ctx, start, load_start):
-    import subprocess
     def sh(cmd):
         try:
             return subprocess.run(cmd, shell=True, capture_output=True, text=True).stdout.strip()

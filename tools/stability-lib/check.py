@@ -2,17 +2,12 @@
 patches.csv's b or in image.pfm, and the energy ledger of run.json."""
 import json
 import math
-import struct
+import os
+import sys
 
-
-def read_pfm(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    parts = data.split(b"\n", 3)
-    w, h = map(int, parts[1].split())
-    scale = float(parts[2])
-    fmt = ("<" if scale < 0 else ">") + "%df" % (w * h * 3)
-    return struct.unpack(fmt, parts[3][: w * h * 12])
+# The PFM reader of the experiments (tools/experiments/lib.py).
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
+from lib import read_pfm  # noqa: E402
 
 
 def check(out):
@@ -31,7 +26,7 @@ def check(out):
                     bad_b += 1
                 else:
                     min_b, max_b = min(min_b, v), max(max_b, v)
-    pixels = read_pfm(out + "/image.pfm")
+    _, _, pixels = read_pfm(out + "/image.pfm")
     bad_pixels = sum(1 for v in pixels if not math.isfinite(v) or v < 0)
     with open(out + "/run.json") as f:
         run = json.load(f)
