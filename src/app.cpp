@@ -170,6 +170,11 @@ struct Prepared {
   uint32_t packetBytes = 0;
 };
 
+// The most rays one shot traces: Method R's packet bits.
+uint32_t RayCap(const Options& o) {
+  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
+}
+
 Status PrepareScene(const Options& o, Prepared* p) {
   Status s = LoadScene(o.scene, &p->scene);
   if (!s.ok()) return s;
@@ -190,14 +195,26 @@ Status PrepareScene(const Options& o, Prepared* p) {
   float largest = std::fmax(mag.x, std::fmax(mag.y, mag.z));
   e.rayEpsilon = std::fmax(1e-6f * glm::length(extent),
                            8.0f * std::numeric_limits<float>::epsilon() * largest);
-  e.rays = o.rays;
+  e.rays = RayCap(o);
+  e.sobol = o.sobol;
+  if (o.rayAlloc == Options::RayAlloc::kPower) {
+    // The power a ray carries: the emitted power (channels summed, summed in
+    // polygon order, the same on every rank) over --emitted-rays.
+    double emitted = 0.0;
+    for (const Polygon& poly : p->part.scene.polygons) {
+      const glm::vec3& ke = p->part.scene.materials[poly.material].ke;
+      emitted += (static_cast<double>(ke.x) + ke.y + ke.z) * poly.area;
+    }
+    e.rayQuantum = emitted / static_cast<double>(o.emittedRays);
+    e.minRays = o.minRays;
+  }
   e.seed = o.seed;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
   e.roundShots = o.roundShots;
   e.queueCapacity = o.queue;
   p->packetBytes =
-      p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, o.rays)) : 0;
+      p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
   return Status::Ok();
 }
 
@@ -410,7 +427,12 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   JsonString(&w, o.outDir.c_str());
   w.Printf(",\n  \"options\": {\n");
   w.Printf("    \"patch_size\": %.9g,\n    \"rays\": %u,\n    \"seed\": %llu,\n", r->patchSize,
-           o.rays, static_cast<unsigned long long>(o.seed));
+           RayCap(o), static_cast<unsigned long long>(o.seed));
+  w.Printf("    \"ray_alloc\": \"%s\",\n    \"emitted_rays\": %llu,\n    \"min_rays\": %u,\n"
+           "    \"max_rays\": %u,\n    \"sampler\": \"%s\",\n    \"ray_budget\": %llu,\n",
+           o.rayAlloc == Options::RayAlloc::kPower ? "power" : "fixed",
+           static_cast<unsigned long long>(o.emittedRays), o.minRays, o.maxRays,
+           o.sobol ? "sobol" : "random", static_cast<unsigned long long>(o.rayBudget));
   w.Printf("    \"stop_unshot\": %.17g,\n    \"max_shots\": %llu,\n    \"max_seconds\": %.17g,\n",
            o.stopUnshot, static_cast<unsigned long long>(o.maxShots), o.maxSeconds);
   w.Printf("    \"width\": %d,\n    \"height\": %d,\n    \"exposure\": %.9g,\n", o.width, o.height,
@@ -689,7 +711,7 @@ int Footprint(const Options& o) {
         "%dx%d image\n\n",
         o.scene.c_str(), total, total == 1 ? "" : "s", ranks, ranks == 1 ? "" : "s",
         MaskMethodName(o.maskMethod), o.maskMethod == MaskMethod::kR ? "N" : "R",
-        o.maskMethod == MaskMethod::kR ? o.rays : o.maskRes, p.packetBytes, o.width, o.height);
+        o.maskMethod == MaskMethod::kR ? RayCap(o) : o.maskRes, p.packetBytes, o.width, o.height);
     add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches", "grid_cells",
         "patches_B", "vertices_B", "grid_B", "queue_B", "packets_B", "arena_B");
     for (uint32_t e = 0; e < total; ++e) {
@@ -770,6 +792,7 @@ int Main(int argc, const char* const* argv) {
   so.order = Span<const uint32_t>(r->options.envOrder.data(), r->options.envOrder.size());
   so.stopUnshot = r->options.stopUnshot;
   so.maxShots = r->options.maxShots;
+  so.rayBudget = r->options.rayBudget;
   so.maxSeconds = r->options.maxSeconds;
   so.stopError = r->options.stopError;
   so.correctUnshot = r->options.correctUnshot;

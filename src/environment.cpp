@@ -7,6 +7,7 @@
 
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
+#include "vismask/sobol.h"
 
 namespace vismask {
 
@@ -39,7 +40,54 @@ uint64_t ForeignStream(uint64_t shotKey, uint32_t env) {
   return Mix64(shotKey ^ (0x9e3779b97f4a7c15ull * (uint64_t(env) + 1)));
 }
 
+// The five uniforms of ray r of a shot, (point: triangle, u, v; direction:
+// u, v): scrambled Sobol' point r (direction in the two best-stratified
+// dimensions), or with `sobol` off the next five PCG32 draws of the shot's
+// stream, in which case rays must be taken in order.
+class RayPoints {
+ public:
+  RayPoints(bool sobol, uint64_t stream)
+      : sobol_(sobol), qmc_(Mix64(stream ^ 0xd1b54a32d192ed03ull)), rng_(ShotRng(stream)) {}
+  // Ray r; with Sobol', `sequential` promises r is the previous call's + 1
+  // (starting at 0), which walks the points one XOR at a time.
+  void Next(uint32_t r, float u[5], bool sequential = false) {
+    if (!sobol_) {
+      for (int k = 0; k < 5; ++k) u[k] = rng_.NextFloat();
+      return;
+    }
+    float p[kSobolDims];
+    if (sequential) qmc_.Next(p);
+    else qmc_.Point(r, p);
+    u[0] = p[4];
+    u[1] = p[2];
+    u[2] = p[3];
+    u[3] = p[0];
+    u[4] = p[1];
+  }
+  bool randomAccess() const { return sobol_; }
+
+ private:
+  bool sobol_;
+  ShotSampler qmc_;
+  Rng rng_;
+};
+
 }  // namespace
+
+uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* fraction) const {
+  *fraction = 1.0;
+  if (options_.rayQuantum <= 0.0) return options_.rays;
+  double x = (power[0] + power[1] + power[2]) / options_.rayQuantum;
+  if (x > options_.rays) {
+    *fraction = options_.rays / x;
+    return options_.rays;
+  }
+  // Stochastic rounding from the shot's own stream: the same on every rank.
+  double whole = std::floor(x);
+  Rng rng(Mix64(shotKey ^ 0x5851f42d4c957f2dull), shotKey);
+  uint32_t n = static_cast<uint32_t>(whole) + (rng.NextFloat() < x - whole ? 1u : 0u);
+  return n < options_.minRays ? options_.minRays : n;
+}
 
 void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices,
                          const Grid::Plan& plan) {
@@ -191,8 +239,7 @@ bool Environment::LeavesScene(const Ray& ray) const {
 }
 
 void Environment::Distribute(const Patch& shooter, uint32_t skip, const double power[3],
-                             uint64_t stream, const MaskBits* in, MaskBits* out) {
-  const uint32_t rays = options_.rays;
+                             uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out) {
   const bool masks = shape_.res > 0;
   const bool foreign = in != nullptr || skip == kNoPatch;
   // Method C: which open pixels the rays hit in, and which they passed.
@@ -205,7 +252,7 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
     passedPixels.SetAllClosed();
   }
   PatchSampler sampler = MakePatchSampler(shooter);
-  Rng rng = ShotRng(stream);
+  RayPoints points(options_.sobol, stream);
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   uint64_t traced = 0, hits = 0;
@@ -215,16 +262,16 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
   for (uint32_t r = 0; r < rays; ++r) {
-    float u0 = rng.NextFloat(), u1 = rng.NextFloat(), u2 = rng.NextFloat();
-    float v1 = rng.NextFloat(), v2 = rng.NextFloat();
-    glm::vec3 local = CosineDirection(v1, v2);
+    float u[5];
+    points.Next(r, u, true);
+    glm::vec3 local = CosineDirection(u[3], u[4]);
     Ray ray;
     // The origin is lifted off the shooter's plane and every hit from t = 0
     // counts (the shooter itself is skipped): a ray from near a corner hits
     // the wall beside it however close. A tMin > 0 instead let such rays
     // through the wall and out of a closed box, a bias of ~4e-6 of the shot
     // power a bounce, which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
-    ray.o = sampler.Point(u0, u1, u2) + options_.rayEpsilon * sampler.frame.n;
+    ray.o = sampler.Point(u[0], u[1], u[2]) + options_.rayEpsilon * sampler.frame.n;
     ray.d = sampler.frame.ToWorld(local);
     ray.tMin = 0.0f;
     ray.tMax = std::numeric_limits<float>::infinity();
@@ -296,23 +343,24 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
 }
 
 void Environment::TraceAlive(const Patch& shooter, uint32_t skip, const double power[3],
-                             uint64_t shotKey, bool foreign, MaskBits* alive) {
-  const uint32_t rays = options_.rays;
-  DCHECK(alive->bits() == rays);
+                             uint64_t shotKey, uint32_t rays, bool foreign, MaskBits* alive) {
+  DCHECK(alive->bits() >= rays);
   PatchSampler sampler = MakePatchSampler(shooter);
-  Rng rng = ShotRng(shotKey);
+  RayPoints points(options_.sobol, shotKey);
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   uint64_t traced = 0, hits = 0, entered = 0, left = 0;
   double lost[3] = {0, 0, 0}, backHit[3] = {0, 0, 0};
   for (uint32_t r = 0; r < rays; ++r) {
-    // Every environment draws every ray, so ray r is the same ray everywhere.
-    float u0 = rng.NextFloat(), u1 = rng.NextFloat(), u2 = rng.NextFloat();
-    float v1 = rng.NextFloat(), v2 = rng.NextFloat();
+    // Sequential draws: every environment draws every ray, so ray r is the
+    // same ray everywhere; Sobol' points are drawn by index, live rays only.
+    float u[5];
+    if (!points.randomAccess()) points.Next(r, u);
     if (!alive->IsOpen(r)) continue;  // absorbed or escaped upstream
+    if (points.randomAccess()) points.Next(r, u);
     Ray ray;  // lifted off the shooter's plane, hits from t = 0, as in Distribute
-    ray.o = sampler.Point(u0, u1, u2) + options_.rayEpsilon * sampler.frame.n;
-    ray.d = sampler.frame.ToWorld(CosineDirection(v1, v2));
+    ray.o = sampler.Point(u[0], u[1], u[2]) + options_.rayEpsilon * sampler.frame.n;
+    ray.d = sampler.frame.ToWorld(CosineDirection(u[3], u[4]));
     ray.tMin = 0.0f;
     ray.tMax = std::numeric_limits<float>::infinity();
     if (foreign) {
@@ -391,28 +439,33 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
 
 void Environment::ShootLocal(uint32_t i) {
   PatchEnergy& src = energy_[i];
-  double power[3];
-  for (int c = 0; c < 3; ++c) {
-    power[c] = src.unshot[c];
-    ledger_.unshot[c] -= src.unshot[c];
-    src.unshot[c] = 0.0;
-  }
-  tree_.Set(i, 0.0);
   const Patch& p = patches_[i];
   uint32_t shotIndex = shotCount_[i]++;
   uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
+  double fraction = 1.0;
+  uint32_t rays = ShotRays(src.unshot, key, &fraction);
+  // A partial shot keeps the rest of the power unshot, at the top of the tree.
+  double power[3];
+  for (int c = 0; c < 3; ++c) {
+    power[c] = fraction < 1.0 ? src.unshot[c] * fraction : src.unshot[c];
+    ledger_.unshot[c] -= power[c];
+    src.unshot[c] = fraction < 1.0 ? src.unshot[c] - power[c] : 0.0;
+  }
+  tree_.Set(i, fraction < 1.0 ? KeyOf(src) : 0.0);
   ++stats_.shots;
   if (numNeighbours_ == 0) {
-    Distribute(p, i, power, key, nullptr, nullptr);
+    Distribute(p, i, power, key, rays, nullptr, nullptr);
     return;
   }
   MaskBits out = ScratchMask(0);
   out.SetAllOpen();
-  if (options_.maskMethod == MaskMethod::kR)
-    TraceAlive(p, i, power, key, false, &out);
-  else
-    Distribute(p, i, power, key, nullptr, &out);
-  Forward(ShotHeader(p, power, key, shotIndex, index_), out);
+  if (options_.maskMethod == MaskMethod::kR) {
+    for (uint32_t r = rays; r < out.bits(); ++r) out.Close(r);  // bits past the shot's rays
+    TraceAlive(p, i, power, key, rays, false, &out);
+  } else {
+    Distribute(p, i, power, key, rays, nullptr, &out);
+  }
+  Forward(ShotHeader(p, power, key, shotIndex, index_, rays), out);
   ++stats_.recordsCreated;
   --newRecords_;
 }
@@ -433,10 +486,11 @@ void Environment::ShootForeign(uint32_t s) {
   int next[6][3];
   bool forward = Downstream(slot.header.sourceEnv, next) > 0;
   if (options_.maskMethod == MaskMethod::kR)
-    TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, true, &out);
+    TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
+               &out);
   else
     Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_),
-               &in, forward ? &out : nullptr);
+               slot.header.rays, &in, forward ? &out : nullptr);
   ++stats_.foreignShots;
   if (forward) Forward(slot.header, out);
   slot = Slot();
@@ -500,7 +554,11 @@ void Environment::Deliver(const uint8_t* packet) {
   }
   ++slot.received;
   double power = h.power[0] + h.power[1] + h.power[2];
-  slot.key = shape_.empty() ? power : power * mask.OpenFraction();
+  // Method R's open share is of the shot's own rays (bits past them are closed).
+  if (shape_.empty()) slot.key = power;
+  else if (options_.maskMethod == MaskMethod::kR)
+    slot.key = power * mask.CountOpen() / (h.rays > 0 ? h.rays : 1);
+  else slot.key = power * mask.OpenFraction();
 }
 
 void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords) {

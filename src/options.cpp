@@ -26,7 +26,24 @@ render options:
   --out DIR            output directory (default out/); created if missing
   --patch-size L       longest patch edge, scene units (default: largest
                        scene extent / 16)
-  --rays N             Monte Carlo rays per shot (default 4096)
+  --ray-alloc power|fixed
+                       how many Monte Carlo rays a shot traces. power (the
+                       default): in proportion to the shot's unshot power,
+                       --emitted-rays for the whole emitted power, at least
+                       --min-rays; a shot worth more than --max-rays shoots
+                       that share of its power and keeps the rest for later
+                       shots. fixed: --rays every shot (the old default)
+  --rays N             fixed: Monte Carlo rays per shot (4096); given alone it
+                       selects --ray-alloc fixed
+  --emitted-rays M     power: the rays the emitted power is worth (8000000);
+                       a shot of power P traces M * P / emitted power rays,
+                       rounded up or down at random from the shot's stream
+  --min-rays F         power: the fewest rays a shot traces (default 64)
+  --max-rays C         power: the most rays a shot traces (default 8192);
+                       also Method R's packet bits
+  --sampler S          sobol (default): scrambled Sobol' points over a
+                       shot's origin x direction; random: independent draws
+  --ray-budget N       stop once N form-factor rays have been traced
   --seed S             random seed, unsigned 64-bit (default 1)
   --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
                        (default 1e-3)
@@ -63,7 +80,7 @@ local environments and visibility masks:
                        ray from the shooter's centre per open pixel (exact at
                        its resolution); C: pixels the rays only hit close,
                        only passed stay open, B's ray for the rest; R: one bit
-                       per ray of the shot (--rays bits), every ray absorbed
+                       per ray of the shot (--rays or --max-rays bits), every ray absorbed
                        in exactly one environment; none: no mask (light
                        passes occluders)
   --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
@@ -181,6 +198,25 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--rays") {
       if (!ParseU64(v, &u) || u < 1 || u > 100000000) return Bad(a, v, "an integer in [1, 1e8]");
       o->rays = static_cast<uint32_t>(u);
+      o->hasRays = true;
+    } else if (a == "--ray-alloc") {
+      if (v == "power") o->rayAlloc = Options::RayAlloc::kPower;
+      else if (v == "fixed") o->rayAlloc = Options::RayAlloc::kFixed;
+      else return Bad(a, v, "power or fixed");
+      o->hasRayAlloc = true;
+    } else if (a == "--emitted-rays") {
+      if (!ParseU64(v, &u) || u < 1 || u > 1000000000000ull) return Bad(a, v, "an integer in [1, 1e12]");
+      o->emittedRays = u;
+    } else if (a == "--min-rays" || a == "--max-rays") {
+      if (!ParseU64(v, &u) || u < 1 || u > 100000000) return Bad(a, v, "an integer in [1, 1e8]");
+      (a == "--min-rays" ? o->minRays : o->maxRays) = static_cast<uint32_t>(u);
+    } else if (a == "--sampler") {
+      if (v == "sobol") o->sobol = true;
+      else if (v == "random") o->sobol = false;
+      else return Bad(a, v, "sobol or random");
+    } else if (a == "--ray-budget") {
+      if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive integer");
+      o->rayBudget = u;
     } else if (a == "--seed") {
       if (!ParseU64(v, &u)) return Bad(a, v, "an unsigned 64-bit integer");
       o->seed = u;
@@ -284,6 +320,14 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     return Status::Error("vismask: " + o->command + ": no scene given (vismask " + o->command + " SCENE.obj)");
   if (o->errorEvery > 0 && o->reference.empty())
     return Status::Error("vismask: --error-every: needs --reference REF.pfm to measure against");
+  // --rays N alone keeps its meaning: N rays every shot.
+  if (!o->hasRayAlloc && o->hasRays) o->rayAlloc = Options::RayAlloc::kFixed;
+  if (o->rayAlloc == Options::RayAlloc::kPower && o->hasRays)
+    return Status::Error("vismask: --rays: sets every shot's rays under --ray-alloc fixed; with "
+                         "--ray-alloc power use --emitted-rays, --min-rays and --max-rays");
+  if (o->minRays > o->maxRays)
+    return Status::Error("vismask: --min-rays " + std::to_string(o->minRays) + " is above --max-rays " +
+                         std::to_string(o->maxRays));
   int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +

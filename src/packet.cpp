@@ -3,7 +3,7 @@
 namespace vismask {
 
 PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey, uint32_t shotIndex,
-                        uint32_t sourceEnv) {
+                        uint32_t sourceEnv, uint32_t rays) {
   PacketHeader h{};
   h.shotKey = shotKey;
   for (int c = 0; c < 3; ++c) h.power[c] = power[c];
@@ -15,6 +15,7 @@ PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey,
   h.shooterId = p.globalId;
   h.shotIndex = shotIndex;
   h.sourceEnv = sourceEnv;
+  h.rays = rays;
   return h;
 }
 

@@ -26,7 +26,12 @@ glm::vec3 PatchSampler::Point(float u0, float u1, float u2) const {
   // (Shirley): barycentrics (1 - su, su (1 - u2), su u2).
   const glm::vec3& ea = u0 < split ? e1 : e2;
   const glm::vec3& eb = u0 < split ? e2 : e3;
-  float su = std::sqrt(u1);
+  // Kept a hair inside the triangle: a point on the patch's outline lies on
+  // the plane of the wall that meets it there, and a ray from it could pass
+  // out of a closed box between the two (su rounds to 1 for u1 > 1 - 3e-8).
+  constexpr float kMargin = 1e-5f;
+  float su = std::fmin(std::fmax(std::sqrt(u1), kMargin), 1.0f - kMargin);
+  u2 = std::fmin(std::fmax(u2, kMargin), 1.0f - kMargin);
   return c0 + (su * (1.0f - u2)) * ea + (su * u2) * eb;
 }
 

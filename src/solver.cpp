@@ -12,6 +12,7 @@ const char* StopReasonName(StopReason r) {
     case StopReason::kConverged: return "converged";
     case StopReason::kMaxShots: return "max-shots";
     case StopReason::kMaxSeconds: return "max-seconds";
+    case StopReason::kRayBudget: return "ray-budget";
   }
   return "?";
 }
@@ -85,6 +86,7 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
     r.unshot = Sum3(e->ledger().unshot) + e->QueuedPower();
     r.emitted = Sum3(e->ledger().emitted);
     r.shots = e->stats().shots + e->stats().foreignShots;
+    r.rays = e->stats().rays;
     r.recordsCreated = e->stats().recordsCreated;
     r.foreignShots = e->stats().foreignShots;
     r.radiosity = Sum3(e->ledger().radiosity);
@@ -117,6 +119,7 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
     tot.unshot += r.unshot;
     tot.emitted += r.emitted;
     tot.shots += r.shots;
+    tot.rays += r.rays;
     tot.recordsCreated += r.recordsCreated;
     tot.radiosity += r.radiosity;
     tot.kdArea += r.kdArea;
@@ -211,6 +214,10 @@ bool ShouldStop(const RoundTotals& totals, const SolveOptions& options, SolveRes
     result->reason = StopReason::kMaxShots;
     return true;
   }
+  if (options.rayBudget > 0 && totals.rays >= options.rayBudget) {
+    result->reason = StopReason::kRayBudget;
+    return true;
+  }
   if (options.maxSeconds > 0.0 && totals.elapsed >= options.maxSeconds) {
     result->reason = StopReason::kMaxSeconds;
     return true;
@@ -274,6 +281,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     result.waitSecondsMax = totals.waitedMax;
     result.criticalSeconds += totals.roundCpuMax;
     result.shots = totals.shots;
+    result.rays = totals.rays;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
     // A ready foreign shooter exists whenever any queue holds one, so a round

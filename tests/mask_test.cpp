@@ -142,7 +142,7 @@ TEST(PacketTest, ForeignEnvironmentsRegenerateTheSourcesRaysExactly) {
     double power[3] = {1.0, 2.0, 3.0};
     uint64_t key = ShotKey(17, p.globalId, 3);
     uint8_t packet[sizeof(PacketHeader)];
-    WriteHeader(packet, ShotHeader(p, power, key, 3, 1));
+    WriteHeader(packet, ShotHeader(p, power, key, 3, 1, 4096));
     PacketHeader h = ReadHeader(packet);
     Patch q = PatchFromHeader(h);
     EXPECT_EQ(h.shotKey, key);

@@ -69,7 +69,16 @@ struct EnvFootprint {
 struct EnvOptions {
   float gridDensity = 4.0f;  // grid cells per patch (Cleary's lambda)
   float rayEpsilon = 0.0f;   // ray origins lifted this far off the shooter's plane (scene units)
-  uint32_t rays = 4096;      // rays per shot
+  // Rays per shot. With rayQuantum == 0 every shot traces `rays` rays.
+  // With rayQuantum > 0 (power allocation) a shot of power P (channels
+  // summed) traces P / rayQuantum rays, rounded stochastically from the
+  // shot's own stream, at least minRays; a shot that would need more than
+  // `rays` shoots only rays * rayQuantum of its power and keeps the rest
+  // unshot (a partial shot), so `rays` is also the most any shot traces.
+  uint32_t rays = 4096;
+  double rayQuantum = 0.0;
+  uint32_t minRays = 1;
+  bool sobol = true;         // scrambled Sobol' points; false: independent PCG32 draws
   uint64_t seed = 1;         // run seed
   MaskMethod maskMethod = MaskMethod::kB;
   uint32_t maskRes = 50;
@@ -163,12 +172,15 @@ class Environment {
   // pixels of rays that hit here (A), of centre rays that hit (B), or of
   // pixels the rays only hit and those whose centre ray hits (C).
   void Distribute(const Patch& shooter, uint32_t skip, const double power[3], uint64_t stream,
-                  const MaskBits* in, MaskBits* out);
+                  uint32_t rays, const MaskBits* in, MaskBits* out);
   // Method R: regenerates the shot's rays from its key, traces those whose
   // bit is set in `alive` (restricted to this box when `foreign`), and
   // clears the bits of the rays it absorbs or lets escape the scene.
   void TraceAlive(const Patch& shooter, uint32_t skip, const double power[3], uint64_t shotKey,
-                  bool foreign, MaskBits* alive);
+                  uint32_t rays, bool foreign, MaskBits* alive);
+  // How many rays a local shot of `power` traces and what share of the
+  // power it carries (1 unless the shot is partial).
+  uint32_t ShotRays(const double power[3], uint64_t shotKey, double* fraction) const;
   // Method C's two working masks: pixels some ray hit in, and pixels some ray
   // passed unoccluded.
   MaskBits ScratchMask(uint32_t k) const;

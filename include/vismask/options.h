@@ -19,7 +19,18 @@ struct Options {
   std::string scene;
   std::string outDir = "out";
   float patchSize = 0.0f;  // 0: automatic (largest scene extent / kAutoPatchDivisions)
-  uint32_t rays = 4096;
+  // Ray allocation: kPower (the default) gives a shot rays in proportion
+  // to its power; kFixed (chosen by --rays N alone) gives every shot N.
+  enum class RayAlloc { kPower, kFixed };
+  RayAlloc rayAlloc = RayAlloc::kPower;
+  bool hasRayAlloc = false;
+  uint32_t rays = 4096;           // --rays: per shot (fixed)
+  bool hasRays = false;
+  uint64_t emittedRays = 8000000; // --emitted-rays: the rays the emitted power is worth (power)
+  uint32_t minRays = 64;          // --min-rays: the fewest a shot traces (power)
+  uint32_t maxRays = 8192;        // --max-rays: the most a shot traces (power); more power -> partial shots
+  bool sobol = true;              // --sampler sobol|random
+  uint64_t rayBudget = 0;         // --ray-budget N: stop once N rays are traced; 0: none
   uint64_t seed = 1;
   double stopUnshot = 1e-3;
   uint64_t maxShots = 0;   // 0: none

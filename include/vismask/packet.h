@@ -27,7 +27,7 @@ struct PacketHeader {
   uint32_t fromEnv;     // the sender of this packet
   uint32_t toEnv;       // the receiver
   uint32_t sequence;    // the sender's packet count this round (ordering)
-  uint32_t reserved;
+  uint32_t rays;        // the shot's ray count (every environment traces as many)
 };
 static_assert(std::is_trivially_copyable<PacketHeader>::value, "packets are plain bytes");
 static_assert(sizeof(PacketHeader) == 128, "the packet header's layout is part of the wire format");
@@ -41,7 +41,7 @@ inline uint32_t PacketBytes(const MaskShape& shape) {
 // The header of a shot of `p` (power, key and ids; the routing fields
 // fromEnv, toEnv and sequence are left 0).
 PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey, uint32_t shotIndex,
-                        uint32_t sourceEnv);
+                        uint32_t sourceEnv, uint32_t rays);
 // The shooter as a foreign environment sees it: corners, normal, area, corner
 // count and global id, the very floats of the source's patch, so that
 // MakePatchSampler and the shot's stream regenerate its rays bit for bit.

@@ -32,6 +32,7 @@ class ErrorProbe {
 struct SolveOptions {
   double stopUnshot = 1e-3;  // stop when unshot/emitted power < this
   uint64_t maxShots = 0;     // 0: no limit
+  uint64_t rayBudget = 0;    // stop once this many form-factor rays are traced; 0: no limit
   double maxSeconds = 0.0;   // 0: no limit
   uint32_t roundShots = 1;   // shots per environment per round
   uint32_t queueCapacity = 64;  // foreign shooters an environment can hold
@@ -45,13 +46,14 @@ struct SolveOptions {
   bool correctUnshot = false;
 };
 
-enum class StopReason { kConverged, kMaxShots, kMaxSeconds };
+enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget };
 const char* StopReasonName(StopReason r);
 
 struct SolveResult {
   StopReason reason = StopReason::kConverged;
   uint64_t rounds = 0;
   uint64_t shots = 0;         // local and foreign
+  uint64_t rays = 0;          // form-factor rays traced, all environments
   double seconds = 0.0;
   double unshotFraction = 1.0;  // (unshot + queued) / emitted, channels summed
   // With a probe: how often it measured, the seconds that took (not in
@@ -92,6 +94,7 @@ struct EnvReport {
   double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
   double roundCpu;   // CPU seconds of this rank's shots in the last round (first entry)
   uint64_t shots;    // local and foreign
+  uint64_t rays;     // form-factor rays traced
   uint64_t recordsCreated;
   uint64_t foreignShots;
   double radiosity;  // sum of b * area, channels summed
@@ -106,6 +109,7 @@ struct RoundTotals {
   double waitedMax = 0.0;  // the most any rank has waited
   double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
   uint64_t shots = 0;
+  uint64_t rays = 0;
   uint64_t recordsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
   double radiosity = 0.0;
