@@ -11,6 +11,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "vismask/display.h"
 #include "vismask/environment.h"
 #include "vismask/image_io.h"
 #include "vismask/mesh.h"
@@ -52,6 +53,10 @@ struct EnvSummary {
   uint64_t vertices;
   uint64_t gridCells;
   uint64_t gridRefs;
+  uint64_t elementsUsed;     // roots included
+  uint64_t elementCapacity;
+  uint64_t leaves;
+  uint64_t elementDepth;     // the deepest leaf
 };
 
 // One row of patches.csv as a rank sends it to rank 0.
@@ -213,6 +218,8 @@ Status PrepareScene(const Options& o, Prepared* p) {
   e.maskRes = o.maskRes;
   e.roundShots = o.roundShots;
   e.queueCapacity = o.queue;
+  e.elements.perPatch = o.elementsPerPatch;
+  e.elements.maxDepth = o.elementDepth;
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
   return Status::Ok();
@@ -489,6 +496,23 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
            "    \"compute_cpu_seconds\": %.6f,\n    \"critical_cpu_seconds\": %.6f,\n",
            res.waitSeconds, res.waitSecondsMax, res.computeSeconds, res.criticalSeconds);
   w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
+  // Sub-patch elements: the pool (roots included), what was used, the
+  // leaves drawn, and whether refinement stopped for want of elements.
+  uint64_t used = 0, capacity = 0, leaves = 0, depth = 0, splits = 0, refused = 0;
+  for (const EnvSummary& e : r->summary) {
+    used += e.elementsUsed;
+    capacity += e.elementCapacity;
+    leaves += e.leaves;
+    depth = e.elementDepth > depth ? e.elementDepth : depth;
+    splits += e.stats.splits;
+    refused += e.stats.refusedSplits;
+  }
+  w.Printf("    \"elements\": {\"capacity\": %llu, \"used\": %llu, \"leaves\": %llu, "
+           "\"splits\": %llu, \"deepest\": %llu, \"refused_splits\": %llu, "
+           "\"refinement_stopped\": %s},\n",
+           (unsigned long long)capacity, (unsigned long long)used, (unsigned long long)leaves,
+           (unsigned long long)splits, (unsigned long long)depth, (unsigned long long)refused,
+           refused > 0 ? "true" : "false");
   // Against --reference (null without one): the final image's relative RMSE.
   if (o.reference.empty()) w.Printf("    \"relative_rmse\": null,\n");
   else w.Printf("    \"relative_rmse\": %.17g,\n", res.relativeRmse);
@@ -576,10 +600,7 @@ void RenderImage(Render* r) {
   double* ambient = r->ambientB;
   AmbientTerm(r->ambient, ambient);
   r->fb.Clear();
-  for (Environment* env : r->envPtrs) {
-    env->ComputeVertexRadiosity(ambient);
-    RasterPatches(r->view, env->patches(), env->vertices(), env->vertexRadiosity(), &r->fb);
-  }
+  for (Environment* env : r->envPtrs) DrawEnvironment(r->view, env, ambient, &r->fb);
   for (int src = 1; src < t->size(); ++src) {
     if (r->isRoot()) {
       t->Recv(src, r->incoming.color.data(), r->incoming.color.bytes());
@@ -629,6 +650,12 @@ int WriteOutputs(Render* r, const SolveResult& res) {
     s.vertices = e.vertices().size();
     s.gridCells = e.grid().cellCount();
     s.gridRefs = e.grid().plan().refs;
+    s.elementsUsed = e.elementsUsed();
+    s.elementCapacity = e.elements().size();
+    for (const Element& el : e.elements().subspan(0, e.elementsUsed())) {
+      s.leaves += el.child == kNoElement;
+      if (el.depth > s.elementDepth) s.elementDepth = el.depth;
+    }
   }
   GatherByEnv(r, r->summaryMine, r->summaryAll, r->summary);
   if (!r->isRoot()) return kExitOk;
@@ -690,11 +717,11 @@ int Footprint(const Options& o) {
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
       add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"grid_cells\": %llu, "
-          "\"patch_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": %llu, "
+          "\"patch_bytes\": %llu, \"element_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": %llu, "
           "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"arena_bytes\": %llu}%s\n",
           e, [&] { for (int k = 0; k < ranks; ++k) { RankEnvs re = EnvsOfRank(total, ranks, k); if (e < re.first + re.count) return k; } return 0; }(),
-          (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.vertices, (ull)f.grid,
-          (ull)f.queue, (ull)f.packets, (ull)f.total, e + 1 < total ? "," : "");
+          (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
+          (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.total, e + 1 < total ? "," : "");
     }
     out += "  ],\n  \"ranks\": [\n";
     for (int k = 0; k < ranks; ++k) {
@@ -712,15 +739,16 @@ int Footprint(const Options& o) {
         o.scene.c_str(), total, total == 1 ? "" : "s", ranks, ranks == 1 ? "" : "s",
         MaskMethodName(o.maskMethod), o.maskMethod == MaskMethod::kR ? "N" : "R",
         o.maskMethod == MaskMethod::kR ? RayCap(o) : o.maskRes, p.packetBytes, o.width, o.height);
-    add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches", "grid_cells",
-        "patches_B", "vertices_B", "grid_B", "queue_B", "packets_B", "arena_B");
+    add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches",
+        "grid_cells", "patches_B", "elements_B", "vertices_B", "grid_B", "queue_B", "packets_B",
+        "arena_B");
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
       int k = 0;
       while (e >= EnvsOfRank(total, ranks, k).first + EnvsOfRank(total, ranks, k).count) ++k;
-      add("%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
-          (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.vertices, (ull)f.grid,
-          (ull)f.queue, (ull)f.packets, (ull)f.total);
+      add("%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
+          (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
+          (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.total);
     }
     add("\n%4s %4s %14s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B", "exchange_B",
         "image_B", "output_B", "total_B");

@@ -102,6 +102,8 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
+  elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options_.elements.perPatch));
+  part(&footprint_.elements);
   vertices_ = arena.Alloc<glm::vec3>(numVertices);
   vertexB_ = arena.Alloc<glm::vec3>(numVertices);
   vertexWeight_ = arena.Alloc<float>(numVertices);
@@ -199,18 +201,37 @@ void Environment::Reset() {
     }
     shotCount_[i] = 0;
     tree_.Set(i, KeyOf(e));
+    Element& root = elements_[i];
+    root = Element{};
+    root.area = p.area;
+    root.child = kNoElement;
   }
+  nextElement_ = static_cast<uint32_t>(patches_.size());
   for (Slot& s : slots_) s = Slot();
   queued_ = 0;
   outCount_ = 0;
 }
 
-void Environment::Receive(uint32_t j, const double share[3]) {
+void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x) {
   const Patch& p = patches_[j];
   PatchEnergy& e = energy_[j];
   double invArea = 1.0 / p.area;
+  // The leaf element the ray landed in, and the quarter of it.
+  const bool triangle = p.numCorners == 3;
+  glm::vec2 st = PatchParam(p, x);
+  uint32_t leaf = j, depth = 0;
+  uint8_t path[32];
+  while (elements_[leaf].child != kNoElement) {
+    uint32_t k = ChildOf(triangle, &st);
+    path[depth++] = static_cast<uint8_t>(k);
+    leaf = elements_[leaf].child + k;
+  }
+  Element& el = elements_[leaf];
+  uint32_t quarter = ChildOf(triangle, &st);
   for (int c = 0; c < 3; ++c) {
     double reflected = share[c] * p.kd[c];
+    el.received[c] += reflected;
+    el.quarter[quarter][c] += reflected;
     e.b[c] += reflected * invArea;
     e.var[c] += (reflected * invArea) * (reflected * invArea);  // one ray's term
     e.unshot[c] += reflected;
@@ -219,6 +240,67 @@ void Environment::Receive(uint32_t j, const double share[3]) {
     ledger_.absorbed[c] += share[c] - reflected;
   }
   tree_.Increase(j, KeyOf(e));
+  // Whether to split is asked at 64, 128, 256, ... hits.
+  uint32_t hits = ++el.hits;
+  if (hits >= options_.elements.minHits && (hits & (hits - 1)) == 0 &&
+      el.depth < options_.elements.maxDepth)
+    MaybeSplit(j, leaf, path, depth);
+}
+
+void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth) {
+  const Patch& p = patches_[j];
+  const bool triangle = p.numCorners == 3;
+  Element& el = elements_[e];
+  // The element's corners in the patch's parameters, down its path.
+  glm::vec2 corners[4], next[4];
+  int n = RootCorners(triangle, corners);
+  for (uint32_t d = 0; d < depth; ++d) {
+    ChildCorners(triangle, corners, path[d], next);
+    for (int k = 0; k < n; ++k) corners[k] = next[k];
+  }
+  // Each quarter's area, from its corners on the patch.
+  double quarterArea[4];
+  for (uint32_t q = 0; q < 4; ++q) {
+    ChildCorners(triangle, corners, q, next);
+    glm::vec3 w[4];
+    for (int k = 0; k < n; ++k) w[k] = PatchPoint(p, next[k]);
+    glm::vec3 cr = n == 3 ? glm::cross(w[1] - w[0], w[2] - w[0]) : glm::cross(w[2] - w[0], w[3] - w[1]);
+    quarterArea[q] = 0.5 * glm::length(glm::dvec3(cr));
+  }
+  double areaSum = quarterArea[0] + quarterArea[1] + quarterArea[2] + quarterArea[3];
+  double lo = 0.0, hi = 0.0, total = 0.0;
+  for (uint32_t q = 0; q < 4; ++q) {
+    double power = el.quarter[q][0] + el.quarter[q][1] + el.quarter[q][2];
+    double density = power / quarterArea[q];
+    total += power;
+    if (q == 0 || density < lo) lo = density;
+    if (q == 0 || density > hi) hi = density;
+  }
+  if (!(total > 0.0)) return;
+  double mean = total / areaSum;
+  // Each quarter holds about hits/4 rays: relative noise ~ 2/sqrt(hits).
+  double noise = 3.0 * 2.0 / std::sqrt(static_cast<double>(el.hits));
+  if ((hi - lo) / mean <= options_.elements.threshold + noise) return;
+  if (nextElement_ + 4 > elements_.size()) {
+    ++stats_.refusedSplits;
+    return;
+  }
+  uint32_t first = nextElement_;
+  nextElement_ += 4;
+  ++stats_.splits;
+  for (uint32_t q = 0; q < 4; ++q) {
+    Element& ch = elements_[first + q];
+    ch = Element{};
+    ch.area = static_cast<float>(quarterArea[q] * (el.area / areaSum));
+    ch.child = kNoElement;
+    ch.depth = el.depth + 1;
+    for (int c = 0; c < 3; ++c) {
+      double older = el.received[c] - (el.quarter[0][c] + el.quarter[1][c] + el.quarter[2][c] +
+                                       el.quarter[3][c]);
+      ch.received[c] = older * (quarterArea[q] / areaSum) + el.quarter[q][c];
+    }
+  }
+  el.child = first;
 }
 
 bool Environment::LeavesScene(const Ray& ray) const {
@@ -309,7 +391,7 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
       for (int c = 0; c < 3; ++c) backHit[c] += share[c];
       continue;
     }
-    Receive(hit.patch, share);
+    Receive(hit.patch, share, ray.o + hit.t * ray.d);
   }
   for (int c = 0; c < 3; ++c) {
     ledger_.escaped[c] += lost[c];
@@ -387,7 +469,7 @@ void Environment::TraceAlive(const Patch& shooter, uint32_t skip, const double p
       for (int c = 0; c < 3; ++c) backHit[c] += share[c];
       continue;
     }
-    Receive(hit.patch, share);
+    Receive(hit.patch, share, ray.o + hit.t * ray.d);
   }
   for (int c = 0; c < 3; ++c) {
     ledger_.escaped[c] += lost[c];
@@ -585,6 +667,23 @@ double Environment::QueuedPower() const {
   return sum;
 }
 
+uint32_t Environment::LeafAt(uint32_t patch, glm::vec2 st) const {
+  const bool triangle = patches_[patch].numCorners == 3;
+  uint32_t e = patch;
+  while (elements_[e].child != kNoElement) e = elements_[e].child + ChildOf(triangle, &st);
+  return e;
+}
+
+glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const {
+  const Patch& p = patches_[patch];
+  const Element& el = elements_[e];
+  glm::vec3 b;
+  for (int c = 0; c < 3; ++c)
+    b[c] = static_cast<float>(static_cast<double>(p.ke[c]) + el.received[c] / el.area +
+                              p.kd[c] * ambient[c]);
+  return b;
+}
+
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {
   for (size_t v = 0; v < vertexB_.size(); ++v) {
     vertexB_[v] = glm::vec3(0.0f);
@@ -592,13 +691,17 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
   }
   for (uint32_t i = 0; i < patches_.size(); ++i) {
     const Patch& p = patches_[i];
-    glm::vec3 b;
-    for (int c = 0; c < 3; ++c)
-      b[c] = static_cast<float>(energy_[i].b[c] + p.kd[c] * ambient[c]);
-    // Each distinct corner once (triangles repeat their last vertex).
+    glm::vec2 corners[4];
+    RootCorners(p.numCorners == 3, corners);
+    // Each distinct corner once (triangles repeat their last vertex), with
+    // the leaf element that holds it.
     for (uint32_t k = 0; k < p.numCorners; ++k) {
-      vertexB_[p.vertex[k]] += p.area * b;
-      vertexWeight_[p.vertex[k]] += p.area;
+      // A point just inside the corner, so the leaf is the corner's own.
+      glm::vec2 centre = p.numCorners == 3 ? glm::vec2(1.0f / 3.0f) : glm::vec2(0.5f);
+      uint32_t leaf = LeafAt(i, corners[k] + 1e-4f * (centre - corners[k]));
+      float w = elements_[leaf].area;
+      vertexB_[p.vertex[k]] += w * LeafRadiosity(i, leaf, ambient);
+      vertexWeight_[p.vertex[k]] += w;
     }
   }
   for (size_t v = 0; v < vertexB_.size(); ++v)

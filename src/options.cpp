@@ -44,6 +44,14 @@ render options:
   --sampler S          sobol (default): scrambled Sobol' points over a
                        shot's origin x direction; random: independent draws
   --ray-budget N       stop once N form-factor rays have been traced
+  --elements K         receivers finer than shooters: each patch is a
+                       quadtree of elements that split where the radiosity
+                       received changes fast (shadow edges, contact shadows,
+                       corners); the pool holds K elements per patch beyond
+                       the patches themselves (default 8; 0: no refinement).
+                       When it is used up refinement stops (run.json says so)
+  --element-depth D    the deepest an element splits, 0-16 (default 4: 1/16
+                       of the patch's edge)
   --seed S             random seed, unsigned 64-bit (default 1)
   --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
                        (default 1e-3)
@@ -214,6 +222,12 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (v == "sobol") o->sobol = true;
       else if (v == "random") o->sobol = false;
       else return Bad(a, v, "sobol or random");
+    } else if (a == "--elements") {
+      if (!ParseU64(v, &u) || u > 1024) return Bad(a, v, "an integer in [0, 1024]");
+      o->elementsPerPatch = static_cast<uint32_t>(u);
+    } else if (a == "--element-depth") {
+      if (!ParseU64(v, &u) || u > 16) return Bad(a, v, "an integer in [0, 16]");
+      o->elementDepth = static_cast<uint32_t>(u);
     } else if (a == "--ray-budget") {
       if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive integer");
       o->rayBudget = u;

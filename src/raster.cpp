@@ -121,6 +121,20 @@ void RasterPatches(const View& view, Span<const Patch> patches, Span<const glm::
   }
 }
 
+void DrawPiece(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
+  CamVert cv[4];
+  for (uint32_t k = 0; k < piece.numCorners; ++k) {
+    glm::vec3 d = piece.p[k] - view.eye;
+    cv[k].p = glm::vec3(glm::dot(d, view.right), glm::dot(d, view.up), glm::dot(d, view.forward));
+    cv[k].c = piece.c[k];
+  }
+  ClipAndDraw(view, cv, piece.id, fb);
+  if (piece.numCorners == 4) {
+    CamVert second[3] = {cv[0], cv[2], cv[3]};
+    ClipAndDraw(view, second, piece.id, fb);
+  }
+}
+
 void Composite(const Framebuffer& other, Framebuffer* fb) {
   CHECK(other.width == fb->width && other.height == fb->height);
   for (size_t i = 0; i < fb->depth.size(); ++i) {

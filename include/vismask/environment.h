@@ -12,6 +12,7 @@
 #include <glm/vec3.hpp>
 
 #include "vismask/arena.h"
+#include "vismask/element.h"
 #include "vismask/grid.h"
 #include "vismask/mask.h"
 #include "vismask/max_tree.h"
@@ -51,6 +52,8 @@ struct EnvStats {
   uint64_t hits = 0;
   uint64_t packetsSent = 0;
   uint64_t recordsCreated = 0;  // local shots that went on to neighbours
+  uint64_t splits = 0;          // elements split into four
+  uint64_t refusedSplits = 0;   // splits refused because the element pool was used up
 };
 
 // What an environment's arena holds, in bytes, by part (from the measuring
@@ -58,6 +61,7 @@ struct EnvStats {
 struct EnvFootprint {
   uint64_t patches = 0;   // Patch, PatchGeom, PatchEnergy, shot counts, selection tree
   uint64_t vertices = 0;  // display lattice and its radiosity
+  uint64_t elements = 0;  // the element pool (roots and children)
   uint64_t grid = 0;      // cell offsets and patch references
   uint64_t queue = 0;     // foreign-shooter slots and their masks
   uint64_t packets = 0;   // outbox and working masks
@@ -84,6 +88,7 @@ struct EnvOptions {
   uint32_t maskRes = 50;
   uint32_t roundShots = 1;   // shots per environment per round
   uint32_t queueCapacity = 64;  // foreign shooters held at once
+  ElementOptions elements;
 };
 
 class Environment {
@@ -130,9 +135,17 @@ class Environment {
   double QueuedPower() const;
   uint32_t queuedCount() const { return queued_; }
 
-  // Display radiosity at the lattice vertices: the area-weighted mean of the
-  // touching patches' B + kd * ambient.
+  // Display radiosity at the lattice vertices: the area-weighted mean, over
+  // the patches touching the vertex, of the leaf element at that corner's
+  // B + kd * ambient.
   void ComputeVertexRadiosity(const double ambient[3]);
+  // The display radiosity of leaf element `e` of patch `patch`: the
+  // patch's emission + what the leaf received / its area + kd * ambient.
+  glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;
+  // The leaf element of patch `patch` at parameters `st`.
+  uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
+  Span<const Element> elements() const { return elements_; }
+  uint32_t elementsUsed() const { return nextElement_; }
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return packetBytes_; }
@@ -184,7 +197,11 @@ class Environment {
   // Method C's two working masks: pixels some ray hit in, and pixels some ray
   // passed unoccluded.
   MaskBits ScratchMask(uint32_t k) const;
-  void Receive(uint32_t j, const double share[3]);
+  // Patch j receives `share` (W per channel) at point `x`.
+  void Receive(uint32_t j, const double share[3], const glm::vec3& x);
+  // Splits leaf `e` of patch `j` (reached from the root by the children
+  // `path[0..depth)`) if its quarters differ beyond noise.
+  void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
   // True if a ray that leaves this environment's box leaves the scene.
   bool LeavesScene(const Ray& ray) const;
   // Sends the shooter's record and `mask` to the neighbours downstream from
@@ -210,6 +227,8 @@ class Environment {
   Span<PatchGeom> geom_;
   Span<PatchEnergy> energy_;
   Span<uint32_t> shotCount_;
+  Span<Element> elements_;  // roots first (element i is patch i's), then the pool
+  uint32_t nextElement_ = 0;
   Span<glm::vec3> vertices_;
   Span<glm::vec3> vertexB_;
   Span<float> vertexWeight_;

@@ -30,6 +30,8 @@ struct Options {
   uint32_t minRays = 64;          // --min-rays: the fewest a shot traces (power)
   uint32_t maxRays = 8192;        // --max-rays: the most a shot traces (power); more power -> partial shots
   bool sobol = true;              // --sampler sobol|random
+  uint32_t elementsPerPatch = 8;  // --elements K: the element pool, K per patch beyond the roots
+  uint32_t elementDepth = 4;      // --element-depth D: the deepest an element splits
   uint64_t rayBudget = 0;         // --ray-budget N: stop once N rays are traced; 0: none
   uint64_t seed = 1;
   double stopUnshot = 1e-3;

@@ -26,6 +26,20 @@ struct Framebuffer {
   void Clear();
 };
 
+// One drawable piece of a patch: corners in world space, counter-clockwise
+// from the front, the radiance at each (already divided by pi), and the
+// patch's global id for the depth tie rule. numCorners is 3 or 4 (then p[3]
+// is used).
+struct DisplayPiece {
+  glm::vec3 p[4];
+  glm::vec3 c[4];
+  uint32_t numCorners;
+  uint32_t id;
+};
+
+// Draws one piece into `fb` (clipped at the near plane).
+void DrawPiece(const View& view, const DisplayPiece& piece, Framebuffer* fb);
+
 // Draws `patches` (corners via `vertices`, radiance per vertex) into `fb`.
 // Triangles crossing the near plane are clipped.
 void RasterPatches(const View& view, Span<const Patch> patches, Span<const glm::vec3> vertices,
