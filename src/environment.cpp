@@ -228,8 +228,10 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
   }
   Element& el = elements_[leaf];
   uint32_t quarter = ChildOf(triangle, &st);
+  double hitPower = 0.0;
   for (int c = 0; c < 3; ++c) {
     double reflected = share[c] * p.kd[c];
+    hitPower += reflected;
     el.received[c] += reflected;
     el.quarter[quarter][c] += reflected;
     e.b[c] += reflected * invArea;
@@ -239,11 +241,12 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
     ledger_.radiosity[c] += reflected;
     ledger_.absorbed[c] += share[c] - reflected;
   }
+  el.squares += hitPower * hitPower;
   tree_.Increase(j, KeyOf(e));
   // Whether to split is asked at 64, 128, 256, ... hits.
   uint32_t hits = ++el.hits;
   if (hits >= options_.elements.minHits && (hits & (hits - 1)) == 0 &&
-      el.depth < options_.elements.maxDepth)
+      el.depth < options_.elements.maxDepth && options_.elements.perPatch > 0)
     MaybeSplit(j, leaf, path, depth);
 }
 
@@ -268,19 +271,22 @@ void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32
     quarterArea[q] = 0.5 * glm::length(glm::dvec3(cr));
   }
   double areaSum = quarterArea[0] + quarterArea[1] + quarterArea[2] + quarterArea[3];
-  double lo = 0.0, hi = 0.0, total = 0.0;
+  double power[4], total = 0.0;
   for (uint32_t q = 0; q < 4; ++q) {
-    double power = el.quarter[q][0] + el.quarter[q][1] + el.quarter[q][2];
-    double density = power / quarterArea[q];
-    total += power;
-    if (q == 0 || density < lo) lo = density;
-    if (q == 0 || density > hi) hi = density;
+    power[q] = el.quarter[q][0] + el.quarter[q][1] + el.quarter[q][2];
+    total += power[q];
   }
-  if (!(total > 0.0)) return;
-  double mean = total / areaSum;
-  // Each quarter holds about hits/4 rays: relative noise ~ 2/sqrt(hits).
-  double noise = 3.0 * 2.0 / std::sqrt(static_cast<double>(el.hits));
-  if ((hi - lo) / mean <= options_.elements.threshold + noise) return;
+  if (!(total > 0.0) || !(el.squares > 0.0)) return;
+  // Against an even spread, quarter q expects f_q = area_q / area of the
+  // power, with variance f_q * (sum of the hits' squared powers).
+  double chi2 = 0.0, spread = 0.0;
+  for (uint32_t q = 0; q < 4; ++q) {
+    double f = quarterArea[q] / areaSum, expect = f * total;
+    chi2 += (power[q] - expect) * (power[q] - expect) / (f * el.squares);
+    double rel = power[q] / expect - 1.0;
+    spread += f * rel * rel;
+  }
+  if (chi2 <= options_.elements.chi2 || std::sqrt(spread) <= options_.elements.threshold) return;
   if (nextElement_ + 4 > elements_.size()) {
     ++stats_.refusedSplits;
     return;

@@ -3,8 +3,10 @@
 // parameter space; a patch shoots as a whole, but each ray it receives lands
 // in one leaf element, which is what the image shows. A leaf splits into
 // four when the power it has received since it was made is spread unevenly
-// over its four quarters, beyond what the Monte Carlo noise of that many
-// hits explains: at shadow boundaries, contact shadows and corners. The
+// over its four quarters, beyond what the Monte Carlo noise of those hits
+// explains (a chi-square test against an even spread, each hit's power
+// squared giving the variance): at shadow boundaries, contact shadows and
+// corners, and only once enough rays have landed there to tell. The
 // children start from what landed in their quarter (exact since the split
 // parent was made; its older history is shared by area). Children come from
 // a pool reserved at init; when it runs out, refinement stops.
@@ -29,6 +31,7 @@ constexpr uint32_t kNoElement = 0xffffffffu;
 struct Element {
   double received[3];  // reflected power received (W), history included
   double quarter[4][3];  // the part of it received in each child's region since made
+  double squares;        // the sum of each received share's square (channels summed) since made
   float area;
   uint32_t child;      // first of four consecutive children; kNoElement for a leaf
   uint32_t hits;       // rays received since made
@@ -39,7 +42,9 @@ struct ElementOptions {
   uint32_t perPatch = 8;   // pool: this many elements per patch on average, beyond the roots
   uint32_t maxDepth = 4;   // a leaf of this depth never splits
   uint32_t minHits = 64;   // hits a leaf needs before it may split
-  float threshold = 0.1f;  // relative spread of the quarters' densities beyond noise
+  float threshold = 0.1f;  // the least relative RMS spread of the quarters' densities that splits
+  float chi2 = 20.0f;      // ... when also significant: chi-square (3 dof) of the quarters against
+                           // an even spread, above this (20: p = 2e-4)
 };
 
 // (s, t) of the point `x` on patch `p` (clamped to the patch).
