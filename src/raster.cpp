@@ -203,9 +203,11 @@ struct Vec2 {
 inline float Cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
 
 // Area and centroid of the part of convex polygon `poly` (n corners, pixel
-// coordinates relative to the pixel's corner) inside the unit square.
-// Returns the area (0 if none).
-float CoverInUnitSquare(const Vec2* poly, int n, Vec2* centroid) {
+// coordinates relative to the pixel's corner) inside the unit square, and
+// the range [*lo, *hi] over that part of the affine function
+// base + grad.x * x + grad.y * y. Returns the area (0 if none).
+float CoverInUnitSquare(const Vec2* poly, int n, Vec2 grad, float base, Vec2* centroid, float* lo,
+                        float* hi) {
   Vec2 a[kMaxPoly + 4], b[kMaxPoly + 4];
   // Four axis-aligned clips: x >= 0, x <= 1, y >= 0, y <= 1.
   auto clip = [](const Vec2* in, int m, Vec2* out, int axis, float bound, float sign) {
@@ -231,8 +233,11 @@ float CoverInUnitSquare(const Vec2* poly, int n, Vec2* centroid) {
   m = clip(a, m, b, 1, 1.0f, -1.0f);
   if (m < 3) return 0.0f;
   float twiceArea = 0.0f, cx = 0.0f, cy = 0.0f;
+  *lo = kInf, *hi = -kInf;
   for (int k = 0; k < m; ++k) {
     Vec2 p = b[k], q = b[(k + 1) % m];
+    float g = base + grad.x * p.x + grad.y * p.y;
+    *lo = std::fmin(*lo, g), *hi = std::fmax(*hi, g);
     float cr = Cross(p, q);
     twiceArea += cr;
     cx += (p.x + q.x) * cr;
@@ -355,6 +360,9 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
   float twice = 0.0f;
   for (int k = 0; k < m; ++k) twice += Cross(sp[k], sp[(k + 1) % m]);
   if (!(std::fabs(twice) > 0.0f)) return;
+  // Corners counter-clockwise from the front turn clockwise in pixel
+  // coordinates (y down): positive area is the back of the piece.
+  const bool back = twice > 0.0f;
   if (twice < 0.0f) std::reverse(sp, sp + m);
   // Edge functions A x + B y + C >= 0 inside.
   float ea[kMaxPoly], eb[kMaxPoly], ec[kMaxPoly];
@@ -370,12 +378,10 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
   int y0 = std::max(0, static_cast<int>(std::floor(minY)));
   int y1 = std::min(view.height - 1, static_cast<int>(std::ceil(maxY)) - 1);
   const float invF = 1.0f / f;
-  const float zLo = 0.5f * zMin, zHi = 2.0f * zMax;
-  // The depth where the ray through pixel point (px, py) meets the plane.
-  auto depthAt = [&](float px, float py) {
-    glm::vec3 r((px - halfW) * invF, (halfH - py) * invF, 1.0f);
-    return s.d / glm::dot(s.n, r);
-  };
+  // 1/depth on the plane is affine in pixel coordinates: iz(x, y) = ia x + ib y + ic.
+  if (s.d == 0.0f) return;  // the plane passes through the eye
+  const float ia = s.n.x * invF / s.d, ib = -s.n.y * invF / s.d;
+  const float ic = (s.n.z - s.n.x * halfW * invF + s.n.y * halfH * invF) / s.d;
   for (int y = y0; y <= y1; ++y) {
     float fy = static_cast<float>(y);
     for (int x = x0; x <= x1; ++x) {
@@ -393,20 +399,32 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       if (outside) continue;
       float cover = 1.0f;
       float sx = fx + 0.5f, sy = fy + 0.5f;  // where the radiance is taken
+      float izCorner = ia * fx + ib * fy + ic;
+      float izLo = izCorner + std::fmin(ia, 0.0f) + std::fmin(ib, 0.0f);
+      float izHi = 0.0f;  // the covered part's nearest: not needed
       if (!inside) {
         Vec2 local[kMaxPoly], c{0.5f, 0.5f};
         for (int k = 0; k < m; ++k) local[k] = Vec2{sp[k].x - fx, sp[k].y - fy};
-        cover = CoverInUnitSquare(local, m, &c);
+        cover = CoverInUnitSquare(local, m, Vec2{ia, ib}, izCorner, &c, &izLo, &izHi);
         if (!(cover > 1e-6f)) continue;
         sx = fx + c.x, sy = fy + c.y;
       }
-      // The sort key: the plane's depth at the pixel centre (the same for
-      // every piece of a plane), or at the sample point where the centre's
-      // ray grazes the plane.
-      float zSample = depthAt(sx, sy);
+      float zSample = 1.0f / (ia * sx + ib * sy + ic);
       if (!(zSample > 0.0f)) zSample = zMin;
-      float key = inside ? zSample : depthAt(fx + 0.5f, fy + 0.5f);
-      if (!(key >= zLo && key <= zHi)) key = zSample;
+      // The sort key. A front face: its plane's depth at the pixel centre
+      // (the same for every piece of a plane, and it keeps a light just
+      // below a ceiling in front of it however grazing the view), or the
+      // sample's where the centre's ray grazes the plane. A back face: the
+      // farthest depth of its covered part, so that at a silhouette a closed
+      // object's back face sorts behind the front face sharing its edge.
+      float key;
+      if (back) {
+        key = 1.0f / izLo;
+        if (!(key >= zMin && key <= zMax)) key = std::fmin(std::fmax(key, zMin), zMax);
+      } else {
+        key = 1.0f / (izCorner + 0.5f * ia + 0.5f * ib);
+        if (!(key >= 0.5f * zMin && key <= 2.0f * zMax)) key = zSample;
+      }
       glm::vec3 pCam = zSample * glm::vec3((sx - halfW) * invF, (halfH - sy) * invF, 1.0f);
       glm::vec3 r = pCam - s.origin;
       glm::vec3 rad = RadianceAt(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)});

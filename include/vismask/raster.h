@@ -8,8 +8,12 @@
 //   kFragments fragments, one per patch id: pieces with the same id add their
 //   coverage and coverage-weighted radiance to one fragment, so pieces that
 //   tile a patch sum to its full coverage. Fragments are kept sorted by
-//   (depth at the pixel centre, id), the nearest kFragments; Resolve composes
-//   them front to back, each taking at most the coverage still free.
+//   (depth, id), the nearest kFragments, where depth is the piece's plane's
+//   depth at the pixel centre for a front face and the farthest point of the
+//   covered part for a back face (so a closed object's back face sorts
+//   behind the front face it shares a silhouette edge with); Resolve
+//   composes them front to back, each taking at most the coverage still
+//   free.
 // - point sampled (--aa off): the pixel centre only, quads split into two
 //   Gouraud-shaded triangles; one (depth, id) sample per pixel.
 //
@@ -36,7 +40,7 @@ constexpr int kFragments = 4;  // fragments per pixel (antialiased)
 // One patch id's share of a pixel (antialiased). Empty: id == kNoPatch,
 // depth = +inf, the rest 0.
 struct Fragment {
-  float depth;     // camera depth of the piece's plane at the pixel centre (min over pieces)
+  float depth;     // sort depth: the plane's at the pixel centre (back faces: farthest covered); min over pieces
   uint32_t id;     // global patch id
   float coverage;  // summed exact area fraction of the id's pieces in the pixel
   float rgb[3];    // summed coverage * radiance
