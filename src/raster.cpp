@@ -428,7 +428,7 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       glm::vec3 pCam = zSample * glm::vec3((sx - halfW) * invF, (halfH - sy) * invF, 1.0f);
       glm::vec3 r = pCam - s.origin;
       glm::vec3 rad = RadianceAt(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)});
-      Fragment in{key, piece.id, cover, {cover * rad.x, cover * rad.y, cover * rad.z}};
+      Fragment in{key, piece.id, back ? -cover : cover, {cover * rad.x, cover * rad.y, cover * rad.z}};
       size_t idx = static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
       AddFragment(&fb->frags[idx * kFragments], &fb->dropped[idx], in);
     }
@@ -497,13 +497,22 @@ void Resolve(Framebuffer* fb) {
   size_t n = fb->color.size();
   for (size_t i = 0; i < n; ++i) {
     const Fragment* f = &fb->frags[i * kFragments];
-    float open = 1.0f, best = 0.0f;
+    float open = 1.0f, front = 0.0f, best = 0.0f;
     uint32_t bestId = kNoPatch;
     glm::vec3 c(0.0f);
     for (int k = 0; k < kFragments && f[k].id != kNoPatch && open > 0.0f; ++k) {
-      float w = std::fmin(f[k].coverage, open);
+      // A front face takes what is still open (pieces meeting at edges, a
+      // silhouette over what is behind: disjoint parts). A back face lies
+      // behind its object's front faces, within their silhouette: it shows
+      // only where it covers more than the front faces before it took (and
+      // is disjoint from other back faces, like the pieces of a wall seen
+      // from behind).
+      float cover = std::fabs(f[k].coverage);
+      bool isFront = f[k].coverage >= 0.0f;
+      float w = std::fmin(isFront ? cover : cover - front, open);
       if (!(w > 0.0f)) continue;
-      float scale = w / f[k].coverage;
+      if (isFront) front += w;
+      float scale = w / cover;
       c += scale * glm::vec3(f[k].rgb[0], f[k].rgb[1], f[k].rgb[2]);
       open -= w;
       if (w > best) best = w, bestId = f[k].id;

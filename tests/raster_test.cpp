@@ -104,8 +104,9 @@ TEST(RasterTest, StraightEdgeMatchesExactCoverage) {
   // well past the image, so the only edge inside it is the slanted one.
   const double s = 0.3719, y0 = 17.21;
   glm::dvec2 e0(-20, y0 - 20 * s), e1(90, y0 + 90 * s);
-  std::vector<DisplayPiece> face = {Piece({AtPixel(e0.x, e0.y), AtPixel(e1.x, e1.y), AtPixel(90, 150),
-                                           AtPixel(-20, 150)},
+  // Corners counter-clockwise in the world (y up): seen from the front.
+  std::vector<DisplayPiece> face = {Piece({AtPixel(-20, 150), AtPixel(90, 150), AtPixel(e1.x, e1.y),
+                                           AtPixel(e0.x, e0.y)},
                                           {1, 1, 1, 1}, 7)};
   Fb aa(true), point(false);
   DrawAll(face, &aa.fb);
@@ -126,19 +127,49 @@ TEST(RasterTest, StraightEdgeMatchesExactCoverage) {
   EXPECT_LE(MaxEdgeError(tilted.fb, project(a), project(b), pc), 0.01);
 }
 
+TEST(RasterTest, BackFacesHideNothingBehindTheirObject) {
+  // A black wedge over a white wall: its front face (x from 20.3 to 44 px)
+  // and, sharing its left edge, a back face receding behind it. Along that
+  // edge the wall shows in exactly the part the front face leaves open.
+  glm::vec3 wall[4] = {AtPixel(-10, 80, 300), AtPixel(80, 80, 300), AtPixel(80, -10, 300),
+                       AtPixel(-10, -10, 300)};
+  glm::vec3 f0 = AtPixel(20.3, 54), f1 = AtPixel(44, 54), f2 = AtPixel(44, 10), f3 = AtPixel(20.3, 10);
+  // The back face's far edge, at depth 150 (rows 32 -+ 22 * 100 / 150 on screen).
+  glm::vec3 b0 = AtPixel(30, 32 - 22.0 * 100 / 150, 150), b1 = AtPixel(30, 32 + 22.0 * 100 / 150, 150);
+  std::vector<DisplayPiece> scene = {
+      Piece({wall[0], wall[1], wall[2], wall[3]}, {1, 1, 1, 1}, 1),
+      Piece({f0, f1, f2, f3}, {0, 0, 0, 0}, 2),  // counter-clockwise: the front
+      Piece({f3, b1, b0, f0}, {0, 0, 0, 0}, 3),  // clockwise on screen: a back face
+  };
+  Fb fb(true);
+  DrawAll(scene, &fb.fb);
+  for (int y = 12; y < 52; ++y) {
+    EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 20].x, 0.3f, 1e-4f) << "row " << y;
+    EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 19].x, 1.0f, 1e-4f) << "row " << y;
+    EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 25].x, 0.0f, 1e-4f) << "row " << y;
+  }
+}
+
 // The image of a white quad, whole or cut into pieces.
 TEST(RasterTest, PiecesSharingEdgesCoverExactlyOnce) {
   // Two coplanar quads of different patches sharing a slanted edge, covering
   // the whole image: every pixel is fully and once covered.
   glm::vec3 tl = AtPixel(-10, -10), tr = AtPixel(80, -10), br = AtPixel(80, 80), bl = AtPixel(-10, 80);
   glm::vec3 m0 = AtPixel(23.3, -10), m1 = AtPixel(41.7, 80);  // the shared edge
-  Fb two(true);
-  DrawAll({Piece({tl, m0, m1, bl}, {0.5f, 0.5f, 0.5f, 0.5f}, 1),
-           Piece({m0, tr, br, m1}, {0.5f, 0.5f, 0.5f, 0.5f}, 2)},
-          &two.fb);
-  for (size_t i = 0; i < two.fb.color.size(); ++i) {
-    ASSERT_NEAR(two.fb.color[i].x, 0.5f, 1e-5f) << "pixel " << i;
-    ASSERT_NE(two.fb.id[i], kNoPatch);
+  // Seen from behind (clockwise on screen) and from the front.
+  for (bool reverse : {false, true}) {
+    DisplayPiece p1 = Piece({tl, m0, m1, bl}, {0.5f, 0.5f, 0.5f, 0.5f}, 1);
+    DisplayPiece p2 = Piece({m0, tr, br, m1}, {0.5f, 0.5f, 0.5f, 0.5f}, 2);
+    if (reverse) {
+      std::swap(p1.p[1], p1.p[3]);
+      std::swap(p2.p[1], p2.p[3]);
+    }
+    Fb two(true);
+    DrawAll({p1, p2}, &two.fb);
+    for (size_t i = 0; i < two.fb.color.size(); ++i) {
+      ASSERT_NEAR(two.fb.color[i].x, 0.5f, 1e-5f) << "pixel " << i << " reverse " << reverse;
+      ASSERT_NE(two.fb.id[i], kNoPatch);
+    }
   }
 
   // A quad rotated by 17 degrees, and the same quad cut into 2 x 2 bilinear

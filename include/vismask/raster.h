@@ -12,8 +12,9 @@
 //   depth at the pixel centre for a front face and the farthest point of the
 //   covered part for a back face (so a closed object's back face sorts
 //   behind the front face it shares a silhouette edge with); Resolve
-//   composes them front to back, each taking at most the coverage still
-//   free.
+//   composes them front to back, a front face taking at most the coverage
+//   still free, a back face only what it covers beyond what front faces
+//   took.
 // - point sampled (--aa off): the pixel centre only, quads split into two
 //   Gouraud-shaded triangles; one (depth, id) sample per pixel.
 //
@@ -42,7 +43,8 @@ constexpr int kFragments = 4;  // fragments per pixel (antialiased)
 struct Fragment {
   float depth;     // sort depth: the plane's at the pixel centre (back faces: farthest covered); min over pieces
   uint32_t id;     // global patch id
-  float coverage;  // summed exact area fraction of the id's pieces in the pixel
+  float coverage;  // summed exact area fraction of the id's pieces in the pixel,
+                   // negative for a back face (its corners clockwise on screen)
   float rgb[3];    // summed coverage * radiance
 };
 static_assert(sizeof(Fragment) == 24, "Fragment is packed");
