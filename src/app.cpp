@@ -71,6 +71,7 @@ struct PatchRecord {
   double b[3];
 };
 constexpr size_t kPatchChunk = 2048;  // records per transfer to rank 0
+constexpr int kBandRows = 16;         // framebuffer rows per transfer to rank 0
 
 // Everything a render needs after init, carved from arenas at init.
 struct Render {
@@ -86,7 +87,7 @@ struct Render {
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
   ExchangeBuffers exchange;
   Framebuffer fb;
-  Framebuffer incoming;  // rank 0 with several ranks: another rank's image
+  Framebuffer incoming;  // rank 0 with several ranks: kBandRows rows of another rank's image
   Span<float> reference;  // rank 0 with --reference: the reference image, RGB floats
   Span<uint8_t> rgb8;
   Span<uint8_t> pngScratch;
@@ -116,7 +117,7 @@ struct Render {
     rankExchangeBytes = rankImageBytes = rankOutputBytes = 0;
     exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
     part(&rankExchangeBytes);
-    fb.Layout(arena, options.width, options.height);
+    fb.Layout(arena, options.width, options.height, options.aa);
     part(&rankImageBytes);
     records = arena.Alloc<PatchRecord>(kPatchChunk);
     summaryMine = arena.Alloc<EnvSummary>(layout.perRank);
@@ -127,7 +128,7 @@ struct Render {
     ambient = arena.Alloc<AmbientReport>(layout.total);
     part(&rankOutputBytes);
     if (!root) return;
-    if (ranks > 1) incoming.Layout(arena, options.width, options.height);
+    if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
     if (!options.reference.empty())
       reference = arena.Alloc<float>(size_t(options.width) * size_t(options.height) * 3);
     rgb8 = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height) * 3);
@@ -457,6 +458,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   else JsonString(&w, o.reference.c_str());
   w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
   w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
+  w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
   w.Printf("    \"stop_error\": %.17g\n  },\n", o.stopError);
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {
@@ -601,18 +603,42 @@ void RenderImage(Render* r) {
   AmbientTerm(r->ambient, ambient);
   r->fb.Clear();
   for (Environment* env : r->envPtrs) DrawEnvironment(r->view, env, ambient, &r->fb);
+  // The other ranks' framebuffers, a band of rows at a time (rank 0 holds
+  // one band), composited in rank order; then the fragments are resolved.
+  const Framebuffer& mine = r->fb;
+  const size_t w = static_cast<size_t>(mine.width);
   for (int src = 1; src < t->size(); ++src) {
-    if (r->isRoot()) {
-      t->Recv(src, r->incoming.color.data(), r->incoming.color.bytes());
-      t->Recv(src, r->incoming.depth.data(), r->incoming.depth.bytes());
-      t->Recv(src, r->incoming.id.data(), r->incoming.id.bytes());
-      Composite(r->incoming, &r->fb);
-    } else if (t->rank() == src) {
-      t->Send(0, r->fb.color.data(), r->fb.color.bytes());
-      t->Send(0, r->fb.depth.data(), r->fb.depth.bytes());
-      t->Send(0, r->fb.id.data(), r->fb.id.bytes());
+    if (!r->isRoot() && t->rank() != src) continue;
+    for (int y = 0; y < mine.height; y += kBandRows) {
+      int rows = std::min(kBandRows, mine.height - y);
+      size_t first = static_cast<size_t>(y) * w, n = static_cast<size_t>(rows) * w;
+      if (r->isRoot()) {
+        Framebuffer& in = r->incoming;
+        if (mine.aa) {
+          t->Recv(src, in.frags.data(), in.frags.subspan(0, n * kFragments).bytes());
+          t->Recv(src, in.dropped.data(), in.dropped.subspan(0, n).bytes());
+        } else {
+          t->Recv(src, in.color.data(), in.color.subspan(0, n).bytes());
+          t->Recv(src, in.depth.data(), in.depth.subspan(0, n).bytes());
+          t->Recv(src, in.id.data(), in.id.subspan(0, n).bytes());
+        }
+        CompositeRows(in, y, rows, &r->fb);
+      } else if (mine.aa) {
+        auto f = mine.frags.subspan(first * kFragments, n * kFragments);
+        auto d = mine.dropped.subspan(first, n);
+        t->Send(0, f.data(), f.bytes());
+        t->Send(0, d.data(), d.bytes());
+      } else {
+        auto c = mine.color.subspan(first, n);
+        auto d = mine.depth.subspan(first, n);
+        auto i = mine.id.subspan(first, n);
+        t->Send(0, c.data(), c.bytes());
+        t->Send(0, d.data(), d.bytes());
+        t->Send(0, i.data(), i.bytes());
+      }
     }
   }
+  if (r->isRoot()) Resolve(&r->fb);
 }
 
 // --reference: the image of the solution so far against the reference, on

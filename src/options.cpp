@@ -63,6 +63,11 @@ render options:
                        eye, target, up and vertical field of view (default:
                        frame the scene's bounding box from -z, looking +z)
   --exposure E         linear exposure for image.png (default: automatic)
+  --aa on|off          on: each pixel is the exact area-weighted mean of what
+                       it sees (a 1-pixel box filter: every piece's coverage
+                       of the pixel square, computed analytically); off: the
+                       pixel centre only, quads as two Gouraud triangles
+                       (the images before --aa existed); default on
   --quiet              no progress line on stderr
   --reference REF.pfm  measure the image's relative RMSE against REF.pfm
                        (same size) when the solve ends, in convergence.csv
@@ -320,6 +325,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--stop-error") {
       if (!ParseDouble(v, &d) || !(d > 0.0) || d >= 1.0) return Bad(a, v, "a number in (0, 1)");
       o->stopError = d;
+    } else if (a == "--aa") {
+      if (v != "on" && v != "off") return Bad(a, v, "on or off");
+      o->aa = v == "on";
     } else if (a == "--correct-unshot") {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->correctUnshot = v == "on";

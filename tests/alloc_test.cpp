@@ -195,5 +195,21 @@ TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
   EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
 }
 
+// The point-sampled raster and its band-wise composite (the tests above use
+// the default, antialiased).
+TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  test::TempDir dir;
+  int code = -1;
+  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2",
+                                 "--ranks", "2", "--aa", "off", "--rays", "256", "--max-shots", "300",
+                                 "--width", "64", "--height", "40", "--quiet"},
+                                &code);
+  EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
+  EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
+}
+
 }  // namespace
 }  // namespace vismask

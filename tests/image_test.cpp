@@ -107,7 +107,7 @@ TEST(RasterTest, CompositeIsIndependentOfGrouping) {
   ASSERT_TRUE(MakeView(cam, 64, 48, &view));
   auto fbOf = [&](Arena& arena, std::vector<Patch> subset) {
     Framebuffer fb;
-    fb.Layout(arena, 64, 48);
+    fb.Layout(arena, 64, 48, false);
     fb.Clear();
     RasterPatches(view, Span<const Patch>(subset.data(), subset.size()),
                   Span<const glm::vec3>(verts.data(), verts.size()),

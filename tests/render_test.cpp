@@ -157,6 +157,8 @@ TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
       {{"render", "scenes/cornell.obj", "--camera", "0,0,-5,0,0,0,0,1,0,40,1"}, "--camera"},
       {{"render", "scenes/cornell.obj", "--seed", "-1"}, "--seed"},
       {{"render", "scenes/cornell.obj", "--correct-unshot", "maybe"}, "--correct-unshot"},
+      {{"render", "scenes/cornell.obj", "--aa", "4"}, "--aa"},
+      {{"render", "scenes/cornell.obj", "--aa"}, "missing value"},
       {{"render", "scenes/cornell.obj", "--stop-error", "0"}, "--stop-error"},
       {{"render", "scenes/cornell.obj", "--stop-error", "1"}, "--stop-error"},
       {{"render", "scenes/cornell.obj", "--stop-error", "nan"}, "--stop-error"},
@@ -223,7 +225,7 @@ TEST(RenderTest, HelpListsEveryOption) {
   EXPECT_EQ(r.code, 0);
   for (const char* flag : {"--out", "--patch-size", "--rays", "--seed", "--stop-unshot",
                            "--max-shots", "--max-seconds", "--width", "--height", "--camera",
-                           "--exposure", "--quiet", "--correct-unshot", "--stop-error"})
+                           "--exposure", "--quiet", "--correct-unshot", "--stop-error", "--aa"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag;
 }
 

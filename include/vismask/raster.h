@@ -1,8 +1,29 @@
-// Raster: draws patches into a colour + depth + id framebuffer with Gouraud
-// shading (perspective-correct interpolation of the lattice vertices'
-// radiance). The depth test compares (depth, global patch id), so the image
-// does not depend on the order patches are drawn in: framebuffers drawn from
-// disjoint sets of patches composite to the same bytes as one drawn from all.
+// Raster: draws display pieces (planar convex quads and triangles with a
+// radiance per corner) into a framebuffer, in one of two modes chosen at
+// Layout (--aa):
+//
+// - antialiased (default): each piece's exact area in each pixel square is
+//   computed analytically (the projected polygon clipped to the pixel), so
+//   the image is the scene filtered with a 1-pixel box. A pixel keeps up to
+//   kFragments fragments, one per patch id: pieces with the same id add their
+//   coverage and coverage-weighted radiance to one fragment, so pieces that
+//   tile a patch sum to its full coverage. Fragments are kept sorted by
+//   (depth, id), the nearest kFragments, where depth is the piece's plane's
+//   depth at the pixel centre for a front face and the farthest point of the
+//   covered part for a back face (so a closed object's back face sorts
+//   behind the front face it shares a silhouette edge with); Resolve
+//   composes them front to back, a front face taking at most the coverage
+//   still free, a back face only what it covers beyond what front faces
+//   took.
+// - point sampled (--aa off): the pixel centre only, quads split into two
+//   Gouraud-shaded triangles; one (depth, id) sample per pixel.
+//
+// Either way the result does not depend on the order pieces of different ids
+// are drawn in, and framebuffers drawn from disjoint sets of ids composite to
+// the same bytes as one drawn from all (pieces of one id must be drawn into
+// one framebuffer, in a fixed order: their sums are floating point). The one
+// exception is a pixel holding more than kFragments ids whose farthest kept
+// key ties, to rounding, with a dropped id drawn as several pieces.
 #pragma once
 #include <cstdint>
 
@@ -15,21 +36,40 @@
 
 namespace vismask {
 
+constexpr int kFragments = 4;  // fragments per pixel (antialiased)
+
+// One patch id's share of a pixel (antialiased). Empty: id == kNoPatch,
+// depth = +inf, the rest 0.
+struct Fragment {
+  float depth;     // sort depth: the plane's at the pixel centre (back faces: farthest covered); min over pieces
+  uint32_t id;     // global patch id
+  float coverage;  // summed exact area fraction of the id's pieces in the pixel,
+                   // negative for a back face (its corners clockwise on screen)
+  float rgb[3];    // summed coverage * radiance
+};
+static_assert(sizeof(Fragment) == 24, "Fragment is packed");
+
 struct Framebuffer {
   int width = 0;
   int height = 0;
-  Span<glm::vec3> color;  // linear radiance, row 0 at the top
-  Span<float> depth;      // distance along the view direction; +inf = empty
-  Span<uint32_t> id;      // global patch id; kNoPatch = empty
+  bool aa = false;
+  Span<glm::vec3> color;  // linear radiance, row 0 at the top (antialiased: after Resolve)
+  Span<uint32_t> id;      // global patch id; kNoPatch = empty (antialiased: the
+                          // id with the largest visible share, after Resolve)
+  Span<float> depth;      // point sampled: distance along the view direction; +inf = empty
+  Span<Fragment> frags;   // antialiased: kFragments per pixel, nearest first
+  Span<uint8_t> dropped;  // antialiased: 1 where a fragment fell off the list
 
-  void Layout(Arena& arena, int w, int h);
+  // Carves w x h pixels from `arena`: point sampled 20 bytes a pixel,
+  // antialiased 16 + kFragments * 24 + 1.
+  void Layout(Arena& arena, int w, int h, bool antialiased);
   void Clear();
 };
 
-// One drawable piece of a patch: corners in world space, counter-clockwise
-// from the front, the radiance at each (already divided by pi), and the
-// patch's global id for the depth tie rule. numCorners is 3 or 4 (then p[3]
-// is used).
+// A planar convex piece to draw: world corners counter-clockwise from the
+// front (a quad's corners are its bilinear parameter square's (0,0), (1,0),
+// (1,1), (0,1)), the radiance at each corner (already divided by pi), the
+// global patch id. numCorners is 3 or 4.
 struct DisplayPiece {
   glm::vec3 p[4];
   glm::vec3 c[4];
@@ -37,15 +77,26 @@ struct DisplayPiece {
   uint32_t id;
 };
 
-// Draws one piece into `fb` (clipped at the near plane).
+// Draws one piece: antialiased, the radiance interpolated perspective-correctly
+// in the piece's own parameters (bilinear for quads, barycentric for
+// triangles) at the centroid of the covered part of each pixel; point sampled,
+// as two Gouraud triangles (0,1,2) and (0,2,3). Clipped to the near plane.
 void DrawPiece(const View& view, const DisplayPiece& piece, Framebuffer* fb);
 
-// Draws `patches` (corners via `vertices`, radiance per vertex) into `fb`.
-// Triangles crossing the near plane are clipped.
+// Draws `patches` (corners via `vertices`, radiance per vertex, divided by pi
+// here) as one piece each; the back of a one-sided patch is drawn black.
 void RasterPatches(const View& view, Span<const Patch> patches, Span<const glm::vec3> vertices,
                    Span<const glm::vec3> vertexRadiance, Framebuffer* fb);
 
-// Keeps, per pixel, the nearer of `fb` and `other` (same tie rule).
+// Merges rows [0, rows) of `band` (same width and mode as `fb`) into rows
+// [firstRow, firstRow + rows) of `fb` with the same rules as drawing.
+void CompositeRows(const Framebuffer& band, int firstRow, int rows, Framebuffer* fb);
+// The whole of `other` (same size and mode) into `fb`.
 void Composite(const Framebuffer& other, Framebuffer* fb);
+
+// Antialiased: composes each pixel's fragments into color and id (empty
+// coverage is black; where fragments were dropped, the kept ones are scaled
+// to fill the pixel). Point sampled: nothing to do.
+void Resolve(Framebuffer* fb);
 
 }  // namespace vismask
