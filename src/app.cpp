@@ -221,6 +221,7 @@ Status PrepareScene(const Options& o, Prepared* p) {
   e.queueCapacity = o.queue;
   e.elements.perPatch = o.elementsPerPatch;
   e.elements.maxDepth = o.elementDepth;
+  e.elements.threshold = o.elementSpread;
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
   return Status::Ok();

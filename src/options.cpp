@@ -52,6 +52,9 @@ render options:
                        When it is used up refinement stops (run.json says so)
   --element-depth D    the deepest an element splits, 0-16 (default 4: 1/16
                        of the patch's edge)
+  --element-spread S   an element splits only where its quarters' radiosity
+                       differs by more than S (relative RMS, default 0.1) and
+                       more than its Monte Carlo noise explains
   --seed S             random seed, unsigned 64-bit (default 1)
   --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
                        (default 1e-3)
@@ -233,6 +236,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--element-depth") {
       if (!ParseU64(v, &u) || u > 16) return Bad(a, v, "an integer in [0, 16]");
       o->elementDepth = static_cast<uint32_t>(u);
+    } else if (a == "--element-spread") {
+      if (!ParseDouble(v, &d) || !(d >= 0.0) || d > 100.0) return Bad(a, v, "a number in [0, 100]");
+      o->elementSpread = static_cast<float>(d);
     } else if (a == "--ray-budget") {
       if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive integer");
       o->rayBudget = u;
