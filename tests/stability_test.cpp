@@ -10,6 +10,12 @@
 #include <gtest/gtest.h>
 
 #include "test_util.h"
+#include "vismask/environment.h"
+#include "vismask/mesh.h"
+#include "vismask/partition.h"
+#include "vismask/scene.h"
+#include "vismask/solver.h"
+#include "vismask/transport.h"
 
 namespace vismask {
 namespace {
@@ -230,6 +236,57 @@ TEST(StabilityTest, IdleRoundsAreNotConvergence) {
   std::string json = ReadFile(dir.File("c") + "/run.json");
   EXPECT_NE(json.find("\"stop_reason\": \"max-shots\""), std::string::npos) << json;
   EXPECT_GT(JsonNumber(json, "shots"), 400.0);
+}
+
+// A solve whose queues have no slot admits no record, so no environment
+// with a neighbour can ever shoot while all the power is unshot: a stall,
+// reported after a whole rotation of rounds (two here), never convergence.
+// (--queue refuses 0, so this drives Solve directly.)
+TEST(StabilityTest, ASolveThatCannotShootStalls) {
+  Scene scene;
+  ASSERT_TRUE(LoadScene("scenes/stiff/box-rho0.5.obj", &scene).ok());
+  EnvGrid grid;
+  grid.n[0] = 2;
+  grid.box = scene.bounds;
+  Partition part;
+  ASSERT_TRUE(PartitionScene(scene, grid, &part).ok());
+  EnvOptions eo;
+  eo.rays = 64;
+  eo.queueCapacity = 0;
+  std::vector<std::unique_ptr<Environment>> envs;
+  std::vector<Environment*> ptrs;
+  uint32_t nextId = 0;
+  for (uint32_t e = 0; e < 2; ++e) {
+    std::vector<uint32_t> pieces;
+    for (uint32_t i = 0; i < part.scene.polygons.size(); ++i)
+      if (part.env[i] == e) pieces.push_back(i);
+    Mesh mesh;
+    ASSERT_TRUE(MeshScene(part.scene, pieces, 0.34f, 1u << 20, &mesh).ok());
+    for (Patch& p : mesh.patches) p.globalId += nextId;
+    nextId += static_cast<uint32_t>(mesh.patches.size());
+    std::vector<uint32_t> ids(mesh.patches.size());
+    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
+    envs.push_back(std::make_unique<Environment>());
+    envs.back()->Init(grid, e, mesh, ids, eo);
+    ptrs.push_back(envs.back().get());
+  }
+  Status error;
+  std::unique_ptr<Transport> loop = MakeTransport(TransportRequest{"loop", 1}, &error);
+  ASSERT_TRUE(loop) << error.ToString();
+  RankEnvs layout = EnvsOfRank(2, 1, 0);
+  Arena arena(1 << 16);
+  ExchangeBuffers buffers;
+  buffers.Layout(arena, layout, 1, ptrs[0]->packetBytes(), 0);
+  SolveOptions so;
+  so.queueCapacity = 0;
+  so.quiet = true;
+  SolveResult res = Solve(Span<Environment* const>(ptrs.data(), ptrs.size()), layout, loop.get(),
+                          &buffers, so, nullptr);
+  EXPECT_EQ(StopReasonName(res.reason), std::string("stalled"));
+  EXPECT_EQ(res.shots, 0u);
+  EXPECT_EQ(res.rounds, 2u);
+  EXPECT_NEAR(res.unshotFraction, 1.0, 1e-12);
+  loop->Finish(0);
 }
 
 struct ExtremeCase {
