@@ -500,8 +500,10 @@ void Environment::Deliver(const uint8_t* packet) {
     }
   }
   ++slot.received;
-  if (options_.maskMethod != MaskMethod::kR)  // R books its flight in the ledger
-    slot.flightShare += static_cast<float>(FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet)));
+  if (options_.maskMethod != MaskMethod::kR) {  // R books its flight in the ledger
+    const uint8_t* bits = shape_.empty() ? nullptr : MaskBytes(packet);
+    slot.flightShare += static_cast<float>(FlightShare(h, bits));
+  }
   double power = h.power[0] + h.power[1] + h.power[2];
   slot.key = shape_.empty() ? power : power * mask.OpenFraction();
 }
@@ -531,8 +533,9 @@ double Environment::QueuedPower() const {
 }
 
 void Environment::FlightPower(double power[3]) const {
-  for (int c = 0; c < 3; ++c) power[c] = options_.maskMethod == MaskMethod::kR ? ledger_.inFlight[c] : 0.0;
-  if (options_.maskMethod == MaskMethod::kR) return;
+  const bool methodR = options_.maskMethod == MaskMethod::kR;
+  for (int c = 0; c < 3; ++c) power[c] = methodR ? ledger_.inFlight[c] : 0.0;
+  if (methodR) return;
   for (const Slot& s : slots_)
     if (s.used)
       for (int c = 0; c < 3; ++c) power[c] += s.header.power[c] * s.flightShare;
