@@ -32,6 +32,7 @@ namespace {
 constexpr int kExitOk = 0;
 constexpr int kExitOutput = 1;
 constexpr int kExitUsage = 2;
+constexpr int kExitStalled = 4;  // (3 is the transport's kExitLostRank)
 constexpr uint64_t kMaxPatches = 50000000;
 constexpr size_t kTextBufferBytes = 64 * 1024;
 
@@ -540,11 +541,14 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"ambient_share\": %.17g,\n", radiosity > 0.0 ? ambientArea / radiosity : 0.0);
   double mc = weight > 0.0 ? std::sqrt(relVarArea / weight) : 0.0;
   w.Printf("    \"mc_relative_error\": %.17g,\n", mc);
-  // The stated error: the Monte Carlo error and the bias estimate of the
-  // power not yet shot (BiasEstimate), combined in quadrature.
+  // The stated error: the Monte Carlo error, the bias estimate of the
+  // power not yet shot (BiasEstimate) and that of the power the masks lost
+  // (LossEstimate), combined in quadrature.
   w.Printf("    \"bias_estimate\": %.17g,\n", res.biasEstimate);
+  w.Printf("    \"loss_estimate\": %.17g,\n", res.lossEstimate);
   w.Printf("    \"stated_error\": %.17g\n  },\n",
-           std::sqrt(mc * mc + res.biasEstimate * res.biasEstimate));
+           std::sqrt(mc * mc + res.biasEstimate * res.biasEstimate +
+                     res.lossEstimate * res.lossEstimate));
   EnergyLedger total;
   for (const EnvSummary& e : r->summary) {
     for (int c = 0; c < 3; ++c) {
@@ -858,6 +862,17 @@ int Main(int argc, const char* const* argv) {
   SolveResult res = Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()),
                           r->layout, r->transport.get(), &r->exchange, so,
                           r->isRoot() ? &r->convergence : nullptr);
+  if (res.reason == StopReason::kStalled) {  // no outputs: the solve did not finish
+    if (r->isRoot()) {
+      for (auto& f : r->files) f.Discard();
+      os::PrintErr("vismask: the solve stalled after %llu shots: %llu rounds without a shot "
+                   "while %.3g of the emitted power was unshot or in flight (the admission of "
+                   "new records let no environment shoot; try a larger --queue)\n",
+                   static_cast<unsigned long long>(res.shots),
+                   static_cast<unsigned long long>(r->layout.total), res.unshotFraction);
+    }
+    return r->transport->Finish(kExitStalled);
+  }
 
   SetPhase(Phase::kOutput);
   rc = WriteOutputs(r.get(), res);

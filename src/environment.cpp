@@ -1,5 +1,6 @@
 #include "vismask/environment.h"
 
+#include <cmath>
 #include <limits>
 #include <unordered_map>
 
@@ -641,6 +642,10 @@ void Environment::Deliver(const uint8_t* packet) {
     }
   }
   ++slot.received;
+  if (options_.maskMethod != MaskMethod::kR) {  // R books its flight in the ledger
+    const uint8_t* bits = shape_.empty() ? nullptr : MaskBytes(packet);
+    slot.flightShare += static_cast<float>(FlightShare(h, bits));
+  }
   double power = h.power[0] + h.power[1] + h.power[2];
   // Method R's open share is of the shot's own rays (bits past them are closed).
   if (shape_.empty()) slot.key = power;
@@ -688,6 +693,63 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
     b[c] = static_cast<float>(static_cast<double>(p.ke[c]) + el.received[c] / el.area +
                               p.kd[c] * ambient[c]);
   return b;
+}
+
+void Environment::FlightPower(double power[3]) const {
+  const bool methodR = options_.maskMethod == MaskMethod::kR;
+  for (int c = 0; c < 3; ++c) power[c] = methodR ? ledger_.inFlight[c] : 0.0;
+  if (methodR) return;
+  for (const Slot& s : slots_)
+    if (s.used)
+      for (int c = 0; c < 3; ++c) power[c] += s.header.power[c] * s.flightShare;
+}
+
+double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) const {
+  // Without a mask, directions on a hemisphere of this resolution.
+  constexpr uint32_t kNoMaskRes = 16;
+  const uint32_t res = bits ? shape_.res : kNoMaskRes, cols = 4 * res;
+  int from[3];
+  grid3_.Cell(static_cast<int>(h.fromEnv), from);
+  int axis = 0;
+  for (int a = 0; a < 3; ++a)
+    if (from[a] != cell_[a]) axis = a;
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+  const double plane = from[axis] < cell_[axis] ? box_.lo[axis] : box_.hi[axis];
+  // The centre ray's origin and frame, as Method B casts it.
+  Patch shooter = PatchFromHeader(h);
+  Frame f = MakePatchSampler(shooter).frame;
+  glm::vec3 centre(0.0f);
+  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
+  centre /= static_cast<float>(shooter.numCorners);
+  const glm::vec3 o = centre + options_.rayEpsilon * f.n;
+  const double halfPi = 1.5707963267948966, step = 6.283185307179586 / cols;
+  const double cs = std::cos(step), sn = std::sin(step);
+  double share = 0.0;
+  for (uint32_t row = 0; row < res; ++row) {
+    double s0 = std::sin(row * halfPi / res), s1 = std::sin((row + 1) * halfPi / res);
+    double theta = (row + 0.5) * halfPi / res, st = std::sin(theta), ct = std::cos(theta);
+    double c = std::cos(0.5 * step), s = std::sin(0.5 * step);  // phi of the column's centre
+    uint32_t crossing = 0;
+    for (uint32_t col = 0; col < cols; ++col) {
+      uint32_t p = row * cols + col;
+      double lx = st * c, ly = st * s;
+      double rc = c * cs - s * sn;  // on to the next column
+      s = s * cs + c * sn;
+      c = rc;
+      if (bits && !((bits[p >> 3] >> (p & 7)) & 1u)) continue;
+      double d[3];
+      for (int a = 0; a < 3; ++a) d[a] = lx * f.t[a] + ly * f.b[a] + ct * f.n[a];
+      if (d[axis] == 0.0) continue;
+      double t = (plane - o[axis]) / d[axis];
+      if (!(t > 0.0)) continue;
+      double q1 = o[a1] + t * d[a1], q2 = o[a2] + t * d[a2];
+      // Half-open, so a direction through an edge enters one box only.
+      if (q1 >= box_.lo[a1] && q1 < box_.hi[a1] && q2 >= box_.lo[a2] && q2 < box_.hi[a2])
+        ++crossing;
+    }
+    share += (s1 * s1 - s0 * s0) * crossing / cols;
+  }
+  return share;
 }
 
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {

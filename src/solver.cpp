@@ -1,5 +1,6 @@
 #include "vismask/solver.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 
@@ -13,6 +14,7 @@ const char* StopReasonName(StopReason r) {
     case StopReason::kMaxShots: return "max-shots";
     case StopReason::kMaxSeconds: return "max-seconds";
     case StopReason::kRayBudget: return "ray-budget";
+    case StopReason::kStalled: return "stalled";
   }
   return "?";
 }
@@ -83,8 +85,15 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
   for (uint32_t i = 0; i < envs.size(); ++i) {
     const Environment* e = envs[i];
     EnvReport& r = x->mine[i];
-    r.unshot = Sum3(e->ledger().unshot) + e->QueuedPower();
-    r.emitted = Sum3(e->ledger().emitted);
+    double flight[3];
+    e->FlightPower(flight);
+    const EnergyLedger& l = e->ledger();
+    r.flight = Sum3(flight);
+    r.unshot = Sum3(l.unshot) + r.flight;
+    r.emitted = Sum3(l.emitted);
+    r.lost = r.emitted - Sum3(l.absorbed) - Sum3(l.escaped) - r.unshot;
+    uint32_t top = e->TopShooter();
+    r.shootable = e->queuedCount() + (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
     r.shots = e->stats().shots + e->stats().foreignShots;
     r.rays = e->stats().rays;
     r.recordsCreated = e->stats().recordsCreated;
@@ -117,6 +126,9 @@ RoundTotals Totals(Span<Environment* const> envs, const RankEnvs& layout, Transp
   for (uint32_t env = 0; env < layout.total; ++env) {
     const EnvReport& r = report(env);
     tot.unshot += r.unshot;
+    tot.flight += r.flight;
+    tot.lost += r.lost;
+    tot.shootable += r.shootable;
     tot.emitted += r.emitted;
     tot.shots += r.shots;
     tot.rays += r.rays;
@@ -248,6 +260,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   RoundTotals totals = Totals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
+  result.lossEstimate = LossEstimate(totals);
   if (convergence)
     convergence->Printf("shot,seconds,unshot_fraction%s\n",
                         probe ? ",relative_rmse,error_seconds" : "");
@@ -262,6 +275,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   };
 
   bool done = ShouldStop(totals, options, &result);
+  uint32_t idle = 0;  // rounds in a row without a shot
   while (!done) {
     double cpu0 = os::CpuSeconds();
     for (uint32_t k = 0; k < n; ++k) {
@@ -284,13 +298,28 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     result.rays = totals.rays;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
     result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
-    // A ready foreign shooter exists whenever any queue holds one, so a round
-    // without a shot means no power is left to shoot (--stop-unshot 0).
-    if (result.shots == before) {
+    result.lossEstimate = LossEstimate(totals);
+    // A round without a shot is convergence only when nothing is left to
+    // shoot anywhere (--stop-unshot 0 drains every queue). Otherwise the
+    // admission held back every environment that had power; its rotation
+    // admits each within n rounds, so n such rounds in a row are a stall.
+    bool idleRound = result.shots == before;
+    if (idleRound && totals.shootable == 0) {
       result.reason = StopReason::kConverged;
       break;
     }
+    if (idleRound && options.maxShots > 0 &&
+        options.maxShots - result.shots < uint64_t(n) * options.roundShots) {
+      result.reason = StopReason::kMaxShots;  // the budget left went to environments with none
+      break;
+    }
+    idle = idleRound ? idle + 1 : 0;
+    if (idle >= n) {
+      result.reason = StopReason::kStalled;
+      break;
+    }
     done = ShouldStop(totals, options, &result);
+    if (idleRound && !done) continue;  // nothing new to measure or record
     bool due = probe && (done || (options.errorEvery > 0 &&
                                   result.shots / options.errorEvery > before / options.errorEvery));
     if (due) {
@@ -317,10 +346,19 @@ double BiasEstimate(const RoundTotals& t, bool corrected) {
   return corrected ? share * (1.0 - rho) : share;
 }
 
+double LossEstimate(const RoundTotals& t) {
+  double rho = t.area > 0.0 ? t.kdArea / t.area : 0.0;
+  double missing = t.lost * rho / (1.0 - rho);
+  double total = t.radiosity + t.unshot * rho / (1.0 - rho) + missing;
+  return total > 0.0 ? std::fabs(missing / total) : 0.0;
+}
+
 AmbientReport AmbientOf(const Environment& env) {
   AmbientReport r{};
   r.area = env.totalArea();
-  for (int c = 0; c < 3; ++c) r.unshot[c] = env.ledger().unshot[c];
+  double flight[3];
+  env.FlightPower(flight);
+  for (int c = 0; c < 3; ++c) r.unshot[c] = env.ledger().unshot[c] + flight[c];
   for (const Patch& p : env.patches())
     for (int c = 0; c < 3; ++c) r.kdArea[c] += static_cast<double>(p.kd[c]) * p.area;
   return r;

@@ -134,6 +134,13 @@ class Environment {
   // the open share of their masks), and how many are held.
   double QueuedPower() const;
   uint32_t queuedCount() const { return queued_; }
+  // The power, per channel, this environment books as shot but not yet
+  // delivered (docs/DESIGN.md, "Power in flight"), so that the sum over
+  // environments counts each watt once: Method R's ledger().inFlight; for
+  // the other methods, each queued shooter's power times the cosine-weighted
+  // share of the directions, open in a packet received, whose centre ray
+  // crosses from that packet's sender into this box.
+  void FlightPower(double power[3]) const;
 
   // Display radiosity at the lattice vertices: the area-weighted mean, over
   // the patches touching the vertex, of the leaf element at that corner's
@@ -175,6 +182,7 @@ class Environment {
     uint8_t used;
     uint8_t received;
     uint8_t expected;
+    float flightShare;   // of the power, booked here as in flight (FlightShare; in the padding)
   };
 
   void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
@@ -210,6 +218,10 @@ class Environment {
   // The grid cells downstream of this environment for a shooter from
   // `sourceEnv` (at most 6, into `next`), and how many there are.
   int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
+  // The cosine-weighted share of h's hemisphere whose centre rays are open
+  // in the packet's mask `bits` (null: no mask, all open) and cross the face
+  // from h.fromEnv into this box.
+  double FlightShare(const PacketHeader& h, const uint8_t* bits) const;
   int FindSlot(uint32_t shooterId, uint32_t shotIndex) const;
   int BestReadySlot() const;
   MaskBits SlotMask(uint32_t slot) const;

@@ -46,7 +46,9 @@ struct SolveOptions {
   bool correctUnshot = false;
 };
 
-enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget };
+// kStalled: rounds without a shot while power was left to shoot (a bug in
+// the admission of records, never a convergence).
+enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget, kStalled };
 const char* StopReasonName(StopReason r);
 
 struct SolveResult {
@@ -55,7 +57,7 @@ struct SolveResult {
   uint64_t shots = 0;         // local and foreign
   uint64_t rays = 0;          // form-factor rays traced, all environments
   double seconds = 0.0;
-  double unshotFraction = 1.0;  // (unshot + queued) / emitted, channels summed
+  double unshotFraction = 1.0;  // (unshot + in flight) / emitted, channels summed
   // With a probe: how often it measured, the seconds that took (not in
   // `seconds`), and the last measurement (of the final solution).
   uint64_t errorMeasurements = 0;
@@ -72,6 +74,7 @@ struct SolveResult {
   double computeSeconds = 0.0;
   double criticalSeconds = 0.0;
   double biasEstimate = 0.0;  // BiasEstimate of the final totals
+  double lossEstimate = 0.0;  // LossEstimate of the final totals
 };
 
 // Which environments live on a rank: contiguous blocks, [first, first+count)
@@ -88,7 +91,9 @@ RankEnvs EnvsOfRank(uint32_t total, int ranks, int rank);
 // summed in environment order, so every rank takes the same decisions
 // whatever the grouping.
 struct EnvReport {
-  double unshot;     // local unshot power plus queued foreign power
+  double unshot;     // local unshot power plus the power in flight booked here
+  double flight;     // the latter (Environment::FlightPower), channels summed
+  double lost;       // emitted - absorbed - escaped - unshot (both parts); summed: the loss
   double emitted;
   double elapsed;    // seconds since the solve began, on this rank's clock
   double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
@@ -97,13 +102,17 @@ struct EnvReport {
   uint64_t rays;     // form-factor rays traced
   uint64_t recordsCreated;
   uint64_t foreignShots;
+  uint64_t shootable;  // local patches with unshot power (0 or 1: any) plus queued shooters
   double radiosity;  // sum of b * area, channels summed
   double kdArea;     // sum of kd * area, channels averaged (constant)
   double area;       // (constant)
 };
 
 struct RoundTotals {
-  double unshot = 0.0;
+  double unshot = 0.0;  // local unshot and in flight
+  double flight = 0.0;  // in flight only
+  double lost = 0.0;    // the ledger's residual less the power in flight
+  uint64_t shootable = 0;
   double emitted = 0.0;
   double elapsed = 0.0;  // rank 0's clock
   double waitedMax = 0.0;  // the most any rank has waited
@@ -127,6 +136,15 @@ struct RoundTotals {
 // fraction (1-rho) of it, lands where the unshot power is, not uniformly,
 // so the estimate is s*(1-rho) (docs/DESIGN.md).
 double BiasEstimate(const RoundTotals& totals, bool corrected);
+
+// The relative bias of the radiosity from the power the masks lost so far
+// (or, if negative, let leak): the ledger's residual less the power in
+// flight, L, would have added rho*L/(1-rho) of radiosity power, which
+// neither the ambient term nor more shots restore. Its magnitude as a share
+// of the radiosity with it, R + rho*(U + L)/(1-rho); 0 to rounding for one
+// environment and for Method R (docs/DESIGN.md). Later shots lose more: it
+// grows as the solve goes on.
+double LossEstimate(const RoundTotals& totals);
 
 // A rank's exchange buffers, carved from its arena at init: one send and one
 // receive block per rank, each large enough for every packet a rank's
@@ -168,13 +186,14 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
 // What an environment contributes to Cohen's ambient term.
 struct AmbientReport {
   double area;
-  double unshot[3];
+  double unshot[3];  // local unshot power plus the power in flight booked here
   double kdArea[3];
 };
 AmbientReport AmbientOf(const Environment& env);
 // Cohen's ambient radiosity estimate, per channel, from every environment's
-// report (in environment order): the unshot power spread over all area and
-// amplified by the mean interreflection 1/(1 - mean kd).
+// report (in environment order): the power not yet delivered (unshot and in
+// flight) spread over all area and amplified by the mean interreflection
+// 1/(1 - mean kd).
 void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]);
 
 }  // namespace vismask
