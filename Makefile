@@ -173,9 +173,9 @@ demo: deps
 BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildcard /usr/include/benchmark/benchmark.h)),$(BUILD)/vismask_bench)
 test: deps
 	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT)
-	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
 	@if command -v blender >/dev/null; then VISMASK_BIN=$(BUILD)/vismask tools/reference --selftest; \
 	 else echo "make: blender not found: tools/reference --selftest skipped (tools/install-deps --reference)"; fi
+	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
 
 # docs/RESULTS.md and docs/results/ from one run of every step in
 # tools/experiments (runs under build/experiments/full; about 15 minutes on
