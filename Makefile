@@ -173,6 +173,8 @@ demo: deps
 BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildcard /usr/include/benchmark/benchmark.h)),$(BUILD)/vismask_bench)
 test: deps
 	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT)
+	@if command -v blender >/dev/null; then VISMASK_BIN=$(BUILD)/vismask tools/reference --selftest; \
+	 else echo "make: blender not found: tools/reference --selftest skipped (tools/install-deps --reference)"; fi
 	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
 
 # docs/RESULTS.md and docs/results/ from one run of every step in

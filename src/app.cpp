@@ -90,6 +90,8 @@ struct Render {
   Framebuffer fb;
   Framebuffer incoming;  // rank 0 with several ranks: kBandRows rows of another rank's image
   Span<float> reference;  // rank 0 with --reference: the reference image, RGB floats
+  Span<uint8_t> exclude;  // rank 0 with --exclude: nonzero where a pixel is left out of the error
+  size_t excludedPixels = 0;
   Span<uint8_t> rgb8;
   Span<uint8_t> pngScratch;
   Span<char> convBuffer;
@@ -132,6 +134,8 @@ struct Render {
     if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
     if (!options.reference.empty())
       reference = arena.Alloc<float>(size_t(options.width) * size_t(options.height) * 3);
+    if (!options.exclude.empty())
+      exclude = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height));
     rgb8 = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height) * 3);
     part(&rankImageBytes);
     pngScratch = arena.Alloc<uint8_t>(PngScratchBytes(options.width, options.height));
@@ -266,6 +270,16 @@ int Init(Render* r) {
                                        ", the image is " + std::to_string(o.width) + "x" +
                                        std::to_string(o.height) + " (--width, --height)"));
   }
+  PgmImage mask;  // --exclude: checked here too, before any output exists
+  if (r->isRoot() && !o.exclude.empty()) {
+    Status s = ReadPgm(o.exclude, &mask);
+    if (!s.ok()) return FailInit(r, Status::Error("vismask: --exclude: " + s.ToString()));
+    if (mask.width != o.width || mask.height != o.height)
+      return FailInit(r, Status::Error("vismask: --exclude: " + o.exclude + ": is " +
+                                       std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                                       ", the image is " + std::to_string(o.width) + "x" +
+                                       std::to_string(o.height)));
+  }
   Prepared p;
   Status s = PrepareScene(o, &p);
   if (!s.ok()) return FailInit(r, s);
@@ -303,6 +317,10 @@ int Init(Render* r) {
   r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot());
   if (!r->isRoot()) return kExitOk;
   for (size_t i = 0; i < r->reference.size(); ++i) r->reference[i] = ref.pixels[i];
+  for (size_t i = 0; i < r->exclude.size(); ++i) {
+    r->exclude[i] = mask.pixels[i] != 0;
+    r->excludedPixels += r->exclude[i];
+  }
 
   char why[os::kWhyBytes];
   if (!os::MakeDirs(o.outDir.c_str(), why)) {
@@ -458,6 +476,9 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"reference\": ");
   if (o.reference.empty()) w.Printf("null");
   else JsonString(&w, o.reference.c_str());
+  w.Printf(",\n    \"exclude\": ");
+  if (o.exclude.empty()) w.Printf("null");
+  else JsonString(&w, o.exclude.c_str());
   w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
   w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
   w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
@@ -520,6 +541,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   // Against --reference (null without one): the final image's relative RMSE.
   if (o.reference.empty()) w.Printf("    \"relative_rmse\": null,\n");
   else w.Printf("    \"relative_rmse\": %.17g,\n", res.relativeRmse);
+  w.Printf("    \"excluded_pixels\": %zu,\n", r->excludedPixels);  // by --exclude
   w.Printf("    \"error_measurements\": %llu,\n",
            static_cast<unsigned long long>(res.errorMeasurements));
   // The stated error of patches.csv's b: the Monte Carlo standard error
@@ -657,7 +679,7 @@ class ReferenceProbe : public ErrorProbe {
     static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "colour is packed RGB floats");
     Span<const float> image(reinterpret_cast<const float*>(r_->fb.color.data()),
                             r_->fb.color.size() * 3);
-    return CompareImages(image, r_->reference).relativeRmse;
+    return CompareImages(image, r_->reference, r_->exclude).relativeRmse;
   }
 
  private:
@@ -807,11 +829,24 @@ int Compare(const Options& o) {
     return Fail(Status::Error("vismask: compare: the images differ in size (" +
                               std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
                               std::to_string(b.width) + "x" + std::to_string(b.height) + ")"));
+  PgmImage mask;  // --exclude: its nonzero pixels are left out
+  if (!o.exclude.empty()) {
+    s = ReadPgm(o.exclude, &mask);
+    if (!s.ok()) return Fail(Status::Error("vismask: --exclude: " + s.ToString()));
+    if (mask.width != a.width || mask.height != a.height)
+      return Fail(Status::Error("vismask: --exclude: " + o.exclude + ": is " +
+                                std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                                ", the images are " + std::to_string(a.width) + "x" +
+                                std::to_string(a.height)));
+  }
   ImageError e = CompareImages(Span<const float>(a.pixels.data(), a.pixels.size()),
-                               Span<const float>(b.pixels.data(), b.pixels.size()));
+                               Span<const float>(b.pixels.data(), b.pixels.size()),
+                               Span<const uint8_t>(mask.pixels.data(), mask.pixels.size()));
   char line[256];
   int n = std::snprintf(line, sizeof line, "relative_rmse %.9g\nmax_abs_error %.9g\n", e.relativeRmse,
                         e.maxAbs);
+  if (!o.exclude.empty())
+    n += std::snprintf(line + n, sizeof line - size_t(n), "excluded_pixels %zu\n", e.excludedPixels);
   os::WriteOut(line, static_cast<size_t>(n));
   return kExitOk;
 }

@@ -147,11 +147,16 @@ bool WritePfm(os::OutFile* file, int width, int height, Span<const glm::vec3> co
   return ok;
 }
 
-ImageError CompareImages(Span<const float> a, Span<const float> b) {
+ImageError CompareImages(Span<const float> a, Span<const float> b, Span<const uint8_t> exclude) {
   CHECK(a.size() == b.size());
+  CHECK(exclude.empty() || a.size() == 3 * exclude.size());
   double num = 0.0, den = 0.0;
   ImageError e;
   for (size_t i = 0; i < a.size(); ++i) {
+    if (!exclude.empty() && exclude[i / 3] != 0) {
+      if (i % 3 == 0) ++e.excludedPixels;
+      continue;
+    }
     double d = static_cast<double>(a[i]) - b[i];
     num += d * d;
     den += static_cast<double>(b[i]) * b[i];
@@ -190,6 +195,26 @@ Status ReadPfm(const std::string& path, PfmImage* image) {
   image->pixels.assign(n, 0.0f);
   for (int y = 0; y < h; ++y)  // PFM rows run bottom to top
     std::memcpy(&image->pixels[size_t(h - 1 - y) * w * 3], &data[size_t(y) * w * 3], size_t(w) * 3 * 4);
+  return Status::Ok();
+}
+
+Status ReadPgm(const std::string& path, PgmImage* image) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::At(path, 0, "cannot open");
+  std::string magic;
+  int w = 0, h = 0, maxval = 0;
+  in >> magic >> w >> h >> maxval;
+  if (!in || magic != "P5" || w <= 0 || h <= 0 || maxval <= 0 || maxval > 255)
+    return Status::At(path, 0, "not an 8-bit binary PGM (expected 'P5', width, height, maxval <= 255)");
+  in.get();  // the single whitespace byte after maxval
+  size_t n = size_t(w) * size_t(h);
+  std::vector<uint8_t> data(n);
+  in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(n));
+  if (static_cast<size_t>(in.gcount()) != n)
+    return Status::At(path, 0, "truncated PGM: expected " + std::to_string(n) + " bytes of pixels");
+  image->width = w;
+  image->height = h;
+  image->pixels = std::move(data);
   return Status::Ok();
 }
 

@@ -18,8 +18,10 @@ usage:
   vismask footprint SCENE.obj [options]  the memory each environment and rank
                                          would reserve, without solving
                                          (render's options; --json for JSON)
-  vismask compare A.pfm B.pfm            relative RMSE and max abs error of A
-                                         against B
+  vismask compare A.pfm B.pfm [--exclude MASK.pgm]
+                                         relative RMSE and max abs error of A
+                                         against B (pixels where MASK.pgm is
+                                         nonzero left out)
   vismask --help                         this text
 
 render options:
@@ -76,6 +78,9 @@ render options:
                        (same size) when the solve ends, in convergence.csv
                        and run.json; the time it takes is not solve time
   --error-every K      with --reference: also every K shots during the solve
+  --exclude MASK.pgm   with --reference: leave out of the relative RMSE the
+                       pixels where MASK.pgm (8-bit PGM, same size) is
+                       nonzero, e.g. visible emitters (tools/reference)
   --correct-unshot on|off
                        on: patches.csv's b includes kd * the ambient term
                        (Cohen's estimate of what the still-unshot power will
@@ -173,10 +178,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     return Status::Ok();
   }
   if (args[0] == "compare") {
-    if (args.size() != 3) return Status::Error("vismask: compare: usage: vismask compare A.pfm B.pfm");
+    const bool mask = args.size() == 5 && args[3] == "--exclude" && !args[4].empty();
+    if (args.size() != 3 && !mask)
+      return Status::Error("vismask: compare: usage: vismask compare A.pfm B.pfm [--exclude MASK.pgm]");
     o->command = "compare";
     o->compareA = args[1];
     o->compareB = args[2];
+    if (mask) o->exclude = args[4];
     return Status::Ok();
   }
   if (args[0] != "render" && args[0] != "footprint")
@@ -326,6 +334,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--reference") {
       if (v.empty()) return Bad(a, v, "a PFM file");
       o->reference = v;
+    } else if (a == "--exclude") {
+      if (v.empty()) return Bad(a, v, "a PGM file");
+      o->exclude = v;
     } else if (a == "--error-every") {
       if (!ParseU64(v, &u) || u < 1) return Bad(a, v, "a positive number of shots");
       o->errorEvery = u;
@@ -357,6 +368,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   if (o->minRays > o->maxRays)
     return Status::Error("vismask: --min-rays " + std::to_string(o->minRays) + " is above --max-rays " +
                          std::to_string(o->maxRays));
+  if (!o->exclude.empty() && o->reference.empty())
+    return Status::Error("vismask: --exclude: needs --reference REF.pfm (the mask applies to its error)");
   int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +

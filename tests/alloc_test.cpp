@@ -151,12 +151,17 @@ TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
   auto ref = args;
   ref.insert(ref.end(), {"--out", dir.File("ref")});
   ASSERT_EQ(test::RunMain(ref).code, 0);
+  // With an --exclude mask too (its pixels left out of every measurement).
+  std::string mask = "P5\n64 64\n255\n" + std::string(64 * 32, '\xff') + std::string(64 * 32, '\0');
+  test::WriteFile(dir.File("mask.pgm"), mask);
   args.insert(args.end(), {"--out", dir.File("out"), "--reference", dir.File("ref/image.pfm"),
-                           "--error-every", "50", "--seed", "2"});
+                           "--exclude", dir.File("mask.pgm"), "--error-every", "50", "--seed", "2"});
   int code = -1;
   long n = AllocationsAfterInit(args, &code);
   ASSERT_EQ(code, 0);
   EXPECT_NE(test::ReadFile(dir.File("out/run.json")).find("\"error_measurements\": 12"),
+            std::string::npos);
+  EXPECT_NE(test::ReadFile(dir.File("out/run.json")).find("\"excluded_pixels\": 2048"),
             std::string::npos);
   EXPECT_EQ(n, 0) << "heap allocations after init";
 }

@@ -148,6 +148,118 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
   }
 }
 
+// An 8-bit PGM of w x h whose pixel (x, y), y from the top, is f(x, y).
+template <typename F>
+std::string Pgm(int w, int h, F f) {
+  std::string s = "P5\n" + std::to_string(w) + " " + std::to_string(h) + "\n255\n";
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) s += static_cast<char>(f(x, y));
+  return s;
+}
+
+std::string JsonNumber(const std::string& json, const std::string& key) {
+  size_t at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return "";
+  at += key.size() + 4;
+  return json.substr(at, json.find_first_of(",\n", at) - at);
+}
+
+TEST(ReferenceTest, CompareImagesLeavesOutExcludedPixels) {
+  // Pixel 1 alone differs; pixel 0 counts only in the denominator.
+  const float b[6] = {1, 1, 1, 3, 3, 3}, a[6] = {1, 1, 1, 1, 1, 1};
+  const uint8_t none[2] = {0, 0}, first[2] = {255, 0}, second[2] = {0, 1};
+  ImageError e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6),
+                               Span<const uint8_t>(none, 2));
+  EXPECT_DOUBLE_EQ(e.relativeRmse, std::sqrt(12.0 / 30.0));
+  EXPECT_EQ(e.excludedPixels, 0u);
+  e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6), Span<const uint8_t>(first, 2));
+  EXPECT_DOUBLE_EQ(e.relativeRmse, std::sqrt(12.0 / 27.0));
+  EXPECT_EQ(e.excludedPixels, 1u);
+  // Excluding the only differing pixel leaves no error at all.
+  e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6), Span<const uint8_t>(second, 2));
+  EXPECT_EQ(e.relativeRmse, 0.0);
+  EXPECT_EQ(e.maxAbs, 0.0);
+  EXPECT_EQ(e.excludedPixels, 1u);
+}
+
+TEST(ReferenceTest, ExcludeMaskLeavesPixelsOutOfTheRenderError) {
+  TempDir dir;
+  Render(dir.File("ref"), {"--envs", "1", "--max-shots", "300"});
+  test::WriteFile(dir.File("none.pgm"), Pgm(48, 40, [](int, int) { return 0; }));
+  test::WriteFile(dir.File("all.pgm"), Pgm(48, 40, [](int, int) { return 255; }));
+  test::WriteFile(dir.File("top.pgm"), Pgm(48, 40, [](int, int y) { return y < 10 ? 7 : 0; }));
+  const std::string ref = dir.File("ref/image.pfm");
+  Render(dir.File("plain"), {"--reference", ref, "--seed", "3", "--max-shots", "150"});
+  Render(dir.File("none"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude", dir.File("none.pgm")});
+  Render(dir.File("all"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude", dir.File("all.pgm")});
+  Render(dir.File("top"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude", dir.File("top.pgm")});
+  std::string plain = ReadFile(dir.File("plain/run.json"));
+  std::string none = ReadFile(dir.File("none/run.json"));
+  std::string all = ReadFile(dir.File("all/run.json"));
+  std::string top = ReadFile(dir.File("top/run.json"));
+  EXPECT_EQ(JsonNumber(plain, "exclude"), "null");
+  EXPECT_EQ(JsonNumber(plain, "excluded_pixels"), "0");
+  EXPECT_EQ(JsonNumber(none, "exclude"), "\"" + dir.File("none.pgm") + "\"");
+  EXPECT_EQ(JsonNumber(none, "relative_rmse"), JsonNumber(plain, "relative_rmse"));
+  EXPECT_EQ(JsonNumber(all, "excluded_pixels"), "1920");
+  EXPECT_EQ(std::stod(JsonNumber(all, "relative_rmse")), 0.0);
+  // The top 10 rows left out: the same figure as CompareImages with that mask.
+  EXPECT_EQ(JsonNumber(top, "excluded_pixels"), "480");
+  PfmImage x, y;
+  ASSERT_TRUE(ReadPfm(dir.File("top/image.pfm"), &x).ok());
+  ASSERT_TRUE(ReadPfm(ref, &y).ok());
+  std::vector<uint8_t> mask(48 * 40, 0);
+  for (size_t i = 0; i < 480; ++i) mask[i] = 1;
+  double want = CompareImages(Span<const float>(x.pixels.data(), x.pixels.size()),
+                              Span<const float>(y.pixels.data(), y.pixels.size()),
+                              Span<const uint8_t>(mask.data(), mask.size()))
+                    .relativeRmse;
+  double got = std::stod(JsonNumber(top, "relative_rmse"));
+  EXPECT_NEAR(got, want, 1e-12 * want);
+  EXPECT_NE(got, std::stod(JsonNumber(plain, "relative_rmse")));
+  // The image itself does not depend on the mask.
+  EXPECT_EQ(ReadFile(dir.File("top/image.pfm")), ReadFile(dir.File("plain/image.pfm")));
+}
+
+TEST(ReferenceTest, BadExcludeMaskExitsTwoAndWritesNothing) {
+  TempDir dir;
+  Render(dir.File("ref"), {"--max-shots", "10"});
+  const std::string ref = dir.File("ref/image.pfm");
+  test::WriteFile(dir.File("small.pgm"), Pgm(47, 40, [](int, int) { return 0; }));
+  test::WriteFile(dir.File("ascii.pgm"), "P2\n48 40\n255\n0 0 0\n");
+  test::WriteFile(dir.File("short.pgm"), "P5\n48 40\n255\nabc");
+  test::WriteFile(dir.File("ok.pgm"), Pgm(48, 40, [](int, int) { return 0; }));
+  struct Case {
+    std::vector<std::string> extra;
+    const char* message;
+  } cases[] = {
+      {{"--exclude", dir.File("ok.pgm")}, "--exclude: needs --reference"},
+      {{"--reference", ref, "--exclude", dir.File("nothere.pgm")}, "nothere.pgm: cannot open"},
+      {{"--reference", ref, "--exclude", dir.File("small.pgm")}, "small.pgm: is 47x40, the image is 48x40"},
+      {{"--reference", ref, "--exclude", dir.File("ascii.pgm")}, "ascii.pgm: not an 8-bit binary PGM"},
+      {{"--reference", ref, "--exclude", dir.File("short.pgm")}, "short.pgm: truncated PGM"},
+      {{"--reference", ref, "--exclude", dir.File("small.pgm"), "--ranks", "2"}, "small.pgm: is 47x40"},
+  };
+  for (const Case& c : cases) {
+    auto args = kBase;
+    args.insert(args.end(), {"--out", dir.File("out")});
+    args.insert(args.end(), c.extra.begin(), c.extra.end());
+    auto r = RunMain(args);
+    EXPECT_EQ(r.code, 2) << c.message;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_FALSE(FileExists(dir.File("out"))) << c.message;
+  }
+  // vismask compare: the same checks on its mask.
+  auto r = RunMain({"compare", ref, ref, "--exclude", dir.File("small.pgm")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("small.pgm: is 47x40, the images are 48x40"), std::string::npos) << r.err;
+  r = RunMain({"compare", ref, ref, "--exclude", dir.File("ascii.pgm")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("ascii.pgm: not an 8-bit binary PGM"), std::string::npos) << r.err;
+  EXPECT_EQ(RunMain({"compare", ref, ref, "--exclude"}).code, 2);
+  EXPECT_EQ(RunMain({"compare", ref, ref, "--exclude", dir.File("ok.pgm")}).code, 0);
+}
+
 }  // namespace
 }  // namespace vismask
 

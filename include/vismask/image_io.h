@@ -37,15 +37,29 @@ struct PfmImage {
 // Reads a colour PFM ("PF"), either byte order. Errors name the file.
 Status ReadPfm(const std::string& path, PfmImage* image);
 
+// An 8-bit greyscale PGM ("P5", maxval <= 255) read at init (heap): one byte
+// a pixel, row 0 at the top. Errors name the file.
+struct PgmImage {
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> pixels;
+};
+Status ReadPgm(const std::string& path, PgmImage* image);
+
 // How far image `a` is from image `b` (same size, floats in any layout as
 // long as both share it): the relative RMSE sqrt(sum (a-b)^2 / sum b^2) over
 // every value (inf if b is all zero and a is not, 0 if both are), and the
 // largest absolute difference. Summed in double, in index order.
+// With `exclude` (one byte a pixel, a and b then RGB, 3 floats a pixel):
+// the pixels where it is nonzero are left out of both sums and of the
+// largest difference, and counted in excludedPixels.
 struct ImageError {
   double relativeRmse = 0.0;
   double maxAbs = 0.0;
+  size_t excludedPixels = 0;
 };
-ImageError CompareImages(Span<const float> a, Span<const float> b);
+ImageError CompareImages(Span<const float> a, Span<const float> b,
+                         Span<const uint8_t> exclude = Span<const uint8_t>());
 
 // An exposure that maps the log-average luminance of the covered pixels
 // (mask[i] != 0) to middle grey. 1 if nothing is covered.

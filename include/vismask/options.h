@@ -57,6 +57,7 @@ struct Options {
   bool json = false;      // footprint --json
   std::string reference;  // --reference REF.pfm: the error of the image against it
   uint64_t errorEvery = 0;  // --error-every K shots (with --reference); 0: at the end only
+  std::string exclude;    // --exclude MASK.pgm (render with --reference, compare): pixels left out of the error
   bool correctUnshot = false;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
   double stopError = 0.0;  // --stop-error E: stop when the estimated bias < E; 0: off  // --correct-unshot on: patches.csv's b gets kd * ambient
