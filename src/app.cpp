@@ -103,6 +103,9 @@ struct Render {
   TextWriter convergence;
   double initSeconds = 0.0;
   double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
+  Span<CutRecord> cutMine, cutAll;  // display values shared across cuts (display.h)
+  uint64_t cutCapacity = 0;         // the most cut vertices any rank's environments hold
+  float cutTolerance = 0.0f;
   uint64_t predictedBytes = 0;  // this rank's arenas, as measured before they were made
 
   bool isRoot() const { return transport->rank() == 0; }
@@ -130,6 +133,10 @@ struct Render {
     ambientAll = arena.Alloc<AmbientReport>(size_t(ranks) * layout.perRank);
     ambient = arena.Alloc<AmbientReport>(layout.total);
     part(&rankOutputBytes);
+    // Cut vertices: every rank's block holds cutCapacity records.
+    cutMine = arena.Alloc<CutRecord>(cutCapacity);
+    cutAll = arena.Alloc<CutRecord>(size_t(ranks) * cutCapacity);
+    part(&rankImageBytes);
     if (!root) return;
     if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
     if (!options.reference.empty())
@@ -288,6 +295,16 @@ int Init(Render* r) {
   r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
   s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
   if (!s.ok()) return FailInit(r, s);
+  // Every rank's cut-vertex count, so that every block is as large as the largest.
+  {
+    uint64_t mine = 0;
+    for (auto& e : r->envs) mine += e->numCutVertices();
+    std::vector<uint64_t> all(static_cast<size_t>(r->transport->size()));
+    r->transport->AllGather(&mine, sizeof mine, all.data());
+    r->cutCapacity = *std::max_element(all.begin(), all.end());
+    glm::vec3 extent = p.scene.bounds.hi - p.scene.bounds.lo;
+    r->cutTolerance = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
+  }
   Arena measure = Arena::Measure();
   r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot());
   uint64_t envBytes = 0;
@@ -629,7 +646,14 @@ void RenderImage(Render* r) {
   double* ambient = r->ambientB;
   AmbientTerm(r->ambient, ambient);
   r->fb.Clear();
-  for (Environment* env : r->envPtrs) DrawEnvironment(r->view, env, ambient, &r->fb);
+  for (Environment* env : r->envPtrs) env->ComputeVertexRadiosity(ambient);
+  if (r->layout.total > 1) {
+    Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
+    CollectCuts(envs, r->cutMine);
+    t->AllGather(r->cutMine.data(), r->cutMine.bytes(), r->cutAll.data());
+    ShareCuts(envs, r->cutAll, r->cutTolerance);
+  }
+  for (Environment* env : r->envPtrs) DrawEnvironment(r->view, *env, ambient, &r->fb);
   // The other ranks' framebuffers, a band of rows at a time (rank 0 holds
   // one band), composited in rank order; then the fragments are resolved.
   const Framebuffer& mine = r->fb;
@@ -755,6 +779,12 @@ int Footprint(const Options& o) {
     Render& r = probes[k];
     r.options = o;
     r.layout = EnvsOfRank(total, ranks, k);
+    for (int q = 0; q < ranks; ++q) {
+      RankEnvs re = EnvsOfRank(total, ranks, q);
+      uint64_t cuts = 0;
+      for (uint32_t e = re.first; e < re.first + re.count; ++e) cuts += envs[e]->numCutVertices();
+      r.cutCapacity = std::max(r.cutCapacity, cuts);
+    }
     Arena measure = Arena::Measure();
     r.LayoutRank(measure, p.packetBytes, ranks, k == 0);
     rankOwn[k] = ArenaRoundUp(measure.used());

@@ -108,6 +108,9 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   vertices_ = arena.Alloc<glm::vec3>(numVertices);
   vertexB_ = arena.Alloc<glm::vec3>(numVertices);
   vertexWeight_ = arena.Alloc<float>(numVertices);
+  cutVertex_ = arena.Alloc<uint32_t>(stagedCut_.size());
+  vertexCut_ = arena.Alloc<uint8_t>(numVertices);
+  cutNormal_ = arena.Alloc<glm::vec3>(stagedCut_.size());
   part(&footprint_.vertices);
   grid_.Layout(arena, plan);
   part(&footprint_.grid);
@@ -157,6 +160,31 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     }
     staged_.push_back(p);
   }
+  // Lattice vertices on a face shared with a neighbour.
+  stagedCut_.clear();
+  stagedCutNormal_.clear();
+  {
+    glm::vec3 extent = grid.box.hi - grid.box.lo;
+    float tol = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
+    std::vector<char> seen(stagedVertices_.size(), 0);
+    for (const Patch& p : staged_) {
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        uint32_t v = p.vertex[k];
+        if (seen[v]) continue;
+        seen[v] = 1;
+        const glm::vec3& x = stagedVertices_[v];
+        bool cut = false;
+        for (int a = 0; a < 3; ++a) {
+          cut |= cell_[a] > 0 && std::fabs(x[a] - box_.lo[a]) <= tol;
+          cut |= cell_[a] + 1 < grid.n[a] && std::fabs(x[a] - box_.hi[a]) <= tol;
+        }
+        if (!cut) continue;
+        stagedCut_.push_back(v);
+        stagedCutNormal_.push_back(p.normal);
+      }
+    }
+  }
+  numCut_ = static_cast<uint32_t>(stagedCut_.size());
   uint32_t n = static_cast<uint32_t>(staged_.size());
   plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n), options.gridDensity);
   Arena measure = Arena::Measure();
@@ -179,9 +207,17 @@ void Environment::Build() {
     kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
   }
   for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
+  for (size_t v = 0; v < vertexCut_.size(); ++v) vertexCut_[v] = 0;
+  for (size_t k = 0; k < stagedCut_.size(); ++k) {
+    vertexCut_[stagedCut_[k]] = 1;
+    cutVertex_[k] = stagedCut_[k];
+    cutNormal_[k] = stagedCutNormal_[k];
+  }
   grid_.Build(patches_, geom_);
   std::vector<Patch>().swap(staged_);
   std::vector<glm::vec3>().swap(stagedVertices_);
+  std::vector<uint32_t>().swap(stagedCut_);
+  std::vector<glm::vec3>().swap(stagedCutNormal_);
   Reset();
 }
 

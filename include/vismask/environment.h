@@ -152,6 +152,15 @@ class Environment {
   // The leaf element of patch `patch` at parameters `st`.
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
   Span<const Element> elements() const { return elements_; }
+  // The lattice vertices on a face this environment shares with a neighbour
+  // (where the partition cut a polygon), and their surface's normal: the
+  // display shares their values across the cut (display.h).
+  Span<const uint32_t> cutVertices() const { return cutVertex_; }
+  uint32_t numCutVertices() const { return numCut_; }  // known from Prepare on
+  Span<const glm::vec3> cutNormals() const { return cutNormal_; }
+  Span<const float> vertexWeights() const { return vertexWeight_; }
+  bool IsCutVertex(uint32_t v) const { return vertexCut_[v] != 0; }
+  void SetVertexRadiosity(uint32_t v, const glm::vec3& b) { vertexB_[v] = b; }
   uint32_t elementsUsed() const { return nextElement_; }
 
   uint32_t index() const { return index_; }
@@ -244,6 +253,10 @@ class Environment {
   Span<glm::vec3> vertices_;
   Span<glm::vec3> vertexB_;
   Span<float> vertexWeight_;
+  Span<uint32_t> cutVertex_;
+  Span<uint8_t> vertexCut_;  // 1 for a cut vertex
+  Span<glm::vec3> cutNormal_;
+  uint32_t numCut_ = 0;
   Grid grid_;
   MaxTree tree_;
   // Exchange state: empty for an environment without neighbours.
@@ -263,6 +276,8 @@ class Environment {
   // Between Prepare and Build only.
   std::vector<Patch> staged_;
   std::vector<glm::vec3> stagedVertices_;
+  std::vector<uint32_t> stagedCut_;
+  std::vector<glm::vec3> stagedCutNormal_;
   Grid::Plan plan_;
 };
 
