@@ -265,43 +265,55 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
 // under temporary names. Heap allocation is allowed here only.
 int Init(Render* r) {
   const Options& o = r->options;
-  // The reference image, read (heap, init) first: a bad one is refused
-  // before the scene is loaded and built.
   PfmImage ref;
-  if (r->isRoot() && !o.reference.empty()) {
-    Status s = ReadPfm(o.reference, &ref);
-    if (!s.ok()) return FailInit(r, Status::Error("vismask: --reference: " + s.ToString()));
-    if (ref.width != o.width || ref.height != o.height)
-      return FailInit(r, Status::Error("vismask: --reference: " + o.reference + " is " +
-                                       std::to_string(ref.width) + "x" + std::to_string(ref.height) +
-                                       ", the image is " + std::to_string(o.width) + "x" +
-                                       std::to_string(o.height) + " (--width, --height)"));
-  }
   PgmImage mask;  // --exclude: checked here too, before any output exists
-  if (r->isRoot() && !o.exclude.empty()) {
-    Status s = ReadPgm(o.exclude, &mask);
-    if (!s.ok()) return FailInit(r, Status::Error("vismask: --exclude: " + s.ToString()));
-    if (mask.width != o.width || mask.height != o.height)
-      return FailInit(r, Status::Error("vismask: --exclude: " + o.exclude + ": is " +
-                                       std::to_string(mask.width) + "x" + std::to_string(mask.height) +
-                                       ", the image is " + std::to_string(o.width) + "x" +
-                                       std::to_string(o.height)));
-  }
   Prepared p;
-  Status s = PrepareScene(o, &p);
-  if (!s.ok()) return FailInit(r, s);
-  r->numPolygons = p.scene.polygons.size();
-  r->patchSize = p.patchSize;
-  r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
-  s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
-  if (!s.ok()) return FailInit(r, s);
-  // Every rank's cut-vertex count, so that every block is as large as the largest.
+  auto load = [&]() -> int {
+    // The reference image, read (heap, init) first: a bad one is refused
+    // before the scene is loaded and built.
+    if (r->isRoot() && !o.reference.empty()) {
+      Status s = ReadPfm(o.reference, &ref);
+      if (!s.ok()) return FailInit(r, Status::Error("vismask: --reference: " + s.ToString()));
+      if (ref.width != o.width || ref.height != o.height)
+        return FailInit(r, Status::Error("vismask: --reference: " + o.reference + " is " +
+                                         std::to_string(ref.width) + "x" + std::to_string(ref.height) +
+                                         ", the image is " + std::to_string(o.width) + "x" +
+                                         std::to_string(o.height) + " (--width, --height)"));
+    }
+    if (r->isRoot() && !o.exclude.empty()) {
+      Status s = ReadPgm(o.exclude, &mask);
+      if (!s.ok()) return FailInit(r, Status::Error("vismask: --exclude: " + s.ToString()));
+      if (mask.width != o.width || mask.height != o.height)
+        return FailInit(r, Status::Error("vismask: --exclude: " + o.exclude + ": is " +
+                                         std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                                         ", the image is " + std::to_string(o.width) + "x" +
+                                         std::to_string(o.height)));
+    }
+    Status s = PrepareScene(o, &p);
+    if (!s.ok()) return FailInit(r, s);
+    r->numPolygons = p.scene.polygons.size();
+    r->patchSize = p.patchSize;
+    r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
+    s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
+    if (!s.ok()) return FailInit(r, s);
+    return kExitOk;
+  };
+  // Every rank reaches this collective, whether its load succeeded or not:
+  // each learns the others' status and cut-vertex counts (every block of
+  // the cut exchange is as large as the largest rank's).
+  struct LoadReport {
+    int64_t code;
+    uint64_t cuts;
+  };
+  LoadReport mine{load(), 0};
+  for (auto& e : r->envs) mine.cuts += e->numCutVertices();
+  std::vector<LoadReport> all(static_cast<size_t>(r->transport->size()));
+  r->transport->AllGather(&mine, sizeof mine, all.data());
+  for (const LoadReport& k : all) {
+    if (k.code != kExitOk) return static_cast<int>(k.code);
+    r->cutCapacity = std::max(r->cutCapacity, k.cuts);
+  }
   {
-    uint64_t mine = 0;
-    for (auto& e : r->envs) mine += e->numCutVertices();
-    std::vector<uint64_t> all(static_cast<size_t>(r->transport->size()));
-    r->transport->AllGather(&mine, sizeof mine, all.data());
-    r->cutCapacity = *std::max_element(all.begin(), all.end());
     glm::vec3 extent = p.scene.bounds.hi - p.scene.bounds.lo;
     r->cutTolerance = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
   }
