@@ -123,6 +123,29 @@ TEST(AllocTest, CornellRenderAllocatesNothingAfterInit) {
   ASSERT_EQ(code, 0);
   EXPECT_TRUE(test::FileExists(dir.File("image.png")));
   EXPECT_EQ(n, 0) << "heap allocations after init";
+  // The counted solve did refine elements (and drew them).
+  std::string json = test::ReadFile(dir.File("run.json"));
+  size_t at = json.find("\"splits\": ");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_GT(std::atol(json.c_str() + at + 10), 10) << "no element split during the counted solve";
+}
+
+TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  // The defaults (power allocation with partial shots, Sobol' samples,
+  // elements, antialiasing) on two environments, so cut vertices are shared.
+  test::TempDir dir;
+  int code = -1;
+  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2",
+                                 "--mask-method", "R", "--emitted-rays", "500000", "--max-rays",
+                                 "2048", "--width", "96", "--height", "96", "--stop-unshot", "1e-2"},
+                                &code);
+  ASSERT_EQ(code, 0);
+  EXPECT_EQ(n, 0) << "heap allocations after init";
+  std::string json = test::ReadFile(dir.File("run.json"));
+  EXPECT_EQ(json.find("\"splits\": 0,"), std::string::npos) << "no element split";
 }
 
 TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {

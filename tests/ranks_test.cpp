@@ -32,7 +32,22 @@ std::string Bin() {
 // `kBase` with --mask-method `method`: the same bytes on one process, on
 // forked processes (`pipeRanks`) and under mpirun (`mpiRanks`, when built).
 void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,
-                               std::vector<const char*> mpiRanks);
+                               std::vector<const char*> mpiRanks,
+                               const std::vector<std::string>& base = kBase);
+
+// The default allocation (rays in proportion to power, partial shots, the
+// rounding drawn from each shot's stream), Sobol' samples, sub-patch
+// elements, antialiasing and the cut vertices shared across environments:
+// still the same bytes everywhere.
+const std::vector<std::string> kPowerBase = {
+    "render", "scenes/cornell.obj", "--envs", "2x1x2", "--emitted-rays", "400000", "--max-rays",
+    "2048", "--stop-unshot", "2e-2", "--width", "96", "--height", "96", "--mask-res", "24",
+    "--patch-size", "50", "--quiet"};
+
+TEST(RanksTest, PowerAllocationAndElementsGiveTheSameBytesEverywhere) {
+  ExpectSameBytesEverywhere("R", {"2", "4"}, {"4"}, kPowerBase);
+  ExpectSameBytesEverywhere("B", {"3"}, {"2"}, kPowerBase);
+}
 
 TEST(RanksTest, EveryTransportAndRankCountGivesTheSameBytes) {
   ExpectSameBytesEverywhere("B", {"1", "2", "4", "8"}, {"1", "2", "4"});
@@ -46,9 +61,10 @@ TEST(RanksTest, MethodsCAndRGiveTheSameBytesEverywhere) {
 }
 
 void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,
-                               std::vector<const char*> mpiRanks) {
+                               std::vector<const char*> mpiRanks,
+                               const std::vector<std::string>& kindOf) {
   TempDir dir;
-  std::vector<std::string> base = kBase;
+  std::vector<std::string> base = kindOf;
   base.insert(base.end(), {"--mask-method", method});
   auto run = [&](const std::string& out, std::vector<std::string> extra) {
     auto args = base;
