@@ -234,6 +234,7 @@ Status PrepareScene(const Options& o, Prepared* p) {
   e.elements.perPatch = o.elementsPerPatch;
   e.elements.maxDepth = o.elementDepth;
   e.elements.threshold = o.elementSpread;
+  e.elements.chi2 = o.elementChi2;
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
   return Status::Ok();

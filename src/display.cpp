@@ -91,7 +91,12 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       }
       DisplayPiece piece;
       piece.numCorners = static_cast<uint32_t>(n);
-      piece.id = p.globalId;
+      // The polygon's id, not the patch's: the pieces of one polygon tile its
+      // plane, so the raster may merge them into one fragment per pixel,
+      // which leaves room at a silhouette where two faces of a block, each
+      // cut into patches, meet a wall behind (with patch ids that pixel held
+      // five or more fragments and lost the wall: dark dots along the edges).
+      piece.id = p.surface;
       for (int k = 0; k < n; ++k) {
         piece.p[k] = PatchPoint(p, node.c[k]);
         piece.c[k] = facing ? kInvPi * CornerValue(env, i, node.c[k], ambient) : glm::vec3(0.0f);

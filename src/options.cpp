@@ -57,6 +57,8 @@ render options:
   --element-spread S   an element splits only where its quarters' radiosity
                        differs by more than S (relative RMS, default 0.1) and
                        more than its Monte Carlo noise explains
+  --element-chi2 X     ... explains: chi-square (3 dof) of its quarters
+                       against an even spread above X (default 20)
   --seed S             random seed, unsigned 64-bit (default 1)
   --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
                        (default 1e-3)
@@ -245,6 +247,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--element-depth") {
       if (!ParseU64(v, &u) || u > 16) return Bad(a, v, "an integer in [0, 16]");
       o->elementDepth = static_cast<uint32_t>(u);
+    } else if (a == "--element-chi2") {
+      if (!ParseDouble(v, &d) || !(d >= 0.0) || d > 1e6) return Bad(a, v, "a number in [0, 1e6]");
+      o->elementChi2 = static_cast<float>(d);
     } else if (a == "--element-spread") {
       if (!ParseDouble(v, &d) || !(d >= 0.0) || d > 100.0) return Bad(a, v, "a number in [0, 100]");
       o->elementSpread = static_cast<float>(d);

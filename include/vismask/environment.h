@@ -255,6 +255,12 @@ class Environment {
   Span<float> vertexWeight_;
   Span<uint32_t> cutVertex_;
   Span<uint8_t> vertexCut_;  // 1 for a cut vertex
+  // Scratch of ComputeVertexRadiosity: quads touching a vertex (0xff: a
+  // triangle too), their corner leaves' edge shares, the inward value.
+  Span<uint8_t> vertexQuads_;
+  Span<float> vertexFrac_;
+  Span<glm::vec3> vertexInward_;
+  Span<uint8_t> vertexSeen_;
   Span<glm::vec3> cutNormal_;
   uint32_t numCut_ = 0;
   Grid grid_;

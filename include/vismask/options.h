@@ -33,6 +33,7 @@ struct Options {
   uint32_t elementsPerPatch = 8;  // --elements K: the element pool, K per patch beyond the roots
   uint32_t elementDepth = 4;      // --element-depth D: the deepest an element splits
   float elementSpread = 0.1f;     // --element-spread S: the least relative spread that splits
+  float elementChi2 = 20.0f;      // --element-chi2 X: the significance a split needs
   uint64_t rayBudget = 0;         // --ray-budget N: stop once N rays are traced; 0: none
   uint64_t seed = 1;
   double stopUnshot = 1e-3;
