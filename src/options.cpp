@@ -27,7 +27,7 @@ usage:
 render options:
   --out DIR            output directory (default out/); created if missing
   --patch-size L       longest patch edge, scene units (default: largest
-                       scene extent / 16)
+                       scene extent / 28)
   --ray-alloc power|fixed
                        how many Monte Carlo rays a shot traces. power (the
                        default): in proportion to the shot's unshot power,
@@ -37,7 +37,7 @@ render options:
                        shots. fixed: --rays every shot (the old default)
   --rays N             fixed: Monte Carlo rays per shot (4096); given alone it
                        selects --ray-alloc fixed
-  --emitted-rays M     power: the rays the emitted power is worth (8000000);
+  --emitted-rays M     power: the rays the emitted power is worth (4000000);
                        a shot of power P traces M * P / emitted power rays,
                        rounded up or down at random from the shot's stream
   --min-rays F         power: the fewest rays a shot traces (default 64)
