@@ -40,7 +40,7 @@ render options:
   --emitted-rays M     power: the rays the emitted power is worth (4000000);
                        a shot of power P traces M * P / emitted power rays,
                        rounded up or down at random from the shot's stream
-  --min-rays F         power: the fewest rays a shot traces (default 64)
+  --min-rays F         power: the fewest rays a shot traces (default 16)
   --max-rays C         power: the most rays a shot traces (default 8192);
                        also Method R's packet bits
   --sampler S          sobol (default): scrambled Sobol' points over a

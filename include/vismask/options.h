@@ -27,7 +27,7 @@ struct Options {
   uint32_t rays = 4096;           // --rays: per shot (fixed)
   bool hasRays = false;
   uint64_t emittedRays = 4000000; // --emitted-rays: the rays the emitted power is worth (power)
-  uint32_t minRays = 64;          // --min-rays: the fewest a shot traces (power)
+  uint32_t minRays = 16;          // --min-rays: the fewest a shot traces (power)
   uint32_t maxRays = 8192;        // --max-rays: the most a shot traces (power); more power -> partial shots
   bool sobol = true;              // --sampler sobol|random
   uint32_t elementsPerPatch = 8;  // --elements K: the element pool, K per patch beyond the roots
