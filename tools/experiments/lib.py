@@ -42,7 +42,7 @@ SCALES = {
                  # chosen so that runs converge in about 0.3, 1, 3, 10 and 30 s
                  # of solve on this machine, and a 0.1 s cap (a converged run
                  # needs ~11 000 shots of at least --min-rays: >= 0.3 s).
-                 gt=dict(size=512, spp=256, exp_spp=256,
+                 gt=dict(size=512, spp=1024, exp_spp=1024,
                          settings=[("cap-0.1s", ["--emitted-rays", "100000", "--max-seconds", "0.1"]),
                                    ("emitted-1e5", ["--emitted-rays", "100000"]),
                                    ("emitted-1e6", ["--emitted-rays", "1000000"]),
