@@ -604,6 +604,11 @@ def reading(ctx, w):
     envs = rows_of(ctx.result("gt-envs.csv"))
     env_parts = [f"{e['run']} {pc(e['vs_gt'])} ({float(e['minus_1_env_points']) * 100:+.2f} points: "
                  f"{e['within_0.3']})" for e in envs if e["max_seconds"] != "none" and e["minus_1_env_points"]]
+    rp = rows_of(ctx.result("gt-renderpark.csv"))
+    rp_parts = [f"{r['who']} at {r['solve_seconds']} s ({pc(r['vismask_front_vs_gt'])} against "
+                f"{r['renderpark']}'s quoted {pc(r['renderpark_vs_gt'], 1)})" for r in rp if r["who"]]
     w(f"- **Against the ground truth (issue 15).** " + "; ".join(parts) + ". Two environments "
       f"at the same capped solve time: " + "; ".join(env_parts) + f". The reference's own noise "
-      f"is {pc(noise)}: every measured figure includes it.")
+      f"is {pc(noise)}: every measured figure includes it. Against RenderPark's quoted figures "
+      "(another session's reference, so indicative only): " + ("; ".join(rp_parts) or
+                                                               "no vismask measurement that early") + ".")
