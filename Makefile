@@ -178,10 +178,13 @@ test: deps
 	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
 
 # docs/RESULTS.md and docs/results/ from one run of every step in
-# tools/experiments (runs under build/experiments/full; about 15 minutes on
-# 2 cores). Timed runs are always rerun; the others are reused when their
-# command line is unchanged (rm -rf build/experiments to start afresh).
+# tools/experiments (runs under build/experiments/full; about 25 minutes on
+# 2 cores, less when the Cycles references are in build/reference-cache).
+# Timed runs are always rerun; the others are reused when their command line
+# is unchanged (rm -rf build/experiments to start afresh). The ground truth
+# (issue 15) needs blender: tools/install-deps --reference.
 experiments: deps
+	@tools/install-deps --reference
 	$(MAKE) $(BUILD)/vismask
 	VISMASK_BIN=$(BUILD)/vismask tools/experiments/all
 

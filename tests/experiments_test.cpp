@@ -84,6 +84,61 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
                               "## Reading", "(img/fig2-B-4.png)", "(error-time.png)"})
     EXPECT_NE(doc.find(heading), std::string::npos) << heading;
   EXPECT_EQ(doc.find("nan"), std::string::npos) << "a figure is not a number";
+
+  // The ground truth (issue 15): with blender, its section, tables and images
+  // and the ground-truth columns of the paper's tables; without, a clear line.
+  EXPECT_NE(doc.find("## Against a path-traced ground truth"), std::string::npos);
+  if (std::system("command -v blender > /dev/null 2>&1") != 0) {
+    EXPECT_NE(doc.find("**Skipped**: blender not found"), std::string::npos);
+    return;
+  }
+  struct GtTable {
+    const char* file;
+    size_t rows;
+    std::vector<int> numericColumns;
+  } gtTables[] = {
+      {"gt-time.csv", 4, {2, 3, 4, 6, 7, 8}},            // today, default, a cap, one setting
+      {"gt-goals.csv", 5, {2, 3}},                        // three budgets, the ratio, the demo
+      {"gt-decomposition.csv", 4, {2, 3, 4, 5, 6, 7, 8}},  // today, default, elements 0, aa off
+      {"gt-envs.csv", 6, {2, 4, 5}},                      // 1 env, B, R: capped and converged
+      {"gt-seam.csv", 2, {1, 2, 3, 4, 5}},
+      {"gt-renderpark.csv", 3, {1, 2, 3}},
+      {"gt-references.csv", 1, {2, 3, 4}},
+      {"gt-experiments.csv", 1, {1, 2, 3, 4}},
+  };
+  for (const GtTable& t : gtTables) {
+    auto rows = ReadCsv(dir.File(t.file));
+    ASSERT_EQ(rows.size(), 1 + t.rows) << t.file;
+    for (size_t r = 1; r < rows.size(); ++r)
+      for (int c : t.numericColumns) {
+        ASSERT_LT(size_t(c), rows[r].size()) << t.file << " row " << r;
+        EXPECT_TRUE(IsNumber(rows[r][c])) << t.file << " row " << r << " col " << c << ": '"
+                                          << rows[r][c] << "'";
+      }
+  }
+  // The ground-truth columns beside reference (b)'s.
+  auto fig2 = ReadCsv(dir.File("fig2-quality.csv"));
+  ASSERT_GE(fig2[0].size(), 11u);
+  EXPECT_EQ(fig2[0][8], "vs_gt_whole");
+  EXPECT_TRUE(IsNumber(fig2[1][8]));
+  auto fig3 = ReadCsv(dir.File("fig3-leak.csv"));
+  EXPECT_EQ(fig3[0].back(), "image_leak_vs_gt_percent");
+  EXPECT_TRUE(IsNumber(fig3[2].back()));
+  auto pareto = ReadCsv(dir.File("pareto.csv"));
+  EXPECT_EQ(pareto[0].back(), "run_final_vs_gt");
+  EXPECT_TRUE(IsNumber(pareto[1].back()));
+  for (const char* png : {"gt-error-time.png", "gt-seam.png", "img/gt-diff-today.png",
+                          "img/gt-diff-default.png", "img/gt-seam-env2-B.png",
+                          "img/gt-seam-env2-R.png"}) {
+    std::string bytes = ReadFile(dir.File(png));
+    ASSERT_GT(bytes.size(), 8u) << png;
+    EXPECT_EQ(bytes.substr(1, 3), "PNG") << png;
+  }
+  for (const char* heading : {"### Error against solve time", "### The goals of issue 15",
+                              "### RenderPark, quoted", "not rerun by make experiments",
+                              "### Where the error comes from", "### Two environments against one",
+                              "(gt-error-time.png)", "(img/gt-diff-default.png)", "Ground truth (c)"})
+    EXPECT_NE(doc.find(heading), std::string::npos) << heading;
 }
 
 }  // namespace

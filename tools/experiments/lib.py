@@ -35,13 +35,36 @@ SCALES = {
                  ref_b=["--rays", "8192", "--stop-unshot", "1e-3"],
                  ref_seeds=[1001, 1002],
                  ref_res=250, table_res=[20, 50, 100], curve_res=[20, 50, 100, 250],
-                 leak_res=250, reps=3, error_every=100),
+                 leak_res=250, reps=3, error_every=100,
+                 # The ground truth (groundtruth.py): a Cycles reference of
+                 # size^2 at spp (two halves) for the original camera, and of
+                 # the experiments' camera at exp_spp. --emitted-rays settings
+                 # chosen so that runs converge in about 0.3, 1, 3, 10 and 30 s
+                 # of solve on this machine, and a 0.1 s cap (a converged run
+                 # needs ~11 000 shots of at least --min-rays: >= 0.3 s).
+                 gt=dict(size=512, spp=1024, exp_spp=1024,
+                         settings=[("cap-0.1s", ["--emitted-rays", "100000", "--max-seconds", "0.1"]),
+                                   ("emitted-1e5", ["--emitted-rays", "100000"]),
+                                   ("emitted-1e6", ["--emitted-rays", "1000000"]),
+                                   ("emitted-3e6", ["--emitted-rays", "3000000"]),
+                                   ("emitted-1.2e7", ["--emitted-rays", "12000000"]),
+                                   ("emitted-4e7", ["--emitted-rays", "40000000"])],
+                         points=40, budgets=[1, 10, 30], env_seconds=10, env_res=100,
+                         band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
+                         common=[], default=[], today_rays=4096)),
     "mini": dict(common=CAMERA + ["--patch-size", "140", "--rays", "256", "--stop-unshot", "5e-2",
                          "--width", "48", "--height", "48"],
                  ref_b=["--rays", "1024", "--stop-unshot", "1e-2"],
                  ref_seeds=[1001, 1002],
                  ref_res=16, table_res=[4, 8], curve_res=[4, 8, 16],
-                 leak_res=16, reps=3, error_every=10),
+                 leak_res=16, reps=3, error_every=10,
+                 gt=dict(size=48, spp=8, exp_spp=8,
+                         settings=[("cap-0.02s", ["--emitted-rays", "20000", "--max-seconds", "0.02"]),
+                                   ("emitted-2e4", ["--emitted-rays", "20000"])],
+                         points=10, budgets=[0.05, 0.2, 0.5], env_seconds=0.2, env_res=8,
+                         band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
+                         common=["--patch-size", "140", "--stop-unshot", "5e-2"],
+                         default=["--emitted-rays", "50000"], today_rays=256)),
 }
 
 
@@ -57,12 +80,14 @@ class Context:
         os.makedirs(self.out, exist_ok=True)
         os.makedirs(self.runs, exist_ok=True)
 
-    def run(self, name, args, fresh=False):
+    def run(self, name, args, fresh=False, common=None):
         """Runs `vismask render SCENE common args --out runs/name` unless the
         same command already ran there (its args.txt matches); returns run.json.
-        `fresh` always reruns (timed repetitions)."""
+        `fresh` always reruns (timed repetitions); `common` replaces the
+        scale's common arguments (the ground-truth runs)."""
         d = os.path.join(self.runs, name)
-        cmd = [self.bin, "render", SCENE] + self.s["common"] + list(args) + ["--out", d, "--quiet"]
+        cmd = [self.bin, "render", SCENE] + (self.s["common"] if common is None else common) + list(
+            args) + ["--out", d, "--quiet"]
         key = " ".join(os.path.relpath(c, ROOT) if c.startswith(ROOT) else c for c in cmd[1:])
         stamp = os.path.join(d, "args.txt")
         if not fresh and os.path.exists(stamp) and open(stamp).read() == key:

@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 
+import groundtruth
 import lib
 
 METHODS_CURVES = ["A", "B", "C"]  # masks of R x 4R pixels, at each R
@@ -101,6 +102,7 @@ def quality(ctx):
     right = region_mask(ctx, ref_a_json, right_only=True)
     _, _, ra = lib.read_pfm(ctx.path(ref_a_name, "image.pfm"))
     w, h, rb = lib.read_pfm(ref_b)
+    gt = groundtruth.exp_reference(ctx)
     rows = []
     os.makedirs(ctx.result("img"), exist_ok=True)
     for r in s["table_res"] + [s["ref_res"]]:
@@ -111,7 +113,7 @@ def quality(ctx):
                      "" if ref else lib.rel_rmse(img, ra, mask),
                      "" if ref else lib.rel_rmse(img, ra, right),
                      lib.rel_rmse(img, rb), lib.rel_rmse(img, rb, mask), lib.rel_rmse(img, rb, right),
-                     j["timings"]["solve_seconds"]])
+                     j["timings"]["solve_seconds"]] + gt_columns(gt, img, mask, right))
         shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig2-B-{r}.png"))
         lib.diff_png(ctx.result(f"img/fig2-B-{r}-diff.png"), w, h, img, ra, 10, mask)
     # The noise floor of a comparison between two 2-environment runs: the
@@ -121,12 +123,34 @@ def quality(ctx):
     _, _, x1 = lib.read_pfm(ctx.path(f"B-{low}", "image.pfm"))
     _, _, x2 = lib.read_pfm(ctx.path(f"B-{low}-seed2", "image.pfm"))
     rows.append([f"{low} (seed 2 vs seed 1)", lib.rel_rmse(x2, x1), lib.rel_rmse(x2, x1, mask),
-                 lib.rel_rmse(x2, x1, right), "", "", "", j2["timings"]["solve_seconds"]])
+                 lib.rel_rmse(x2, x1, right), "", "", "", j2["timings"]["solve_seconds"], "", "", ""])
     lib.write_csv(ctx.result("fig2-quality.csv"),
                   ["mask_res", "vs_ref_a_whole", "vs_ref_a_region", "vs_ref_a_right",
-                   "vs_ref_b_whole", "vs_ref_b_region", "vs_ref_b_right", "solve_seconds"], rows)
+                   "vs_ref_b_whole", "vs_ref_b_region", "vs_ref_b_right", "solve_seconds",
+                   "vs_gt_whole", "vs_gt_region", "vs_gt_right"], rows)
+    # The ground truth of this camera, and reference (b) against it.
+    if gt is not None:
+        groundtruth.write_csv(ctx.result("gt-experiments.csv"),
+                      ["what", "noise", "ref_b_vs_gt_whole", "ref_b_vs_gt_region", "ref_b_vs_gt_right"],
+                      [[gt.what, gt.noise] + gt_columns(gt, rb, mask, right)])
+    elif os.path.exists(ctx.result("gt-experiments.csv")):
+        os.remove(ctx.result("gt-experiments.csv"))
     # The region itself, for the doc.
     region_png(ctx, w, h, rb, mask)
+
+
+def gt_columns(gt, img, mask, right):
+    """The image's relative RMSE against the ground truth (emitter pixels
+    excluded): whole, shadow region, its right part; blank without one."""
+    if gt is None:
+        return ["", "", ""]
+    return [gt.error(img), gt.error(img, mask), gt.error(img, right)]
+
+
+def region_mean(img, mask):
+    """Mean over the mask's pixels, channels summed."""
+    n = sum(mask)
+    return sum(sum(img[3 * i:3 * i + 3]) for i in range(len(mask)) if mask[i]) / max(1, n)
 
 
 def region_png(ctx, w, h, ref, mask):
@@ -180,18 +204,31 @@ def leak(ctx):
     refs = [lib.region_patch_mean(ctx.path(f"ref-b-seed{k}", "patches.csv"), region, True)
             for k in seeds]
     ref_mean = sum(m for m, _ in refs) / len(refs)
+    # Beside the patch measure, the same in the image: the mean over the
+    # right part's pixels, against (b)'s image and against the ground truth's.
+    gt = groundtruth.exp_reference(ctx)
+    _, _, rb = lib.read_pfm(ref_b_path(ctx))
+    right = region_mask(ctx, lib.load_json(ctx.path(f"ref-b-seed{seeds[0]}", "run.json")), right_only=True)
+    if gt is not None:
+        right_gt = [k and m for k, m in zip(gt.keep, right)]
+        gt_mean = region_mean(gt.px, right_gt)
+    b_img = region_mean(rb, right)
     rows = [["reference (b) seed spread", "",
-             100 * (refs[1][0] - refs[0][0]) / ref_mean, refs[0][1]]]
+             100 * (refs[1][0] - refs[0][0]) / ref_mean, refs[0][1], "", "", "", "", "",
+             "" if gt is None else 100 * (region_mean(rb, right_gt) - gt_mean) / gt_mean]]
     for m, r in configs(s["curve_res"]):
         name, j = curve_run(ctx, m, r)
         mean, area = lib.region_patch_mean(ctx.path(name, "patches.csv"), region, True)
         res = j["result"]
+        _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
         rows.append([m, "" if m in SINGLE else r, 100 * (mean - ref_mean) / ref_mean, area,
                      res["rays"], res["mask_rays"], res["bytes_sent"],
-                     j["timings"]["solve_seconds"]])
+                     j["timings"]["solve_seconds"], 100 * (region_mean(img, right) - b_img) / b_img,
+                     "" if gt is None else 100 * (region_mean(img, right_gt) - gt_mean) / gt_mean])
     lib.write_csv(ctx.result("fig3-leak.csv"),
                   ["method", "mask_res", "leak_percent", "region_area", "rays", "mask_rays",
-                   "bytes_sent", "solve_seconds"], rows)
+                   "bytes_sent", "solve_seconds", "image_leak_vs_b_percent",
+                   "image_leak_vs_gt_percent"], rows)
     os.makedirs(ctx.result("img"), exist_ok=True)
     name = f"A-{s['leak_res']}"
     shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig3-{name}.png"))
@@ -243,16 +280,24 @@ def error_time(ctx):
         if reach:
             t, e, name = reach[-1]
             rows.append([b, e, name, t])
-    lib.write_csv(ctx.result("pareto.csv"), ["budget_seconds", "lowest_relative_rmse", "run", "at_seconds"],
-                  rows)
+    # The ground truth: the curves measure against (b) only; beside them, the
+    # final image of the same run against the ground truth.
+    gt = groundtruth.exp_reference(ctx)
+    final_gt = {}
+    for name, _, _ in series:
+        final_gt[name] = "" if gt is None else gt.error(lib.read_pfm(ctx.path(name, "image.pfm"))[2])
+    for r in rows:
+        r.append(final_gt[r[2]])
+    lib.write_csv(ctx.result("pareto.csv"), ["budget_seconds", "lowest_relative_rmse", "run", "at_seconds",
+                                             "run_final_vs_gt"], rows)
     # Per run: the final error, its time, what measuring cost.
     rows = []
     for name, _, j in series:
         rows.append([name, j["result"]["shots"], j["timings"]["solve_seconds"],
                      j["result"]["relative_rmse"], j["result"]["error_measurements"],
-                     j["timings"]["error_seconds"]])
+                     j["timings"]["error_seconds"], final_gt[name]])
     lib.write_csv(ctx.result("curves.csv"), ["run", "shots", "solve_seconds", "final_relative_rmse",
-                                             "error_measurements", "error_seconds"], rows)
+                                             "error_measurements", "error_seconds", "final_vs_gt"], rows)
     plot_curves(ctx, series)
 
 
@@ -327,7 +372,9 @@ def pretty(v, h):
         return f"{x:.6f}"
     if "percent" in h:
         return f"{x:+.1f}%"
-    if "rmse" in h or h.startswith("vs_") or h.startswith("noise"):
+    if h in groundtruth.POINTS:
+        return f"{100 * x:+.2f} pt"
+    if "rmse" in h or h.startswith("vs_") or h.startswith("noise") or h in groundtruth.PERCENT:
         return f"{100 * x:.3f}%"
     if "ratio" in h:
         return f"{x:.2e}"
@@ -397,6 +444,19 @@ def report(ctx, meta=None):
       f"against it below, {pct(lowest)}: "
       + ("well below (under a third)." if float(ref["noise_whole"]) < lowest / 3 else
          "NOT well below: the differences against (b) below include its noise.") + "\n")
+    gtx = ctx.result("gt-experiments.csv")
+    if os.path.exists(gtx):
+        x = rows_of(ctx, "gt-experiments.csv")[0]
+        w("**Ground truth (c)**, a path-traced reference of the same view (issue 15): "
+          f"{x['what']}; its own noise {pct(x['noise'])} (from its two halves; a measured error "
+          "cannot fall below it). The pixels that see the emitter are left out of every comparison "
+          "with it (its mask). Reference (b) against it: "
+          f"{pct(x['ref_b_vs_gt_whole'])} over the image, {pct(x['ref_b_vs_gt_region'])} in the "
+          f"shadow region, {pct(x['ref_b_vs_gt_right'])} in its right part. The `vs_gt` columns "
+          "below are against (c), beside those against (b).\n")
+    else:
+        w("**Ground truth (c)**: not made (blender not found; tools/install-deps --reference "
+          "installs it): the `vs_gt` columns below are empty.\n")
     w("**The shadow region** (below, bright): the points of the floor and back wall from which at "
       "least one of 5 × 5 points spread over the light is hidden by the tall block (umbra and "
       "penumbra), as seen from the camera: the pixels whose visible surface is such a point. The "
@@ -429,6 +489,9 @@ def report(ctx, meta=None):
       "shadow region (patch centre in the region, x < 278), above reference (b)'s, in percent "
       "(power received = mean radiosity × area). The first row is the difference between reference "
       "(b)'s two seeds: the noise of this measure.\n")
+    w("`image_leak_vs_b_percent` and `image_leak_vs_gt_percent`: the same in the image, the mean "
+      "of the pixels in the right environment's part of the shadow region above reference (b)'s "
+      "image and above the ground truth (c)'s; in the first row, (b)'s image above (c)'s.\n")
     w(f"Method A at R = {hi}, and |A − B| at R = {hi} with the same seed (what differs is the mask; "
       "white = 10% of the image's mean), the right environment's part of the shadow region outlined "
       "in blue:\n")
@@ -438,7 +501,9 @@ def report(ctx, meta=None):
     w(f"Every curve run measured its image against reference (b) every {s['error_every']} shots "
       "(`--reference`, `--error-every`).\n")
     w(f"![error against time]({link('error-time.png')})\n")
-    w("The Pareto front: the lowest error any run had reached within each time budget.\n")
+    w("The Pareto front: the lowest error any run had reached within each time budget. The curves "
+      "are against reference (b); `run_final_vs_gt` is the final image of the run named in that "
+      "row against the ground truth (c) (`final_vs_gt` in the last table).\n")
     w(table_md(ctx.result("pareto.csv")) + "\n")
     w("What measuring cost (not in the solve times):\n")
     w(table_md(ctx.result("curves.csv")) + "\n")
@@ -474,6 +539,8 @@ def report(ctx, meta=None):
           "in flight, over emitted). A closed box of one material fixes the mean by conservation, "
           "so a bias beyond the standard error is rays lost or counted twice.\n")
         w(table_md(ctx.result("closed-box.csv")) + "\n")
+
+    groundtruth.report_section(ctx, w, link, table_md)
 
     w("## Reading\n")
     res = [str(r) for r in s["table_res"]]
@@ -563,6 +630,7 @@ def report(ctx, meta=None):
           f"{pct(min(float(r['final_relative_rmse']) for r in curves))} to "
           f"{pct(max(float(r['final_relative_rmse']) for r in curves))}, against reference (b)'s "
           f"own noise of {pct(ref['noise_whole'])}.")
+    groundtruth.reading(ctx, w)
     w("")
     with open(doc, "w") as f:
         f.write("\n".join(L) + "\n")
@@ -604,7 +672,8 @@ def meta_info(ctx, start, load_start):
 
 
 STEPS = {"references": references, "quality": quality, "timing": timing, "leak": leak,
-         "error-time": error_time, "closed-box": closed_box, "report": report}
+         "error-time": error_time, "closed-box": closed_box,
+         "ground-truth": groundtruth.ground_truth, "report": report}
 
 
 def main(step, doc):
@@ -617,7 +686,7 @@ def main(step, doc):
     # Every figure from this run: no run is reused from an earlier one.
     shutil.rmtree(ctx.runs, ignore_errors=True)
     os.makedirs(ctx.runs)
-    for name in ["references", "quality", "leak", "error-time", "timing", "closed-box"]:
+    for name in ["references", "quality", "leak", "error-time", "timing", "closed-box", "ground-truth"]:
         t0 = time.time()
         lib.log(f"experiments: {name}")
         STEPS[name](ctx)
