@@ -143,11 +143,15 @@ def demo_reference(ctx):
 
 
 def experiments_reference(ctx):
-    """At the experiments' own camera and size (lib.CAMERA), or None without blender."""
-    if not have_blender():
-        return None
+    """At the experiments' own camera and size (lib.CAMERA): the committed one
+    when there is one, else rendered; None without blender."""
     g = ctx.s["gt"]
     w = int(lib.arg(ctx.s["common"], "--width"))
+    ref = committed(ctx, f"cornell-experiments-{w}") if ctx.scale == "full" else None
+    if ref:
+        return ref
+    if not have_blender():
+        return None
     return render_reference(ctx, f"cornell-experiments-{w}", lib.arg(lib.CAMERA, "--camera"), w,
                             g["exp_spp"])
 
@@ -514,11 +518,13 @@ def report_section(ctx, w, link, table_md):
     w(f"Each run measured its image against the reference about {g['points']} times during the "
       "solve (`--error-every`, off the clock). `today` is the render before issue 15 "
       "(`--rays 4096 --sampler random --elements 0 --aa off`); `default` every default option "
-      "(power allocation, `--emitted-rays 8000000`, Sobol', elements, exact-coverage "
-      "antialiasing); the `emitted-*` runs the defaults with another `--emitted-rays`, chosen so "
-      "that they converge (`--stop-unshot` 1e-3) in about 0.3, 1, 3, 10 and 30 s here (their "
-      "measured times are in the table: a budget figure below uses what was reached by then). A "
-      "converged solve takes about 11 000 shots of at least `--min-rays` 64 rays, so no setting "
+      "(power allocation, `--emitted-rays 4000000`, `--min-rays 16`, patches of extent/28, "
+      "Sobol', elements, exact-coverage antialiasing); the `emitted-*` runs the defaults with "
+      "another `--emitted-rays` (one also with `--stop-unshot 3e-3`), chosen so that they "
+      "converge in about 0.3, 1, 3, 10 and 30 s here, and the `patch-15-*` runs the same with "
+      "finer patches (their measured times are in the table: a budget figure below uses what "
+      "was reached by then). A converged solve takes some 30 000 shots of at least "
+      "`--min-rays` rays, so no setting "
       "of `--emitted-rays` converges in 0.1 s: `cap-0.1s` is a `--max-seconds 0.1` cap (its "
       "result depends on the machine's speed). `noise_seed` is the run's own Monte Carlo noise: "
       "the RMSE between seeds 1 and 2 over √2. The front (orange) is the lowest error any "

@@ -41,14 +41,21 @@ SCALES = {
                  # the experiments' camera at exp_spp. --emitted-rays settings
                  # chosen so that runs converge in about 0.3, 1, 3, 10 and 30 s
                  # of solve on this machine, and a 0.1 s cap (a converged run
-                 # needs ~11 000 shots of at least --min-rays: >= 0.3 s).
+                 # needs ~30 000 shots of at least --min-rays: >= 0.3 s).
                  gt=dict(size=512, spp=1024, exp_spp=1024,
                          settings=[("cap-0.1s", ["--emitted-rays", "100000", "--max-seconds", "0.1"]),
                                    ("emitted-1e5", ["--emitted-rays", "100000"]),
-                                   ("emitted-1e6", ["--emitted-rays", "1000000"]),
+                                   ("emitted-7e5", ["--emitted-rays", "700000"]),
+                                   ("emitted-1.3e6-stop-3e-3",
+                                    ["--emitted-rays", "1300000", "--stop-unshot", "3e-3"]),
                                    ("emitted-3e6", ["--emitted-rays", "3000000"]),
                                    ("emitted-1.2e7", ["--emitted-rays", "12000000"]),
-                                   ("emitted-4e7", ["--emitted-rays", "40000000"])],
+                                   ("emitted-4e7", ["--emitted-rays", "40000000"]),
+                                   # Finer patches than the default extent/28 (20 units here).
+                                   ("patch-15-emitted-1.2e7",
+                                    ["--patch-size", "15", "--emitted-rays", "12000000"]),
+                                   ("patch-15-emitted-4e7",
+                                    ["--patch-size", "15", "--emitted-rays", "40000000"])],
                          points=40, budgets=[1, 10, 30], env_seconds=10, env_res=100,
                          band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
                          common=[], default=[], today_rays=4096)),
