@@ -21,7 +21,9 @@ TODAY = ["--rays", "4096", "--sampler", "random", "--elements", "0", "--aa", "of
 
 
 def today(ctx):
-    return ["--rays", str(ctx.s["gt"]["today_rays"])] + TODAY[2:]
+    # Before issue 15 the automatic patch size was extent/16: 34.95 here.
+    patch = ["--patch-size", "34.95"] if ctx.scale == "full" else []
+    return ["--rays", str(ctx.s["gt"]["today_rays"])] + TODAY[2:] + patch
 
 
 def configs(ctx):
@@ -517,7 +519,8 @@ def report_section(ctx, w, link, table_md):
     w("### Error against solve time\n")
     w(f"Each run measured its image against the reference about {g['points']} times during the "
       "solve (`--error-every`, off the clock). `today` is the render before issue 15 "
-      "(`--rays 4096 --sampler random --elements 0 --aa off`); `default` every default option "
+      "(`--rays 4096 --sampler random --elements 0 --aa off --patch-size 34.95`, the former "
+      "extent/16); `default` every default option "
       "(power allocation, `--emitted-rays 4000000`, `--min-rays 16`, patches of extent/28, "
       "Sobol', elements, exact-coverage antialiasing); the `emitted-*` runs the defaults with "
       "another `--emitted-rays` (one also with `--stop-unshot 3e-3`), chosen so that they "

@@ -46,6 +46,8 @@ SCALES = {
                          settings=[("cap-0.1s", ["--emitted-rays", "100000", "--max-seconds", "0.1"]),
                                    ("emitted-1e5", ["--emitted-rays", "100000"]),
                                    ("emitted-7e5", ["--emitted-rays", "700000"]),
+                                   ("emitted-1.1e6-stop-3e-3",
+                                    ["--emitted-rays", "1100000", "--stop-unshot", "3e-3"]),
                                    ("emitted-1.3e6-stop-3e-3",
                                     ["--emitted-rays", "1300000", "--stop-unshot", "3e-3"]),
                                    ("emitted-3e6", ["--emitted-rays", "3000000"]),
