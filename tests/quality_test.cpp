@@ -165,6 +165,21 @@ TEST(QualityTest, PartialShotsKeepTheLedgerClosed) {
     EXPECT_LT(std::fabs(residual[c]), 1e-9 * emitted[c]) << "channel " << c;
 }
 
+// The leaf elements under patch `root`.
+std::vector<uint32_t> LeavesOf(Span<const Element> el, uint32_t root) {
+  std::vector<uint32_t> leaves, stack = {root};
+  while (!stack.empty()) {
+    uint32_t e = stack.back();
+    stack.pop_back();
+    if (el[e].child == kNoElement) {
+      leaves.push_back(e);
+      continue;
+    }
+    for (uint32_t k = 0; k < 4; ++k) stack.push_back(el[e].child + k);
+  }
+  return leaves;
+}
+
 // One environment holding the whole Cornell box, meshed at `patchSize`.
 void MakeCornell(float patchSize, const EnvOptions& options, Environment* env) {
   Scene scene;
@@ -206,15 +221,7 @@ TEST(ElementTest, LeavesHoldThePatchsPowerAndRefineAtShadows) {
     const Patch& p = e2.patches()[i];
     double leafSum[3] = {0, 0, 0};
     double leafArea = 0.0;
-    // Leaves under root i: walk with an explicit stack.
-    std::vector<uint32_t> stack = {i};
-    while (!stack.empty()) {
-      uint32_t e = stack.back();
-      stack.pop_back();
-      if (el[e].child != kNoElement) {
-        for (uint32_t k = 0; k < 4; ++k) stack.push_back(el[e].child + k);
-        continue;
-      }
+    for (uint32_t e : LeavesOf(el, i)) {
       leafArea += el[e].area;
       for (int c = 0; c < 3; ++c) leafSum[c] += el[e].received[c];
     }
@@ -239,14 +246,7 @@ TEST(ElementTest, LeavesHoldThePatchsPowerAndRefineAtShadows) {
       bool nearShort = c.x > 20 && c.x < 350 && c.z > 5 && c.z < 330;
       bool nearTall = c.x > 205 && c.x < 530 && c.z > 190 && c.z < 516;
       if (nearBlocks != (nearShort || nearTall)) continue;
-      std::vector<uint32_t> stack = {i};
-      while (!stack.empty()) {
-        uint32_t e = stack.back();
-        stack.pop_back();
-        if (el[e].child != kNoElement) {
-          for (uint32_t k = 0; k < 4; ++k) stack.push_back(el[e].child + k);
-          continue;
-        }
+      for (uint32_t e : LeavesOf(el, i)) {
         sum += el[e].depth;
         ++n;
       }
