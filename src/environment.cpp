@@ -111,10 +111,9 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   vertexWeight_ = arena.Alloc<float>(numVertices);
   cutVertex_ = arena.Alloc<uint32_t>(stagedCut_.size());
   vertexCut_ = arena.Alloc<uint8_t>(numVertices);
-  vertexQuads_ = arena.Alloc<uint8_t>(numVertices);
+  vertexOutline_ = arena.Alloc<uint8_t>(numVertices);
   vertexFrac_ = arena.Alloc<float>(numVertices);
   vertexInward_ = arena.Alloc<glm::vec3>(numVertices);
-  vertexSeen_ = arena.Alloc<uint8_t>(numVertices);
   cutNormal_ = arena.Alloc<glm::vec3>(stagedCut_.size());
   part(&footprint_.vertices);
   grid_.Layout(arena, plan);
@@ -217,6 +216,26 @@ void Environment::Build() {
     vertexCut_[stagedCut_[k]] = 1;
     cutVertex_[k] = stagedCut_[k];
     cutNormal_[k] = stagedCutNormal_[k];
+  }
+  // The outline vertices to extrapolate: touched by one or two quads (and
+  // no triangle), not on a cut, and every touching quad's opposite corner an
+  // interior vertex (four quads), else the outline is too ragged or narrow
+  // to tell inward from along.
+  {
+    std::vector<uint8_t> quads(vertexOutline_.size(), 0), inward(vertexOutline_.size(), 0);
+    for (const Patch& p : staged_)
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        uint8_t& q = quads[p.vertex[k]];
+        q = p.numCorners == 4 && q != 0xff ? q + 1 : 0xff;
+      }
+    for (const Patch& p : staged_)
+      if (p.numCorners == 4)
+        for (uint32_t k = 0; k < 4; ++k) inward[p.vertex[k]] += quads[p.vertex[(k + 2) % 4]] == 4;
+    for (size_t v = 0; v < vertexOutline_.size(); ++v) {
+      uint8_t q = quads[v];
+      bool outline = q >= 1 && q <= 2 && !vertexCut_[v] && inward[v] == q;
+      vertexOutline_[v] = outline ? q : 0;
+    }
   }
   grid_.Build(patches_, geom_);
   std::vector<Patch>().swap(staged_);
@@ -712,13 +731,6 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords) {
   }
 }
 
-double Environment::QueuedPower() const {
-  double sum = 0.0;
-  for (const Slot& s : slots_)
-    if (s.used) sum += s.key;
-  return sum;
-}
-
 uint32_t Environment::LeafAt(uint32_t patch, glm::vec2 st) const {
   const bool triangle = patches_[patch].numCorners == 3;
   uint32_t e = patch;
@@ -797,10 +809,8 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
   for (size_t v = 0; v < vertexB_.size(); ++v) {
     vertexB_[v] = glm::vec3(0.0f);
     vertexWeight_[v] = 0.0f;
-    vertexQuads_[v] = 0;
     vertexFrac_[v] = 0.0f;
     vertexInward_[v] = glm::vec3(0.0f);
-    vertexSeen_[v] = 0;
   }
   for (uint32_t i = 0; i < patches_.size(); ++i) {
     const Patch& p = patches_[i];
@@ -816,8 +826,6 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
       uint32_t v = p.vertex[k];
       vertexB_[v] += w * LeafRadiosity(i, leaf, ambient);
       vertexWeight_[v] += w;
-      // Quads touching the vertex (a triangle marks it as not a quad lattice's).
-      vertexQuads_[v] = p.numCorners == 4 && vertexQuads_[v] != 0xff ? vertexQuads_[v] + 1 : 0xff;
       vertexFrac_[v] += std::sqrt(w / p.area);
     }
   }
@@ -832,20 +840,12 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
   for (uint32_t i = 0; i < patches_.size(); ++i) {
     const Patch& p = patches_[i];
     if (p.numCorners != 4) continue;
-    for (uint32_t k = 0; k < 4; ++k) {
-      uint32_t v = p.vertex[k], o = p.vertex[(k + 2) % 4];
-      uint8_t q = vertexQuads_[v];
-      // Outline vertices (1 or 2 quads) not on a cut, looking at an interior one.
-      if (q == 0 || q > 2 || vertexCut_[v] || vertexQuads_[o] != 4) continue;
-      vertexInward_[v] += vertexB_[o];
-      ++vertexSeen_[v];
-    }
+    for (uint32_t k = 0; k < 4; ++k)
+      if (vertexOutline_[p.vertex[k]]) vertexInward_[p.vertex[k]] += vertexB_[p.vertex[(k + 2) % 4]];
   }
   for (size_t v = 0; v < vertexB_.size(); ++v) {
-    uint8_t q = vertexQuads_[v];
-    // Every touching quad must look at an interior vertex (else the outline
-    // is too ragged or narrow to tell inward from along).
-    if (q == 0 || q > 2 || vertexCut_[v] || vertexSeen_[v] != q) continue;
+    uint8_t q = vertexOutline_[v];
+    if (q == 0) continue;
     float s = vertexFrac_[v] / static_cast<float>(q), f = 0.5f * s / (1.0f - 0.5f * s);
     glm::vec3 inward = vertexInward_[v] / static_cast<float>(q);
     glm::vec3 b = vertexB_[v] + f * (vertexB_[v] - inward);

@@ -130,9 +130,7 @@ class Environment {
   // in a fixed order (sender, then sequence) for results to be reproducible.
   void Deliver(const uint8_t* packet);
 
-  // Power waiting here in foreign shooters (channels summed, weighted by
-  // the open share of their masks), and how many are held.
-  double QueuedPower() const;
+  // How many foreign shooters are held.
   uint32_t queuedCount() const { return queued_; }
   // The power, per channel, this environment books as shot but not yet
   // delivered (docs/DESIGN.md, "Power in flight"), so that the sum over
@@ -255,12 +253,12 @@ class Environment {
   Span<float> vertexWeight_;
   Span<uint32_t> cutVertex_;
   Span<uint8_t> vertexCut_;  // 1 for a cut vertex
-  // Scratch of ComputeVertexRadiosity: quads touching a vertex (0xff: a
-  // triangle too), their corner leaves' edge shares, the inward value.
-  Span<uint8_t> vertexQuads_;
+  // Outline vertices of quad lattices that ComputeVertexRadiosity
+  // extrapolates: how many quads touch them (1 or 2; 0: not extrapolated),
+  // fixed at Build. Its scratch: the corner leaves' edge shares, the inward value.
+  Span<uint8_t> vertexOutline_;
   Span<float> vertexFrac_;
   Span<glm::vec3> vertexInward_;
-  Span<uint8_t> vertexSeen_;
   Span<glm::vec3> cutNormal_;
   uint32_t numCut_ = 0;
   Grid grid_;
