@@ -278,17 +278,12 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
   PatchEnergy& e = energy_[j];
   double invArea = 1.0 / p.area;
   // The leaf element the ray landed in, and the quarter of it.
-  const bool triangle = p.numCorners == 3;
   glm::vec2 st = PatchParam(p, x);
-  uint32_t leaf = j, depth = 0;
+  uint32_t depth = 0;
   uint8_t path[32];
-  while (elements_[leaf].child != kNoElement) {
-    uint32_t k = ChildOf(triangle, &st);
-    path[depth++] = static_cast<uint8_t>(k);
-    leaf = elements_[leaf].child + k;
-  }
+  uint32_t leaf = Descend(j, &st, path, &depth);
   Element& el = elements_[leaf];
-  uint32_t quarter = ChildOf(triangle, &st);
+  uint32_t quarter = ChildOf(p.numCorners == 3, &st);
   double hitPower = 0.0;
   for (int c = 0; c < 3; ++c) {
     double reflected = share[c] * p.kd[c];
@@ -731,11 +726,20 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords) {
   }
 }
 
-uint32_t Environment::LeafAt(uint32_t patch, glm::vec2 st) const {
+uint32_t Environment::Descend(uint32_t patch, glm::vec2* st, uint8_t* path,
+                              uint32_t* depth) const {
   const bool triangle = patches_[patch].numCorners == 3;
   uint32_t e = patch;
-  while (elements_[e].child != kNoElement) e = elements_[e].child + ChildOf(triangle, &st);
+  while (elements_[e].child != kNoElement) {
+    uint32_t k = ChildOf(triangle, st);
+    if (path) path[(*depth)++] = static_cast<uint8_t>(k);
+    e = elements_[e].child + k;
+  }
   return e;
+}
+
+uint32_t Environment::LeafAt(uint32_t patch, glm::vec2 st) const {
+  return Descend(patch, &st, nullptr, nullptr);
 }
 
 glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const {

@@ -214,6 +214,10 @@ class Environment {
   MaskBits ScratchMask(uint32_t k) const;
   // Patch j receives `share` (W per channel) at point `x`.
   void Receive(uint32_t j, const double share[3], const glm::vec3& x);
+  // The leaf of patch `patch` holding `st`, which is left in the leaf's own
+  // parameters; with `path`, the children taken are appended there (*depth
+  // of them, at most the element depth).
+  uint32_t Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const;
   // Splits leaf `e` of patch `j` (reached from the root by the children
   // `path[0..depth)`) if its quarters differ beyond noise.
   void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
