@@ -130,30 +130,50 @@ bool IsInteger(const std::string& s) {
   return true;
 }
 
-// Resolves a face corner "i", "i/t", "i/t/n" or "i//n" to a 0-based vertex
-// index; negative i counts back from the last vertex defined so far.
-std::string ParseCorner(const std::string& s, size_t numVertices, size_t* index) {
+// Resolves a 1-based OBJ index (negative: counts back from the last element
+// defined so far) against `count` elements of `what` ("vertex", ...).
+std::string ResolveIndex(const std::string& s, const std::string& corner, size_t count,
+                         const char* what, const char* plural, size_t* index) {
+  long long i = std::strtoll(s.c_str(), nullptr, 10);  // saturates: then out of range
+  if (i == 0)
+    return std::string(what) + " index 0 in '" + corner + "' (OBJ indices start at 1)";
+  long long resolved = i > 0 ? i - 1 : static_cast<long long>(count) + i;
+  if (resolved < 0 || resolved >= static_cast<long long>(count))
+    return std::string(what) + " index " + s + " out of range (" + Str(count) + " " + plural +
+           " so far)";
+  *index = static_cast<size_t>(resolved);
+  return "";
+}
+
+// A face corner's indices, 0-based; kNone where the corner gives none.
+constexpr size_t kNone = static_cast<size_t>(-1);
+struct CornerIndex {
+  size_t v = kNone, vt = kNone, vn = kNone;
+};
+
+// Resolves a face corner "i", "i/t", "i/t/n" or "i//n".
+std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs,
+                        size_t numNormals, CornerIndex* out) {
   const std::string bad = "bad face vertex '" + s + "'";
   size_t slash = s.find('/');
-  std::string pos = s.substr(0, slash);
+  std::string pos = s.substr(0, slash), uv, normal;
   if (slash != std::string::npos) {
     std::string rest = s.substr(slash + 1);
     size_t slash2 = rest.find('/');
-    if (slash2 == std::string::npos) {
-      if (!IsInteger(rest)) return bad;
-    } else if (!(slash2 == 0 || IsInteger(rest.substr(0, slash2))) ||
-               !IsInteger(rest.substr(slash2 + 1))) {
-      return bad;
+    uv = rest.substr(0, slash2);
+    if (slash2 != std::string::npos) {
+      normal = rest.substr(slash2 + 1);
+      if (!IsInteger(normal)) return bad;
     }
+    if (!(IsInteger(uv) || (uv.empty() && slash2 != std::string::npos))) return bad;
   }
   if (!IsInteger(pos)) return bad;
-  long long i = std::strtoll(pos.c_str(), nullptr, 10);  // saturates: then out of range
-  if (i == 0) return "vertex index 0 in '" + s + "' (OBJ indices start at 1)";
-  long long resolved = i > 0 ? i - 1 : static_cast<long long>(numVertices) + i;
-  if (resolved < 0 || resolved >= static_cast<long long>(numVertices))
-    return "vertex index " + pos + " out of range (" + Str(numVertices) + " vertices so far)";
-  *index = static_cast<size_t>(resolved);
-  return "";
+  CornerIndex c;
+  std::string err = ResolveIndex(pos, s, numVertices, "vertex", "vertices", &c.v);
+  if (err.empty() && !uv.empty()) err = ResolveIndex(uv, s, numUvs, "texture coordinate", "texture coordinates", &c.vt);
+  if (err.empty() && !normal.empty()) err = ResolveIndex(normal, s, numNormals, "normal", "normals", &c.vn);
+  *out = c;
+  return err;
 }
 
 double Orient(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) {
@@ -229,11 +249,20 @@ class Loader {
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
+  // One warning line per distinct `what`, at its first file:line.
+  void Warn(const std::string& path, int line, const std::string& what) {
+    if (!warnedKeys_.insert(what).second) return;
+    std::string w = path + ":" + std::to_string(line) + ": warning: " + what;
+    if (warnings_) warnings_->push_back(w);
+    else std::fprintf(stderr, "%s\n", w.c_str());
+  }
 
   Scene* scene_;
   const SceneFileReader& readMtl_;
   std::vector<std::string>* warnings_;  // null: print to stderr
   std::vector<glm::vec3> vertices_;
+  std::vector<glm::vec2> uvs_;
+  std::vector<glm::vec3> normals_;
   std::map<std::string, std::pair<uint32_t, std::string>> materials_;  // index, "file:line"
   std::set<std::string> loadedMtls_;
   std::set<std::string> warnedKeys_;
@@ -245,6 +274,7 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
   std::string err;
   bool haveMaterial = false;
   uint32_t material = 0;
+  uint32_t smoothing = 0;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int line = static_cast<int>(i + 1);
     const Tokens t = Tokenize(lines[i]);
@@ -265,11 +295,27 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
       Polygon p;
       p.material = material;
       p.line = line;
+      p.smoothing = smoothing;
+      size_t withUv = 0, withNormal = 0;
       for (size_t k = 1; k <= args; ++k) {
-        size_t index = 0;
-        err = ParseCorner(t[k], vertices_.size(), &index);
+        CornerIndex c;
+        err = ParseCorner(t[k], vertices_.size(), uvs_.size(), normals_.size(), &c);
         if (!err.empty()) return Status::At(path, line, err);
-        p.corners.push_back(vertices_[index]);
+        p.corners.push_back(vertices_[c.v]);
+        p.uv.push_back(c.vt == kNone ? glm::vec2(0.0f) : uvs_[c.vt]);
+        p.vn.push_back(c.vn == kNone ? glm::vec3(0.0f) : normals_[c.vn]);
+        withUv += c.vt != kNone;
+        withNormal += c.vn != kNone;
+      }
+      // Per-corner data is all or nothing: a face that gives it for some
+      // corners only keeps none (said once per kind).
+      if (withUv != args) {
+        if (withUv != 0) Warn(path, line, "texture coordinates on some corners of a face only: ignored");
+        p.uv.clear();
+      }
+      if (withNormal != args) {
+        if (withNormal != 0) Warn(path, line, "normals on some corners of a face only: ignored");
+        p.vn.clear();
       }
       err = FinishPolygon(&p);
       if (!err.empty()) return Status::At(path, line, err);
@@ -289,7 +335,31 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
       }
     } else if (key == "l" || key == "p") {
       return Status::At(path, line, "'" + key + "': lines and points are not supported");
-    } else if (key != "vn" && key != "vt" && key != "o" && key != "g" && key != "s") {
+    } else if (key == "vt") {
+      if (args < 1 || args > 3)
+        return Status::At(path, line, "'vt' needs 1 to 3 numbers, got " + Str(args));
+      float uvw[3] = {0.0f, 0.0f, 0.0f};
+      err = ParseFloats(t, 1, args, uvw);  // w is checked, then ignored
+      if (!err.empty()) return Status::At(path, line, err);
+      uvs_.emplace_back(uvw[0], uvw[1]);
+    } else if (key == "vn") {
+      if (args != 3) return Status::At(path, line, "'vn' needs 3 numbers, got " + Str(args));
+      float xyz[3];
+      err = ParseFloats(t, 1, 3, xyz);
+      if (!err.empty()) return Status::At(path, line, err);
+      normals_.emplace_back(xyz[0], xyz[1], xyz[2]);
+    } else if (key == "s") {
+      if (args != 1) return Status::At(path, line, "'s' needs 1 group or 'off', got " + Str(args));
+      if (t[1] == "off") {
+        smoothing = 0;
+      } else {
+        if (!IsInteger(t[1]) || t[1][0] == '-')
+          return Status::At(path, line, "bad smoothing group '" + t[1] + "'");
+        unsigned long long g = std::strtoull(t[1].c_str(), nullptr, 10);
+        if (g > 0xffffffffull) return Status::At(path, line, "smoothing group '" + t[1] + "' is too large");
+        smoothing = static_cast<uint32_t>(g);
+      }
+    } else if (key != "o" && key != "g") {
       return Status::At(path, line, "unknown statement '" + key + "'");
     }
   }
@@ -319,8 +389,27 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       if (!added)
         return Status::At(path, line,
                           "duplicate material '" + t[1] + "' (first at " + it->second.second + ")");
-      materials.push_back(Material{t[1], glm::vec3(0.0f), glm::vec3(0.0f)});
+      Material m;
+      m.name = t[1];
+      m.where = where;
+      materials.push_back(std::move(m));
       haveMaterial = true;
+    } else if (key == "Ka") {
+      if (!haveMaterial) return Status::At(path, line, "'Ka' before any 'newmtl'");
+      if (args != 3) return Status::At(path, line, "'Ka' needs 3 numbers, got " + Str(args));
+      float rgb[3];
+      err = ParseFloats(t, 1, 3, rgb);
+      if (!err.empty()) return Status::At(path, line, err);
+      for (float x : rgb)
+        if (x < 0.0f) return Status::At(path, line, "Ka must be >= 0, got " + Num(x));
+      materials.back().ka = glm::vec3(rgb[0], rgb[1], rgb[2]);
+    } else if (key == "map_Kd") {
+      if (!haveMaterial) return Status::At(path, line, "'map_Kd' before any 'newmtl'");
+      if (args == 0) return Status::At(path, line, "'map_Kd' needs a file name");
+      // Options (-bm 1, -s 1 1 1, ...) come before the name, which is the
+      // last token; they are not applied, and said so once.
+      if (args > 1) Warn(path, line, "ignoring map_Kd options");
+      materials.back().mapKd = DirOf(path) + t.back();
     } else if (key == "Kd" || key == "Ke") {
       if (!haveMaterial) return Status::At(path, line, "'" + key + "' before any 'newmtl'");
       if (args != 3)
@@ -335,10 +424,8 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
           return Status::At(path, line, "Ke must be >= 0, got " + Num(x));
       }
       (key == "Kd" ? materials.back().kd : materials.back().ke) = glm::vec3(rgb[0], rgb[1], rgb[2]);
-    } else if (warnedKeys_.insert(key).second) {
-      std::string w = path + ":" + std::to_string(line) + ": warning: ignoring MTL key '" + key + "'";
-      if (warnings_) warnings_->push_back(w);
-      else std::fprintf(stderr, "%s\n", w.c_str());
+    } else {
+      Warn(path, line, "ignoring MTL key '" + key + "'");
     }
   }
   return Status::Ok();

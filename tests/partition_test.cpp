@@ -38,7 +38,7 @@ Polygon MakePolygon(const std::vector<glm::vec3>& corners, int line) {
 Scene MakeScene(const std::vector<Polygon>& polygons) {
   Scene scene;
   scene.objPath = "test.obj";
-  scene.materials.push_back({"m", glm::vec3(0.5f), glm::vec3(1.0f)});
+  scene.materials.push_back({"m", glm::vec3(0.5f), glm::vec3(1.0f), glm::vec3(0.0f), "", ""});
   scene.polygons = polygons;
   scene.bounds.lo = scene.bounds.hi = polygons[0].corners[0];
   for (const Polygon& p : polygons) {

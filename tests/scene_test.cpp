@@ -124,6 +124,72 @@ TEST_F(SceneTest, NegativeIndicesAndCornerForms) {
   EXPECT_EQ(p.line, 9);
 }
 
+TEST_F(SceneTest, TextureCoordinatesNormalsAndSmoothingGroups) {
+  Scene scene;
+  Status s = LoadBody(
+      "vt 0 0\nvt 1 0\nvt 1 1 0\nvn 0 0 1\ns 3\nf 1/1/1 2/2/1 3/3/1\ns off\nf 1//1 3//1 4//1\n"
+      "f 1/-3 3/-1 4/-1\n",
+      &scene);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_EQ(scene.polygons.size(), 3u);
+  const Polygon& a = scene.polygons[0];
+  ASSERT_EQ(a.uv.size(), 3u);
+  EXPECT_EQ(a.uv[1], glm::vec2(1.0f, 0.0f));
+  EXPECT_EQ(a.uv[2], glm::vec2(1.0f, 1.0f));
+  ASSERT_EQ(a.vn.size(), 3u);
+  EXPECT_EQ(a.vn[0], glm::vec3(0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(a.smoothing, 3u);
+  EXPECT_TRUE(scene.polygons[1].uv.empty());
+  EXPECT_EQ(scene.polygons[1].vn.size(), 3u);
+  EXPECT_EQ(scene.polygons[1].smoothing, 0u);
+  EXPECT_EQ(scene.polygons[2].uv[0], glm::vec2(0.0f, 0.0f));
+  EXPECT_TRUE(scene.polygons[2].vn.empty());
+}
+
+TEST_F(SceneTest, PerCornerDataIsAllOrNothingAndInRange) {
+  Scene scene;
+  std::vector<std::string> warnings;
+  Write("m.mtl", kMtl);
+  auto read = [](const std::string& path, std::string* text) {
+    std::ifstream in(path, std::ios::binary);
+    text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    return std::string(in ? "" : "cannot open");
+  };
+  ASSERT_TRUE(LoadSceneFromText(obj(), std::string(kHead) + "vt 0 0\nf 1/1 2 3\nf 1/1 3 4\n", read,
+                                &scene, &warnings)
+                  .ok());
+  EXPECT_TRUE(scene.polygons[0].uv.empty());
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0], obj() + ":8: warning: texture coordinates on some corners of a face only: ignored");
+  ExpectError(LoadBody("vt 0 0\nf 1/2 2/1 3/1\n", &scene), obj(), 8,
+              "texture coordinate index 2 out of range (1 texture coordinates so far)");
+  ExpectError(LoadBody("f 1//1 2//1 3//1\n", &scene), obj(), 7, "normal index 1 out of range");
+  ExpectError(LoadBody("vn 0 0\n", &scene), obj(), 7, "'vn' needs 3 numbers");
+  ExpectError(LoadBody("s -1\n", &scene), obj(), 7, "bad smoothing group");
+}
+
+TEST_F(SceneTest, AmbientColourAndDiffuseMapAreRead) {
+  Write("m.mtl", std::string(kMtl) + "newmtl tex\nKa 20 20 20\nmap_Kd -bm 1 tex/wood.png\n");
+  Scene scene;
+  std::vector<std::string> warnings;
+  std::string objText = std::string(kHead) + "f 1 2 3\n";
+  Status s = LoadSceneFromText(
+      dir_ + "s.obj", objText,
+      [](const std::string& path, std::string* text) {
+        std::ifstream in(path, std::ios::binary);
+        text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        return std::string(in ? "" : "cannot open");
+      },
+      &scene, &warnings);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_EQ(scene.materials.size(), 3u);
+  EXPECT_EQ(scene.materials[2].ka, glm::vec3(20.0f));
+  EXPECT_EQ(scene.materials[2].mapKd, dir_ + "tex/wood.png");
+  EXPECT_EQ(scene.materials[2].where, mtl() + ":6");
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("ignoring map_Kd options"), std::string::npos) << warnings[0];
+}
+
 TEST_F(SceneTest, CrlfCommentsAndTrailingWhitespace) {
   Write("m.mtl", "# materials\r\nnewmtl light \r\nKd 0.5 0.5 0.5\t\r\nKe 1 1 1\r\n");
   std::string path = Write("s.obj",

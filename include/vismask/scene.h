@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "vismask/status.h"
@@ -23,12 +24,18 @@ struct Material {
   std::string name;
   glm::vec3 kd{0.0f};  // diffuse reflectance, each channel in [0, 1)
   glm::vec3 ke{0.0f};  // emitted exitance, each channel >= 0
+  glm::vec3 ka{0.0f};  // ambient colour as written (read for --emit NAME=ka)
+  std::string mapKd;   // map_Kd: the texture's path (relative to the cwd), "" if none
+  std::string where;   // "file:line" of its 'newmtl'
 };
 
 // A planar simple polygon with 3 or more corners, counter-clockwise seen from
 // its front side.
 struct Polygon {
   std::vector<glm::vec3> corners;
+  std::vector<glm::vec2> uv;  // texture coordinates, one per corner ('vt'), or empty
+  std::vector<glm::vec3> vn;  // vertex normals as written, one per corner ('vn'), or empty
+  uint32_t smoothing = 0;     // smoothing group ('s N'); 0: none ('s off', 's 0' or no 's')
   glm::vec3 normal{0.0f};  // unit, front side (Newell's method)
   double area = 0.0;
   uint32_t material = 0;  // index into Scene::materials
@@ -49,7 +56,10 @@ struct Scene {
 // parse or is not finite, a degenerate, non-planar or self-intersecting face, a
 // face with no material, Kd outside [0, 1), negative Ke, a duplicate material,
 // no emitter at all (line 0). Unknown MTL keys are ignored with one warning
-// each on stderr.
+// each on stderr. Read and kept for later stages: 'vt' and 'vn' per face corner
+// (kept only when every corner of the face gives them; a face that gives them
+// for some corners warns once), 's' smoothing groups, 'Ka' and 'map_Kd' (the
+// last token; options before it are ignored with a warning).
 Status LoadScene(const std::string& objPath, Scene* scene);
 
 // Reads the file at `path` into *text; returns an error message ("cannot
