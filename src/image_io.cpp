@@ -166,6 +166,35 @@ ImageError CompareImages(Span<const float> a, Span<const float> b, Span<const ui
   return e;
 }
 
+namespace {
+
+// The bytes left in `in` after its current position (-1 if unknown).
+long long BytesLeft(std::ifstream& in) {
+  std::streampos here = in.tellg();
+  if (here < 0) return -1;
+  in.seekg(0, std::ios::end);
+  std::streampos end = in.tellg();
+  in.seekg(here);
+  return end < here ? -1 : static_cast<long long>(end - here);
+}
+
+// Checks a w x h image of `bytesPerPixel` against the bytes the file still
+// holds, before anything is allocated: a header may claim any size.
+std::string CheckPixelBytes(std::ifstream& in, int w, int h, int bytesPerPixel, const char* kind) {
+  long long left = BytesLeft(in);
+  // w * h * bytesPerPixel without overflow: w, h < 2^31, so compare by division.
+  unsigned long long perRow = static_cast<unsigned long long>(w) * bytesPerPixel;
+  if (left < 0 || static_cast<unsigned long long>(left) / perRow < static_cast<unsigned long long>(h))
+    return std::string("truncated ") + kind + ": the header says " + std::to_string(w) + " x " +
+           std::to_string(h) + " pixels (" +
+           std::to_string(static_cast<unsigned long long>(w) * static_cast<unsigned long long>(h)) +
+           " x " + std::to_string(bytesPerPixel) + " bytes), the file holds " +
+           std::to_string(left < 0 ? 0 : left) + " bytes after it";
+  return "";
+}
+
+}  // namespace
+
 Status ReadPfm(const std::string& path, PfmImage* image) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return Status::At(path, 0, "cannot open");
@@ -176,6 +205,8 @@ Status ReadPfm(const std::string& path, PfmImage* image) {
   if (!in || magic != "PF" || w <= 0 || h <= 0 || scale == 0.0 || !std::isfinite(scale))
     return Status::At(path, 0, "not a colour PFM (expected 'PF', width, height, scale)");
   in.get();  // the single whitespace byte after the scale
+  std::string err = CheckPixelBytes(in, w, h, 12, "PFM");
+  if (!err.empty()) return Status::At(path, 0, err);
   size_t n = size_t(w) * size_t(h) * 3;
   std::vector<float> data(n);
   in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(n * sizeof(float)));
@@ -188,6 +219,17 @@ Status ReadPfm(const std::string& path, PfmImage* image) {
       std::memcpy(&u, &f, 4);
       u = __builtin_bswap32(u);
       std::memcpy(&f, &u, 4);
+    }
+  }
+  // A NaN would compare as a perfect match and an Inf write -nan into JSON.
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(data[i])) {
+      size_t pixel = i / 3;
+      size_t x = pixel % size_t(w), yFromBottom = pixel / size_t(w);
+      return Status::At(path, 0,
+                        "pixel (" + std::to_string(x) + ", " + std::to_string(size_t(h) - 1 - yFromBottom) +
+                            ") (x, y from the top left) is not finite: " +
+                            (std::isnan(data[i]) ? "NaN" : "Inf"));
     }
   }
   image->width = w;
@@ -207,6 +249,8 @@ Status ReadPgm(const std::string& path, PgmImage* image) {
   if (!in || magic != "P5" || w <= 0 || h <= 0 || maxval <= 0 || maxval > 255)
     return Status::At(path, 0, "not an 8-bit binary PGM (expected 'P5', width, height, maxval <= 255)");
   in.get();  // the single whitespace byte after maxval
+  std::string err = CheckPixelBytes(in, w, h, 1, "PGM");
+  if (!err.empty()) return Status::At(path, 0, err);
   size_t n = size_t(w) * size_t(h);
   std::vector<uint8_t> data(n);
   in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(n));

@@ -1,6 +1,7 @@
 // --reference and --error-every: the error of the image against a reference,
 // measured during the solve without changing it.
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -125,6 +126,20 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
   TempDir dir;
   Render(dir.File("ref"), {"--max-shots", "10"});
   test::WriteFile(dir.File("junk.pfm"), "P6\n1 1\n255\nabc");
+  // Headers that claim far more pixels than the file holds (issue 17: these
+  // allocated first and aborted with bad_alloc or length_error).
+  test::WriteFile(dir.File("huge.pfm"), "PF\n100000 100000\n-1\n");
+  test::WriteFile(dir.File("max.pfm"), "PF\n2147483647 2147483647\n-1\n");
+  // One non-finite pixel in a 48x40 reference (issue 17: a NaN compared as a
+  // perfect match, an Inf wrote -nan into run.json).
+  auto withPixel = [&](const std::string& name, float value) {
+    std::string pfm = ReadFile(dir.File("ref/image.pfm"));
+    size_t header = pfm.size() - 48 * 40 * 12;
+    std::memcpy(&pfm[header + (40 * 48 - 1) * 12 + 4], &value, 4);  // top right, green
+    test::WriteFile(dir.File(name), pfm);
+  };
+  withPixel("nan.pfm", std::nanf(""));
+  withPixel("inf.pfm", INFINITY);
   struct Case {
     std::vector<std::string> extra;
     const char* message;
@@ -136,6 +151,10 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
       {{"--reference", dir.File("junk.pfm")}, "junk.pfm: not a colour PFM"},
       // Rank 0 alone reads the reference and refuses it; rank 1 stops too.
       {{"--reference", dir.File("junk.pfm"), "--ranks", "2"}, "junk.pfm: not a colour PFM"},
+      {{"--reference", dir.File("huge.pfm")}, "huge.pfm: truncated PFM: the header says 100000 x 100000"},
+      {{"--reference", dir.File("max.pfm")}, "max.pfm: truncated PFM"},
+      {{"--reference", dir.File("nan.pfm")}, "nan.pfm: pixel (47, 0) (x, y from the top left) is not finite: NaN"},
+      {{"--reference", dir.File("inf.pfm")}, "inf.pfm: pixel (47, 0) (x, y from the top left) is not finite: Inf"},
   };
   for (const Case& c : cases) {
     auto args = kBase;
@@ -145,6 +164,14 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
     EXPECT_EQ(r.code, 2) << c.message;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
     EXPECT_FALSE(FileExists(dir.File("out"))) << c.message;
+  }
+  // compare reads with the same reader: refused too, exit 2.
+  for (const char* bad : {"huge.pfm", "max.pfm", "nan.pfm", "inf.pfm"}) {
+    auto r = RunMain({"compare", dir.File("ref/image.pfm"), dir.File(bad)});
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
+    EXPECT_NE(r.err.find(bad), std::string::npos) << r.err;
+    r = RunMain({"compare", dir.File(bad), dir.File("ref/image.pfm")});
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
   }
 }
 
