@@ -58,6 +58,15 @@ void PrintErr(const char* fmt, ...) {
   WriteErr(buf, static_cast<size_t>(n) < sizeof buf ? static_cast<size_t>(n) : sizeof buf - 1);
 }
 
+void GuardStandardDescriptors() {
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) != -1 || errno != EBADF) continue;
+    // open() returns the lowest free descriptor: this one.
+    int opened = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    if (opened != fd && opened >= 0) ::close(opened);  // not ours to fill; leave it
+  }
+}
+
 bool StderrIsTerminal() { return ::isatty(2) == 1; }
 
 bool MakeDirs(const char* path, char* why) {

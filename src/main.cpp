@@ -1,3 +1,7 @@
 #include "vismask/app.h"
+#include "vismask/os.h"
 
-int main(int argc, char** argv) { return vismask::Main(argc, argv); }
+int main(int argc, char** argv) {
+  vismask::os::GuardStandardDescriptors();
+  return vismask::Main(argc, argv);
+}

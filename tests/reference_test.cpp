@@ -168,10 +168,10 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
   // compare reads with the same reader: refused too, exit 2.
   for (const char* bad : {"huge.pfm", "max.pfm", "nan.pfm", "inf.pfm"}) {
     auto r = RunMain({"compare", dir.File("ref/image.pfm"), dir.File(bad)});
-    EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
     EXPECT_NE(r.err.find(bad), std::string::npos) << r.err;
     r = RunMain({"compare", dir.File(bad), dir.File("ref/image.pfm")});
-    EXPECT_EQ(r.code, 2) << bad << ": " << r.out;
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
   }
 }
 

@@ -24,6 +24,12 @@ void WriteOut(const char* s, size_t n);
 // printf-style to stderr; lines longer than 1 KiB are cut.
 void PrintErr(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
 
+// Opens /dev/null on any of descriptors 0, 1 and 2 that is closed, so that
+// the first file vismask opens never becomes "standard error" (a run with
+// 2>&- would otherwise write its progress lines into an output file). Call
+// first thing in main.
+void GuardStandardDescriptors();
+
 // True if standard error is a terminal (progress lines then redraw in place).
 bool StderrIsTerminal();
 
