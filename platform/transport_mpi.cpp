@@ -104,6 +104,13 @@ Status MpiTransport::Start(const TransportRequest& request) {
                          " does not match the MPI world size " + std::to_string(size_) +
                          " (mpirun -np sets the number of ranks)");
   }
+  std::string tooMany = RankCountError(size_, "the MPI world size is");
+  if (!tooMany.empty()) {
+    finished_ = true;
+    MPI_Finalize();
+    // Every rank would say it: rank 0 alone does (the others' status is empty).
+    return rank_ == 0 ? Status::Error(tooMany + " (mpirun -np)") : Status::Error("");
+  }
   sendSizes_.reset(new uint64_t[size_]());
   recvSizes_.reset(new uint64_t[size_]());
   sendCounts_.reset(new int[size_]());

@@ -37,7 +37,7 @@
 namespace vismask {
 namespace {
 
-constexpr int kMaxPipeRanks = 256;
+constexpr int kMaxPipeRanks = kMaxRanks;
 // How long a waiting rank sleeps in poll() before it checks that its peers live.
 constexpr int kPollMs = 100;
 // Length word of the frame a child sends from Finish (no data frame is this long).
@@ -622,10 +622,9 @@ void PipeTransport::RestoreSigpipe() {
 
 std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status* error) {
   const std::string& name = request.name;
-  if (request.ranks < 1 || request.ranks > kMaxPipeRanks) {
-    *error =
-        Status::Error("vismask: --ranks must be between 1 and " + std::to_string(kMaxPipeRanks) +
-                      " (got " + std::to_string(request.ranks) + ")");
+  std::string tooMany = RankCountError(request.ranks, "--ranks");
+  if (!tooMany.empty()) {
+    *error = Status::Error(tooMany);
     return nullptr;
   }
   if (name == "mpi") {

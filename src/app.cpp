@@ -911,12 +911,13 @@ int Main(int argc, const char* const* argv) {
   if (r->options.command == "footprint") return Footprint(r->options);
   // The pipe transport forks here: every rank carries on from this point.
   r->transport = MakeTransport(TransportRequest{r->options.transport, r->options.ranks}, &s);
-  if (!r->transport) return Fail(s);
+  // An error with no text: another rank (rank 0) reports it.
+  if (!r->transport) return s.message().empty() ? kExitUsage : Fail(s);
   int rc = Init(r.get());
   // Every rank learns whether every rank's init succeeded (rank 0 alone
   // opens the outputs) before anyone starts the solve's collectives.
-  int32_t mine = rc, all[256] = {};
-  CHECK(r->transport->size() <= 256);
+  int32_t mine = rc, all[kMaxRanks] = {};
+  CHECK(r->transport->size() <= kMaxRanks);  // MakeTransport refuses more
   r->transport->AllGather(&mine, sizeof mine, all);
   for (int k = 0; k < r->transport->size(); ++k) rc = std::max(rc, static_cast<int>(all[k]));
   if (rc != kExitOk) return r->transport->Finish(rc);

@@ -237,6 +237,19 @@ TEST(TransportTest, RefusedRequests) {
   EXPECT_NE(error.message().find("pipe"), std::string::npos) << error.message();
 }
 
+// One limit for every transport (issue 17: mpirun -np 257 ended in a CHECK
+// on every rank); the MPI transport calls the same function on its world size.
+TEST(TransportTest, RankLimitIsStatedOnce) {
+  EXPECT_EQ(RankCountError(1, "--ranks"), "");
+  EXPECT_EQ(RankCountError(kMaxRanks, "--ranks"), "");
+  EXPECT_EQ(RankCountError(kMaxRanks + 1, "the MPI world size is"),
+            "vismask: the MPI world size is 257: a run has 1 to 256 ranks");
+  EXPECT_NE(RankCountError(0, "--ranks"), "");
+  Status error;
+  EXPECT_FALSE(MakeTransport({"pipe", kMaxRanks + 1}, &error));
+  EXPECT_EQ(error.message(), "vismask: --ranks 257: a run has 1 to 256 ranks");
+}
+
 TEST(TransportTest, PipeOfOneRankIsLocal) {
   Status error;
   std::unique_ptr<Transport> t = MakeTransport({"pipe", 1}, &error);

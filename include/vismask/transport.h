@@ -22,6 +22,19 @@ namespace vismask {
 
 constexpr int kExitLostRank = 3;
 
+// The most ranks a run may have, whatever the transport: rank-indexed
+// tables (the pipe transport's peers, init's agreement on every rank's
+// status) are fixed arrays of this size. Both transports refuse a larger
+// world with RankCountError.
+constexpr int kMaxRanks = 256;
+
+// Empty if `ranks` is a run's possible rank count, else the user's error.
+inline std::string RankCountError(int ranks, const char* what) {
+  if (ranks >= 1 && ranks <= kMaxRanks) return "";
+  return "vismask: " + std::string(what) + " " + std::to_string(ranks) + ": a run has 1 to " +
+         std::to_string(kMaxRanks) + " ranks";
+}
+
 class Transport {
  public:
   virtual ~Transport() = default;
@@ -65,7 +78,7 @@ struct TransportRequest {
 // The transport this binary provides for `request` (platform/). Called once,
 // early in init: the pipe transport forks here, so every process carries on
 // from this call with its own rank. On error (an unknown or unavailable
-// transport, or --ranks outside 1..256 for pipe) returns null and sets
+// transport, or a rank count outside 1..kMaxRanks) returns null and sets
 // *error.
 std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status* error);
 
