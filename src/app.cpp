@@ -334,8 +334,17 @@ int Init(Render* r) {
                  static_cast<unsigned long long>(o.memBudget));
     return kExitUsage;
   }
+  // The system may refuse what the budget allowed (no --mem-budget, ulimit
+  // -v, overcommit off): a user error naming the bytes, not a CHECK.
+  auto refused = [&](const char* what, uint64_t bytes) {
+    os::PrintErr("vismask: rank %d: the system refused %llu bytes for %s (this rank needs %llu "
+                 "in all); lower --width/--height, --envs, --round-shots or run on more ranks\n",
+                 r->transport->rank(), static_cast<unsigned long long>(bytes), what,
+                 static_cast<unsigned long long>(need));
+    return kExitUsage;
+  };
   for (auto& e : r->envs) {
-    e->Build();
+    if (!e->Build()) return refused("an environment's arena", e->footprint().total);
     r->envPtrs.push_back(e.get());
   }
 
@@ -343,7 +352,8 @@ int Init(Render* r) {
   if (!MakeView(r->camera, o.width, o.height, &r->view))
     return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));
 
-  r->rankArena = Arena(measure.used());
+  if (!Arena::Reserve(measure.used(), &r->rankArena))
+    return refused("the rank's exchange and output buffers", ArenaRoundUp(measure.used()));
   r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot());
   if (!r->isRoot()) return kExitOk;
   for (size_t i = 0; i < r->reference.size(); ++i) r->reference[i] = ref.pixels[i];

@@ -12,6 +12,20 @@ Arena::Arena(size_t capacity) : capacity_(ArenaRoundUp(capacity)) {
   std::memset(base_, 0, capacity_);
 }
 
+bool Arena::Reserve(size_t capacity, Arena* out) {
+  Arena a;
+  a.capacity_ = ArenaRoundUp(capacity);
+  if (a.capacity_ == 0) a.capacity_ = kAlign;
+  a.base_ = static_cast<uint8_t*>(std::aligned_alloc(kAlign, a.capacity_));
+  if (a.base_ == nullptr) {
+    a.capacity_ = 0;
+    return false;
+  }
+  std::memset(a.base_, 0, a.capacity_);
+  *out = std::move(a);
+  return true;
+}
+
 Arena::~Arena() { std::free(base_); }
 
 Arena::Arena(Arena&& o) noexcept : base_(o.base_), capacity_(o.capacity_), used_(o.used_) {

@@ -196,9 +196,9 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   return footprint_;
 }
 
-void Environment::Build() {
+bool Environment::Build() {
   uint32_t n = static_cast<uint32_t>(staged_.size());
-  arena_ = Arena(footprint_.total);
+  if (!Arena::Reserve(footprint_.total, &arena_)) return false;
   Layout(arena_, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
   CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
   totalArea_ = 0.0;
@@ -243,6 +243,7 @@ void Environment::Build() {
   std::vector<uint32_t>().swap(stagedCut_);
   std::vector<glm::vec3>().swap(stagedCutNormal_);
   Reset();
+  return true;
 }
 
 void Environment::Reset() {

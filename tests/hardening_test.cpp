@@ -3,6 +3,8 @@
 #include <cstdlib>
 #include <string>
 
+#include <sys/wait.h>
+
 #include <gtest/gtest.h>
 
 #include "test_util.h"
@@ -33,6 +35,29 @@ TEST(HardeningTest, ClosedStandardDescriptorsNeverBecomeOutputs) {
     std::string pfm = ReadFile(out + "/image.pfm");
     EXPECT_EQ(pfm.substr(0, 3), "PF\n") << redirect;
     EXPECT_EQ(ReadFile(out + "/run.json").substr(0, 1), "{") << redirect;
+  }
+}
+
+// Memory the budget allowed but the system refuses (ulimit -v here) is a
+// user error that names the bytes (exit 2, no outputs), not a CHECK (134).
+TEST(HardeningTest, RefusedArenaMemoryIsAUserError) {
+  TempDir dir;
+  const std::string cases[] = {
+      "--width 16384 --height 16384",                     // the rank's buffers
+      "--round-shots 1000000 --envs 2 --ranks 2",         // the environments' arenas
+  };
+  for (const std::string& extra : cases) {
+    std::string out = dir.File("out");
+    std::string cmd = "(ulimit -v 4000000; " + Bin() + " render scenes/cornell.obj " + extra +
+                      " --out " + out + " 2> " + dir.File("err") + ")";
+    int status = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(status)) << cmd;
+    EXPECT_EQ(WEXITSTATUS(status), 2) << cmd << "\n" << ReadFile(dir.File("err"));
+    std::string err = ReadFile(dir.File("err"));
+    EXPECT_NE(err.find("the system refused"), std::string::npos) << err;
+    EXPECT_NE(err.find(" bytes for "), std::string::npos) << err;
+    EXPECT_EQ(err.find("internal error"), std::string::npos) << err;
+    EXPECT_FALSE(test::FileExists(out)) << extra;
   }
 }
 

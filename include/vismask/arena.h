@@ -23,7 +23,11 @@ class Arena {
   // A measuring arena: Alloc returns spans with null data and counts bytes.
   static Arena Measure() { return Arena(); }
   // A real arena of `capacity` bytes, one aligned heap block (init only).
+  // The system's refusal is a CHECK failure: user-sized arenas use Reserve.
   explicit Arena(size_t capacity);
+  // Makes *out a real arena of `capacity` bytes; false, leaving *out as it
+  // was, if the system refuses the memory (the caller says so, exit 2).
+  static bool Reserve(size_t capacity, Arena* out);
   ~Arena();
   Arena(Arena&& other) noexcept;
   Arena& operator=(Arena&& other) noexcept;

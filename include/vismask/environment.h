@@ -103,8 +103,9 @@ class Environment {
   const EnvFootprint& Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                               const std::vector<uint32_t>& ids, const EnvOptions& options);
   // Init, second half: makes the arena of exactly the measured size, copies
-  // the patches in, builds the grid, and drops the heap copies.
-  void Build();
+  // the patches in, builds the grid, and drops the heap copies. False, with
+  // nothing built, if the system refuses the arena's memory.
+  bool Build();
   // Prepare and Build.
   void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
             const std::vector<uint32_t>& ids, const EnvOptions& options) {
