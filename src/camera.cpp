@@ -84,6 +84,8 @@ void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {
   std::vector<double> depth(n * n);
   std::vector<uint8_t> front(n * n);
   std::vector<glm::dvec2> poly;
+  std::vector<double> nearest;
+  std::vector<uint32_t> order;
   for (int s = 0; s < kNumViewSides; ++s) {
     rays[s] = 0;
     View view;
@@ -96,7 +98,23 @@ void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {
         dir[y * n + x] = focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
     std::fill(depth.begin(), depth.end(), kInf);
     std::fill(front.begin(), front.end(), uint8_t{0});
-    for (const Polygon& p : scene.polygons) {
+    // Near to far by the nearest corner (file order on ties), so that a
+    // polygon behind what a pixel already sees is passed over at once.
+    nearest.resize(scene.polygons.size());
+    order.resize(scene.polygons.size());
+    for (uint32_t k = 0; k < scene.polygons.size(); ++k) {
+      double z = kInf;
+      for (const glm::vec3& corner : scene.polygons[k].corners)
+        z = std::min(z, glm::dot(glm::dvec3(corner) - eye, forward));
+      nearest[k] = z / focal;  // in units of t: a pixel's ray has dot(dir, forward) = focal
+      order[k] = k;
+    }
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return nearest[a] < nearest[b] || (nearest[a] == nearest[b] && a < b);
+    });
+    for (uint32_t k : order) {
+      const Polygon& p = scene.polygons[k];
+      const double tMin = nearest[k];
       // The pixels whose centres the polygon's projected corners bound. The
       // eye is outside the box, so every corner is in front of it; were one
       // not, the whole image is tested.
@@ -133,6 +151,7 @@ void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {
       for (int y = y0; y <= y1; ++y) {
         for (int x = x0; x <= x1; ++x) {
           const int i = y * n + x;
+          if (tMin * (1.0 - 1e-6) >= depth[i]) continue;  // (dot(dir, forward) is focal to rounding)
           double facing = glm::dot(normal, dir[i]);
           if (facing == 0.0) continue;  // edge-on
           double t = reach / facing;
