@@ -83,7 +83,10 @@ struct Render {
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
   std::vector<Environment*> envPtrs;
-  Camera camera;  // the one used (--camera or the default)
+  Camera camera;  // the one used (--camera or a side's)
+  bool hasSide = false;  // the camera is a side's: --view or chosen (not --camera)
+  bool sideChosen = false;  // chosen by ChooseViewSide (not --view)
+  ViewSide side = ViewSide::kFront;
   View view;
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
   ExchangeBuffers exchange;
@@ -348,7 +351,14 @@ int Init(Render* r) {
     r->envPtrs.push_back(e.get());
   }
 
-  r->camera = o.hasCamera ? o.camera : DefaultCamera(p.scene.bounds);
+  if (o.hasCamera) {
+    r->camera = o.camera;
+  } else {
+    r->hasSide = true;
+    r->sideChosen = !o.hasView;
+    r->side = o.hasView ? o.view : ChooseViewSide(p.scene);
+    r->camera = SideCamera(p.scene.bounds, r->side);
+  }
   if (!MakeView(r->camera, o.width, o.height, &r->view))
     return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));
 
@@ -509,6 +519,10 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   const Camera& c = r->camera;  // as --camera takes it: eye, target, up, fovy
   w.Printf("    \"camera\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g],\n", c.eye.x,
            c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fovyDeg);
+  // The side the camera frames (null with --camera), and whether it was chosen (no --view).
+  if (r->hasSide) w.Printf("    \"view\": \"%s\",\n", ViewSideName(r->side));
+  else w.Printf("    \"view\": null,\n");
+  w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"queue\": %u,\n",
@@ -733,6 +747,22 @@ class ReferenceProbe : public ErrorProbe {
   Render* r_;
 };
 
+// A camera that sees nothing but background, or only the unlit backs of
+// one-sided polygons (an open box seen from a closed side), gives a black
+// image that looks like a failed solve: say so. Rank 0, output phase: reads
+// the resolved framebuffer and allocates nothing.
+void WarnIfEmpty(const Framebuffer& fb, bool hasCamera) {
+  ImageContent content = InspectImage(fb);
+  if (content.litFront) return;
+  const char* fix = hasCamera ? "try another --camera, or --view front|back|left|right|top|bottom"
+                              : "try --view front|back|left|right|top|bottom, or --camera";
+  if (!content.surface)
+    os::PrintErr("vismask: warning: the image is all background: the camera sees no surface (%s)\n", fix);
+  else
+    os::PrintErr("vismask: warning: the image is black: the camera sees no lit front-facing "
+                 "surface, only background and the backs of one-sided polygons (%s)\n", fix);
+}
+
 int WriteOutputs(Render* r, const SolveResult& res) {
   double start = os::Seconds();
   RenderImage(r);
@@ -760,6 +790,7 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   GatherByEnv(r, r->summaryMine, r->summaryAll, r->summary);
   if (!r->isRoot()) return kExitOk;
 
+  WarnIfEmpty(r->fb, r->options.hasCamera);
   float exposure = r->options.hasExposure ? r->options.exposure
                                           : AutoExposure(r->fb.color, r->fb.id, kNoPatch);
   ToneMap(r->fb.color, exposure, r->rgb8);
@@ -967,9 +998,13 @@ int Main(int argc, const char* const* argv) {
   rc = WriteOutputs(r.get(), res);
   SetPhase(Phase::kDone);
   rc = r->transport->Finish(rc);
-  if (rc == kExitOk && !r->options.quiet && r->isRoot())
-    os::PrintErr("vismask: %llu shots, %.2f s solve; wrote %s/image.png\n",
-                 static_cast<unsigned long long>(res.shots), res.seconds, r->options.outDir.c_str());
+  if (rc == kExitOk && !r->options.quiet && r->isRoot()) {
+    char view[64] = "--camera";
+    if (r->hasSide)
+      std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side), r->sideChosen ? " (chosen)" : "");
+    os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
+                 static_cast<unsigned long long>(res.shots), res.seconds, view, r->options.outDir.c_str());
+  }
   return rc;
 }
 

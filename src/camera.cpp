@@ -1,23 +1,182 @@
 #include "vismask/camera.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 
 namespace vismask {
 
-Camera DefaultCamera(const Bounds& b) {
+namespace {
+
+struct SideSpec {
+  const char* name;
+  int axis;       // the view axis: 0 x, 1 y, 2 z
+  bool eyeOnHi;   // the eye is beyond bounds.hi[axis] (else below bounds.lo[axis])
+  glm::vec3 up;
+};
+
+// Indexed by ViewSide (see camera.h for the names and up vectors).
+const SideSpec kSides[kNumViewSides] = {
+    {"front", 2, false, {0.0f, 1.0f, 0.0f}}, {"back", 2, true, {0.0f, 1.0f, 0.0f}},
+    {"left", 0, true, {0.0f, 1.0f, 0.0f}},   {"right", 0, false, {0.0f, 1.0f, 0.0f}},
+    {"top", 1, true, {0.0f, 0.0f, 1.0f}},    {"bottom", 1, false, {0.0f, 0.0f, -1.0f}},
+};
+
+// Whether `q` lies inside the simple polygon `poly` (crossing number, edges
+// half-open so a point on an edge shared by two polygons counts in one).
+bool Inside(const std::vector<glm::dvec2>& poly, glm::dvec2 q) {
+  bool in = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const glm::dvec2& a = poly[i];
+    const glm::dvec2& b = poly[j];
+    if ((a.y > q.y) != (b.y > q.y) && q.x < (b.x - a.x) * (q.y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
+}  // namespace
+
+const char* ViewSideName(ViewSide side) { return kSides[static_cast<int>(side)].name; }
+
+bool ParseViewSide(const char* name, ViewSide* side) {
+  for (int s = 0; s < kNumViewSides; ++s) {
+    if (std::strcmp(name, kSides[s].name) == 0) {
+      *side = static_cast<ViewSide>(s);
+      return true;
+    }
+  }
+  return false;
+}
+
+Camera SideCamera(const Bounds& b, ViewSide side) {
+  const SideSpec& s = kSides[static_cast<int>(side)];
   Camera c;
   glm::vec3 centre = 0.5f * (b.lo + b.hi);
   glm::vec3 half = 0.5f * (b.hi - b.lo);
   float tanHalf = std::tan(0.5f * c.fovyDeg * 3.14159265358979f / 180.0f);
-  float reach = std::fmax(half.x, half.y);
-  if (reach <= 0.0f) reach = std::fmax(half.z, 1.0f);
+  // The face across the view: its larger extent fills the field of view.
+  // (front's arithmetic is exactly the camera's before --view: its images
+  // stay byte for byte.)
+  int u = s.axis == 0 ? 2 : 0, v = s.axis == 1 ? 2 : 1;
+  float reach = std::fmax(half[u], half[v]);
+  if (reach <= 0.0f) reach = std::fmax(half[s.axis], 1.0f);
   float distance = 1.04f * reach / tanHalf;
-  c.eye = glm::vec3(centre.x, centre.y, b.lo.z - distance);
-  c.target = glm::vec3(centre.x, centre.y, b.lo.z);
-  c.up = glm::vec3(0.0f, 1.0f, 0.0f);
+  float face = s.eyeOnHi ? b.hi[s.axis] : b.lo[s.axis];
+  c.target = centre;
+  c.target[s.axis] = face;
+  c.eye = centre;
+  c.eye[s.axis] = s.eyeOnHi ? face + distance : face - distance;
+  c.up = s.up;
   return c;
+}
+
+Camera DefaultCamera(const Bounds& bounds) { return SideCamera(bounds, ViewSide::kFront); }
+
+void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {
+  constexpr int n = kViewProbeRays;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<glm::dvec3> dir(n * n);
+  std::vector<double> depth(n * n);
+  std::vector<uint8_t> front(n * n);
+  std::vector<glm::dvec2> poly;
+  std::vector<double> nearest;
+  std::vector<uint32_t> order;
+  for (int s = 0; s < kNumViewSides; ++s) {
+    rays[s] = 0;
+    View view;
+    if (!MakeView(SideCamera(scene.bounds, static_cast<ViewSide>(s)), n, n, &view)) continue;
+    const glm::dvec3 eye(view.eye), right(view.right), up(view.up), forward(view.forward);
+    const double focal = view.focal, halfN = 0.5 * n;
+    // One ray through each pixel centre of an n x n image, row 0 at the top.
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x)
+        dir[y * n + x] = focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
+    std::fill(depth.begin(), depth.end(), kInf);
+    std::fill(front.begin(), front.end(), uint8_t{0});
+    // Near to far by the nearest corner (file order on ties), so that a
+    // polygon behind what a pixel already sees is passed over at once.
+    nearest.resize(scene.polygons.size());
+    order.resize(scene.polygons.size());
+    for (uint32_t k = 0; k < scene.polygons.size(); ++k) {
+      double z = kInf;
+      for (const glm::vec3& corner : scene.polygons[k].corners)
+        z = std::min(z, glm::dot(glm::dvec3(corner) - eye, forward));
+      nearest[k] = z / focal;  // in units of t: a pixel's ray has dot(dir, forward) = focal
+      order[k] = k;
+    }
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return nearest[a] < nearest[b] || (nearest[a] == nearest[b] && a < b);
+    });
+    for (uint32_t k : order) {
+      const Polygon& p = scene.polygons[k];
+      const double tMin = nearest[k];
+      // The pixels whose centres the polygon's projected corners bound. The
+      // eye is outside the box, so every corner is in front of it; were one
+      // not, the whole image is tested.
+      double minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf;
+      bool behind = false;
+      for (const glm::vec3& corner : p.corners) {
+        glm::dvec3 d = glm::dvec3(corner) - eye;
+        double z = glm::dot(d, forward);
+        if (!(z > 0.0)) {
+          behind = true;
+          break;
+        }
+        double sx = halfN + focal * glm::dot(d, right) / z, sy = halfN - focal * glm::dot(d, up) / z;
+        minX = std::min(minX, sx), maxX = std::max(maxX, sx);
+        minY = std::min(minY, sy), maxY = std::max(maxY, sy);
+      }
+      int x0 = 0, x1 = n - 1, y0 = 0, y1 = n - 1;
+      if (!behind) {
+        x0 = std::max(0, static_cast<int>(std::floor(minX - 0.5)));
+        x1 = std::min(n - 1, static_cast<int>(std::ceil(maxX - 0.5)));
+        y0 = std::max(0, static_cast<int>(std::floor(minY - 0.5)));
+        y1 = std::min(n - 1, static_cast<int>(std::ceil(maxY - 0.5)));
+        if (x0 > x1 || y0 > y1) continue;
+      }
+      // The inside test in the plane's projection that distorts it least.
+      const glm::dvec3 normal(p.normal);
+      int drop = 0;
+      for (int a = 1; a < 3; ++a)
+        if (std::fabs(normal[a]) > std::fabs(normal[drop])) drop = a;
+      const int pu = drop == 0 ? 1 : 0, pv = drop == 2 ? 1 : 2;
+      poly.clear();
+      for (const glm::vec3& corner : p.corners) poly.emplace_back(corner[pu], corner[pv]);
+      const double reach = glm::dot(normal, glm::dvec3(p.corners[0]) - eye);
+      for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) {
+          const int i = y * n + x;
+          if (tMin * (1.0 - 1e-6) >= depth[i]) continue;  // (dot(dir, forward) is focal to rounding)
+          double facing = glm::dot(normal, dir[i]);
+          if (facing == 0.0) continue;  // edge-on
+          double t = reach / facing;
+          // Strictly nearer: of coincident polygons the first in the file is seen.
+          if (!(t > 0.0) || !(t < depth[i])) continue;
+          glm::dvec3 hit = eye + t * dir[i];
+          if (!Inside(poly, glm::dvec2(hit[pu], hit[pv]))) continue;
+          depth[i] = t;
+          front[i] = facing < 0.0;
+        }
+      }
+    }
+    for (uint8_t f : front) rays[s] += f;
+  }
+}
+
+ViewSide ChooseViewSide(const Scene& scene) {
+  uint32_t rays[kNumViewSides];
+  VisibleFrontRays(scene, rays);
+  uint32_t best = *std::max_element(rays, rays + kNumViewSides);
+  // Near ties (counts within 1% of the best, the probe's own resolution
+  // noise for a symmetric scene) go to the earlier side: front first.
+  for (int s = 0; s < kNumViewSides; ++s)
+    if (rays[s] + best / 100 >= best) return static_cast<ViewSide>(s);
+  return ViewSide::kFront;
 }
 
 bool MakeView(const Camera& c, int width, int height, View* v) {

@@ -68,7 +68,16 @@ render options:
   --width W, --height H   image size in pixels (default 512 x 512)
   --camera ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy_deg
                        eye, target, up and vertical field of view (default:
-                       frame the scene's bounding box from -z, looking +z)
+                       the --view side that shows the most front-facing
+                       surface, front on a tie)
+  --view SIDE          front | back | left | right | top | bottom: frame the
+                       scene's bounding box from that side, its larger extent
+                       filling the view: front from -z looking +z, back from
+                       +z, left from +x and right from -x (as they appear in
+                       the front view), top from +y, bottom from -y. Without
+                       --view or --camera, the side is chosen by rays from
+                       each side's eye: the most image showing the front of
+                       a polygon, occlusion included. Not with --camera
   --exposure E         linear exposure for image.png (default: automatic)
   --aa on|off          on: each pixel is the exact area-weighted mean of what
                        it sees (a 1-pixel box filter: every piece's coverage
@@ -293,6 +302,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       View view;
       if (!MakeView(o->camera, 1, 1, &view))
         return Bad(a, v, "eye != target, up not parallel to the view direction, 0 < fovy < 180");
+    } else if (a == "--view") {
+      if (!ParseViewSide(v.c_str(), &o->view)) return Bad(a, v, "front, back, left, right, top or bottom");
+      o->hasView = true;
     } else if (a == "--envs") {
       if (!ParseEnvGrid(v.c_str(), o->envs)) return Bad(a, v, "NX[xNY[xNZ]], each 1..64");
     } else if (a == "--mask-method") {
@@ -363,6 +375,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   }
   if (o->scene.empty())
     return Status::Error("vismask: " + o->command + ": no scene given (vismask " + o->command + " SCENE.obj)");
+  if (o->hasView && o->hasCamera)
+    return Status::Error("vismask: --view and --camera: give one or the other (--view frames the "
+                         "bounding box from a side, --camera places the camera itself)");
   if (o->errorEvery > 0 && o->reference.empty())
     return Status::Error("vismask: --error-every: needs --reference REF.pfm to measure against");
   // --rays N alone keeps its meaning: N rays every shot.

@@ -492,36 +492,64 @@ void Composite(const Framebuffer& other, Framebuffer* fb) {
   CompositeRows(other, 0, other.height, fb);
 }
 
+namespace {
+
+// One antialiased pixel's fragments composed: its colour, the id with the
+// largest visible share, and the share front faces took.
+void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* id, float* frontShare) {
+  float open = 1.0f, front = 0.0f, best = 0.0f;
+  uint32_t bestId = kNoPatch;
+  glm::vec3 c(0.0f);
+  for (int k = 0; k < kFragments && f[k].id != kNoPatch && open > 0.0f; ++k) {
+    // A front face takes what is still open (pieces meeting at edges, a
+    // silhouette over what is behind: disjoint parts). A back face lies
+    // behind its object's front faces, within their silhouette: it shows
+    // only where it covers more than the front faces before it took (and
+    // is disjoint from other back faces, like the pieces of a wall seen
+    // from behind).
+    float cover = std::fabs(f[k].coverage);
+    bool isFront = f[k].coverage >= 0.0f;
+    float w = std::fmin(isFront ? cover : cover - front, open);
+    if (!(w > 0.0f)) continue;
+    if (isFront) front += w;
+    float scale = w / cover;
+    c += scale * glm::vec3(f[k].rgb[0], f[k].rgb[1], f[k].rgb[2]);
+    open -= w;
+    if (w > best) best = w, bestId = f[k].id;
+  }
+  // Where ids were dropped, the kept ones stand for the whole pixel.
+  if (dropped && open > 0.0f && open < 1.0f) c *= 1.0f / (1.0f - open);
+  *color = c;
+  *id = bestId;
+  *frontShare = front;
+}
+
+}  // namespace
+
 void Resolve(Framebuffer* fb) {
   if (!fb->aa) return;
   size_t n = fb->color.size();
-  for (size_t i = 0; i < n; ++i) {
-    const Fragment* f = &fb->frags[i * kFragments];
-    float open = 1.0f, front = 0.0f, best = 0.0f;
-    uint32_t bestId = kNoPatch;
-    glm::vec3 c(0.0f);
-    for (int k = 0; k < kFragments && f[k].id != kNoPatch && open > 0.0f; ++k) {
-      // A front face takes what is still open (pieces meeting at edges, a
-      // silhouette over what is behind: disjoint parts). A back face lies
-      // behind its object's front faces, within their silhouette: it shows
-      // only where it covers more than the front faces before it took (and
-      // is disjoint from other back faces, like the pieces of a wall seen
-      // from behind).
-      float cover = std::fabs(f[k].coverage);
-      bool isFront = f[k].coverage >= 0.0f;
-      float w = std::fmin(isFront ? cover : cover - front, open);
-      if (!(w > 0.0f)) continue;
-      if (isFront) front += w;
-      float scale = w / cover;
-      c += scale * glm::vec3(f[k].rgb[0], f[k].rgb[1], f[k].rgb[2]);
-      open -= w;
-      if (w > best) best = w, bestId = f[k].id;
+  float front;
+  for (size_t i = 0; i < n; ++i)
+    ResolvePixel(&fb->frags[i * kFragments], fb->dropped[i] != 0, &fb->color[i], &fb->id[i], &front);
+}
+
+ImageContent InspectImage(const Framebuffer& fb) {
+  ImageContent content;
+  for (size_t i = 0; i < fb.color.size() && !content.litFront; ++i) {
+    if (fb.id[i] == kNoPatch) continue;
+    content.surface = true;
+    const glm::vec3& c = fb.color[i];
+    if (!(c.r > 0.0f || c.g > 0.0f || c.b > 0.0f)) continue;
+    float front = 1.0f;
+    if (fb.aa) {
+      glm::vec3 color;
+      uint32_t id;
+      ResolvePixel(&fb.frags[i * kFragments], fb.dropped[i] != 0, &color, &id, &front);
     }
-    // Where ids were dropped, the kept ones stand for the whole pixel.
-    if (fb->dropped[i] && open > 0.0f && open < 1.0f) c *= 1.0f / (1.0f - open);
-    fb->color[i] = c;
-    fb->id[i] = bestId;
+    content.litFront = front >= 0.5f;
   }
+  return content;
 }
 
 }  // namespace vismask

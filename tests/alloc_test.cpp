@@ -82,13 +82,14 @@ void free(void* p) { __libc_free(p); }
 namespace vismask {
 namespace {
 
-long AllocationsAfterInit(const std::vector<std::string>& args, int* code) {
+long AllocationsAfterInit(const std::vector<std::string>& args, int* code, std::string* err = nullptr) {
   gTestPid = getpid();
   gAfterInit = 0;
   gArmed = true;
   test::RunResult r = test::RunMain(args);
   gArmed = false;
   *code = r.code;
+  if (err) *err = r.err;
   return gAfterInit.load();
 }
 
@@ -237,6 +238,33 @@ TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {
                                 &code);
   EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
   EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
+}
+
+// The default camera's side is chosen at init; the check for a black image
+// runs in the output phase, on a scene whose walls face away from the
+// camera (a box closed on -z, open on +z, seen with --view front).
+TEST(AllocTest, ChosenViewAndBlackImageWarningAllocateNothing) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  test::TempDir dir;
+  test::WriteFile(dir.File("box.obj"),
+                  "mtllib box.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\n"
+                  "v 0 1 1\nv 0.4 0.99 0.4\nv 0.6 0.99 0.4\nv 0.6 0.99 0.6\nv 0.4 0.99 0.6\n"
+                  "usemtl wall\nf 1 2 3 4\nf 1 5 6 2\nf 4 3 7 8\nf 1 4 8 5\nf 2 6 7 3\n"
+                  "usemtl light\nf 9 10 11 12\n");
+  test::WriteFile(dir.File("box.mtl"), "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n");
+  for (const char* view : {"", "front"}) {
+    std::vector<std::string> args = {"render", dir.File("box.obj"), "--out", dir.File("out"), "--rays",
+                                     "256", "--max-shots", "200", "--width", "48", "--height", "48"};
+    if (*view) args.insert(args.end(), {"--view", view});
+    int code = -1;
+    std::string err;
+    long n = AllocationsAfterInit(args, &code, &err);
+    ASSERT_EQ(code, 0) << err;
+    EXPECT_EQ(n, 0) << "heap allocations after init (--view '" << view << "')";
+    EXPECT_EQ(err.find("warning: the image is black:") != std::string::npos, *view != 0) << err;
+  }
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
-// Camera: a pinhole looking from `eye` at `target`. The default frames a
-// scene's bounding box from its -z side looking +z (the Cornell box's
-// original camera).
+// Camera: a pinhole looking from `eye` at `target`. Without --camera the
+// camera frames the scene's bounding box from one of its six sides (--view,
+// or the side chosen by ChooseViewSide).
 #pragma once
+#include <cstdint>
+
 #include <glm/vec3.hpp>
 
 #include "vismask/scene.h"
@@ -15,10 +17,46 @@ struct Camera {
   float fovyDeg = 39.3f;
 };
 
-// The default camera for `bounds`: centred on the box in x and y, far enough
-// back on -z that the box's front face fills the vertical field of view with
-// a 4% margin, looking +z, up +y.
+// The side of the bounding box the eye is on. front is the Cornell box's
+// original camera (-z side, looking +z, up +y), whose image has +x on the
+// left; left and right are named as in that image: left is the +x side,
+// right the -x side; the four horizontal views have up +y. top (+y side)
+// and bottom (-y side) are the front camera turned about x over the box and
+// under it: up is +z and -z, and +x stays on the image's left.
+enum class ViewSide : uint8_t { kFront, kBack, kLeft, kRight, kTop, kBottom };
+constexpr int kNumViewSides = 6;
+
+// "front", "back", "left", "right", "top", "bottom".
+const char* ViewSideName(ViewSide side);
+// The side named `name` (as ViewSideName spells it); false for any other.
+bool ParseViewSide(const char* name, ViewSide* side);
+
+// The camera for `side` of `bounds`: looking along the axis through the
+// box's centre at the face on that side, far enough back that the face's
+// larger extent fills the vertical field of view (39.3 degrees) with a 4%
+// margin. kFront is the camera vismask always used before --view.
+Camera SideCamera(const Bounds& bounds, ViewSide side);
+
+// SideCamera(bounds, ViewSide::kFront).
 Camera DefaultCamera(const Bounds& bounds);
+
+// How much of each side's image shows the front of a polygon: the rays, out
+// of kViewProbeRays^2 through the image's pixel centres (a square image),
+// whose nearest hit is a polygon's front side. Occlusion counts: a ray that
+// meets the back of a wall first sees nothing, whatever lies beyond. Indexed
+// by ViewSide. Deterministic (no random numbers), init-time (heap allowed);
+// each ray tests only the polygons whose projected bounds hold it.
+constexpr int kViewProbeRays = 64;
+void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]);
+
+// The default camera's side: the one whose image shows the most front-facing
+// surface (VisibleFrontRays), a side within 1% of the best count counting
+// as tied with it, ties going to the first of front, back, left, right,
+// top, bottom. From outside, a polygon facing into the box shows its back,
+// so an open box is seen through its open side (the Cornell box from -z,
+// McGuire's CornellBox-Sphere from +z); a box closed on every side shows no
+// front from anywhere and keeps front.
+ViewSide ChooseViewSide(const Scene& scene);
 
 // A camera's derived basis for projection onto a width x height image.
 struct View {

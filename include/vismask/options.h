@@ -43,6 +43,8 @@ struct Options {
   int height = 512;
   bool hasCamera = false;
   Camera camera;
+  bool hasView = false;  // --view SIDE: that side's camera instead of the chosen one
+  ViewSide view = ViewSide::kFront;
   bool hasExposure = false;
   float exposure = 1.0f;
   bool quiet = false;

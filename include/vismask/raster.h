@@ -99,4 +99,16 @@ void Composite(const Framebuffer& other, Framebuffer* fb);
 // to fill the pixel). Point sampled: nothing to do.
 void Resolve(Framebuffer* fb);
 
+// What a resolved image shows. surface: some pixel holds a patch. litFront:
+// some pixel is not black and, antialiased, front faces take at least half
+// of it. (Only front faces are lit, but the antialiased composite can give
+// a front face a sliver of a pixel on the silhouette of a back face in front
+// of it: a box seen from its closed side shows its inside along the rim, in
+// pixels whose centres lie outside the box.) Allocates nothing.
+struct ImageContent {
+  bool surface = false;
+  bool litFront = false;
+};
+ImageContent InspectImage(const Framebuffer& fb);
+
 }  // namespace vismask

@@ -1,0 +1,372 @@
+// The default camera's side (occlusion included), the --view presets, and
+// the warning for an image that shows nothing.
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+#include "vismask/camera.h"
+#include "vismask/options.h"
+#include "vismask/scene.h"
+
+namespace vismask {
+namespace {
+
+using test::ReadFile;
+using test::RunMain;
+using test::TempDir;
+using test::WriteFile;
+
+// A polygon from its corners, counter-clockwise seen from its front.
+Polygon Quad(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d) {
+  Polygon p;
+  p.corners = {a, b, c, d};
+  glm::vec3 n = glm::cross(b - a, c - a);
+  p.area = glm::length(n);
+  p.normal = n / static_cast<float>(p.area);
+  return p;
+}
+
+void AddBounds(Scene* s) {
+  s->bounds.lo = s->bounds.hi = s->polygons[0].corners[0];
+  for (const Polygon& p : s->polygons)
+    for (const glm::vec3& c : p.corners) {
+      s->bounds.lo = glm::min(s->bounds.lo, c);
+      s->bounds.hi = glm::max(s->bounds.hi, c);
+    }
+}
+
+// The unit cube's six faces facing inward, less the one on `open`'s side
+// (kFront: the -z face missing, ...); open < 0 keeps all six.
+Scene OpenBox(int open) {
+  const glm::vec3 v[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  struct Face {
+    ViewSide side;
+    int a, b, c, d;
+  };
+  // Counter-clockwise seen from inside.
+  const Face faces[6] = {{ViewSide::kFront, 0, 1, 2, 3}, {ViewSide::kBack, 4, 7, 6, 5},
+                         {ViewSide::kBottom, 0, 4, 5, 1}, {ViewSide::kTop, 3, 2, 6, 7},
+                         {ViewSide::kRight, 0, 3, 7, 4}, {ViewSide::kLeft, 1, 5, 6, 2}};
+  Scene s;
+  for (const Face& f : faces)
+    if (static_cast<int>(f.side) != open) s.polygons.push_back(Quad(v[f.a], v[f.b], v[f.c], v[f.d]));
+  AddBounds(&s);
+  return s;
+}
+
+// The same box as an OBJ, with a small emitter under the ceiling facing
+// down; `missing` names the face left out ("" for none, "+z" for the
+// CornellBox-Sphere shape: closed on -z, open on +z).
+void WriteOpenBox(const std::string& dir, const std::string& missing) {
+  std::ostringstream obj;
+  obj << "mtllib box.mtl\n";
+  const double c[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  for (auto& v : c) obj << "v " << v[0] << " " << v[1] << " " << v[2] << "\n";
+  obj << "v 0.4 0.99 0.4\nv 0.6 0.99 0.4\nv 0.6 0.99 0.6\nv 0.4 0.99 0.6\n";
+  obj << "usemtl wall\n";
+  if (missing != "-z") obj << "f 1 2 3 4\n";
+  if (missing != "+z") obj << "f 5 8 7 6\n";
+  if (missing != "-y") obj << "f 1 5 6 2\n";
+  if (missing != "+y") obj << "f 4 3 7 8\n";
+  if (missing != "-x") obj << "f 1 4 8 5\n";
+  if (missing != "+x") obj << "f 2 6 7 3\n";
+  obj << "usemtl light\nf 9 10 11 12\n";  // normal -y
+  WriteFile(dir + "/box.obj", obj.str());
+  WriteFile(dir + "/box.mtl", "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n");
+}
+
+std::vector<std::string> TinyRender(const TempDir& dir, const std::string& scene) {
+  return {"render", scene, "--out", dir.File("out"), "--max-shots", "20", "--rays", "64",
+          "--width", "24", "--height", "24", "--quiet"};
+}
+
+// run.json's "camera" array: eye, target, up, fovy.
+std::vector<double> JsonCamera(const std::string& json) {
+  std::vector<double> c;
+  size_t at = json.find("\"camera\": [");
+  if (at == std::string::npos) return c;
+  std::istringstream in(json.substr(at + 11));
+  double x;
+  char sep;
+  while (c.size() < 10 && in >> x) {
+    c.push_back(x);
+    in >> sep;
+  }
+  return c;
+}
+
+TEST(CameraTest, FrontIsTheCameraBeforeViewBitForBit) {
+  // The formula DefaultCamera had before --view existed, on the Cornell
+  // box's bounds and on a flat one.
+  for (Bounds b : {Bounds{{0.0f, 0.0f, 0.0f}, {556.0f, 548.8f, 559.2f}},
+                   Bounds{{-1.5f, 2.0f, 3.0f}, {0.25f, 2.0f, 7.0f}}}) {
+    glm::vec3 centre = 0.5f * (b.lo + b.hi);
+    glm::vec3 half = 0.5f * (b.hi - b.lo);
+    float tanHalf = std::tan(0.5f * 39.3f * 3.14159265358979f / 180.0f);
+    float reach = std::fmax(half.x, half.y);
+    if (reach <= 0.0f) reach = std::fmax(half.z, 1.0f);
+    float distance = 1.04f * reach / tanHalf;
+    for (Camera c : {SideCamera(b, ViewSide::kFront), DefaultCamera(b)}) {
+      EXPECT_EQ(c.eye, glm::vec3(centre.x, centre.y, b.lo.z - distance));
+      EXPECT_EQ(c.target, glm::vec3(centre.x, centre.y, b.lo.z));
+      EXPECT_EQ(c.up, glm::vec3(0.0f, 1.0f, 0.0f));
+      EXPECT_EQ(c.fovyDeg, 39.3f);
+    }
+  }
+}
+
+TEST(CameraTest, EachSideLooksAtItsFaceFromOutside) {
+  const Bounds b{{0.0f, 0.0f, 0.0f}, {4.0f, 2.0f, 1.0f}};
+  struct Expect {
+    ViewSide side;
+    const char* name;
+    int axis;
+    float sign;  // the eye's side of the box along axis
+    glm::vec3 up;
+    float reach;  // the face's larger half extent
+  };
+  const Expect cases[] = {
+      {ViewSide::kFront, "front", 2, -1.0f, {0, 1, 0}, 2.0f}, {ViewSide::kBack, "back", 2, 1.0f, {0, 1, 0}, 2.0f},
+      {ViewSide::kLeft, "left", 0, 1.0f, {0, 1, 0}, 1.0f},    {ViewSide::kRight, "right", 0, -1.0f, {0, 1, 0}, 1.0f},
+      {ViewSide::kTop, "top", 1, 1.0f, {0, 0, 1}, 2.0f},      {ViewSide::kBottom, "bottom", 1, -1.0f, {0, 0, -1}, 2.0f},
+  };
+  const float tanHalf = std::tan(0.5f * 39.3f * 3.14159265358979f / 180.0f);
+  for (const Expect& e : cases) {
+    SCOPED_TRACE(e.name);
+    EXPECT_STREQ(ViewSideName(e.side), e.name);
+    ViewSide parsed = ViewSide::kFront;
+    ASSERT_TRUE(ParseViewSide(e.name, &parsed));
+    EXPECT_EQ(parsed, e.side);
+    Camera c = SideCamera(b, e.side);
+    glm::vec3 face = 0.5f * (b.lo + b.hi);
+    face[e.axis] = e.sign > 0.0f ? b.hi[e.axis] : b.lo[e.axis];
+    EXPECT_EQ(c.target, face);
+    glm::vec3 back = c.eye - c.target;
+    for (int a = 0; a < 3; ++a)
+      if (a != e.axis) {
+        EXPECT_EQ(back[a], 0.0f);
+      }
+    EXPECT_NEAR(back[e.axis], e.sign * 1.04f * e.reach / tanHalf, 1e-4f);
+    EXPECT_EQ(c.up, e.up);
+    View v;
+    ASSERT_TRUE(MakeView(c, 64, 48, &v));
+    // top and bottom keep the front view's +x on the image's left.
+    if (e.axis == 1) {
+      EXPECT_LT(v.right.x, -0.99f);
+    }
+  }
+  ViewSide s;
+  EXPECT_FALSE(ParseViewSide("side", &s));
+  EXPECT_FALSE(ParseViewSide("Front", &s));
+}
+
+TEST(CameraTest, OpenBoxIsSeenThroughItsOpenSide) {
+  for (int open = 0; open < kNumViewSides; ++open) {
+    SCOPED_TRACE(ViewSideName(static_cast<ViewSide>(open)));
+    Scene s = OpenBox(open);
+    uint32_t rays[kNumViewSides];
+    VisibleFrontRays(s, rays);
+    for (int side = 0; side < kNumViewSides; ++side) {
+      if (side == open) {
+        EXPECT_GT(rays[side], 3000u);  // the inside fills most of the view
+      } else {
+        EXPECT_EQ(rays[side], 0u) << ViewSideName(static_cast<ViewSide>(side));
+      }
+    }
+    EXPECT_EQ(ChooseViewSide(s), static_cast<ViewSide>(open));
+  }
+}
+
+TEST(CameraTest, ClosedBoxKeepsFront) {
+  Scene s = OpenBox(-1);
+  uint32_t rays[kNumViewSides];
+  VisibleFrontRays(s, rays);
+  for (uint32_t r : rays) EXPECT_EQ(r, 0u);
+  EXPECT_EQ(ChooseViewSide(s), ViewSide::kFront);
+}
+
+TEST(CameraTest, OccludedFrontFacesAreNotCounted) {
+  // A quad facing -z (towards the front camera) behind a larger one facing
+  // +z: facing the eye is not enough, the front camera sees only a back.
+  Polygon facing = Quad({0.65f, 0.35f, 1.0f}, {0.35f, 0.35f, 1.0f}, {0.35f, 0.65f, 1.0f}, {0.65f, 0.65f, 1.0f});
+  Polygon wall = Quad({0.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f});
+  ASSERT_LT(facing.normal.z, 0.0f);
+  ASSERT_GT(wall.normal.z, 0.0f);
+  Scene alone;
+  alone.polygons = {facing};
+  alone.bounds = Bounds{{0, 0, 0}, {1, 1, 1}};
+  Scene hidden = alone;
+  hidden.polygons.push_back(wall);
+  uint32_t a[kNumViewSides], h[kNumViewSides];
+  VisibleFrontRays(alone, a);
+  VisibleFrontRays(hidden, h);
+  const int front = static_cast<int>(ViewSide::kFront), back = static_cast<int>(ViewSide::kBack);
+  EXPECT_GT(a[front], 50u);
+  EXPECT_EQ(h[front], 0u);
+  // From +z the wall is seen through the hole around the quad's back.
+  EXPECT_GT(h[back], 0u);
+  EXPECT_EQ(ChooseViewSide(hidden), ViewSide::kBack);
+}
+
+TEST(CameraTest, NearTiesGoToFront) {
+  // Two squares facing out of the unit cube's z faces, -z and +z: the front
+  // and back cameras each see one, alike; front wins the tie.
+  Scene s;
+  s.polygons = {Quad({1, 0, 0}, {0, 0, 0}, {0, 1, 0}, {1, 1, 0}),
+                Quad({0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1})};
+  s.bounds = Bounds{{0, 0, 0}, {1, 1, 1}};
+  ASSERT_LT(s.polygons[0].normal.z, 0.0f);
+  ASSERT_GT(s.polygons[1].normal.z, 0.0f);
+  uint32_t rays[kNumViewSides];
+  VisibleFrontRays(s, rays);
+  EXPECT_GT(rays[0], 2000u);
+  EXPECT_NEAR(rays[0], rays[1], rays[0] / 100);
+  for (int side = 2; side < kNumViewSides; ++side) EXPECT_EQ(rays[side], 0u);
+  EXPECT_EQ(ChooseViewSide(s), ViewSide::kFront);
+  // Without the front's square, back.
+  s.polygons.erase(s.polygons.begin());
+  EXPECT_EQ(ChooseViewSide(s), ViewSide::kBack);
+}
+
+TEST(CameraTest, CornellBoxKeepsFront) {
+  Scene s;
+  Status st = LoadScene("scenes/cornell.obj", &s);
+  ASSERT_TRUE(st.ok()) << st.ToString();
+  EXPECT_EQ(ChooseViewSide(s), ViewSide::kFront);
+}
+
+TEST(CameraTest, McGuireSphereBoxIsSeenFromBack) {
+  // The shared copy of McGuire's scene, when this machine has it.
+  const char* path = "/work/shared/scenes/CornellBox-Sphere.obj";
+  if (!test::FileExists(path)) GTEST_SKIP() << path << " is not here";
+  Scene s;
+  std::vector<std::string> warnings;
+  Status st = LoadSceneFromText(path, ReadFile(path),
+                                [](const std::string& p, std::string* text) {
+                                  if (!test::FileExists(p)) return std::string("cannot open");
+                                  *text = ReadFile(p);
+                                  return std::string();
+                                },
+                                &s, &warnings);
+  if (!st.ok()) GTEST_SKIP() << "vismask does not load it: " << st.ToString();
+  EXPECT_EQ(ChooseViewSide(s), ViewSide::kBack);
+}
+
+// Through the command line.
+
+TEST(CameraTest, DefaultRenderOfABoxOpenOnPlusZLooksFromPlusZ) {
+  TempDir dir;
+  WriteOpenBox(dir.path(), "+z");
+  auto r = RunMain(TinyRender(dir, dir.File("box.obj")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  std::string json = ReadFile(dir.File("out/run.json"));
+  EXPECT_NE(json.find("\"view\": \"back\",\n    \"view_auto\": true,"), std::string::npos) << json;
+  std::vector<double> c = JsonCamera(json);
+  ASSERT_EQ(c.size(), 10u) << json;
+  EXPECT_GT(c[2], 1.0);   // eye beyond the box's +z face
+  EXPECT_EQ(c[5], 1.0);   // looking at that face
+}
+
+TEST(CameraTest, CornellDefaultCameraIsUnchanged) {
+  TempDir dir;
+  auto r = RunMain({"render", "scenes/cornell.obj", "--out", dir.File("out"), "--max-shots", "5",
+                    "--rays", "64", "--width", "16", "--height", "16"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string json = ReadFile(dir.File("out/run.json"));
+  // The numbers run.json held before --view existed.
+  EXPECT_NE(json.find("\"camera\": [278, 274.399994, -809.706604, 278, 274.399994, 0, 0, 1, 0, "
+                      "39.2999992],\n    \"view\": \"front\",\n    \"view_auto\": true,"),
+            std::string::npos)
+      << json;
+  EXPECT_NE(r.err.find(", view front (chosen); wrote "), std::string::npos) << r.err;
+}
+
+TEST(CameraTest, ViewPresetsPutTheEyeOnTheirSide) {
+  TempDir dir;
+  WriteOpenBox(dir.path(), "");
+  struct Case {
+    const char* view;
+    int axis;
+    double sign;
+  };
+  for (const Case& k : {Case{"front", 2, -1}, Case{"back", 2, 1}, Case{"left", 0, 1},
+                        Case{"right", 0, -1}, Case{"top", 1, 1}, Case{"bottom", 1, -1}}) {
+    SCOPED_TRACE(k.view);
+    auto args = TinyRender(dir, dir.File("box.obj"));
+    args.insert(args.end(), {"--view", k.view});
+    auto r = RunMain(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::string json = ReadFile(dir.File("out/run.json"));
+    EXPECT_NE(json.find(std::string("\"view\": \"") + k.view + "\",\n    \"view_auto\": false,"),
+              std::string::npos)
+        << json;
+    std::vector<double> c = JsonCamera(json);
+    ASSERT_EQ(c.size(), 10u) << json;
+    for (int a = 0; a < 3; ++a) {
+      if (a == k.axis) {
+        EXPECT_GT(k.sign * (c[a] - 0.5), 0.5);  // outside the unit box
+      } else {
+        EXPECT_EQ(c[a], 0.5);
+      }
+    }
+  }
+}
+
+TEST(CameraTest, ViewWithCameraIsAUsageError) {
+  TempDir dir;
+  WriteOpenBox(dir.path(), "+z");
+  auto args = TinyRender(dir, dir.File("box.obj"));
+  args.insert(args.end(), {"--view", "back", "--camera", "0.5,0.5,3,0.5,0.5,0,0,1,0,40"});
+  auto r = RunMain(args);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--view and --camera"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::FileExists(dir.File("out/run.json")));
+  args = TinyRender(dir, dir.File("box.obj"));
+  args.insert(args.end(), {"--view", "sideways"});
+  r = RunMain(args);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--view: expected front, back, left, right, top or bottom, got 'sideways'"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(std::string(HelpText()).find("--view SIDE"), std::string::npos);
+}
+
+TEST(CameraTest, BlackImagesWarnAndExitZero) {
+  TempDir dir;
+  WriteOpenBox(dir.path(), "+z");
+  // The box's closed side: the backs of its walls, drawn black.
+  auto args = TinyRender(dir, dir.File("box.obj"));
+  args.insert(args.end(), {"--view", "front"});
+  auto r = RunMain(args);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("vismask: warning: the image is black: the camera sees no lit "
+                       "front-facing surface"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("(try --view "), std::string::npos) << r.err;
+  EXPECT_TRUE(test::FileExists(dir.File("out/image.png")));
+  // Looking away from the scene: nothing at all.
+  args = TinyRender(dir, dir.File("box.obj"));
+  args.insert(args.end(), {"--camera", "0.5,0.5,3,0.5,0.5,4,0,1,0,40"});
+  r = RunMain(args);
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("vismask: warning: the image is all background: the camera sees no surface "
+                       "(try another --camera"),
+            std::string::npos)
+      << r.err;
+  // One line.
+  size_t at = r.err.find("warning");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_EQ(r.err.find('\n', at), r.err.size() - 1) << r.err;
+}
+
+}  // namespace
+}  // namespace vismask
