@@ -1,6 +1,7 @@
 // POSIX implementation of include/vismask/os.h.
 #include <errno.h>
 #include <fcntl.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -143,25 +144,30 @@ bool OutFile::Open(const char* path, char* why) {
     if (why) std::snprintf(why, kWhyBytes, "path too long: %.200s...", path);
     return false;
   }
+  struct stat st;
+  if (::lstat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+    if (why) std::snprintf(why, kWhyBytes, "'%s' exists and is not a regular file", path);
+    return false;
+  }
   std::strcpy(path_, path);
-  std::snprintf(tmpPath_, sizeof tmpPath_, "%s.tmp", path);
+  std::snprintf(tmpPath_, sizeof tmpPath_, "%s.tmp.%ld", path, static_cast<long>(::getpid()));
   fd_ = ::open(tmpPath_, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd_ < 0) {
     SetWhy(why, "cannot open", tmpPath_);
     return false;
   }
-  failed_ = false;
+  writeErrno_ = 0;
   return true;
 }
 
 bool OutFile::Write(const void* data, size_t n) {
-  if (fd_ < 0 || failed_) return false;
+  if (fd_ < 0 || writeErrno_ != 0) return false;
   const char* s = static_cast<const char*>(data);
   while (n > 0) {
     ssize_t w = ::write(fd_, s, n);
     if (w < 0) {
       if (errno == EINTR) continue;
-      failed_ = true;
+      writeErrno_ = errno;
       return false;
     }
     s += w;
@@ -170,23 +176,23 @@ bool OutFile::Write(const void* data, size_t n) {
   return true;
 }
 
-bool OutFile::Commit(char* why) {
-  if (fd_ < 0) return false;
-  bool ok = !failed_;
-  if (::close(fd_) != 0) ok = false;
-  fd_ = -1;
-  if (!ok) {
-    if (why) std::snprintf(why, kWhyBytes, "write failed: %s", tmpPath_);
-    ::unlink(tmpPath_);
+bool OutFile::Close(char* why) {
+  if (fd_ < 0) {
+    if (why) std::snprintf(why, kWhyBytes, "'%s' is not open", path_);
     return false;
   }
-  if (::rename(tmpPath_, path_) != 0) {
-    SetWhy(why, "cannot rename", tmpPath_);
+  int failed = writeErrno_;
+  if (::close(fd_) != 0 && failed == 0) failed = errno;
+  fd_ = -1;
+  if (failed != 0) {
+    if (why) std::snprintf(why, kWhyBytes, "cannot write '%s': %s", tmpPath_, std::strerror(failed));
     ::unlink(tmpPath_);
     return false;
   }
   return true;
 }
+
+bool OutFile::Commit(char* why) { return CommitAll(this, 1, why); }
 
 void OutFile::Discard() {
   if (fd_ >= 0) {
@@ -194,6 +200,97 @@ void OutFile::Discard() {
     fd_ = -1;
     ::unlink(tmpPath_);
   }
+}
+
+bool CommitAll(OutFile* files, int n, char* why) {
+  bool ok = true;
+  for (int i = 0; i < n; ++i) {
+    if (!ok) {
+      files[i].Discard();
+      continue;
+    }
+    ok = files[i].Close(why);
+    if (!ok)
+      for (int j = 0; j < i; ++j) ::unlink(files[j].tmpPath_);
+  }
+  if (!ok) return false;
+  // The files that exist keep a second name (a hard link, "NAME.old.PID")
+  // until every rename has succeeded, so that a failure can put them back.
+  constexpr int kMax = 16;
+  if (n > kMax) {
+    if (why) std::snprintf(why, kWhyBytes, "too many files to commit at once (%d)", n);
+    for (int i = 0; i < n; ++i) ::unlink(files[i].tmpPath_);
+    return false;
+  }
+  char old[kMax][kMaxPath + 24];
+  bool kept[kMax] = {};
+  int renamed = 0;
+  for (int i = 0; i < n && ok; ++i) {
+    std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i].path_, static_cast<long>(::getpid()));
+    ::unlink(old[i]);
+    if (::link(files[i].path_, old[i]) == 0) {
+      kept[i] = true;
+    } else if (errno != ENOENT) {
+      SetWhy(why, "cannot keep the previous", files[i].path_);
+      ok = false;
+    }
+  }
+  for (int i = 0; i < n && ok; ++i) {
+    if (::rename(files[i].tmpPath_, files[i].path_) != 0) {
+      SetWhy(why, "cannot rename", files[i].tmpPath_);
+      ok = false;
+    } else {
+      ++renamed;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!ok && i < renamed) {
+      // Put back what was there: the previous file, or nothing.
+      if (kept[i]) ::rename(old[i], files[i].path_);
+      else ::unlink(files[i].path_);
+    }
+    if (!ok && i >= renamed) ::unlink(files[i].tmpPath_);
+    if (kept[i]) ::unlink(old[i]);  // a no-op after the rename back
+  }
+  return ok;
+}
+
+DirLock::~DirLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool DirLock::Acquire(const char* dir, char* why) {
+  char path[kMaxPath + 16];
+  std::snprintf(path, sizeof path, "%s/.vismask.lock", dir);
+  int fd = ::open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    SetWhy(why, "cannot open the lock file", path);
+    return false;
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    int err = errno;
+    char pid[32] = {};
+    ssize_t got = ::pread(fd, pid, sizeof pid - 1, 0);
+    ::close(fd);
+    if (err == EWOULDBLOCK) {
+      if (why)
+        std::snprintf(why, kWhyBytes, "'%s' is in use by another vismask run (pid %s)", dir,
+                      got > 0 ? pid : "unknown");
+    } else if (why) {
+      std::snprintf(why, kWhyBytes, "cannot lock '%s': %s", path, std::strerror(err));
+    }
+    return false;
+  }
+  char pid[32];
+  int len = std::snprintf(pid, sizeof pid, "%ld", static_cast<long>(::getpid()));
+  if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid, static_cast<size_t>(len), 0) != len) {
+    SetWhy(why, "cannot write the lock file", path);
+    ::close(fd);
+    return false;
+  }
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = fd;
+  return true;
 }
 
 }  // namespace vismask::os

@@ -102,6 +102,7 @@ struct Render {
   Span<PatchRecord> records;
   Span<EnvSummary> summaryMine, summaryAll, summary;  // summary: by environment
   Span<AmbientReport> ambientMine, ambientAll, ambient;
+  os::DirLock outLock;  // rank 0: --out is ours until the process ends
   os::OutFile files[kNumOutputs];
   TextWriter convergence;
   double initSeconds = 0.0;
@@ -376,6 +377,10 @@ int Init(Render* r) {
   if (!os::MakeDirs(o.outDir.c_str(), why)) {
     os::PrintErr("vismask: --out: %s\n", why);
     return kExitOutput;
+  }
+  if (!r->outLock.Acquire(o.outDir.c_str(), why)) {
+    os::PrintErr("vismask: --out: %s\n", why);
+    return kExitUsage;
   }
   for (int f = 0; f < kNumOutputs; ++f) {
     std::string path = o.outDir + "/" + kOutputNames[f];
@@ -794,13 +799,16 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   float exposure = r->options.hasExposure ? r->options.exposure
                                           : AutoExposure(r->fb.color, r->fb.id, kNoPatch);
   ToneMap(r->fb.color, exposure, r->rgb8);
-  char why[os::kWhyBytes] = "write failed";
+  char why[os::kWhyBytes] = "";
+  // A failed write is remembered by its file and reported by CommitAll with
+  // the file's name and the reason; only the PNG encoder fails on its own.
   bool ok = WritePng(&r->files[kPng], r->options.width, r->options.height, r->rgb8, r->pngScratch, why);
-  ok = ok && WritePfm(&r->files[kPfm], r->options.width, r->options.height, r->fb.color);
-  ok = ok && r->convergence.Flush();
+  WritePfm(&r->files[kPfm], r->options.width, r->options.height, r->fb.color);
+  r->convergence.Flush();
   WriteRunJson(r, res, exposure, os::Seconds() - start);
-  // Commit only when every file was written: all outputs appear, or none.
-  for (int f = 0; f < kNumOutputs && ok; ++f) ok = r->files[f].Commit(why);
+  // Commit only when every file was written: all outputs are this run's, or
+  // none is replaced (run.json, last, marks a complete run).
+  if (ok) ok = os::CommitAll(r->files, kNumOutputs, why);
   if (!ok) {
     for (auto& f : r->files) f.Discard();
     os::PrintErr("vismask: cannot write the outputs in '%s': %s\n", r->options.outDir.c_str(), why);

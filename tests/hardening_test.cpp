@@ -1,13 +1,20 @@
 // Hostile use (issue 17): closed standard descriptors, and the like. Each
 // case here once gave a wrong result, a lost output or a crash.
+#include <unistd.h>
+
+#include <algorithm>
 #include <cstdlib>
+#include <filesystem>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include <sys/wait.h>
 
 #include <gtest/gtest.h>
 
 #include "test_util.h"
+#include "vismask/os.h"
 
 namespace vismask {
 namespace {
@@ -59,6 +66,114 @@ TEST(HardeningTest, RefusedArenaMemoryIsAUserError) {
     EXPECT_EQ(err.find("internal error"), std::string::npos) << err;
     EXPECT_FALSE(test::FileExists(out)) << extra;
   }
+}
+
+// Outputs are committed as one: a rename that fails half-way puts back
+// what every final name held (issue 17 item 4: image.png and image.pfm were
+// already the new run's while run.json was still the old one's).
+TEST(HardeningTest, CommitAllIsAllOrNothing) {
+  TempDir dir;
+  test::WriteFile(dir.File("a"), "old a");
+  test::WriteFile(dir.File("c"), "old c");
+  os::OutFile files[3];
+  char why[os::kWhyBytes] = "";
+  for (const char* name : {"a", "b", "c"}) {
+    os::OutFile& f = files[name[0] - 'a'];
+    ASSERT_TRUE(f.Open(dir.File(name).c_str(), why)) << why;
+    ASSERT_TRUE(f.Write("new ", 4));
+    ASSERT_TRUE(f.Write(name, 1));
+  }
+  // b becomes a non-empty directory after its file was opened.
+  std::filesystem::create_directories(dir.File("b/inside"));
+  EXPECT_FALSE(os::CommitAll(files, 3, why));
+  EXPECT_NE(std::string(why).find(dir.File("b")), std::string::npos) << why;
+  EXPECT_EQ(ReadFile(dir.File("a")), "old a");
+  EXPECT_EQ(ReadFile(dir.File("c")), "old c");
+  EXPECT_TRUE(std::filesystem::is_directory(dir.File("b/inside")));
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"a", "b", "c"}));
+  // A rename that fails after others succeeded (c's temporary file gone):
+  // a and b, already renamed, are put back (a to its old bytes, b removed).
+  std::filesystem::remove_all(dir.File("b"));
+  for (const char* name : {"a", "b", "c"}) {
+    os::OutFile& f = files[name[0] - 'a'];
+    ASSERT_TRUE(f.Open(dir.File(name).c_str(), why)) << why;
+    ASSERT_TRUE(f.Write("new ", 4));
+  }
+  std::filesystem::remove(dir.File("c.tmp." + std::to_string(getpid())));
+  EXPECT_FALSE(os::CommitAll(files, 3, why));
+  EXPECT_NE(std::string(why).find("cannot rename"), std::string::npos) << why;
+  EXPECT_EQ(ReadFile(dir.File("a")), "old a");
+  EXPECT_FALSE(test::FileExists(dir.File("b")));
+  EXPECT_EQ(ReadFile(dir.File("c")), "old c");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()),
+                          std::filesystem::directory_iterator()),
+            2);
+  // And without an obstacle, every file is the new one, nothing else left.
+  for (const char* name : {"a", "b", "c"}) {
+    os::OutFile& f = files[name[0] - 'a'];
+    ASSERT_TRUE(f.Open(dir.File(name).c_str(), why)) << why;
+    ASSERT_TRUE(f.Write("new ", 4));
+    ASSERT_TRUE(f.Write(name, 1));
+  }
+  ASSERT_TRUE(os::CommitAll(files, 3, why)) << why;
+  EXPECT_EQ(ReadFile(dir.File("a")), "new a");
+  EXPECT_EQ(ReadFile(dir.File("b")), "new b");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()),
+                          std::filesystem::directory_iterator()),
+            3);
+}
+
+// An output that cannot be replaced (a directory named patches.csv) is found
+// at init, before the solve, and nothing of the previous run is touched.
+TEST(HardeningTest, UnreplaceableOutputIsRefusedAtInit) {
+  TempDir dir;
+  std::string out = dir.File("out");
+  const std::vector<std::string> run = {"render", "scenes/cornell.obj", "--width", "32", "--height",
+                                        "32", "--max-shots", "200", "--quiet", "--out", out};
+  ASSERT_EQ(test::RunMain(run).code, 0);
+  std::string png = ReadFile(out + "/image.png"), json = ReadFile(out + "/run.json");
+  std::filesystem::remove(out + "/patches.csv");
+  std::filesystem::create_directories(out + "/patches.csv");
+  auto second = run;
+  second.insert(second.end(), {"--seed", "7"});
+  auto r = test::RunMain(second);
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("patches.csv' exists and is not a regular file"), std::string::npos) << r.err;
+  EXPECT_EQ(ReadFile(out + "/image.png"), png);
+  EXPECT_EQ(ReadFile(out + "/run.json"), json);
+  for (const auto& e : std::filesystem::directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+// A second run into a directory in use is refused, naming the holder; the
+// first run's outputs are its own (issue 17 item 3: two runs spliced
+// patches.csv through fixed .tmp names).
+TEST(HardeningTest, SecondRunIntoTheSameDirectoryIsRefused) {
+  TempDir dir;
+  std::string out = dir.File("out");
+  std::string first = Bin() + " render scenes/cornell.obj --width 32 --height 32 --rays 4096 "
+                      "--max-shots 1000000 --max-seconds 6 --quiet --out " + out +
+                      " 2> " + dir.File("first.err") + " & echo $! > " + dir.File("pid");
+  ASSERT_EQ(std::system(first.c_str()), 0);
+  // Wait (up to 5 s) until the first run holds the lock.
+  for (int i = 0; i < 100 && ReadFile(out + "/.vismask.lock").empty(); ++i) usleep(50000);
+  std::string holder = ReadFile(out + "/.vismask.lock");
+  ASSERT_FALSE(holder.empty());
+  auto r = test::RunMain({"render", "scenes/cornell.obj", "--width", "16", "--height", "16",
+                          "--max-shots", "10", "--quiet", "--out", out});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("is in use by another vismask run (pid " + holder + ")"), std::string::npos)
+      << r.err;
+  // The first run finishes with its own outputs.
+  std::string pid = ReadFile(dir.File("pid"));
+  std::string wait = "while kill -0 " + pid.substr(0, pid.find('\n')) + " 2>/dev/null; do sleep 0.1; done";
+  ASSERT_EQ(std::system(wait.c_str()), 0);
+  EXPECT_NE(ReadFile(out + "/run.json").find("\"width\": 32"), std::string::npos);
+  EXPECT_EQ(ReadFile(out + "/image.pfm").substr(0, 9), "PF\n32 32\n");
 }
 
 }  // namespace

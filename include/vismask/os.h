@@ -46,10 +46,10 @@ uint64_t PeakRssBytes();
 // Rss - Anonymous from /proc/self/smaps_rollup; 0 if unknown.
 uint64_t FileRssBytes();
 
-// An output file written under a temporary name ("NAME.tmp") and renamed to
-// its final name only by Commit(), so an interrupted run never leaves a file
-// that looks complete. Discard() (or destruction without Commit) removes the
-// temporary file.
+// An output file written under a temporary name ("NAME.tmp.PID", unique to
+// the process) and renamed to its final name only by Commit() or CommitAll(),
+// so an interrupted run never leaves a file that looks complete. Discard()
+// (or destruction without a commit) removes the temporary file.
 class OutFile {
  public:
   OutFile() = default;
@@ -57,9 +57,12 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Opens "<path>.tmp" for writing. False (with *why, kWhyBytes) on failure.
+  // Opens the temporary file for writing. False (with *why, kWhyBytes) on
+  // failure, which includes a final name that exists and is not a regular
+  // file (it could not be replaced at the end of the run).
   bool Open(const char* path, char* why);
-  // Writes all bytes. False on failure (the file is then discarded by Commit).
+  // Writes all bytes. False on failure (remembered: the commit then fails
+  // with the reason).
   bool Write(const void* data, size_t n);
   // Closes and renames to the final name. False (with *why, kWhyBytes) on failure.
   bool Commit(char* why);
@@ -68,10 +71,39 @@ class OutFile {
   const char* path() const { return path_; }
 
  private:
+  friend bool CommitAll(OutFile* files, int n, char* why);
+  // Closes; false (with *why) if a write or the close failed.
+  bool Close(char* why);
+
   int fd_ = -1;
-  bool failed_ = false;
+  int writeErrno_ = 0;  // errno of the first failed write, 0 if none
   char path_[kMaxPath] = {};
-  char tmpPath_[kMaxPath + 8] = {};
+  char tmpPath_[kMaxPath + 24] = {};
+};
+
+// Commits `n` open files as one: every final name then holds the new file,
+// or, on failure (with *why), every final name holds what it held before
+// (files that existed are restored, new ones removed) and no temporary file
+// is left. Files are renamed in array order: put the one that marks a run
+// complete (run.json) last.
+bool CommitAll(OutFile* files, int n, char* why);
+
+// An exclusive lock on an output directory, held until destruction or the
+// process's end (flock on DIR/.vismask.lock, which holds the holder's pid).
+// A second run into the same directory is refused instead of the two
+// splicing each other's files.
+class DirLock {
+ public:
+  DirLock() = default;
+  ~DirLock();
+  DirLock(const DirLock&) = delete;
+  DirLock& operator=(const DirLock&) = delete;
+  // False (with *why, naming the holder's pid when known) if another
+  // process holds the lock or the lock file cannot be made.
+  bool Acquire(const char* dir, char* why);
+
+ private:
+  int fd_ = -1;
 };
 
 }  // namespace vismask::os
