@@ -382,7 +382,7 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
       }
       FaceResult r = ShapeFace(p, options_.strict, &scene_->polygons);
       if (r.fate == FaceResult::kRefused) return Status::At(path, line, r.error);
-      if (r.removedCorners > 0) {
+      if (r.removedCorners > 0 && (r.fate == FaceResult::kKept || r.fate == FaceResult::kTriangulated)) {
         cornersRemoved_.Add(line);
         cornersRemoved_.corners += r.removedCorners;
       }
