@@ -198,7 +198,7 @@ uint32_t RayCap(const Options& o) {
 }
 
 Status PrepareScene(const Options& o, Prepared* p) {
-  Status s = LoadScene(o.scene, &p->scene);
+  Status s = LoadScene(o.scene, &p->scene, o.load);
   if (!s.ok()) return s;
   glm::vec3 extent = p->scene.bounds.hi - p->scene.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));

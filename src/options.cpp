@@ -85,6 +85,17 @@ render options:
                        pixel centre only, quads as two Gouraud triangles
                        (the images before --aa existed); default on
   --quiet              no progress line on stderr
+  --strict             refuse degenerate, non-planar and self-intersecting
+                       faces (exit 2, file:line) instead of mending them:
+                       by default a non-planar face is triangulated, a
+                       repeated or collinear corner removed, and a face with
+                       no area or crossing edges dropped, each kind counted
+                       in one warning line
+  --emit NAME=R,G,B    make material NAME an emitter of exitance Ke =
+                       (R, G, B), each >= 0, replacing the MTL's Ke (said
+                       in a warning when that was not 0); NAME=ka takes the
+                       material's Ka (scenes that give the light's strength
+                       there); repeatable; a NAME no MTL defines exits 2
   --reference REF.pfm  measure the image's relative RMSE against REF.pfm
                        (same size) when the solve ends, in convergence.csv
                        and run.json; the time it takes is not solve time
@@ -209,6 +220,10 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     }
     if (a == "--quiet") {
       o->quiet = true;
+      continue;
+    }
+    if (a == "--strict") {
+      o->load.strict = true;
       continue;
     }
     if (a == "--json" && o->command == "footprint") {
@@ -366,6 +381,28 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--correct-unshot") {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->correctUnshot = v == "on";
+    } else if (a == "--emit") {
+      const char* expected = "NAME=R,G,B (each a number >= 0) or NAME=ka";
+      size_t eq = v.rfind('=');
+      if (eq == std::string::npos || eq == 0) return Bad(a, v, expected);
+      EmitOverride e;
+      e.material = v.substr(0, eq);
+      std::string value = v.substr(eq + 1);
+      if (value == "ka" || value == "Ka") {
+        e.fromKa = true;
+      } else {
+        std::vector<std::string> parts(1);
+        for (char ch : value) {
+          if (ch == ',') parts.emplace_back();
+          else parts.back() += ch;
+        }
+        double c[3];
+        bool good = parts.size() == 3;
+        for (size_t k = 0; good && k < 3; ++k) good = ParseDouble(parts[k], &c[k]) && c[k] >= 0.0 && c[k] <= 3.4e38;
+        if (!good) return Bad(a, v, expected);
+        e.ke = glm::vec3(c[0], c[1], c[2]);
+      }
+      o->load.emit.push_back(e);
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);

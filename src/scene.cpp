@@ -1,6 +1,7 @@
 #include "vismask/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -16,26 +17,18 @@
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <glm/vector_relational.hpp>
 
 #include "geometry_util.h"
+#include "vismask/face.h"
 
 namespace vismask {
 namespace {
 
-// Face checks, relative to the face's size (its largest corner-to-corner
-// distance). Planarity: corners may be off the Newell plane by 1e-4 of the
-// size (0.06 mm on a 0.6 m wall), far above float rounding (~1e-7), below a
-// modelling error (the published Cornell left wall is 1e-3 off, so
-// scenes/cornell.obj splits it). The others reject only true degeneracy.
-constexpr double kPlanarTol = 1e-4;     // max corner distance from the plane
-constexpr double kRepeatTol = 1e-6;     // min distance between two corners
-constexpr double kAreaTol = 1e-6;       // min area, times size^2
-constexpr double kCollinearTol = 1e-5;  // min |sin| of the angle at a corner
-
 // What float geometry and float images can carry (docs/STABILITY.md). Ray
 // tests multiply coordinates and square lengths in float (max 3.4e38, least
 // normal 1.2e-38), so coordinates stay within 1e15 and faces above 1e-15 in
-// size; radiosity is bounded by max Ke / (1 - max Kd), and the image holds it
+// size; radiosity is bounded by max Ke / (1 - max Kd) (when max Kd < 1), and the image holds it
 // in float, so that bound stays within 1e36, and above 1e-30 so that the
 // image is not all denormals.
 constexpr double kMaxCoordinate = 1e15;
@@ -176,99 +169,169 @@ std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs,
   return err;
 }
 
-double Orient(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) {
-  return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+// "1 face", "3 faces".
+std::string Count(size_t n, const char* one, const char* many) {
+  return Str(n) + " " + (n == 1 ? one : many);
 }
 
-// Whether p, known to be on the line ab, lies within the segment ab.
-bool OnSegment(glm::dvec2 a, glm::dvec2 b, glm::dvec2 p) {
-  return std::min(a.x, b.x) <= p.x && p.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= p.y &&
-         p.y <= std::max(a.y, b.y);
-}
-
-// Whether the closed segments ab and cd cross or touch.
-bool SegmentsMeet(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c, glm::dvec2 d) {
-  double o1 = Orient(a, b, c), o2 = Orient(a, b, d), o3 = Orient(c, d, a), o4 = Orient(c, d, b);
-  if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0)))
-    return true;
-  return (o1 == 0 && OnSegment(a, b, c)) || (o2 == 0 && OnSegment(a, b, d)) ||
-         (o3 == 0 && OnSegment(c, d, a)) || (o4 == 0 && OnSegment(c, d, b));
-}
-
-// Checks a face's shape and sets its normal and area; returns an error message
-// for a degenerate, non-planar or self-intersecting face.
-std::string FinishPolygon(Polygon* p) {
-  const size_t n = p->corners.size();
-  std::vector<glm::dvec3> c;
-  for (const glm::vec3& v : p->corners) c.emplace_back(v);
-  double size = 0.0;
-  for (size_t i = 0; i < n; ++i)
-    for (size_t j = i + 1; j < n; ++j) size = std::max(size, glm::length(c[i] - c[j]));
-  for (size_t i = 0; i < n; ++i)
-    for (size_t j = i + 1; j < n; ++j)
-      if (glm::length(c[i] - c[j]) <= kRepeatTol * size)
-        return "degenerate face: vertices " + Str(i + 1) + " and " + Str(j + 1) + " coincide";
-  for (size_t i = 0; i < n; ++i) {
-    glm::dvec3 a = c[(i + n - 1) % n] - c[i], b = c[(i + 1) % n] - c[i];
-    if (glm::length(glm::cross(a, b)) <= kCollinearTol * glm::length(a) * glm::length(b))
-      return "degenerate face: vertex " + Str(i + 1) + " is collinear with its neighbours";
+// A kind of mended face, counted: how many, the first one's line, and the
+// farthest corner off the plane (non-planar faces).
+struct FaceTally {
+  size_t faces = 0;
+  size_t corners = 0;  // corners removed
+  int line = 0;
+  double off = 0.0;
+  void Add(int at) {
+    if (faces++ == 0) line = at;
   }
-  // Newell's method, about corner 0 for precision.
-  glm::dvec3 sum = NewellSum(c);
-  double twiceArea = glm::length(sum);
-  if (twiceArea / 2 <= kAreaTol * size * size) return "degenerate face: zero area";
-  glm::dvec3 normal = sum / twiceArea;
-  glm::dvec3 centroid(0.0);
-  for (const glm::dvec3& v : c) centroid += v / static_cast<double>(n);
-  for (size_t i = 0; i < n; ++i) {
-    double off = std::fabs(glm::dot(normal, c[i] - centroid));
-    if (off > kPlanarTol * size)
-      return "non-planar face: vertex " + Str(i + 1) + " is " + Num(off) +
-             " off the face's plane (tolerance " + Num(kPlanarTol * size) + ")";
+};
+
+// Parses "a b c" (or one number) leniently, for keys only read to warn.
+bool LenientFloats(const Tokens& t, size_t count, double* out) {
+  if (t.size() < count + 1) return false;
+  for (size_t i = 0; i < count; ++i) {
+    char* end = nullptr;
+    out[i] = std::strtod(t[i + 1].c_str(), &end);
+    if (end == t[i + 1].c_str() || *end != '\0' || !std::isfinite(out[i])) return false;
   }
-  // Simple polygon: no two non-adjacent edges meet (in the plane's projection).
-  glm::dvec3 an = glm::abs(normal);
-  int axis = an.x > an.y ? (an.x > an.z ? 0 : 2) : (an.y > an.z ? 1 : 2);
-  auto at = [&](size_t i) {
-    return glm::dvec2(c[i % n][(axis + 1) % 3], c[i % n][(axis + 2) % 3]);
-  };
-  for (size_t i = 0; i < n; ++i)
-    for (size_t j = i + 2; j < n; ++j)
-      if (!(i == 0 && j == n - 1) && SegmentsMeet(at(i), at(i + 1), at(j), at(j + 1)))
-        return "self-intersecting face: edges " + Str(i + 1) + " and " + Str(j + 1) + " meet";
-  p->normal = glm::vec3(normal);
-  p->area = twiceArea / 2;
+  return true;
+}
+
+// MTL keys that do not matter to diffuse radiosity, read silently (those
+// that describe a specular or transparent material are looked at for the
+// warning that names such materials).
+bool IsSilentMtlKey(const std::string& key) {
+  static const char* const kKeys[] = {"Ns", "Ni", "d", "Tr", "Tf", "illum", "Ks", "sharpness",
+                                      "map_Ka", "map_Ks", "map_Ns", "map_bump", "map_Bump",
+                                      "bump", "disp", "decal", "refl", "Km"};
+  for (const char* k : kKeys)
+    if (key == k) return true;
+  return false;
+}
+
+// What makes a material more than diffuse: kept per material while its MTL
+// is read, for one warning after loading.
+struct Finish {
+  int illum = -1;   // -1: not given
+  bool ks = false;  // some Ks channel > 0
+  bool tf = false;  // some Tf channel < 1
+  double d = 1.0;   // dissolve (1 - Tr)
+};
+
+// Why a material is not purely diffuse, or "" if it is.
+std::string NotDiffuse(const Finish& f) {
+  if (f.illum >= 3 && f.illum <= 9) return "illum " + std::to_string(f.illum);
+  if (f.ks && f.illum != 0 && f.illum != 1) return "Ks";
+  if (f.d < 1.0) return "d " + Num(f.d);
+  if (f.tf) return "Tf";
   return "";
 }
 
 class Loader {
  public:
-  Loader(Scene* scene, const SceneFileReader& readMtl, std::vector<std::string>* warnings)
-      : scene_(scene), readMtl_(readMtl), warnings_(warnings) {}
+  Loader(Scene* scene, const SceneFileReader& readMtl, const LoadOptions& options)
+      : scene_(scene), readMtl_(readMtl), options_(options) {}
   Status LoadObj(const std::string& path, const std::string& text);
+  // Applies options.emit; an --emit that names no material is an error.
+  Status ApplyEmit();
+  // The warnings, one line per kind, in the order they first arose and the
+  // aggregate ones after.
+  std::vector<std::string> Warnings() const;
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
   // One warning line per distinct `what`, at its first file:line.
   void Warn(const std::string& path, int line, const std::string& what) {
     if (!warnedKeys_.insert(what).second) return;
-    std::string w = path + ":" + std::to_string(line) + ": warning: " + what;
-    if (warnings_) warnings_->push_back(w);
-    else std::fprintf(stderr, "%s\n", w.c_str());
+    warnings_.push_back(path + ":" + std::to_string(line) + ": warning: " + what);
   }
 
   Scene* scene_;
   const SceneFileReader& readMtl_;
-  std::vector<std::string>* warnings_;  // null: print to stderr
+  const LoadOptions& options_;
+  std::vector<std::string> warnings_;
   std::vector<glm::vec3> vertices_;
   std::vector<glm::vec2> uvs_;
   std::vector<glm::vec3> normals_;
   std::map<std::string, std::pair<uint32_t, std::string>> materials_;  // index, "file:line"
+  std::vector<Finish> finishes_;                                       // per material
   std::set<std::string> loadedMtls_;
   std::set<std::string> warnedKeys_;
+  std::vector<std::string> ignoredKeys_;  // unknown MTL keys, in order of first use
+  std::string ignoredWhere_;              // "file:line" of the first
+  std::string path_;                      // the OBJ
+  FaceTally triangulated_, cornersRemoved_, degenerate_, selfIntersecting_;
+  std::vector<std::string> replacedKe_;  // "name (Ke r g b)" of each --emit that replaced one
+  std::string replacedWhere_;
 };
 
+Status Loader::ApplyEmit() {
+  std::vector<Material>& materials = scene_->materials;
+  for (const EmitOverride& e : options_.emit) {
+    auto it = materials_.find(e.material);
+    if (it == materials_.end()) {
+      std::string names;
+      for (const Material& m : materials) names += (names.empty() ? "" : ", ") + m.name;
+      return Status::Error("vismask: --emit: no material '" + e.material + "' in " + path_ +
+                           (names.empty() ? " (it defines none)" : " (its materials: " + names + ")"));
+    }
+    Material& m = materials[it->second.first];
+    if (m.ke != glm::vec3(0.0f)) {
+      if (replacedKe_.empty()) replacedWhere_ = m.where;
+      replacedKe_.push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) + ")");
+    }
+    m.ke = e.fromKa ? m.ka : e.ke;
+  }
+  return Status::Ok();
+}
+
+std::vector<std::string> Loader::Warnings() const {
+  std::vector<std::string> w = warnings_;
+  auto at = [&](int line) { return path_ + ":" + std::to_string(line) + ": warning: "; };
+  if (!ignoredKeys_.empty()) {
+    std::string keys;
+    for (const std::string& k : ignoredKeys_) keys += (keys.empty() ? "'" : ", '") + k + "'";
+    w.push_back(ignoredWhere_ + ": warning: ignoring MTL key" + (ignoredKeys_.size() > 1 ? "s " : " ") +
+                keys + (ignoredKeys_.size() > 1 ? " (first here)" : ""));
+  }
+  // Specular or transparent materials that faces use, in material order.
+  std::vector<bool> used(scene_->materials.size(), false);
+  for (const Polygon& p : scene_->polygons) used[p.material] = true;
+  std::string named, where;
+  for (size_t i = 0; i < scene_->materials.size(); ++i) {
+    std::string why = used[i] ? NotDiffuse(finishes_[i]) : "";
+    if (why.empty()) continue;
+    if (named.empty()) where = scene_->materials[i].where;
+    named += (named.empty() ? "" : ", ") + scene_->materials[i].name + " (" + why + ")";
+  }
+  if (!named.empty())
+    w.push_back(where + ": warning: specular materials rendered as diffuse with their Kd: " + named);
+  if (!replacedKe_.empty()) {
+    std::string list;
+    for (const std::string& r : replacedKe_) list += (list.empty() ? "" : ", ") + r;
+    w.push_back(replacedWhere_ + ": warning: --emit replaces the MTL's Ke of " + list);
+  }
+  const FaceTally& t = triangulated_;
+  if (t.faces)
+    w.push_back(at(t.line) + Count(t.faces, "non-planar face", "non-planar faces") +
+                " triangulated (first here; up to " + Num(t.off) + " off " +
+                (t.faces == 1 ? "its" : "their") + " plane)");
+  if (cornersRemoved_.faces)
+    w.push_back(at(cornersRemoved_.line) +
+                Count(cornersRemoved_.corners, "repeated or collinear corner", "repeated or collinear corners") +
+                " removed from " + Count(cornersRemoved_.faces, "face", "faces") + " (first here)");
+  if (degenerate_.faces)
+    w.push_back(at(degenerate_.line) + Count(degenerate_.faces, "degenerate face", "degenerate faces") +
+                " dropped (zero area: repeated or collinear vertices; first here)");
+  if (selfIntersecting_.faces)
+    w.push_back(at(selfIntersecting_.line) +
+                Count(selfIntersecting_.faces, "self-intersecting face", "self-intersecting faces") +
+                " dropped (first here)");
+  return w;
+}
+
 Status Loader::LoadObj(const std::string& path, const std::string& text) {
+  path_ = path;
   std::vector<std::string> lines;
   SplitLines(text, &lines);
   std::string err;
@@ -317,9 +380,20 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
         if (withNormal != 0) Warn(path, line, "normals on some corners of a face only: ignored");
         p.vn.clear();
       }
-      err = FinishPolygon(&p);
-      if (!err.empty()) return Status::At(path, line, err);
-      scene_->polygons.push_back(std::move(p));
+      FaceResult r = ShapeFace(p, options_.strict, &scene_->polygons);
+      if (r.fate == FaceResult::kRefused) return Status::At(path, line, r.error);
+      if (r.removedCorners > 0 && (r.fate == FaceResult::kKept || r.fate == FaceResult::kTriangulated)) {
+        cornersRemoved_.Add(line);
+        cornersRemoved_.corners += r.removedCorners;
+      }
+      if (r.fate == FaceResult::kTriangulated) {
+        triangulated_.Add(line);
+        triangulated_.off = std::max(triangulated_.off, r.offPlane);
+        // Triangles too thin to keep are degenerate pieces of the face.
+        if (r.droppedTriangles > 0) degenerate_.Add(line);
+      }
+      if (r.fate == FaceResult::kDegenerate) degenerate_.Add(line);
+      if (r.fate == FaceResult::kSelfIntersecting) selfIntersecting_.Add(line);
     } else if (key == "usemtl") {
       if (args != 1) return Status::At(path, line, "'usemtl' needs 1 name, got " + Str(args));
       auto it = materials_.find(t[1]);
@@ -393,6 +467,7 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       m.name = t[1];
       m.where = where;
       materials.push_back(std::move(m));
+      finishes_.emplace_back();
       haveMaterial = true;
     } else if (key == "Ka") {
       if (!haveMaterial) return Status::At(path, line, "'Ka' before any 'newmtl'");
@@ -418,42 +493,117 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       err = ParseFloats(t, 1, 3, rgb);
       if (!err.empty()) return Status::At(path, line, err);
       for (float x : rgb) {
-        if (key == "Kd" && !(x >= 0.0f && x < 1.0f))
-          return Status::At(path, line, "Kd must be in [0, 1), got " + Num(x));
+        if (key == "Kd" && !(x >= 0.0f && x <= 1.0f))
+          return Status::At(path, line, "Kd must be in [0, 1], got " + Num(x));
         if (key == "Ke" && x < 0.0f)
           return Status::At(path, line, "Ke must be >= 0, got " + Num(x));
       }
       (key == "Kd" ? materials.back().kd : materials.back().ke) = glm::vec3(rgb[0], rgb[1], rgb[2]);
+    } else if (IsSilentMtlKey(key)) {
+      // Read only to name specular or transparent materials after loading.
+      if (!haveMaterial) continue;
+      Finish& f = finishes_.back();
+      double v[3];
+      if (key == "illum" && LenientFloats(t, 1, v)) f.illum = static_cast<int>(v[0]);
+      if (key == "Ks" && LenientFloats(t, 3, v)) f.ks = v[0] > 0.0 || v[1] > 0.0 || v[2] > 0.0;
+      if (key == "Tf" && LenientFloats(t, 3, v)) f.tf = v[0] < 1.0 || v[1] < 1.0 || v[2] < 1.0;
+      if (key == "d" && LenientFloats(t, 1, v)) f.d = v[0];
+      if (key == "Tr" && LenientFloats(t, 1, v)) f.d = 1.0 - v[0];
     } else {
-      Warn(path, line, "ignoring MTL key '" + key + "'");
+      if (ignoredKeys_.empty()) ignoredWhere_ = path + ":" + std::to_string(line);
+      if (std::find(ignoredKeys_.begin(), ignoredKeys_.end(), key) == ignoredKeys_.end())
+        ignoredKeys_.push_back(key);
     }
   }
   return Status::Ok();
 }
 
+// Whether the faces close space with their fronts facing in, so that no
+// ray leaving a front can escape or reach a back face: every edge is run by
+// exactly two faces in opposite directions (edges matched by their end
+// points as read, so a T-junction leaves a scene open), and of the
+// edge-connected parts exactly one faces in (negative signed volume), its
+// box holding every other part, which all face out (blocks standing in a
+// room). Other nestings are taken as open: a part inside another part is
+// not looked into.
+bool ClosedFacingIn(const std::vector<Polygon>& polys) {
+  using Point = std::array<float, 3>;
+  auto point = [](const glm::vec3& v) { return Point{v.x, v.y, v.z}; };
+  std::map<std::pair<Point, Point>, std::vector<uint32_t>> edges;  // directed edge -> faces
+  for (uint32_t f = 0; f < polys.size(); ++f) {
+    const std::vector<glm::vec3>& c = polys[f].corners;
+    for (size_t i = 0; i < c.size(); ++i)
+      edges[{point(c[i]), point(c[(i + 1) % c.size()])}].push_back(f);
+  }
+  std::vector<uint32_t> parent(polys.size());
+  for (uint32_t f = 0; f < polys.size(); ++f) parent[f] = f;
+  auto root = [&](uint32_t f) {
+    while (parent[f] != f) f = parent[f] = parent[parent[f]];
+    return f;
+  };
+  for (const auto& [edge, faces] : edges) {
+    auto twin = edges.find({edge.second, edge.first});
+    if (faces.size() != 1 || twin == edges.end() || twin->second.size() != 1) return false;
+    parent[root(faces[0])] = root(twin->second[0]);
+  }
+  // Signed volume (divergence theorem over planar faces) and box of each part.
+  std::map<uint32_t, std::pair<double, Bounds>> parts;
+  for (uint32_t f = 0; f < polys.size(); ++f) {
+    std::vector<glm::dvec3> c;
+    for (const glm::vec3& v : polys[f].corners) c.emplace_back(v);
+    auto [it, added] = parts.try_emplace(root(f), 0.0, Bounds{polys[f].corners[0], polys[f].corners[0]});
+    it->second.first += glm::dot(c[0], NewellSum(c)) / 6.0;
+    for (const glm::vec3& v : polys[f].corners) {
+      it->second.second.lo = glm::min(it->second.second.lo, v);
+      it->second.second.hi = glm::max(it->second.second.hi, v);
+    }
+  }
+  const Bounds* room = nullptr;
+  for (const auto& [r, part] : parts) {
+    if (part.first < 0.0) {
+      if (room) return false;
+      room = &part.second;
+    } else if (!(part.first > 0.0)) {
+      return false;
+    }
+  }
+  if (!room) return false;
+  for (const auto& [r, part] : parts) {
+    const Bounds& b = part.second;
+    if (&b == room) continue;
+    if (glm::any(glm::lessThan(b.lo, room->lo)) || glm::any(glm::greaterThan(b.hi, room->hi))) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
-Status LoadScene(const std::string& objPath, Scene* scene) {
+Status LoadScene(const std::string& objPath, Scene* scene, const LoadOptions& options) {
   std::string text;
   std::string err = ReadText(objPath, &text);
   if (!err.empty()) return Status::At(objPath, 0, err + " file");
-  return LoadSceneFromText(objPath, text, ReadText, scene);
+  return LoadSceneFromText(objPath, text, ReadText, scene, nullptr, options);
 }
 
 Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
                          const SceneFileReader& readMtl, Scene* scene,
-                         std::vector<std::string>* warnings) {
+                         std::vector<std::string>* warnings, const LoadOptions& options) {
   Scene result;
   result.objPath = objPath;
-  Loader loader(&result, readMtl, warnings);
+  Loader loader(&result, readMtl, options);
   Status s = loader.LoadObj(objPath, objText);
+  if (!s.ok()) return s;
+  s = loader.ApplyEmit();
   if (!s.ok()) return s;
   bool emits = false;
   for (const Polygon& p : result.polygons) {
     const glm::vec3& ke = result.materials[p.material].ke;
     emits = emits || ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
   }
-  if (!emits) return Status::At(objPath, 0, "no emitter: no face has a material with Ke > 0");
+  if (!emits)
+    return Status::At(objPath, 0,
+                      "no emitter: no face has a material with Ke > 0 (--emit NAME=R,G,B or "
+                      "NAME=ka makes material NAME one)");
   // Ranges: refused here, at init, rather than solved into Inf or zeros.
   double maxKd = 0.0, maxKe = 0.0;
   int keLine = 0;
@@ -502,7 +652,12 @@ Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
                           Num(largest) + " step by " + Num(step) + " in float, more than " +
                           Num(kMaxStepShare) + " of its extent " + Num(extent) +
                           "; move it towards the origin");
-  double bound = maxKe / (1.0 - maxKd);
+  // With a perfect reflector (max Kd 1) the bound is infinite, and the
+  // check is skipped: a face with Kd 1 passes on all it receives, and what
+  // the scene loses instead (absorbed by other faces or back faces, or
+  // escaped) no local figure bounds; a scene that cannot lose power in a
+  // channel is refused below.
+  double bound = maxKd < 1.0 ? maxKe / (1.0 - maxKd) : 0.0;
   if (bound > kMaxRadiosity)
     return Status::At(objPath, keLine,
                       "radiosity may reach " + Num(bound) + " (max Ke / (1 - max Kd)), beyond " +
@@ -511,6 +666,22 @@ Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
     return Status::At(objPath, keLine,
                       "brightest Ke " + Num(maxKe) + " is below " + Num(kMinRadiosity) +
                           " (the float image would underflow); scale Ke up");
+  static const char* const kChannel[3] = {"red", "green", "blue"};
+  for (int c = 0; c < 3; ++c) {
+    bool perfect = true;
+    for (const Polygon& p : result.polygons) perfect = perfect && result.materials[p.material].kd[c] >= 1.0f;
+    if (perfect && ClosedFacingIn(result.polygons))
+      return Status::At(objPath, 0,
+                        std::string("the scene cannot lose power in the ") + kChannel[c] +
+                            " channel: every face has Kd 1 there and the faces close space with "
+                            "their fronts facing in, so nothing is absorbed and nothing escapes "
+                            "(the solve would never end); give some face a Kd below 1 or open the "
+                            "scene");
+  }
+  std::vector<std::string> lines = loader.Warnings();
+  if (warnings) warnings->insert(warnings->end(), lines.begin(), lines.end());
+  else
+    for (const std::string& w : lines) std::fprintf(stderr, "%s\n", w.c_str());
   *scene = std::move(result);
   return Status::Ok();
 }

@@ -338,8 +338,25 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   return result;
 }
 
+// The reflectance behind Cohen's 1/(1 - rho): `rhoKd`, the area-mean kd,
+// while it is below 1. At 1 (every face has kd 1, in a channel or in all)
+// it bounds nothing: such a scene loses power only by back faces and
+// escape (the loader refuses one that cannot lose any), and the share of
+// the power shot so far that was lost stands in for 1 - rho: of the power
+// shot, the radiosity power R less the unshot U, the emitted E less U was
+// absorbed or escaped. 1 when nothing has been shot or lost yet: no
+// estimate.
+double EffectiveReflectance(double rhoKd, double emitted, double unshot, double radiosity) {
+  if (rhoKd < 1.0) return rhoKd;
+  double shot = radiosity - unshot, lost = emitted - unshot;
+  if (!(shot > 0.0) || !(lost > 1e-12 * shot)) return 1.0;
+  return std::fmax(0.0, 1.0 - lost / shot);
+}
+
 double BiasEstimate(const RoundTotals& t, bool corrected) {
   double rho = t.area > 0.0 ? t.kdArea / t.area : 0.0;
+  rho = EffectiveReflectance(rho, t.emitted, t.unshot, t.radiosity);
+  if (rho >= 1.0) return 1.0;  // no estimate: all of b may be still to come
   double future = t.unshot * rho / (1.0 - rho);
   double total = t.radiosity + future;
   double share = total > 0.0 ? future / total : 0.0;
@@ -348,6 +365,8 @@ double BiasEstimate(const RoundTotals& t, bool corrected) {
 
 double LossEstimate(const RoundTotals& t) {
   double rho = t.area > 0.0 ? t.kdArea / t.area : 0.0;
+  rho = EffectiveReflectance(rho, t.emitted, t.unshot, t.radiosity);
+  if (rho >= 1.0) return 1.0;  // no estimate
   double missing = t.lost * rho / (1.0 - rho);
   double total = t.radiosity + t.unshot * rho / (1.0 - rho) + missing;
   return total > 0.0 ? std::fabs(missing / total) : 0.0;
@@ -358,24 +377,34 @@ AmbientReport AmbientOf(const Environment& env) {
   r.area = env.totalArea();
   double flight[3];
   env.FlightPower(flight);
-  for (int c = 0; c < 3; ++c) r.unshot[c] = env.ledger().unshot[c] + flight[c];
+  for (int c = 0; c < 3; ++c) {
+    r.unshot[c] = env.ledger().unshot[c] + flight[c];
+    r.emitted[c] = env.ledger().emitted[c];
+    r.radiosity[c] = env.ledger().radiosity[c];
+  }
   for (const Patch& p : env.patches())
     for (int c = 0; c < 3; ++c) r.kdArea[c] += static_cast<double>(p.kd[c]) * p.area;
   return r;
 }
 
 void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]) {
-  double area = 0.0, unshot[3] = {0, 0, 0}, kdArea[3] = {0, 0, 0};
+  double area = 0.0, unshot[3] = {0, 0, 0}, kdArea[3] = {0, 0, 0}, emitted[3] = {0, 0, 0},
+         radiosity[3] = {0, 0, 0};
   for (const AmbientReport& r : reports) {
     area += r.area;
     for (int c = 0; c < 3; ++c) {
       unshot[c] += r.unshot[c];
       kdArea[c] += r.kdArea[c];
+      emitted[c] += r.emitted[c];
+      radiosity[c] += r.radiosity[c];
     }
   }
   for (int c = 0; c < 3; ++c) {
     double meanKd = area > 0.0 ? kdArea[c] / area : 0.0;
-    ambient[c] = area > 0.0 ? unshot[c] / area / (1.0 - meanKd) : 0.0;
+    meanKd = EffectiveReflectance(meanKd, emitted[c], unshot[c], radiosity[c]);
+    // No estimate (nothing shot or lost yet in a channel where every face
+    // has kd 1): no ambient term rather than an infinite one.
+    ambient[c] = area > 0.0 && meanKd < 1.0 ? unshot[c] / area / (1.0 - meanKd) : 0.0;
   }
 }
 

@@ -360,3 +360,45 @@ TEST(StabilityTest, UnsolvableRangesAreRefusedAtInit) {
 
 }  // namespace
 }  // namespace vismask
+
+namespace vismask {
+namespace {
+
+// With kd 1 on every face the kd-mean bounds nothing: the measured loss per
+// unit shot stands in, and with none yet there is no estimate (no ambient
+// term, bias 1) rather than an infinite one (issue 16).
+TEST(StabilityTest, PerfectReflectorsUseTheMeasuredLoss) {
+  EXPECT_EQ(EffectiveReflectance(0.5, 10.0, 2.0, 42.0), 0.5);  // kd below 1: as before
+  EXPECT_DOUBLE_EQ(EffectiveReflectance(1.0, 10.0, 2.0, 42.0), 1.0 - 8.0 / 40.0);
+  EXPECT_EQ(EffectiveReflectance(1.0, 10.0, 10.0, 10.0), 1.0);  // nothing shot yet
+  AmbientReport r{};
+  r.area = 2.0;
+  for (int c = 0; c < 3; ++c) {
+    r.unshot[c] = 2.0;
+    r.kdArea[c] = c == 0 ? 2.0 : 1.0;  // channel 0: kd 1 everywhere
+    r.emitted[c] = 10.0;
+    r.radiosity[c] = 42.0;
+  }
+  double ambient[3];
+  AmbientTerm(Span<const AmbientReport>(&r, 1), ambient);
+  EXPECT_DOUBLE_EQ(ambient[0], 2.0 / 2.0 / (8.0 / 40.0));
+  EXPECT_DOUBLE_EQ(ambient[1], 2.0 / 2.0 / 0.5);
+  r.unshot[0] = 10.0;  // all still unshot: no estimate
+  AmbientTerm(Span<const AmbientReport>(&r, 1), ambient);
+  EXPECT_EQ(ambient[0], 0.0);
+  RoundTotals t;
+  t.area = 2.0;
+  t.kdArea = 2.0;
+  t.emitted = 10.0;
+  t.unshot = 10.0;
+  t.radiosity = 10.0;
+  EXPECT_EQ(BiasEstimate(t, false), 1.0);
+  EXPECT_EQ(LossEstimate(t), 1.0);
+  t.unshot = 2.0;
+  t.radiosity = 42.0;
+  EXPECT_TRUE(std::isfinite(BiasEstimate(t, true)));
+  EXPECT_LT(BiasEstimate(t, false), 1.0);
+}
+
+}  // namespace
+}  // namespace vismask

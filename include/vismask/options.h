@@ -9,6 +9,7 @@
 
 #include "vismask/camera.h"
 #include "vismask/mask.h"
+#include "vismask/scene.h"
 #include "vismask/status.h"
 
 namespace vismask {
@@ -17,6 +18,7 @@ struct Options {
   std::string command;  // "render", "footprint" or "compare"; empty with --help
   bool help = false;
   std::string scene;
+  LoadOptions load;  // --strict, --emit NAME=R,G,B|ka (repeatable)
   std::string outDir = "out";
   float patchSize = 0.0f;  // 0: automatic (largest scene extent / kAutoPatchDivisions)
   // Ray allocation: kPower (the default) gives a shot rays in proportion

@@ -48,7 +48,7 @@ static_assert(sizeof(PatchGeom) == 80, "PatchGeom is the grid's hot data");
 struct Patch {
   glm::vec3 corner[4];   // counter-clockwise seen from the front; corner[3] == corner[2] for triangles
   glm::vec3 normal;      // unit, front side
-  glm::vec3 kd;          // diffuse reflectance per channel, in [0, 1)
+  glm::vec3 kd;          // diffuse reflectance per channel, in [0, 1]
   glm::vec3 ke;          // emitted exitance per channel (W/m^2 in scene units)
   float area;            // in scene units^2
   uint32_t numCorners;   // 3 or 4

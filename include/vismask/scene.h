@@ -22,15 +22,16 @@ struct Bounds {
 
 struct Material {
   std::string name;
-  glm::vec3 kd{0.0f};  // diffuse reflectance, each channel in [0, 1)
-  glm::vec3 ke{0.0f};  // emitted exitance, each channel >= 0
+  glm::vec3 kd{0.0f};  // diffuse reflectance, each channel in [0, 1] (1: a perfect reflector)
+  glm::vec3 ke{0.0f};  // emitted exitance, each channel >= 0 (--emit may replace it)
   glm::vec3 ka{0.0f};  // ambient colour as written (read for --emit NAME=ka)
   std::string mapKd;   // map_Kd: the texture's path (relative to the cwd), "" if none
   std::string where;   // "file:line" of its 'newmtl'
 };
 
 // A planar simple polygon with 3 or more corners, counter-clockwise seen from
-// its front side.
+// its front side: an OBJ face, or a piece of one the loader mended (a
+// triangle of a non-planar face; the face less degenerate corners).
 struct Polygon {
   std::vector<glm::vec3> corners;
   std::vector<glm::vec2> uv;  // texture coordinates, one per corner ('vt'), or empty
@@ -39,7 +40,7 @@ struct Polygon {
   glm::vec3 normal{0.0f};  // unit, front side (Newell's method)
   double area = 0.0;
   uint32_t material = 0;  // index into Scene::materials
-  int line = 0;           // line of the 'f' statement in Scene::objPath
+  int line = 0;           // line of the 'f' statement in Scene::objPath (shared by its pieces)
 };
 
 struct Scene {
@@ -49,18 +50,44 @@ struct Scene {
   Bounds bounds;  // of all polygon corners
 };
 
+// What the loader is told besides the files (the command line's --strict
+// and --emit).
+struct EmitOverride {
+  std::string material;  // a material's name
+  bool fromKa = false;   // NAME=ka: Ke = the material's Ka
+  glm::vec3 ke{0.0f};    // NAME=R,G,B: Ke = (R, G, B), each >= 0
+};
+struct LoadOptions {
+  // Refuse a face that is degenerate, non-planar or self-intersecting, with
+  // the messages of the loader before issue 16, instead of mending it.
+  bool strict = false;
+  // Materials made emitters (or not): each replaces its material's Ke, in
+  // order (the last for a name wins).
+  std::vector<EmitOverride> emit;
+};
+
 // Loads and validates `objPath` and the MTL files it names (relative to the
 // OBJ's directory). On malformed input returns an error naming file and line,
 // leaving *scene untouched: a missing or unreadable file, an unknown statement
 // or wrong argument count, a bad or out-of-range index, a number that does not
-// parse or is not finite, a degenerate, non-planar or self-intersecting face, a
-// face with no material, Kd outside [0, 1), negative Ke, a duplicate material,
-// no emitter at all (line 0). Unknown MTL keys are ignored with one warning
-// each on stderr. Read and kept for later stages: 'vt' and 'vn' per face corner
-// (kept only when every corner of the face gives them; a face that gives them
-// for some corners warns once), 's' smoothing groups, 'Ka' and 'map_Kd' (the
-// last token; options before it are ignored with a warning).
-Status LoadScene(const std::string& objPath, Scene* scene);
+// parse or is not finite, a face with no material, Kd outside [0, 1], negative
+// Ke or Ka, a duplicate material, an --emit naming no material (no file),
+// no emitter at all, or a scene that cannot lose power (line 0: in some
+// channel every face has Kd 1 and the faces close space with their fronts
+// facing in). Faces that are degenerate, non-planar or self-intersecting are
+// refused with `options.strict`; otherwise mended or dropped (ShapeFace,
+// face.h), and each kind is counted in one warning line at its first face.
+// Warnings, after loading and only when it succeeds, one line per kind at its
+// first file:line: MTL keys that neither matter to diffuse radiosity nor are
+// known (one line for all), materials rendered as diffuse although specular
+// or transparent (illum 3-9, Ks with a highlight, Tf or d below 1, Tr above
+// 0; one line naming those faces use), an --emit replacing a nonzero Ke.
+// Read and kept for later stages: 'vt' and 'vn' per face corner (kept only
+// when every corner of the face gives them; a face that gives them for some
+// corners warns once), 's' smoothing groups, 'Ka' and 'map_Kd' (the last
+// token; options before it are ignored with a warning).
+Status LoadScene(const std::string& objPath, Scene* scene,
+                 const LoadOptions& options = LoadOptions());
 
 // Reads the file at `path` into *text; returns an error message ("cannot
 // open", ...), empty on success.
@@ -74,6 +101,7 @@ using SceneFileReader = std::function<std::string(const std::string& path, std::
 // `warnings` when given, else to stderr.
 Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
                          const SceneFileReader& readMtl, Scene* scene,
-                         std::vector<std::string>* warnings = nullptr);
+                         std::vector<std::string>* warnings = nullptr,
+                         const LoadOptions& options = LoadOptions());
 
 }  // namespace vismask

@@ -146,6 +146,14 @@ double BiasEstimate(const RoundTotals& totals, bool corrected);
 // grows as the solve goes on.
 double LossEstimate(const RoundTotals& totals);
 
+// The reflectance behind the 1/(1 - rho) of the estimates above and the
+// ambient term: `rhoKd` (the area-mean kd) while below 1; else, with no
+// absorbing face, 1 - (emitted - unshot) / (radiosity - unshot), the share
+// of the power shot so far that was absorbed (back faces) or escaped; 1 if
+// nothing was shot or lost yet, which BiasEstimate and LossEstimate report
+// as 1 (no estimate) and AmbientTerm as no ambient term.
+double EffectiveReflectance(double rhoKd, double emitted, double unshot, double radiosity);
+
 // A rank's exchange buffers, carved from its arena at init: one send and one
 // receive block per rank, each large enough for every packet a rank's
 // environments can send in a round, and the gathered reports.
@@ -188,12 +196,16 @@ struct AmbientReport {
   double area;
   double unshot[3];  // local unshot power plus the power in flight booked here
   double kdArea[3];
+  double emitted[3];    // the ledger's (for EffectiveReflectance when kd is 1 everywhere)
+  double radiosity[3];
 };
 AmbientReport AmbientOf(const Environment& env);
 // Cohen's ambient radiosity estimate, per channel, from every environment's
 // report (in environment order): the power not yet delivered (unshot and in
 // flight) spread over all area and amplified by the mean interreflection
-// 1/(1 - mean kd).
+// 1/(1 - mean kd); where the mean kd is 1, 1/(the share of the power shot
+// so far that was lost), and 0 (no estimate) while none was
+// (EffectiveReflectance).
 void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]);
 
 }  // namespace vismask
