@@ -280,7 +280,7 @@ void ExpectSoundRender(const std::string& out, const std::string& what) {
 
 // The public scenes in scenes/real/ (and one of ours), small and fast, with
 // the one warning line each kind of oddity gets. McGuire's boxes open
-// towards +z: --camera looks in from there.
+// towards +z: the default camera looks in from there (issue 16 item 8).
 TEST(RenderTest, RealScenesRender) {
   TempDir dir;
   const std::string mcguire = "0,1,3.9,0,1,0,0,1,0,39.3";
@@ -293,7 +293,7 @@ TEST(RenderTest, RealScenesRender) {
        {"scenes/real/CornellBox-Original.obj:62: warning: 1 non-planar face triangulated (first here; up to "
         "0.005 off its plane)"}},
       {{"scenes/real/CornellBox-Original.obj"}, {"scenes/real/CornellBox-Original.obj:62: warning: 1 non-planar"}},
-      {{"scenes/real/CornellBox-Sphere.obj", "--camera", mcguire},
+      {{"scenes/real/CornellBox-Sphere.obj"},  // the default camera looks in from +z
        {"scenes/real/CornellBox-Sphere.mtl:21: warning: ignoring MTL key 'v'",
         "scenes/real/CornellBox-Sphere.mtl:15: warning: specular materials rendered as diffuse with their Kd: "
         "leftSphere (illum 5), rightSphere (illum 7)"}},
@@ -319,6 +319,10 @@ TEST(RenderTest, RealScenesRender) {
     ASSERT_EQ(lines.size(), c.warnings.size()) << r.err;
     for (size_t i = 0; i < lines.size(); ++i) EXPECT_EQ(lines[i].rfind(c.warnings[i], 0), 0u) << lines[i];
     ExpectSoundRender(out, c.args[0]);
+    // McGuire's boxes are closed on -z: the default view is chosen from +z.
+    if (c.args.size() == 1 && c.args[0].find("CornellBox") != std::string::npos) {
+      EXPECT_NE(ReadFile(out + "/run.json").find("\"view\": \"back\""), std::string::npos) << c.args[0];
+    }
   }
 }
 
