@@ -5,6 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -24,6 +27,9 @@
 
 namespace vismask {
 namespace {
+
+// The largest OBJ or MTL file read (the whole file is held in memory at init).
+constexpr uintmax_t kMaxFileBytes = uintmax_t{4} << 30;
 
 // What float geometry and float images can carry (docs/STABILITY.md). Ray
 // tests multiply coordinates and square lengths in float (max 3.4e38, least
@@ -69,10 +75,40 @@ std::string Num(double x) {
   return buf;
 }
 
+// A piece of the input quoted in a message: at most 32 bytes, anything but
+// printable ASCII escaped (\xNN), so that binary garbage, terminal escapes
+// or a megabyte line never reach the terminal whole.
+std::string Quote(const std::string& s) {
+  constexpr size_t kMax = 32;
+  std::string q = "'";
+  for (size_t i = 0; i < s.size() && i < kMax; ++i) {
+    unsigned char c = static_cast<unsigned char>(s[i]);
+    if (c >= 0x20 && c < 0x7f && c != '\\') {
+      q += static_cast<char>(c);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", c);
+      q += hex;
+    }
+  }
+  return q + (s.size() > kMax ? "'..." : "'");
+}
+
+// Whether an unknown MTL key may be named in a warning: a short identifier,
+// as MTL keys are. Anything else (a line of a file that is not MTL at all)
+// is counted, never echoed.
+bool LooksLikeKey(const std::string& s) {
+  if (s.empty() || s.size() > 24) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
+  return true;
+}
+
 // Splits text into lines as std::getline does: at '\n', the last line kept
-// even without one, no empty line after a final '\n'.
+// even without one, no empty line after a final '\n'; a leading BOM dropped.
 void SplitLines(const std::string& text, std::vector<std::string>* lines) {
-  size_t start = 0;
+  // A UTF-8 byte-order mark (some Windows editors write one) is not text.
+  size_t start = text.compare(0, 3, "\xef\xbb\xbf") == 0 ? 3 : 0;
   while (start < text.size()) {
     size_t end = text.find('\n', start);
     if (end == std::string::npos) end = text.size();
@@ -83,8 +119,19 @@ void SplitLines(const std::string& text, std::vector<std::string>* lines) {
 
 // Reads a whole file; returns an error message, empty on success.
 std::string ReadText(const std::string& path, std::string* text) {
+  // Only regular files, of a size the loader can hold: a device (/dev/zero)
+  // or a FIFO would be read until memory runs out.
+  std::error_code ec;
+  std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (ec) return std::string("cannot open (") + ec.message() + ")";
+  if (!std::filesystem::is_regular_file(st)) return "cannot read: not a regular file";
+  uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) return std::string("cannot read (") + ec.message() + ")";
+  if (size > kMaxFileBytes)
+    return "cannot read: " + std::to_string(size) + " bytes, more than the " +
+           std::to_string(kMaxFileBytes) + " a scene file may have";
   std::ifstream in(path, std::ios::binary);
-  if (!in) return "cannot open";
+  if (!in) return std::string("cannot open (") + std::strerror(errno) + ")";
   // istream::read, not istreambuf_iterator: a read error (a directory)
   // sets badbit instead of throwing.
   std::string all;
@@ -95,10 +142,12 @@ std::string ReadText(const std::string& path, std::string* text) {
   return "";
 }
 
-// The directory part of a path, with its trailing '/' ("" for a bare name).
-std::string DirOf(const std::string& path) {
-  size_t slash = path.rfind('/');
-  return slash == std::string::npos ? "" : path.substr(0, slash + 1);
+// A file named inside another (mtllib in an OBJ, map_Kd in an MTL): relative
+// to the naming file's directory, or as it is when absolute.
+std::string Beside(const std::string& namingFile, const std::string& name) {
+  if (!name.empty() && name[0] == '/') return name;
+  size_t slash = namingFile.rfind('/');
+  return (slash == std::string::npos ? "" : namingFile.substr(0, slash + 1)) + name;
 }
 
 // Parses tokens[first..first+count) as finite floats into out[].
@@ -107,9 +156,9 @@ std::string ParseFloats(const Tokens& tokens, size_t first, size_t count, float*
     const std::string& s = tokens[first + i];
     char* end = nullptr;
     double d = std::strtod(s.c_str(), &end);
-    if (end == s.c_str() || *end != '\0') return "bad number '" + s + "'";
-    if (!std::isfinite(d)) return "number '" + s + "' is not finite";
-    if (std::fabs(d) > std::numeric_limits<float>::max()) return "number '" + s + "' is too large";
+    if (end == s.c_str() || *end != '\0') return "bad number " + Quote(s);
+    if (!std::isfinite(d)) return "number " + Quote(s) + " is not finite";
+    if (std::fabs(d) > std::numeric_limits<float>::max()) return "number " + Quote(s) + " is too large";
     out[i] = static_cast<float>(d);
   }
   return "";
@@ -129,10 +178,10 @@ std::string ResolveIndex(const std::string& s, const std::string& corner, size_t
                          const char* what, const char* plural, size_t* index) {
   long long i = std::strtoll(s.c_str(), nullptr, 10);  // saturates: then out of range
   if (i == 0)
-    return std::string(what) + " index 0 in '" + corner + "' (OBJ indices start at 1)";
+    return std::string(what) + " index 0 in " + Quote(corner) + " (OBJ indices start at 1)";
   long long resolved = i > 0 ? i - 1 : static_cast<long long>(count) + i;
   if (resolved < 0 || resolved >= static_cast<long long>(count))
-    return std::string(what) + " index " + s + " out of range (" + Str(count) + " " + plural +
+    return std::string(what) + " index " + (s.size() > 20 ? s.substr(0, 20) + "..." : s) + " out of range (" + Str(count) + " " + plural +
            " so far)";
   *index = static_cast<size_t>(resolved);
   return "";
@@ -147,7 +196,7 @@ struct CornerIndex {
 // Resolves a face corner "i", "i/t", "i/t/n" or "i//n".
 std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs,
                         size_t numNormals, CornerIndex* out) {
-  const std::string bad = "bad face vertex '" + s + "'";
+  const std::string bad = "bad face vertex " + Quote(s);
   size_t slash = s.find('/');
   std::string pos = s.substr(0, slash), uv, normal;
   if (slash != std::string::npos) {
@@ -259,6 +308,8 @@ class Loader {
   std::set<std::string> warnedKeys_;
   std::vector<std::string> ignoredKeys_;  // unknown MTL keys, in order of first use
   std::string ignoredWhere_;              // "file:line" of the first
+  size_t notMtlLines_ = 0;                // lines whose first word is no MTL key at all
+  std::string notMtlWhere_;               // "file:line" of the first
   std::string path_;                      // the OBJ
   FaceTally triangulated_, cornersRemoved_, degenerate_, selfIntersecting_;
   std::vector<std::string> replacedKe_;  // "name (Ke r g b)" of each --emit that replaced one
@@ -294,6 +345,10 @@ std::vector<std::string> Loader::Warnings() const {
     w.push_back(ignoredWhere_ + ": warning: ignoring MTL key" + (ignoredKeys_.size() > 1 ? "s " : " ") +
                 keys + (ignoredKeys_.size() > 1 ? " (first here)" : ""));
   }
+  if (notMtlLines_ > 0)
+    w.push_back(notMtlWhere_ + ": warning: " + std::to_string(notMtlLines_) +
+                (notMtlLines_ > 1 ? " lines are" : " line is") +
+                " not MTL statements: ignored (first here; is it an MTL file?)");
   // Specular or transparent materials that faces use, in material order.
   std::vector<bool> used(scene_->materials.size(), false);
   for (const Polygon& p : scene_->polygons) used[p.material] = true;
@@ -398,17 +453,17 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
       if (args != 1) return Status::At(path, line, "'usemtl' needs 1 name, got " + Str(args));
       auto it = materials_.find(t[1]);
       if (it == materials_.end())
-        return Status::At(path, line, "undefined material '" + t[1] + "'");
+        return Status::At(path, line, "undefined material " + Quote(t[1]));
       material = it->second.first;
       haveMaterial = true;
     } else if (key == "mtllib") {
       if (args == 0) return Status::At(path, line, "'mtllib' needs a file name");
       for (size_t k = 1; k <= args; ++k) {
-        Status s = LoadMtl(DirOf(path) + t[k], path, line);
+        Status s = LoadMtl(Beside(path, t[k]), path, line);
         if (!s.ok()) return s;
       }
     } else if (key == "l" || key == "p") {
-      return Status::At(path, line, "'" + key + "': lines and points are not supported");
+      return Status::At(path, line, Quote(key) + ": lines and points are not supported");
     } else if (key == "vt") {
       if (args < 1 || args > 3)
         return Status::At(path, line, "'vt' needs 1 to 3 numbers, got " + Str(args));
@@ -428,13 +483,13 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
         smoothing = 0;
       } else {
         if (!IsInteger(t[1]) || t[1][0] == '-')
-          return Status::At(path, line, "bad smoothing group '" + t[1] + "'");
+          return Status::At(path, line, "bad smoothing group " + Quote(t[1]));
         unsigned long long g = std::strtoull(t[1].c_str(), nullptr, 10);
-        if (g > 0xffffffffull) return Status::At(path, line, "smoothing group '" + t[1] + "' is too large");
+        if (g > 0xffffffffull) return Status::At(path, line, "smoothing group " + Quote(t[1]) + " is too large");
         smoothing = static_cast<uint32_t>(g);
       }
     } else if (key != "o" && key != "g") {
-      return Status::At(path, line, "unknown statement '" + key + "'");
+      return Status::At(path, line, "unknown statement " + Quote(key));
     }
   }
   return Status::Ok();
@@ -462,7 +517,7 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
           materials_.emplace(t[1], std::make_pair(static_cast<uint32_t>(materials.size()), where));
       if (!added)
         return Status::At(path, line,
-                          "duplicate material '" + t[1] + "' (first at " + it->second.second + ")");
+                          "duplicate material " + Quote(t[1]) + " (first at " + it->second.second + ")");
       Material m;
       m.name = t[1];
       m.where = where;
@@ -484,11 +539,11 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       // Options (-bm 1, -s 1 1 1, ...) come before the name, which is the
       // last token; they are not applied, and said so once.
       if (args > 1) Warn(path, line, "ignoring map_Kd options");
-      materials.back().mapKd = DirOf(path) + t.back();
+      materials.back().mapKd = Beside(path, t.back());
     } else if (key == "Kd" || key == "Ke") {
-      if (!haveMaterial) return Status::At(path, line, "'" + key + "' before any 'newmtl'");
+      if (!haveMaterial) return Status::At(path, line, Quote(key) + " before any 'newmtl'");
       if (args != 3)
-        return Status::At(path, line, "'" + key + "' needs 3 numbers, got " + Str(args));
+        return Status::At(path, line, Quote(key) + " needs 3 numbers, got " + Str(args));
       float rgb[3];
       err = ParseFloats(t, 1, 3, rgb);
       if (!err.empty()) return Status::At(path, line, err);
@@ -509,6 +564,8 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       if (key == "Tf" && LenientFloats(t, 3, v)) f.tf = v[0] < 1.0 || v[1] < 1.0 || v[2] < 1.0;
       if (key == "d" && LenientFloats(t, 1, v)) f.d = v[0];
       if (key == "Tr" && LenientFloats(t, 1, v)) f.d = 1.0 - v[0];
+    } else if (!LooksLikeKey(key)) {
+      if (notMtlLines_++ == 0) notMtlWhere_ = path + ":" + std::to_string(line);
     } else {
       if (ignoredKeys_.empty()) ignoredWhere_ = path + ":" + std::to_string(line);
       if (std::find(ignoredKeys_.begin(), ignoredKeys_.end(), key) == ignoredKeys_.end())

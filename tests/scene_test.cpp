@@ -526,6 +526,59 @@ TEST_F(SceneTest, UnreadableObj) {
   ExpectError(LoadScene(dir_, &scene), dir_, 0, "cannot read");  // a directory
 }
 
+// Issue 17 item 11: mtllib may name any file. Only regular files are read;
+// absolute names are used as they are; what is quoted back is a short,
+// escaped excerpt, and lines that are no MTL statement are counted, never
+// echoed (an /etc/shadow-like file printed its first fields).
+TEST_F(SceneTest, MtllibReadsOnlyRegularFilesAndEchoesNothingOfThem) {
+  Scene scene;
+  ExpectError(LoadScene(Write("s.obj", "mtllib /dev/zero\n"), &scene), obj(), 1, "not a regular file");
+  ExpectError(LoadScene(Write("s.obj", "mtllib ../" + dir_.substr(dir_.rfind('/', dir_.size() - 2) + 1) + "\n"),
+                        &scene),
+              obj(), 1, "not a regular file");  // a directory
+  // Absolute: used as it is (it was joined to the OBJ's directory: DIR//abs).
+  Write("abs.mtl", kMtl);
+  ASSERT_TRUE(LoadScene(Write("s.obj", "mtllib " + dir_ + "abs.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\n"
+                                       "v 0 1 0\nf 1 2 3\n"),
+                        &scene)
+                  .ok());
+  // A file that is not MTL: its lines are counted, not quoted.
+  Write("secret", std::string(kMtl) + "root:$6$secrethash:19000:0:99999:7:::\n"
+                                      "daemon:*:19000:0:99999:7:::\n\x1b[31mred\n");
+  std::vector<std::string> warnings;
+  std::string text;
+  Status st = LoadSceneFromText(
+      obj(), std::string("mtllib secret\n") + (kHead + 12) + "f 1 2 3\n",
+      [](const std::string& path, std::string* out) {
+        std::ifstream in(path, std::ios::binary);
+        out->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        return std::string(in ? "" : "cannot open");
+      },
+      &scene, &warnings);
+  ASSERT_TRUE(st.ok()) << st.ToString();
+  std::string all;
+  for (const std::string& w : warnings) all += w + "\n";
+  EXPECT_EQ(all.find("secrethash"), std::string::npos) << all;
+  EXPECT_EQ(all.find("root"), std::string::npos) << all;
+  EXPECT_EQ(all.find('\x1b'), std::string::npos) << all;
+  EXPECT_NE(all.find("3 lines are not MTL statements"), std::string::npos) << all;
+  // A garbage statement in the OBJ is quoted short and escaped.
+  Status bad = LoadBody(std::string("\x1b[2J") + std::string(5000, 'x') + "\n", &scene);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.message().find('\x1b'), std::string::npos);
+  EXPECT_LT(bad.message().size(), 100u) << bad.message();
+  EXPECT_NE(bad.message().find("unknown statement '\\x1b[2Jxxx"), std::string::npos) << bad.message();
+}
+
+// Issue 17 item 15: a UTF-8 byte-order mark gave "unknown statement 'mtllib'".
+TEST_F(SceneTest, ByteOrderMarkIsSkipped) {
+  Scene scene;
+  Write("m.mtl", std::string("\xef\xbb\xbf") + kMtl);
+  Status s = LoadScene(Write("s.obj", std::string("\xef\xbb\xbf") + kHead + "f 1 2 3\n"), &scene);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_EQ(scene.polygons.size(), 1u);
+}
+
 TEST_F(SceneTest, MissingMtl) {
   Scene scene;
   ExpectError(LoadScene(Write("s.obj", "v 0 0 0\nmtllib none.mtl\n"), &scene), obj(), 2,
