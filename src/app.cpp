@@ -481,20 +481,33 @@ void WritePatchesCsv(Render* r) {
   w.Flush();
 }
 
+// One character of a JSON string as it is written inside the quotes: into
+// out (at least 7 bytes); returns the length.
+size_t JsonChar(char c, char* out) {
+  unsigned char ch = static_cast<unsigned char>(c);
+  if (ch == '"' || ch == '\\') {
+    out[0] = '\\';
+    out[1] = c;
+    return 2;
+  }
+  if (ch < 0x20) return static_cast<size_t>(std::snprintf(out, 7, "\\u%04x", ch));
+  out[0] = c;
+  return 1;
+}
+
 void JsonString(TextWriter* w, const char* s) {
   w->Write("\"", 1);
-  for (; *s; ++s) {
-    unsigned char ch = static_cast<unsigned char>(*s);
-    if (ch == '"' || ch == '\\') {
-      char esc[2] = {'\\', static_cast<char>(ch)};
-      w->Write(esc, 2);
-    } else if (ch < 0x20) {
-      w->Printf("\\u%04x", ch);
-    } else {
-      w->Write(s, 1);
-    }
-  }
+  char esc[8];
+  for (; *s; ++s) w->Write(esc, JsonChar(*s, esc));
   w->Write("\"", 1);
+}
+
+// The same, for init-time text on the heap (footprint --json).
+std::string JsonQuoted(const std::string& s) {
+  std::string q = "\"";
+  char esc[8];
+  for (char c : s) q.append(esc, JsonChar(c, esc));
+  return q + "\"";
 }
 
 void JsonTriple(TextWriter* w, const char* name, const double v[3], bool comma) {
@@ -855,7 +868,7 @@ int Footprint(const Options& o) {
     rankTotal[k] = rankEnvBytes[k] + rankOwn[k];
   }
   if (o.json) {
-    out += "{\n  \"scene\": \"" + o.scene + "\",\n";
+    out += "{\n  \"scene\": " + JsonQuoted(o.scene) + ",\n";
     add("  \"mask_method\": \"%s\",\n  \"packet_size_bytes\": %u,\n", MaskMethodName(o.maskMethod),
         p.packetBytes);
     out += "  \"environments\": [\n";

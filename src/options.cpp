@@ -164,6 +164,10 @@ options (the message names file:line or the option); 3 a rank was lost;
 
 namespace {
 
+// The least normal float: options stored as float refuse anything smaller
+// rather than silently becoming 0 (--patch-size 0 is "automatic").
+constexpr double kFloatMin = 1.17549435e-38;
+
 Status Bad(const std::string& flag, const std::string& value, const std::string& expected) {
   return Status::Error("vismask: " + flag + ": expected " + expected + ", got '" + value + "'");
 }
@@ -226,7 +230,10 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       o->load.strict = true;
       continue;
     }
-    if (a == "--json" && o->command == "footprint") {
+    if (a == "--json") {
+      if (o->command != "footprint")
+        return Status::Error("vismask: --json is an option of 'vismask footprint', not of '" +
+                             o->command + "'");
       o->json = true;
       continue;
     }
@@ -237,6 +244,11 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       continue;
     }
     if (i + 1 >= args.size()) return Status::Error("vismask: " + a + ": missing value");
+    // A value that is itself an option ("--out --quiet") is a missing value,
+    // not a directory called --quiet.
+    if (args[i + 1].rfind("--", 0) == 0)
+      return Status::Error("vismask: " + a + ": missing value (the next argument is the option '" +
+                           args[i + 1] + "')");
     const std::string& v = args[++i];
     double d = 0.0;
     uint64_t u = 0;
@@ -245,6 +257,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       o->outDir = v;
     } else if (a == "--patch-size") {
       if (!ParseDouble(v, &d) || !(d > 0.0) || d > 3.4e38) return Bad(a, v, "a length > 0");
+      if (d < kFloatMin) return Bad(a, v, "a length float can hold (>= 1.2e-38; smaller is 0)");
       o->patchSize = static_cast<float>(d);
     } else if (a == "--rays") {
       if (!ParseU64(v, &u) || u < 1 || u > 100000000) return Bad(a, v, "an integer in [1, 1e8]");
@@ -297,6 +310,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       (a == "--width" ? o->width : o->height) = static_cast<int>(u);
     } else if (a == "--exposure") {
       if (!ParseDouble(v, &d) || !(d > 0.0) || d > 3.4e38) return Bad(a, v, "a number > 0");
+      if (d < kFloatMin) return Bad(a, v, "a number float can hold (>= 1.2e-38; smaller is 0)");
       o->hasExposure = true;
       o->exposure = static_cast<float>(d);
     } else if (a == "--camera") {

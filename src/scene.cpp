@@ -46,6 +46,13 @@ constexpr double kMinFaceSize = 1e-15;
 constexpr double kMaxRadiosity = 1e36;
 constexpr double kMinRadiosity = 1e-30;
 
+std::string Num(double x);
+
+std::string CoordinateError(double x) {
+  return "coordinate " + Num(x) + " is beyond +-" + Num(kMaxCoordinate) +
+         " (float ray tests would overflow); scale the scene down";
+}
+
 using Tokens = std::vector<std::string>;
 
 bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
@@ -159,6 +166,8 @@ std::string ParseFloats(const Tokens& tokens, size_t first, size_t count, float*
     if (end == s.c_str() || *end != '\0') return "bad number " + Quote(s);
     if (!std::isfinite(d)) return "number " + Quote(s) + " is not finite";
     if (std::fabs(d) > std::numeric_limits<float>::max()) return "number " + Quote(s) + " is too large";
+    if (d != 0.0 && std::fabs(d) < std::numeric_limits<float>::min())
+      return "number " + Quote(s) + " is too small for float (it would be 0 or denormal; least 1.2e-38)";
     out[i] = static_cast<float>(d);
   }
   return "";
@@ -405,6 +414,11 @@ Status Loader::LoadObj(const std::string& path, const std::string& text) {
       float xyzw[4];
       err = ParseFloats(t, 1, args, xyzw);  // w is checked, then ignored
       if (!err.empty()) return Status::At(path, line, err);
+      // Checked here, at the vertex's own line, before any face made of it
+      // is judged (a face with a far corner looks degenerate).
+      for (int a = 0; a < 3; ++a)
+        if (std::fabs(xyzw[a]) > kMaxCoordinate)
+          return Status::At(path, line, CoordinateError(xyzw[a]));
       vertices_.emplace_back(xyzw[0], xyzw[1], xyzw[2]);
     } else if (key == "f") {
       if (args < 3)
@@ -667,10 +681,7 @@ Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
   for (const Polygon& p : result.polygons) {
     for (const glm::vec3& v : p.corners)
       for (int a = 0; a < 3; ++a)
-        if (std::fabs(v[a]) > kMaxCoordinate)
-          return Status::At(objPath, p.line,
-                            "coordinate " + Num(v[a]) + " is beyond +-" + Num(kMaxCoordinate) +
-                                " (float ray tests would overflow); scale the scene down");
+        if (std::fabs(v[a]) > kMaxCoordinate) return Status::At(objPath, p.line, CoordinateError(v[a]));
     if (std::sqrt(p.area) < kMinFaceSize)
       return Status::At(objPath, p.line,
                         "face of area " + Num(p.area) + " is below " + Num(kMinFaceSize) +

@@ -176,5 +176,46 @@ TEST(HardeningTest, SecondRunIntoTheSameDirectoryIsRefused) {
   EXPECT_EQ(ReadFile(out + "/image.pfm").substr(0, 9), "PF\n32 32\n");
 }
 
+// Issue 17 items 14 and 15: values that silently became something else, and
+// messages that misled.
+TEST(HardeningTest, OptionsThatUnderflowOrLookLikeOptionsAreRefused) {
+  TempDir dir;
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  } cases[] = {
+      {{"render", "scenes/cornell.obj", "--patch-size", "1e-50"}, "a length float can hold"},
+      {{"render", "scenes/cornell.obj", "--exposure", "1e-50"}, "a number float can hold"},
+      {{"render", "scenes/cornell.obj", "--json"}, "--json is an option of 'vismask footprint'"},
+      {{"render", "scenes/cornell.obj", "--out", "--quiet"},
+       "--out: missing value (the next argument is the option '--quiet')"},
+  };
+  for (const Case& c : cases) {
+    auto args = c.args;
+    if (args.back() != "--quiet") args.insert(args.end(), {"--out", dir.File("out")});
+    auto r = test::RunMain(args);
+    EXPECT_EQ(r.code, 2) << c.message;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_FALSE(test::FileExists(dir.File("out")));
+    EXPECT_FALSE(test::FileExists("--quiet"));
+  }
+}
+
+// footprint --json printed the scene's path unescaped: invalid JSON.
+TEST(HardeningTest, FootprintJsonEscapesTheScenePath) {
+  TempDir dir;
+  std::string odd = dir.File("q\"x\\y.obj");
+  std::filesystem::copy_file("scenes/cornell.obj", odd);
+  std::filesystem::copy_file("scenes/cornell.mtl", dir.File("cornell.mtl"));
+  std::string cmd = Bin() + " footprint '" + odd + "' --json > " + dir.File("fp.json");
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::string json = ReadFile(dir.File("fp.json"));
+  EXPECT_NE(json.find("q\\\"x\\\\y.obj\""), std::string::npos) << json.substr(0, 200);
+  if (std::system("command -v /usr/bin/python3 > /dev/null") == 0) {
+    std::string check = "/usr/bin/python3 -c 'import json,sys; json.load(open(sys.argv[1]))' " + dir.File("fp.json");
+    EXPECT_EQ(std::system(check.c_str()), 0) << json.substr(0, 200);
+  }
+}
+
 }  // namespace
 }  // namespace vismask

@@ -818,7 +818,18 @@ TEST_F(SceneTest, CoordinatesBeyondFloatRangeAreRefused) {
   ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 2e15 0 0\n"
                                        "v 0 2e15 0\nf 1 2 3\n"),
                         &scene),
-              obj(), 6, "beyond");
+              obj(), 4, "beyond");  // at the vertex's line, before any face is judged
+  // Issue 17 item 15: a far vertex was reported as a degenerate face.
+  ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1e30 0 0\n"
+                                       "f 1 2 3\n"),
+                        &scene),
+              obj(), 5, "coordinate 1e+30 is beyond");
+  // Issue 17 item 14: Ke 1e-50 became 0 and the scene "had no emitter".
+  Write("tiny.mtl", "newmtl light\nKd 0.5 0.5 0.5\nKe 1e-50 0 0\n");
+  ExpectError(LoadScene(Write("s.obj", "mtllib tiny.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                       "f 1 2 3\n"),
+                        &scene),
+              dir_ + "tiny.mtl", 3, "'1e-50' is too small for float");
   ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1e-16 0 0\n"
                                        "v 0 1e-16 0\nf 1 2 3\n"),
                         &scene),
