@@ -129,6 +129,16 @@ uint64_t PeakRssBytes() {
   return ReadProcFile("/proc/self/status", buf, sizeof buf) ? ProcField(buf, "VmHWM:") : 0;
 }
 
+uint64_t MemAvailableBytes() {
+  char buf[8192];
+  return ReadProcFile("/proc/meminfo", buf, sizeof buf) ? ProcField(buf, "MemAvailable:") : 0;
+}
+
+uint64_t AnonRssBytes() {
+  char buf[8192];
+  return ReadProcFile("/proc/self/status", buf, sizeof buf) ? ProcField(buf, "RssAnon:") : 0;
+}
+
 uint64_t FileRssBytes() {
   char buf[4096];
   if (!ReadProcFile("/proc/self/smaps_rollup", buf, sizeof buf)) return 0;

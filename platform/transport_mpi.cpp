@@ -46,6 +46,7 @@ class MpiTransport final : public Transport {
   int rank() const override { return rank_; }
   int size() const override { return size_; }
   const char* name() const override { return "mpi"; }
+  int ranksOnHost() const override { return ranksOnHost_; }
 
   void AllToAll(const Span<const uint8_t>* send, const Span<uint8_t>* recv,
                 size_t* recvBytes) override;
@@ -64,6 +65,7 @@ class MpiTransport final : public Transport {
 
   int rank_ = 0;
   int size_ = 1;
+  int ranksOnHost_ = 1;  // the size of this rank's shared-memory communicator
   bool started_ = false;
   bool finished_ = false;
   // AllToAll scratch, one entry per rank, made in Start.
@@ -110,6 +112,14 @@ Status MpiTransport::Start(const TransportRequest& request) {
     MPI_Finalize();
     // Every rank would say it: rank 0 alone does (the others' status is empty).
     return rank_ == 0 ? Status::Error(tooMany + " (mpirun -np)") : Status::Error("");
+  }
+  MPI_Comm host;
+  if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &host) ==
+      MPI_SUCCESS) {
+    MPI_Comm_size(host, &ranksOnHost_);
+    MPI_Comm_free(&host);
+  } else {
+    ranksOnHost_ = size_;  // unknown: as if every rank shared this host
   }
   sendSizes_.reset(new uint64_t[size_]());
   recvSizes_.reset(new uint64_t[size_]());

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -328,14 +329,28 @@ int Init(Render* r) {
   for (auto& e : r->envs) envBytes += e->footprint().total;
   uint64_t need = envBytes + ArenaRoundUp(measure.used());
   r->predictedBytes = need;
-  if (o.memBudget > 0 && need > o.memBudget) {
+  // The budget: --mem-budget, or else the host's available memory shared by
+  // the ranks on it (a run the machine cannot hold is refused here, not
+  // killed by the kernel later).
+  uint64_t budget = o.memBudget;
+  int onHost = std::max(1, r->transport->ranksOnHost());
+  if (budget == 0) budget = os::MemAvailableBytes() / static_cast<uint64_t>(onHost);
+  if (budget > 0 && need > budget) {
     // Every rank checks its own need; each that is over says so.
+    char whose[200];
+    if (o.memBudget > 0)
+      std::snprintf(whose, sizeof whose, "the budget of %llu bytes",
+                    static_cast<unsigned long long>(budget));
+    else
+      std::snprintf(whose, sizeof whose,
+                    "the memory available to it, %llu bytes (MemAvailable over %d rank%s on this "
+                    "host; --mem-budget sets another budget)",
+                    static_cast<unsigned long long>(budget), onHost, onHost > 1 ? "s" : "");
     os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes (environment arenas %llu + rank "
-                 "buffers %llu), more than the budget of %llu bytes\n",
+                 "buffers %llu), more than %s\n",
                  r->transport->rank(), static_cast<unsigned long long>(need),
                  static_cast<unsigned long long>(envBytes),
-                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())),
-                 static_cast<unsigned long long>(o.memBudget));
+                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())), whose);
     return kExitUsage;
   }
   // The system may refuse what the budget allowed (no --mem-budget, ulimit
@@ -975,7 +990,17 @@ int Main(int argc, const char* const* argv) {
   r->transport = MakeTransport(TransportRequest{r->options.transport, r->options.ranks}, &s);
   // An error with no text: another rank (rank 0) reports it.
   if (!r->transport) return s.message().empty() ? kExitUsage : Fail(s);
-  int rc = Init(r.get());
+  int rc = kExitUsage;
+  try {
+    rc = Init(r.get());
+  } catch (const std::bad_alloc&) {
+    // Init's heap (the scene, the mesh) is not in the budget: a scene too
+    // big to load is refused here, with what this process had reached.
+    os::PrintErr("vismask: rank %d: out of memory at init, loading and meshing the scene (peak "
+                 "resident %llu bytes); a larger --patch-size, fewer ranks on this host or more "
+                 "memory\n",
+                 r->transport->rank(), static_cast<unsigned long long>(os::PeakRssBytes()));
+  }
   // Every rank learns whether every rank's init succeeded (rank 0 alone
   // opens the outputs) before anyone starts the solve's collectives.
   int32_t mine = rc, all[kMaxRanks] = {};

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iterator>
@@ -50,8 +51,10 @@ TEST(HardeningTest, ClosedStandardDescriptorsNeverBecomeOutputs) {
 TEST(HardeningTest, RefusedArenaMemoryIsAUserError) {
   TempDir dir;
   const std::string cases[] = {
-      "--width 16384 --height 16384",                     // the rank's buffers
-      "--round-shots 1000000 --envs 2 --ranks 2",         // the environments' arenas
+      // --mem-budget above what ulimit -v lets the system give: the budget
+      // passes, the allocation fails.
+      "--width 16384 --height 16384 --mem-budget 100G",              // the rank's buffers
+      "--round-shots 1000000 --envs 2 --ranks 2 --mem-budget 100G",  // the environments' arenas
   };
   for (const std::string& extra : cases) {
     std::string out = dir.File("out");
@@ -174,6 +177,58 @@ TEST(HardeningTest, SecondRunIntoTheSameDirectoryIsRefused) {
   ASSERT_EQ(std::system(wait.c_str()), 0);
   EXPECT_NE(ReadFile(out + "/run.json").find("\"width\": 32"), std::string::npos);
   EXPECT_EQ(ReadFile(out + "/image.pfm").substr(0, 9), "PF\n32 32\n");
+}
+
+// Issue 17 item 9: with no --mem-budget, the budget is the host's available
+// memory over the ranks on it; a run beyond it is refused at init with the
+// numbers instead of being killed by the kernel.
+TEST(HardeningTest, DefaultBudgetIsTheAvailableMemory) {
+  TempDir dir;
+  // 64x64x64 environments and a 16384^2 image: some 60 GB a rank, beyond
+  // the 24 GiB hosts this runs on.
+  auto r = test::RunMain({"render", "scenes/cornell.obj", "--envs", "64x64x64", "--max-shots", "5",
+                          "--rays", "64", "--width", "16384", "--height", "16384", "--quiet", "--out",
+                          dir.File("out")});
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("more than the memory available to it"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("MemAvailable over 1 rank on this host"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::FileExists(dir.File("out")));
+  // An explicit budget is the user's word: the same run is then judged by it.
+  r = test::RunMain({"render", "scenes/cornell.obj", "--envs", "64x64x64", "--max-shots", "5", "--rays",
+                     "64", "--quiet", "--mem-budget", "1G", "--out", dir.File("out")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("more than the budget of 1073741824 bytes"), std::string::npos) << r.err;
+}
+
+// Issue 17 item 10: a scene too big for the memory init may use ended in
+// an uncaught bad_alloc (exit 134); it is refused with exit 2.
+TEST(HardeningTest, SceneTooBigToLoadIsRefused) {
+  TempDir dir;
+  std::string obj = "mtllib big.mtl\nusemtl light\n";
+  const int n = 300000;
+  char line[96];
+  for (int i = 0; i < n; ++i) {
+    double x = (i % 97) * 1.01, y = (i / 97 % 97) * 1.01, z = (i / 9409) * 1.01;
+    std::snprintf(line, sizeof line, "v %g %g %g\nv %g %g %g\nv %g %g %g\n", x, y, z, x + 1, y, z, x, y + 1,
+                  z);
+    obj += line;
+  }
+  for (int i = 0; i < n; ++i) {
+    std::snprintf(line, sizeof line, "f %d %d %d\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    obj += line;
+  }
+  test::WriteFile(dir.File("big.obj"), obj);
+  test::WriteFile(dir.File("big.mtl"), "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+  std::string cmd = "(ulimit -v 250000; " + Bin() + " render " + dir.File("big.obj") + " --quiet --out " +
+                    dir.File("out") + " 2> " + dir.File("err") + ")";
+  int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2) << ReadFile(dir.File("err"));
+  std::string err = ReadFile(dir.File("err"));
+  EXPECT_TRUE(err.find("out of memory at init") != std::string::npos ||
+              err.find("the system refused") != std::string::npos)
+      << err;
+  EXPECT_FALSE(test::FileExists(dir.File("out")));
 }
 
 // Issue 17 items 14 and 15: values that silently became something else, and

@@ -40,6 +40,13 @@ bool MakeDirs(const char* path, char* why);
 // True if `path` exists (any kind of file).
 bool Exists(const char* path);
 
+// MemAvailable from /proc/meminfo: what the host can give new allocations
+// without swapping, bytes; 0 if unknown.
+uint64_t MemAvailableBytes();
+// Anonymous resident bytes of this process now (its heap, stacks and
+// arenas touched so far: RssAnon); 0 if unknown.
+uint64_t AnonRssBytes();
+
 // Peak resident set size of this process (VmHWM), bytes; 0 if unknown.
 uint64_t PeakRssBytes();
 // Resident bytes backed by files (the binary and its shared libraries):

@@ -41,6 +41,9 @@ class Transport {
   virtual int rank() const = 0;
   virtual int size() const = 0;
   virtual const char* name() const = 0;
+  // How many of the run's ranks share this rank's host (and its memory):
+  // the default memory budget is the host's available memory over them.
+  virtual int ranksOnHost() const { return size(); }
 
   // Every rank sends send[r].size() bytes to each rank r (send[rank()] is not
   // sent) and receives into recv[r] what rank r sent it; recvBytes[r] gets
