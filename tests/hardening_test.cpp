@@ -206,7 +206,7 @@ TEST(HardeningTest, SceneTooBigToLoadIsRefused) {
   TempDir dir;
   std::string obj = "mtllib big.mtl\nusemtl light\n";
   const int n = 300000;
-  char line[96];
+  char line[256];
   for (int i = 0; i < n; ++i) {
     double x = (i % 97) * 1.01, y = (i / 97 % 97) * 1.01, z = (i / 9409) * 1.01;
     std::snprintf(line, sizeof line, "v %g %g %g\nv %g %g %g\nv %g %g %g\n", x, y, z, x + 1, y, z, x, y + 1,
