@@ -184,6 +184,7 @@ struct Prepared {
   Partition part;
   float patchSize = 0.0f;
   std::vector<std::vector<uint32_t>> pieces;  // polygon pieces of each environment
+  TwinOptions twins;  // --two-sided, --two-sided-emitters
   EnvOptions envOptions;
   uint32_t packetBytes = 0;
 };
@@ -223,9 +224,12 @@ Status PrepareScene(const Options& o, Prepared* p) {
       const glm::vec3& ke = p->part.scene.materials[poly.material].ke;
       emitted += (static_cast<double>(ke.x) + ke.y + ke.z) * poly.area;
     }
+    if (o.twoSidedEmitters) emitted *= 2.0;  // every emitter's twin emits as much
     e.rayQuantum = emitted / static_cast<double>(o.emittedRays);
     e.minRays = o.minRays;
   }
+  p->twins.all = o.twoSided;
+  p->twins.emitters = o.twoSidedEmitters;
   e.seed = o.seed;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
@@ -250,6 +254,13 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     Mesh mesh;
     Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
     if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
+    // Twins in the environment of their originals, after all of its patches.
+    AddTwins(p.twins, &mesh);
+    if (mesh.patches.size() > kMaxPatches)
+      return Status::Error("vismask: --patch-size: the mesh needs " +
+                           std::to_string(mesh.patches.size()) +
+                           " patches with both sides, more than the limit of " +
+                           std::to_string(kMaxPatches));
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
     if (e < first) continue;

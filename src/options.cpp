@@ -76,6 +76,14 @@ render options:
                        pixel centre only, quads as two Gouraud triangles
                        (the images before --aa existed); default on
   --quiet              no progress line on stderr
+  --two-sided          both sides of every polygon receive, reflect and show
+                       (for scenes wound inconsistently): each polygon is
+                       meshed twice, the copy reversed; patches double.
+                       An emitter's copy reflects but does not emit unless
+                       --two-sided-emitters is given too
+  --two-sided-emitters emitters emit from both sides, Ke from each: twice
+                       the emitted power of the one-sided emitter (their
+                       back sides also reflect)
   --reference REF.pfm  measure the image's relative RMSE against REF.pfm
                        (same size) when the solve ends, in convergence.csv
                        and run.json; the time it takes is not solve time
@@ -200,6 +208,14 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     }
     if (a == "--quiet") {
       o->quiet = true;
+      continue;
+    }
+    if (a == "--two-sided") {
+      o->twoSided = true;
+      continue;
+    }
+    if (a == "--two-sided-emitters") {
+      o->twoSidedEmitters = true;
       continue;
     }
     if (a == "--json" && o->command == "footprint") {
