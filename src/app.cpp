@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include "vismask/display.h"
+#include "vismask/emitter_check.h"
 #include "vismask/environment.h"
 #include "vismask/image_io.h"
 #include "vismask/mesh.h"
@@ -303,6 +304,9 @@ int Init(Render* r) {
     }
     Status s = PrepareScene(o, &p);
     if (!s.ok()) return FailInit(r, s);
+    // Emitters that light nothing (a face wound the wrong way): one line each.
+    if (r->isRoot())
+      for (const std::string& w : EmitterWarnings(p.scene)) os::PrintErr("%s\n", w.c_str());
     r->numPolygons = p.scene.polygons.size();
     r->patchSize = p.patchSize;
     r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
