@@ -506,7 +506,7 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   Ray r = ray;       // tMax shrinks to just past the best hit so far
   float limit = t1;  // no step into a cell beyond this: the ray's end or the best hit
   uint32_t bestPatch = kNoPatch;
-  float bestT = 0.0f;
+  float bestT = r.tMax;  // every hit is nearer than the ray's end
   bool bestFront = false;
   const uint64_t* occupied = occupied_.data();
   for (;;) {
@@ -518,12 +518,12 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
       uint32_t p = refs[k];
       float t;
       bool front;
-      if (p == skip.patch || p == skip.twin || !IntersectPatch(geom[p], r, &t, &front)) continue;
+      if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
       if (kAnyHit) return true;
-      // t <= bestT here (or no hit yet). On a tie a front side wins, so
-      // that of two coplanar twins the ray lands on the one it faces
-      // (their t is bit-identical: patch.h, TwinGeom); then the lower index.
-      if (t < bestT || front > bestFront || (front == bestFront && p < bestPatch)) {
+      // t <= bestT here. On a tie a front side wins, so that of two
+      // coplanar twins the ray lands on the one it faces (their t is
+      // bit-identical: patch.h, TwinGeom); then the lower index.
+      if (t < bestT || (front > bestFront || (front == bestFront && p < bestPatch))) {
         bestPatch = p;
         bestT = t;
         bestFront = front;
