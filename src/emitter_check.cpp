@@ -129,8 +129,8 @@ std::vector<std::string> EmitterWarnings(const Scene& scene) {
     char what[256];
     if (e.nearWarning()) {
       std::snprintf(what, sizeof what,
-                    "sends %d%% of its power into a surface %.3g away in front of it (%.2g%% of "
-                    "the scene's size)",
+                    "sends %d%% of its power into a surface it faces %.3g away, %.2g%% of the "
+                    "scene's size",
                     Percent(e.nearShare), e.nearDistance, 100.0 * e.nearDistance / largest);
     } else {
       std::snprintf(what, sizeof what,
