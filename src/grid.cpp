@@ -249,6 +249,15 @@ void ForEachCell(const Frame& f, const Shape& s, Visit&& visit) {
   }
 }
 
+// Of two hits at the same t, whether patch p (side `front`) beats `best`:
+// a front side beats a back side, then the lower index wins. A total order
+// (so the walk's cell order cannot matter): of two coplanar twins, whose t
+// is bit-identical (patch.h, TwinGeom), the ray lands on the one it faces.
+// Runs on exact ties only, off the walk's hot path.
+inline bool TieWins(uint32_t p, bool front, uint32_t best, bool bestFront) {
+  return front != bestFront ? front : p < best;
+}
+
 }  // namespace
 
 Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
@@ -421,8 +430,9 @@ bool Grid::TestAll(const Ray& ray, Skip skip, Hit* hit) const {
     bool front;
     if (p == skip.patch || p == skip.twin || !IntersectPatch(geom[p], ray, &t, &front)) continue;
     if (kAnyHit) return true;
-    // The nearest; of equal t, a front side first (patches rise with p).
-    if (best.patch == kNoPatch || t < best.t || (t == best.t && front && !best.front))
+    // The nearest; of equal t, TieWins (patches rise with p).
+    if (best.patch == kNoPatch || t < best.t ||
+        (t == best.t && TieWins(p, front, best.patch, best.front)))
       best = Hit{p, t, front};
   }
   if (best.patch == kNoPatch) return false;
@@ -520,10 +530,9 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
       bool front;
       if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
       if (kAnyHit) return true;
-      // t <= bestT here. On a tie a front side wins, so that of two
-      // coplanar twins the ray lands on the one it faces (their t is
-      // bit-identical: patch.h, TwinGeom); then the lower index.
-      if (t < bestT || (front > bestFront || (front == bestFront && p < bestPatch))) {
+      // t <= bestT here. On a tie a front side, then the lower index, so
+      // that of two coplanar twins the ray lands on the one it faces.
+      if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
         bestPatch = p;
         bestT = t;
         bestFront = front;

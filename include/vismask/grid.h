@@ -47,9 +47,9 @@ class Grid {
   void Build(Span<const Patch> patches, Span<const PatchGeom> geom);
 
   // Closest hit in (ray.tMin, ray.tMax), ignoring the patches in `skip`.
-  // Front and back sides both count; of hits at the same t, a front side
-  // wins over a back side (so of two coplanar twins, the one the ray
-  // faces), then the lower index.
+  // Front and back sides both count. Of hits at the same t, a front side
+  // wins, then the lower index: of two coplanar twins (TwinGeom) the one
+  // the ray faces.
   bool Intersect(const Ray& ray, Skip skip, Hit* hit) const;
   // True if anything is hit in (ray.tMin, ray.tMax), ignoring `skip`.
   bool Occluded(const Ray& ray, Skip skip) const;
