@@ -535,8 +535,8 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
   // Only when on, so that a one-sided run.json is what it was before them.
   if (o.twoSided || o.twoSidedEmitters)
-    w.Printf("    \"two_sided\": %s,\n    \"two_sided_emitters\": %s,\n", o.twoSided ? "true" : "false",
-             o.twoSidedEmitters ? "true" : "false");
+    w.Printf("    \"two_sided\": %s,\n    \"two_sided_emitters\": %s,\n",
+             o.twoSided ? "true" : "false", o.twoSidedEmitters ? "true" : "false");
   w.Printf("    \"stop_error\": %.17g\n  },\n", o.stopError);
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {

@@ -85,8 +85,9 @@ std::vector<EmitterEstimate> EstimateEmitters(const Scene& scene) {
         PatchSampler s = MakePatchSampler(p);
         float u[5];
         for (float& x : u) x = rng.NextFloat();
-        Ray ray{s.Point(u[0], u[1], u[2]) + eps * s.frame.n, s.frame.ToWorld(CosineDirection(u[3], u[4])),
-                0.0f, std::numeric_limits<float>::infinity()};
+        Ray ray{s.Point(u[0], u[1], u[2]) + eps * s.frame.n,
+                s.frame.ToWorld(CosineDirection(u[3], u[4])), 0.0f,
+                std::numeric_limits<float>::infinity()};
         Hit hit;
         bool any = grid.Intersect(ray, Skip(static_cast<uint32_t>(k)), &hit);
         if (side == 1) {

@@ -63,7 +63,8 @@ std::vector<PatchGeom> GeomOf(const Mesh& mesh) {
   std::vector<PatchGeom> geom(mesh.patches.size());
   for (size_t i = 0; i < geom.size(); ++i) {
     bool copy = mesh.twin[i] < i;
-    geom[i] = copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[i]])) : MakePatchGeom(mesh.patches[i]);
+    geom[i] = copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[i]]))
+                   : MakePatchGeom(mesh.patches[i]);
   }
   return geom;
 }
@@ -87,7 +88,8 @@ TEST(TwoSidedTest, TwinsAreTheSameCornersReversedWithTheirOwnVertices) {
     EXPECT_EQ(t.corner[0], p.corner[0]);
     EXPECT_EQ(t.corner[1], p.corner[2]);
     EXPECT_EQ(t.corner[2], p.corner[1]);
-    for (int k = 0; k < 4; ++k) EXPECT_GE(t.vertex[k], mesh.vertices.size() / 2) << "shares a vertex";
+    for (int k = 0; k < 4; ++k)
+      EXPECT_GE(t.vertex[k], mesh.vertices.size() / 2) << "shares a vertex";
   }
   Scene s2;
   Mesh emitting = TwinnedTriangle(&s2, true);
@@ -168,8 +170,8 @@ TEST(TwoSidedTest, AShotSkipsItsTwin) {
   const Patch& p = mesh.patches[i];
   glm::vec3 centre = (p.corner[0] + p.corner[1] + p.corner[2]) / 3.0f;
   // Just behind the plane, leaving along the normal (a tilt keeps it general).
-  Ray ray{centre - 1e-4f * p.normal, p.normal + 0.1f * glm::normalize(p.corner[1] - p.corner[0]), 0.0f,
-          10.0f};
+  Ray ray{centre - 1e-4f * p.normal,
+          p.normal + 0.1f * glm::normalize(p.corner[1] - p.corner[0]), 0.0f, 10.0f};
   Hit hit;
   ASSERT_TRUE(grid.Intersect(ray, Skip(i), &hit));
   EXPECT_EQ(hit.patch, n + i);
@@ -307,7 +309,8 @@ TEST(TwoSidedTest, LedgerClosesTwoSided) {
     std::vector<double> emitted = Triple(json, "emitted"), residual = Triple(json, "residual");
     ASSERT_EQ(residual.size(), 3u);
     for (int c = 0; c < 3; ++c)
-      EXPECT_LT(std::fabs(residual[c]), 1e-9 * emitted[c]) << "channel " << c << " " << extra.size();
+      EXPECT_LT(std::fabs(residual[c]), 1e-9 * emitted[c])
+          << "channel " << c << ", " << extra.size() << " extra options";
   }
 }
 
