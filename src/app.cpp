@@ -13,6 +13,7 @@
 #include <glm/geometric.hpp>
 
 #include "vismask/display.h"
+#include "vismask/emitter_check.h"
 #include "vismask/environment.h"
 #include "vismask/image_io.h"
 #include "vismask/mesh.h"
@@ -81,6 +82,7 @@ struct Render {
   std::unique_ptr<Transport> transport;
   RankEnvs layout;
   size_t numPolygons = 0;
+  uint64_t numTwins = 0;  // twin patches, all ranks (--two-sided, --two-sided-emitters)
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
   std::vector<Environment*> envPtrs;
@@ -189,6 +191,7 @@ struct Prepared {
   Partition part;
   float patchSize = 0.0f;
   std::vector<std::vector<uint32_t>> pieces;  // polygon pieces of each environment
+  TwinOptions twins;  // --two-sided, --two-sided-emitters
   EnvOptions envOptions;
   uint32_t packetBytes = 0;
 };
@@ -228,9 +231,12 @@ Status PrepareScene(const Options& o, Prepared* p) {
       const glm::vec3& ke = p->part.scene.materials[poly.material].ke;
       emitted += (static_cast<double>(ke.x) + ke.y + ke.z) * poly.area;
     }
+    if (o.twoSidedEmitters) emitted *= 2.0;  // every emitter's twin emits as much
     e.rayQuantum = emitted / static_cast<double>(o.emittedRays);
     e.minRays = o.minRays;
   }
+  p->twins.all = o.twoSided;
+  p->twins.emitters = o.twoSidedEmitters;
   e.seed = o.seed;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
@@ -255,6 +261,13 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     Mesh mesh;
     Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
     if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
+    // Twins in the environment of their originals, after all of its patches.
+    AddTwins(p.twins, &mesh);
+    if (mesh.patches.size() > kMaxPatches)
+      return Status::Error("vismask: --patch-size: the mesh needs " +
+                           std::to_string(mesh.patches.size()) +
+                           " patches with both sides, more than the limit of " +
+                           std::to_string(kMaxPatches));
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
     if (e < first) continue;
@@ -297,6 +310,9 @@ int Init(Render* r) {
     }
     Status s = PrepareScene(o, &p);
     if (!s.ok()) return FailInit(r, s);
+    // Emitters that light nothing (a face wound the wrong way): one line each.
+    if (r->isRoot())
+      for (const std::string& w : EmitterWarnings(p.scene)) os::PrintErr("%s\n", w.c_str());
     r->numPolygons = p.scene.polygons.size();
     r->patchSize = p.patchSize;
     r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
@@ -310,14 +326,19 @@ int Init(Render* r) {
   struct LoadReport {
     int64_t code;
     uint64_t cuts;
+    uint64_t twins;
   };
-  LoadReport mine{load(), 0};
-  for (auto& e : r->envs) mine.cuts += e->numCutVertices();
+  LoadReport mine{load(), 0, 0};
+  for (auto& e : r->envs) {
+    mine.cuts += e->numCutVertices();
+    mine.twins += e->numTwins();
+  }
   std::vector<LoadReport> all(static_cast<size_t>(r->transport->size()));
   r->transport->AllGather(&mine, sizeof mine, all.data());
   for (const LoadReport& k : all) {
     if (k.code != kExitOk) return static_cast<int>(k.code);
     r->cutCapacity = std::max(r->cutCapacity, k.cuts);
+    r->numTwins += k.twins;
   }
   {
     glm::vec3 extent = p.scene.bounds.hi - p.scene.bounds.lo;
@@ -569,6 +590,10 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
   w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
   w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
+  // Only when on, so that a one-sided run.json is what it was before them.
+  if (o.twoSided || o.twoSidedEmitters)
+    w.Printf("    \"two_sided\": %s,\n    \"two_sided_emitters\": %s,\n",
+             o.twoSided ? "true" : "false", o.twoSidedEmitters ? "true" : "false");
   w.Printf("    \"stop_error\": %.17g\n  },\n", o.stopError);
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {
@@ -579,6 +604,8 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   }
   w.Printf("  \"counts\": {\n    \"polygons\": %zu,\n    \"patches\": %zu,\n", r->numPolygons,
            patches);
+  if (o.twoSided || o.twoSidedEmitters)  // of `patches`, the reversed copies
+    w.Printf("    \"twin_patches\": %llu,\n", static_cast<unsigned long long>(r->numTwins));
   w.Printf("    \"vertices\": %zu,\n    \"environments\": %zu,\n", vertices, r->summary.size());
   w.Printf("    \"ranks\": %d,\n    \"transport\": \"%s\",\n", r->transport->size(),
            r->transport->name());
@@ -847,26 +874,26 @@ int WriteOutputs(Render* r, const SolveResult& res) {
 
 // vismask footprint: every environment's and every rank's arena bytes, by
 // part, from the same measuring layout a render uses, without solving.
-int Footprint(const Options& o) {
-  Prepared p;
-  Status s = PrepareScene(o, &p);
-  if (!s.ok()) return Fail(s);
-  uint32_t total = static_cast<uint32_t>(p.grid.count());
+// The figures `footprint` reports for one way of meshing the scene.
+struct FootprintFigures {
   std::vector<std::unique_ptr<Environment>> envs;
-  s = PrepareEnvs(p, 0, total, &envs);
-  if (!s.ok()) return Fail(s);
+  std::vector<Render> probes;  // per rank: its own buffers' layout
+  std::vector<uint64_t> rankTotal, rankEnvBytes, rankOwn;
+  uint64_t patches = 0, twins = 0, envBytes = 0, total = 0;
+};
+
+Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f) {
+  uint32_t total = static_cast<uint32_t>(p.grid.count());
+  Status s = PrepareEnvs(p, 0, total, &f->envs);
+  if (!s.ok()) return s;
   int ranks = o.ranks;
-  std::string out;
-  char line[512];
-  auto add = [&](const char* fmt, auto... args) {
-    std::snprintf(line, sizeof line, fmt, args...);
-    out += line;
-  };
-  using ull = unsigned long long;
-  std::vector<uint64_t> rankTotal(ranks), rankEnvBytes(ranks), rankOwn(ranks);
-  std::vector<Render> probes(ranks);
+  f->rankTotal.assign(ranks, 0);
+  f->rankEnvBytes.assign(ranks, 0);
+  f->rankOwn.assign(ranks, 0);
+  f->probes = std::vector<Render>(ranks);
+  auto& envs = f->envs;
   for (int k = 0; k < ranks; ++k) {
-    Render& r = probes[k];
+    Render& r = f->probes[k];
     r.options = o;
     r.layout = EnvsOfRank(total, ranks, k);
     for (int q = 0; q < ranks; ++q) {
@@ -877,23 +904,72 @@ int Footprint(const Options& o) {
     }
     Arena measure = Arena::Measure();
     r.LayoutRank(measure, p.packetBytes, ranks, k == 0);
-    rankOwn[k] = ArenaRoundUp(measure.used());
+    f->rankOwn[k] = ArenaRoundUp(measure.used());
     for (uint32_t e = r.layout.first; e < r.layout.first + r.layout.count; ++e)
-      rankEnvBytes[k] += envs[e]->footprint().total;
-    rankTotal[k] = rankEnvBytes[k] + rankOwn[k];
+      f->rankEnvBytes[k] += envs[e]->footprint().total;
+    f->rankTotal[k] = f->rankEnvBytes[k] + f->rankOwn[k];
+    f->total += f->rankTotal[k];
   }
+  for (const auto& e : envs) {
+    f->patches += e->footprint().numPatches;
+    f->twins += e->numTwins();
+    f->envBytes += e->footprint().total;
+  }
+  return Status::Ok();
+}
+
+int Footprint(const Options& o) {
+  Prepared p;
+  Status s = PrepareScene(o, &p);
+  if (!s.ok()) return Fail(s);
+  uint32_t total = static_cast<uint32_t>(p.grid.count());
+  FootprintFigures fig;
+  s = MeasureFootprint(o, p, &fig);
+  if (!s.ok()) return Fail(s);
+  // What two-sidedness costs: the same scene measured one-sided.
+  FootprintFigures one;
+  if (p.twins.any()) {
+    Prepared q = p;
+    q.twins = TwinOptions{};
+    s = MeasureFootprint(o, q, &one);
+    if (!s.ok()) return Fail(s);
+  }
+  const auto& envs = fig.envs;
+  const auto& probes = fig.probes;
+  const auto& rankTotal = fig.rankTotal;
+  const auto& rankEnvBytes = fig.rankEnvBytes;
+  const auto& rankOwn = fig.rankOwn;
+  int ranks = o.ranks;
+  std::string out;
+  char line[512];
+  auto add = [&](const char* fmt, auto... args) {
+    std::snprintf(line, sizeof line, fmt, args...);
+    out += line;
+  };
+  using ull = unsigned long long;
+  // One-sided figures: the same as these when nothing is two-sided.
+  const FootprintFigures& base = p.twins.any() ? one : fig;
   if (o.json) {
     out += "{\n  \"scene\": " + JsonQuoted(o.scene) + ",\n";
     add("  \"mask_method\": \"%s\",\n  \"packet_size_bytes\": %u,\n", MaskMethodName(o.maskMethod),
         p.packetBytes);
+    // What --two-sided / --two-sided-emitters cost against the one-sided
+    // mesh (all patches, all ranks; total_bytes: every rank's arenas).
+    add("  \"two_sided\": {\"two_sided\": %s, \"two_sided_emitters\": %s, \"patches\": %llu, "
+        "\"twin_patches\": %llu, \"one_sided_patches\": %llu, \"environment_arena_bytes\": %llu, "
+        "\"one_sided_environment_arena_bytes\": %llu, \"total_bytes\": %llu, "
+        "\"one_sided_total_bytes\": %llu, \"extra_bytes\": %lld},\n",
+        o.twoSided ? "true" : "false", o.twoSidedEmitters ? "true" : "false", (ull)fig.patches,
+        (ull)fig.twins, (ull)base.patches, (ull)fig.envBytes, (ull)base.envBytes, (ull)fig.total,
+        (ull)base.total, (long long)fig.total - (long long)base.total);
     out += "  \"environments\": [\n";
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
-      add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"grid_cells\": %llu, "
+      add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"twin_patches\": %llu, \"grid_cells\": %llu, "
           "\"patch_bytes\": %llu, \"element_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": %llu, "
           "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"arena_bytes\": %llu}%s\n",
           e, [&] { for (int k = 0; k < ranks; ++k) { RankEnvs re = EnvsOfRank(total, ranks, k); if (e < re.first + re.count) return k; } return 0; }(),
-          (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
+          (ull)f.numPatches, (ull)envs[e]->numTwins(), (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
           (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.total, e + 1 < total ? "," : "");
     }
     out += "  ],\n  \"ranks\": [\n";
@@ -930,6 +1006,12 @@ int Footprint(const Options& o) {
       add("%4d %4u %14llu %12llu %12llu %12llu %13llu\n", k, r.layout.count, (ull)rankEnvBytes[k],
           (ull)r.rankExchangeBytes, (ull)r.rankImageBytes, (ull)r.rankOutputBytes, (ull)rankTotal[k]);
     }
+    if (p.twins.any())
+      add("\n%s: %llu patches, %llu of them twins (one-sided: %llu); %llu bytes in all ranks' "
+          "arenas, %+lld (%+.1f%%) against one-sided\n",
+          o.twoSided ? "--two-sided" : "--two-sided-emitters", (ull)fig.patches, (ull)fig.twins,
+          (ull)base.patches, (ull)fig.total, (long long)fig.total - (long long)base.total,
+          100.0 * (static_cast<double>(fig.total) / static_cast<double>(base.total) - 1.0));
     add("\nbytes are arena reservations (the whole of a solve's memory after init); a rank's\n"
         "process also holds its binary and libraries (see run.json's memory section)\n");
   }

@@ -68,6 +68,10 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
     const bool triangle = p.numCorners == 3;
     // The back of a one-sided patch reflects nothing: it is drawn black.
     const bool facing = glm::dot(p.normal, view.eye - p.corner[0]) > 0.0f;
+    // Of two twins (two-sided meshes) only the one facing the eye is drawn:
+    // they share corner[0] and their normals are exact negatives, so just
+    // one of them faces it, and no coplanar back face takes a fragment.
+    if (!facing && env.twinOf(i) != kNoPatch) continue;
     // Depth-first over the tree, with a fixed stack (4 entries per level).
     struct Node {
       uint32_t e;

@@ -100,6 +100,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   };
   patches_ = arena.Alloc<Patch>(numPatches);
   geom_ = arena.Alloc<PatchGeom>(numPatches);
+  twin_ = arena.Alloc<uint32_t>(stagedTwin_.size());
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
   tree_.Layout(arena, numPatches);
@@ -164,6 +165,24 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     }
     staged_.push_back(p);
   }
+  // Ray-test data; a twin's from its original's (TwinGeom), and the pairs.
+  stagedGeom_.clear();
+  stagedTwin_.clear();
+  numTwins_ = 0;
+  for (uint32_t id : ids) {
+    bool copy = !mesh.twin.empty() && mesh.twin[id] != kNoPatch && mesh.twin[id] < id;
+    stagedGeom_.push_back(copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[id]]))
+                               : MakePatchGeom(mesh.patches[id]));
+    numTwins_ += copy;
+  }
+  if (!mesh.twin.empty()) {
+    std::unordered_map<uint32_t, uint32_t> local;
+    for (uint32_t i = 0; i < ids.size(); ++i) local.emplace(ids[i], i);
+    for (uint32_t id : ids) {
+      auto it = mesh.twin[id] == kNoPatch ? local.end() : local.find(mesh.twin[id]);
+      stagedTwin_.push_back(it == local.end() ? kNoPatch : it->second);
+    }
+  }
   // Lattice vertices on a face shared with a neighbour.
   stagedCut_.clear();
   stagedCutNormal_.clear();
@@ -190,7 +209,8 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   }
   numCut_ = static_cast<uint32_t>(stagedCut_.size());
   uint32_t n = static_cast<uint32_t>(staged_.size());
-  plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n), options.gridDensity);
+  plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n),
+                         Span<const PatchGeom>(stagedGeom_.data(), n), options.gridDensity);
   Arena measure = Arena::Measure();
   Layout(measure, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
   return footprint_;
@@ -205,11 +225,12 @@ bool Environment::Build() {
   kdArea_ = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
     patches_[i] = staged_[i];
-    geom_[i] = MakePatchGeom(staged_[i]);
+    geom_[i] = stagedGeom_[i];
     totalArea_ += staged_[i].area;
     const glm::vec3& kd = staged_[i].kd;
     kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
   }
+  for (size_t i = 0; i < stagedTwin_.size(); ++i) twin_[i] = stagedTwin_[i];
   for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
   for (size_t v = 0; v < vertexCut_.size(); ++v) vertexCut_[v] = 0;
   for (size_t k = 0; k < stagedCut_.size(); ++k) {
@@ -239,6 +260,8 @@ bool Environment::Build() {
   }
   grid_.Build(patches_, geom_);
   std::vector<Patch>().swap(staged_);
+  std::vector<PatchGeom>().swap(stagedGeom_);
+  std::vector<uint32_t>().swap(stagedTwin_);
   std::vector<glm::vec3>().swap(stagedVertices_);
   std::vector<uint32_t>().swap(stagedCut_);
   std::vector<glm::vec3>().swap(stagedCutNormal_);
@@ -383,10 +406,10 @@ bool Environment::LeavesScene(const Ray& ray) const {
   return next < 0 || next >= grid3_.n[axis];
 }
 
-void Environment::Distribute(const Patch& shooter, uint32_t skip, const double power[3],
+void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out) {
   const bool masks = shape_.res > 0;
-  const bool foreign = in != nullptr || skip == kNoPatch;
+  const bool foreign = in != nullptr || skip.patch == kNoPatch;
   // Method C: which open pixels the rays hit in, and which they passed.
   const bool methodC = masks && out && options_.maskMethod == MaskMethod::kC;
   MaskBits hitPixels, passedPixels;
@@ -412,7 +435,7 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
     glm::vec3 local = CosineDirection(u[3], u[4]);
     Ray ray;
     // The origin is lifted off the shooter's plane and every hit from t = 0
-    // counts (the shooter itself is skipped): a ray from near a corner hits
+    // counts (the shooter and its twin are skipped): a ray from near a corner hits
     // the wall beside it however close. A tMin > 0 instead let such rays
     // through the wall and out of a closed box, a bias of ~4e-6 of the shot
     // power a bounce, which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
@@ -487,7 +510,7 @@ void Environment::Distribute(const Patch& shooter, uint32_t skip, const double p
   }
 }
 
-void Environment::TraceAlive(const Patch& shooter, uint32_t skip, const double power[3],
+void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t shotKey, uint32_t rays, bool foreign, MaskBits* alive) {
   DCHECK(alive->bits() >= rays);
   PatchSampler sampler = MakePatchSampler(shooter);
@@ -598,17 +621,19 @@ void Environment::ShootLocal(uint32_t i) {
   }
   tree_.Set(i, fraction < 1.0 ? KeyOf(src) : 0.0);
   ++stats_.shots;
+  // The shooter's rays ignore it and its twin (coplanar, behind them).
+  const Skip skip(i, twinOf(i));
   if (numNeighbours_ == 0) {
-    Distribute(p, i, power, key, rays, nullptr, nullptr);
+    Distribute(p, skip, power, key, rays, nullptr, nullptr);
     return;
   }
   MaskBits out = ScratchMask(0);
   out.SetAllOpen();
   if (options_.maskMethod == MaskMethod::kR) {
     for (uint32_t r = rays; r < out.bits(); ++r) out.Close(r);  // bits past the shot's rays
-    TraceAlive(p, i, power, key, rays, false, &out);
+    TraceAlive(p, skip, power, key, rays, false, &out);
   } else {
-    Distribute(p, i, power, key, rays, nullptr, &out);
+    Distribute(p, skip, power, key, rays, nullptr, &out);
   }
   Forward(ShotHeader(p, power, key, shotIndex, index_, rays), out);
   ++stats_.recordsCreated;

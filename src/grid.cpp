@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
@@ -248,9 +249,25 @@ void ForEachCell(const Frame& f, const Shape& s, Visit&& visit) {
   }
 }
 
+// Of two hits at the same t, whether patch p (side `front`) beats `best`:
+// a front side beats a back side, then the lower index wins. A total order
+// (so the walk's cell order cannot matter): of two coplanar twins, whose t
+// is bit-identical (patch.h, TwinGeom), the ray lands on the one it faces.
+// Runs on exact ties only, off the walk's hot path.
+inline bool TieWins(uint32_t p, bool front, uint32_t best, bool bestFront) {
+  return front != bestFront ? front : p < best;
+}
+
 }  // namespace
 
 Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
+  std::vector<PatchGeom> geom(patches.size());
+  for (size_t i = 0; i < patches.size(); ++i) geom[i] = MakePatchGeom(patches[i]);
+  return MakePlan(patches, Span<const PatchGeom>(geom.data(), geom.size()), density);
+}
+
+Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom, float density) {
+  CHECK(patches.size() == geom.size());
   CHECK_MSG(density > 0.0f && std::isfinite(density), "grid density must be positive");
   Plan plan;
   size_t n = patches.size();
@@ -264,8 +281,8 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
   // flat scene gets some thickness.
   glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo.x);
   Shape shape;
-  for (const Patch& p : patches) {
-    MakeShape(p, MakePatchGeom(p), scale, &shape);
+  for (size_t i = 0; i < n; ++i) {
+    MakeShape(patches[i], geom[i], scale, &shape);
     lo = glm::min(lo, shape.lo);
     hi = glm::max(hi, shape.hi);
   }
@@ -336,8 +353,8 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
   // Exact reference count, by the same rule Build uses.
   Frame frame = FrameOf(plan);
   uint64_t refs = 0;
-  for (const Patch& p : patches) {
-    MakeShape(p, MakePatchGeom(p), scale, &shape);
+  for (size_t i = 0; i < n; ++i) {
+    MakeShape(patches[i], geom[i], scale, &shape);
     ForEachCell(frame, shape, [&refs](size_t) { ++refs; });
   }
   plan.refs = refs;
@@ -403,7 +420,7 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
 }
 
 template <bool kAnyHit>
-bool Grid::TestAll(const Ray& ray, uint32_t skip, Hit* hit) const {
+bool Grid::TestAll(const Ray& ray, Skip skip, Hit* hit) const {
   const PatchGeom* geom = geom_.data();
   uint32_t n = static_cast<uint32_t>(geom_.size());
   Hit best;
@@ -411,9 +428,12 @@ bool Grid::TestAll(const Ray& ray, uint32_t skip, Hit* hit) const {
   for (uint32_t p = 0; p < n; ++p) {
     float t;
     bool front;
-    if (p == skip || !IntersectPatch(geom[p], ray, &t, &front)) continue;
+    if (p == skip.patch || p == skip.twin || !IntersectPatch(geom[p], ray, &t, &front)) continue;
     if (kAnyHit) return true;
-    if (t < best.t || best.patch == kNoPatch) best = Hit{p, t, front};
+    // The nearest; of equal t, TieWins (patches rise with p).
+    if (best.patch == kNoPatch || t < best.t ||
+        (t == best.t && TieWins(p, front, best.patch, best.front)))
+      best = Hit{p, t, front};
   }
   if (best.patch == kNoPatch) return false;
   *hit = best;
@@ -421,7 +441,7 @@ bool Grid::TestAll(const Ray& ray, uint32_t skip, Hit* hit) const {
 }
 
 template <bool kAnyHit>
-bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
+bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   DCHECK(cellStart_.data() != nullptr);  // built
   if (!(ray.tMin < ray.tMax)) return false;
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
@@ -496,7 +516,7 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
   Ray r = ray;       // tMax shrinks to just past the best hit so far
   float limit = t1;  // no step into a cell beyond this: the ray's end or the best hit
   uint32_t bestPatch = kNoPatch;
-  float bestT = 0.0f;
+  float bestT = r.tMax;  // every hit is nearer than the ray's end
   bool bestFront = false;
   const uint64_t* occupied = occupied_.data();
   for (;;) {
@@ -508,10 +528,11 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
       uint32_t p = refs[k];
       float t;
       bool front;
-      if (p == skip || !IntersectPatch(geom[p], r, &t, &front)) continue;
+      if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
       if (kAnyHit) return true;
-      // t <= bestT here; on a tie the lower index wins.
-      if (t < bestT || p < bestPatch) {
+      // t <= bestT here. On a tie a front side, then the lower index, so
+      // that of two coplanar twins the ray lands on the one it faces.
+      if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
         bestPatch = p;
         bestT = t;
         bestFront = front;
@@ -545,11 +566,11 @@ bool Grid::Walk(const Ray& ray, uint32_t skip, Hit* hit) const {
   return true;
 }
 
-bool Grid::Intersect(const Ray& ray, uint32_t skip, Hit* hit) const {
+bool Grid::Intersect(const Ray& ray, Skip skip, Hit* hit) const {
   return Walk<false>(ray, skip, hit);
 }
 
-bool Grid::Occluded(const Ray& ray, uint32_t skip) const {
+bool Grid::Occluded(const Ray& ray, Skip skip) const {
   return Walk<true>(ray, skip, nullptr);
 }
 

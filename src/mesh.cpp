@@ -158,6 +158,7 @@ Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, floa
     return Status::Error("the mesh needs " + Num(numPatches) + " patches and " + Num(numVertices) +
                          " vertices at patch size " + Num(s) + ", more than 32-bit ids allow");
 
+  CHECK_MSG(mesh->twin.empty(), "twins come after every patch: AddTwins after the last MeshScene");
   mesh->patches.reserve(mesh->patches.size() + static_cast<size_t>(numPatches));
   mesh->vertices.reserve(mesh->vertices.size() + static_cast<size_t>(numVertices));
   for (const Piece& piece : pieces) {
@@ -168,6 +169,41 @@ Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, floa
     }
   }
   return Status::Ok();
+}
+
+void AddTwins(const TwinOptions& options, Mesh* mesh) {
+  if (!options.any()) return;
+  const uint32_t n = static_cast<uint32_t>(mesh->patches.size());
+  CHECK_MSG(mesh->twin.empty(), "AddTwins runs once, on a mesh without twins");
+  mesh->twin.assign(n, kNoPatch);
+  // Each original vertex a twin uses gets one copy, shared by the twins of
+  // the patches around it: the reversed side has a lattice of its own.
+  std::vector<uint32_t> copy(mesh->vertices.size(), kNoPatch);
+  for (uint32_t i = 0; i < n; ++i) {
+    const Patch p = mesh->patches[i];  // a copy: patches grows below
+    const bool emits = p.ke.x > 0.0f || p.ke.y > 0.0f || p.ke.z > 0.0f;
+    if (!options.all && !(options.emitters && emits)) continue;
+    // corner[0] stays, the rest run backwards; a triangle repeats its last.
+    static const uint32_t kQuad[4] = {0, 3, 2, 1}, kTriangle[4] = {0, 2, 1, 1};
+    const uint32_t* from = p.numCorners == 4 ? kQuad : kTriangle;
+    Patch t = p;
+    for (uint32_t q = 0; q < 4; ++q) {
+      uint32_t v = p.vertex[from[q]];
+      if (copy[v] == kNoPatch) {
+        copy[v] = static_cast<uint32_t>(mesh->vertices.size());
+        glm::vec3 x = mesh->vertices[v];
+        mesh->vertices.push_back(x);
+      }
+      t.vertex[q] = copy[v];
+      t.corner[q] = p.corner[from[q]];
+    }
+    t.normal = -p.normal;
+    if (!(options.emitters && emits)) t.ke = glm::vec3(0.0f);
+    t.globalId = static_cast<uint32_t>(mesh->patches.size());
+    mesh->twin[i] = t.globalId;
+    mesh->twin.push_back(i);
+    mesh->patches.push_back(t);
+  }
 }
 
 }  // namespace vismask

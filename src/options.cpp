@@ -96,6 +96,14 @@ render options:
                        in a warning when that was not 0); NAME=ka takes the
                        material's Ka (scenes that give the light's strength
                        there); repeatable; a NAME no MTL defines exits 2
+  --two-sided          both sides of every polygon receive, reflect and show
+                       (for scenes wound inconsistently): each polygon is
+                       meshed twice, the copy reversed; patches double.
+                       An emitter's copy reflects but does not emit unless
+                       --two-sided-emitters is given too
+  --two-sided-emitters emitters emit from both sides, Ke from each: twice
+                       the emitted power of the one-sided emitter (their
+                       back sides also reflect)
   --reference REF.pfm  measure the image's relative RMSE against REF.pfm
                        (same size) when the solve ends, in convergence.csv
                        and run.json; the time it takes is not solve time
@@ -228,6 +236,14 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     }
     if (a == "--strict") {
       o->load.strict = true;
+      continue;
+    }
+    if (a == "--two-sided") {
+      o->twoSided = true;
+      continue;
+    }
+    if (a == "--two-sided-emitters") {
+      o->twoSidedEmitters = true;
       continue;
     }
     if (a == "--json") {

@@ -224,6 +224,27 @@ TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
   EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
 }
 
+// Two-sided scenes: twins everywhere, both sides of the light emitting, on
+// two environments and two ranks (cut vertices of both sides shared).
+TEST(AllocTest, TwoSidedRenderAllocatesNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  for (const char* ranks : {"1", "2"}) {
+    test::TempDir dir;
+    int code = -1;
+    long n = AllocationsAfterInit({"render", "scenes/miswound.obj", "--out", dir.path(), "--envs",
+                                   "2", "--ranks", ranks, "--mask-method", "R", "--two-sided",
+                                   "--two-sided-emitters", "--emitted-rays", "300000",
+                                   "--max-rays", "2048", "--width", "96", "--height", "96",
+                                   "--stop-unshot", "1e-2", "--quiet"},
+                                  &code);
+    EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(n, 0) << ranks << " ranks: heap allocations after init";
+    EXPECT_NE(test::ReadFile(dir.File("run.json")).find("\"twin_patches\""), std::string::npos);
+  }
+}
+
 // The point-sampled raster and its band-wise composite (the tests above use
 // the default, antialiased).
 TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {

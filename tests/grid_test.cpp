@@ -156,14 +156,16 @@ void BuildGrid(const TestScene& s, float density, BuiltGrid* b) {
   b->grid.Build(patches, Span<const PatchGeom>(s.geom.data(), s.geom.size()));
 }
 
-// The reference: every patch, the same tie rule (lower index wins).
+// The reference: every patch, the same tie rule (a front side, then the
+// lower index: grid.h).
 bool BruteIntersect(const TestScene& s, const Ray& ray, uint32_t skip, Hit* hit) {
   Hit best;
   for (uint32_t p = 0; p < s.geom.size(); ++p) {
     float t;
     bool front;
     if (p == skip || !IntersectPatch(s.geom[p], ray, &t, &front)) continue;
-    if (best.patch == kNoPatch || t < best.t) best = Hit{p, t, front};
+    if (best.patch == kNoPatch || t < best.t || (t == best.t && front && !best.front))
+      best = Hit{p, t, front};
   }
   *hit = best;
   return best.patch != kNoPatch;

@@ -49,6 +49,15 @@ TEST(RanksTest, PowerAllocationAndElementsGiveTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("B", {"3"}, {"2"}, kPowerBase);
 }
 
+// Two-sided: twins in every environment, both sides of the light emitting.
+TEST(RanksTest, TwoSidedGivesTheSameBytesEverywhere) {
+  std::vector<std::string> base = kPowerBase;
+  base[1] = "scenes/miswound.obj";
+  base.insert(base.end(), {"--two-sided", "--two-sided-emitters"});
+  ExpectSameBytesEverywhere("B", {"2", "4"}, {"2"}, base);
+  ExpectSameBytesEverywhere("R", {"3"}, {"4"}, base);
+}
+
 TEST(RanksTest, EveryTransportAndRankCountGivesTheSameBytes) {
   ExpectSameBytesEverywhere("B", {"1", "2", "4", "8"}, {"1", "2", "4"});
 }

@@ -4,7 +4,8 @@
 // patch's own corners, the shared lattice vertex (Environment::
 // ComputeVertexRadiosity, which averages across the patches of a polygon);
 // elsewhere, the area-weighted mean of the patch's leaves that touch it.
-// Back faces are black.
+// Back faces are black; of two twins (a two-sided mesh, mesh.h) only the
+// one facing the eye is drawn.
 //
 // Where the partition cut a polygon, its two sides are meshed and solved by
 // different environments, and each side's lattice vertices on the cut see

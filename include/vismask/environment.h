@@ -99,7 +99,9 @@ class Environment {
 
   // Init, first half: takes environment `index` of `grid` from the patches
   // `ids` of `mesh` (copied to the heap, display vertices remapped to a local
-  // lattice), plans the grid and measures the arena. No arena yet.
+  // lattice), plans the grid and measures the arena. No arena yet. A twin
+  // in a two-sided mesh (mesh.h) gets TwinGeom of its original's ray-test
+  // data; twins are paired locally when both are among `ids`.
   const EnvFootprint& Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                               const std::vector<uint32_t>& ids, const EnvOptions& options);
   // Init, second half: makes the arena of exactly the measured size, copies
@@ -167,6 +169,9 @@ class Environment {
   bool hasNeighbours() const { return numNeighbours_ > 0; }
   const Bounds& box() const { return box_; }
   Span<const Patch> patches() const { return patches_; }
+  // The local index of patch i's twin (two-sided meshes, mesh.h), or kNoPatch.
+  uint32_t twinOf(uint32_t i) const { return twin_.empty() ? kNoPatch : twin_[i]; }
+  uint32_t numTwins() const { return numTwins_; }  // patches that are a twin copy
   Span<const PatchEnergy> energy() const { return energy_; }
   Span<const glm::vec3> vertices() const { return vertices_; }
   Span<const glm::vec3> vertexRadiosity() const { return vertexB_; }
@@ -200,12 +205,12 @@ class Environment {
   // pixel is closed in `in` are skipped; with a mask method, `out` loses the
   // pixels of rays that hit here (A), of centre rays that hit (B), or of
   // pixels the rays only hit and those whose centre ray hits (C).
-  void Distribute(const Patch& shooter, uint32_t skip, const double power[3], uint64_t stream,
+  void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
                   uint32_t rays, const MaskBits* in, MaskBits* out);
   // Method R: regenerates the shot's rays from its key, traces those whose
   // bit is set in `alive` (restricted to this box when `foreign`), and
   // clears the bits of the rays it absorbs or lets escape the scene.
-  void TraceAlive(const Patch& shooter, uint32_t skip, const double power[3], uint64_t shotKey,
+  void TraceAlive(const Patch& shooter, Skip skip, const double power[3], uint64_t shotKey,
                   uint32_t rays, bool foreign, MaskBits* alive);
   // How many rays a local shot of `power` traces and what share of the
   // power it carries (1 unless the shot is partial).
@@ -249,6 +254,8 @@ class Environment {
   Arena arena_ = Arena::Measure();
   Span<Patch> patches_;
   Span<PatchGeom> geom_;
+  Span<uint32_t> twin_;  // two-sided meshes: each patch's twin or kNoPatch; else empty
+  uint32_t numTwins_ = 0;
   Span<PatchEnergy> energy_;
   Span<uint32_t> shotCount_;
   Span<Element> elements_;  // roots first (element i is patch i's), then the pool
@@ -284,6 +291,8 @@ class Environment {
   EnvFootprint footprint_;
   // Between Prepare and Build only.
   std::vector<Patch> staged_;
+  std::vector<PatchGeom> stagedGeom_;
+  std::vector<uint32_t> stagedTwin_;  // empty without twins
   std::vector<glm::vec3> stagedVertices_;
   std::vector<uint32_t> stagedCut_;
   std::vector<glm::vec3> stagedCutNormal_;

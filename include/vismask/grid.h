@@ -18,6 +18,15 @@
 
 namespace vismask {
 
+// The patches a ray ignores: the one it was shot from and, in a two-sided
+// mesh, that patch's twin (coplanar, behind the origin: mesh.h). Either may
+// be kNoPatch; a plain index converts.
+struct Skip {
+  uint32_t patch = kNoPatch;
+  uint32_t twin = kNoPatch;
+  Skip(uint32_t p = kNoPatch, uint32_t t = kNoPatch) : patch(p), twin(t) {}  // NOLINT: implicit
+};
+
 class Grid {
  public:
   // What the grid needs, decided at init before any arena exists.
@@ -28,17 +37,22 @@ class Grid {
   };
   // Plans the grid for `patches` with about `density` cells per patch.
   static Plan MakePlan(Span<const Patch> patches, float density);
+  // The same, for patches whose ray-test data is `geom` (what Build will
+  // be given), rather than MakePatchGeom of each (twins: TwinGeom).
+  static Plan MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom, float density);
 
   // Carves cellStart and refs from `arena` (also from a measuring arena).
   void Layout(Arena& arena, const Plan& plan);
   // Fills the arrays. `geom` must outlive the grid; indices are into it.
   void Build(Span<const Patch> patches, Span<const PatchGeom> geom);
 
-  // Closest hit in (ray.tMin, ray.tMax), ignoring patch `skip`. Front and
-  // back sides both count.
-  bool Intersect(const Ray& ray, uint32_t skip, Hit* hit) const;
+  // Closest hit in (ray.tMin, ray.tMax), ignoring the patches in `skip`.
+  // Front and back sides both count. Of hits at the same t, a front side
+  // wins, then the lower index: of two coplanar twins (TwinGeom) the one
+  // the ray faces.
+  bool Intersect(const Ray& ray, Skip skip, Hit* hit) const;
   // True if anything is hit in (ray.tMin, ray.tMax), ignoring `skip`.
-  bool Occluded(const Ray& ray, uint32_t skip) const;
+  bool Occluded(const Ray& ray, Skip skip) const;
 
   const Plan& plan() const { return plan_; }
   size_t cellCount() const { return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2]; }
@@ -53,10 +67,10 @@ class Grid {
  private:
   // The DDA walk behind Intersect (kAnyHit false) and Occluded (true).
   template <bool kAnyHit>
-  bool Walk(const Ray& ray, uint32_t skip, Hit* hit) const;
+  bool Walk(const Ray& ray, Skip skip, Hit* hit) const;
   // Every patch, for rays whose origin is too far away for the grid's padding.
   template <bool kAnyHit>
-  bool TestAll(const Ray& ray, uint32_t skip, Hit* hit) const;
+  bool TestAll(const Ray& ray, Skip skip, Hit* hit) const;
 
   Plan plan_;
   glm::vec3 cellSize_{1.0f};

@@ -14,6 +14,17 @@ namespace vismask {
 struct Mesh {
   std::vector<Patch> patches;        // in polygon order; Patch::globalId == index
   std::vector<glm::vec3> vertices;   // display lattice; Patch::vertex[] index it
+  // Two-sided meshes (AddTwins): per patch, the index of its twin, the same
+  // patch with its front on the other side, or kNoPatch. Empty: no twins.
+  std::vector<uint32_t> twin;
+};
+
+// Which patches AddTwins copies: every patch (--two-sided), and/or every
+// emitting patch, whose twin then emits too (--two-sided-emitters).
+struct TwinOptions {
+  bool all = false;
+  bool emitters = false;
+  bool any() const { return all || emitters; }
 };
 
 // Appends the patches of the given polygons of `scene` to `mesh`, with edges
@@ -26,5 +37,14 @@ struct Mesh {
 // or the mesh would exceed `maxPatches`.
 Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, float patchSize,
                  uint64_t maxPatches, Mesh* mesh);
+
+// Appends a twin of each patch `options` selects, after all the patches:
+// the same corners (bit for bit) in reverse order from corner[0], so its
+// front is the original's back, normal negated, same kd and area, on its
+// own copy of the lattice vertices (the two sides are displayed apart).
+// An emitter's twin emits Ke with `options.emitters`, nothing otherwise.
+// Twins keep the original's `surface`; globalId is the index, as for the
+// others. Sets mesh->twin for every patch. Does nothing when !options.any().
+void AddTwins(const TwinOptions& options, Mesh* mesh);
 
 }  // namespace vismask

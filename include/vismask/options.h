@@ -64,6 +64,12 @@ struct Options {
   uint64_t errorEvery = 0;  // --error-every K shots (with --reference); 0: at the end only
   std::string exclude;    // --exclude MASK.pgm (render with --reference, compare): pixels left out of the error
   bool correctUnshot = false;
+  // --two-sided: every polygon gets a second, reversed copy (its twin), so
+  // both sides receive, reflect and show. --two-sided-emitters: emitting
+  // polygons get one too (with --two-sided, their twins already exist),
+  // and emitters' twins emit Ke as well: twice the emitted power.
+  bool twoSided = false;
+  bool twoSidedEmitters = false;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
   double stopError = 0.0;  // --stop-error E: stop when the estimated bias < E; 0: off  // --correct-unshot on: patches.csv's b gets kd * ambient
   // vismask compare A.pfm B.pfm

@@ -67,6 +67,20 @@ struct PatchEnergy {
 // Builds a patch's ray-test data from its corners and normal.
 PatchGeom MakePatchGeom(const Patch& p);
 
+// The ray-test data of a patch's twin (mesh.h, AddTwins: the same corners,
+// reversed), from the original's: plane negated, the same edge planes. Not
+// MakePatchGeom of the twin, whose edge offsets would round differently.
+// Negation is exact in IEEE arithmetic, and so is every product and sum
+// IntersectPatch forms from it, so a ray meets both at bit-identical t and
+// point, and both or neither pass the edge tests: one from the front, the
+// other from the back.
+inline PatchGeom TwinGeom(const PatchGeom& g) {
+  PatchGeom t = g;
+  t.n = -g.n;
+  t.d = -g.d;
+  return t;
+}
+
 // Intersects `ray` with one patch. Returns true and sets *t and *front when the
 // ray meets the patch at ray.tMin < t < ray.tMax.
 inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* front) {
