@@ -106,7 +106,7 @@ struct Render {
   double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
   // Display values shared across cuts and smoothed polygons (display.h).
   Span<VertexRecord> sharedMine, sharedAll;
-  Span<uint32_t> sharedScratch;   // ShareVertices' sort of the smooth records
+  Span<uint32_t> sharedScratch;   // ShareVertices' sort of the smooth records, and those at one point
   uint64_t sharedCapacity = 0;    // the most shared vertices any rank's environments hold
   bool anySmooth = false;         // some rank has smooth vertices
   ShareRule shareRule;
@@ -140,7 +140,7 @@ struct Render {
     // Shared vertices: every rank's block holds sharedCapacity records.
     sharedMine = arena.Alloc<VertexRecord>(sharedCapacity);
     sharedAll = arena.Alloc<VertexRecord>(size_t(ranks) * sharedCapacity);
-    sharedScratch = arena.Alloc<uint32_t>(anySmooth ? size_t(ranks) * sharedCapacity : 0);
+    sharedScratch = arena.Alloc<uint32_t>(anySmooth ? 2 * size_t(ranks) * sharedCapacity : 0);
     part(&rankImageBytes);
     if (!root) return;
     if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);

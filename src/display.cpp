@@ -163,7 +163,9 @@ void CollectShared(Span<Environment* const> envs, Span<VertexRecord> out) {
     Span<const uint32_t> cut = env->cutVertices();
     for (size_t k = 0; k < cut.size(); ++k) {
       CHECK(n < out.size());
-      out[n++] = MakeRecord(*env, cut[k], env->cutNormals()[k], kRecordCut, env->FindSmooth(cut[k]));
+      int64_t s = env->FindSmooth(cut[k]);
+      out[n++] = MakeRecord(*env, cut[k], env->cutNormals()[k], kRecordCut,
+                            s < 0 ? nullptr : &env->smoothVertices()[size_t(s)]);
     }
     for (const SmoothVertex& s : env->smoothVertices()) {
       if (env->IsCutVertex(s.vertex)) continue;
@@ -195,7 +197,7 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
   size_t numSmooth = 0;
   for (size_t i = 0; i < used; ++i) {
     if (!(all[i].flags & kRecordSmooth)) continue;
-    CHECK(numSmooth < scratch.size());
+    CHECK(2 * all.size() <= scratch.size());
     scratch[numSmooth++] = static_cast<uint32_t>(i);
   }
   uint32_t* smooth = scratch.data();
@@ -205,12 +207,13 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
   });
 
   // Vertex v of `env`: on a cut (normal n) and/or smooth (s).
+  // Returns whether a smooth record of another polygon was taken in.
   auto share = [&](Environment* env, uint32_t v, bool isCut, glm::vec3 n, const SmoothVertex* s) {
     glm::vec3 x = env->vertices()[v];
     float w = env->vertexWeights()[v];
     glm::vec3 sum = env->vertexRadiosity()[v] * w;
     float weight = w;
-    bool shared = false;
+    bool shared = false, matched = false;
     const VertexRecord* below = nullptr;
     const VertexRecord* above = nullptr;
     if (isCut) {
@@ -257,8 +260,9 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
       }
     }
     if (s) {
-      // Every other polygon's smooth record at x that smooths with this one,
-      // once (not again if it stood for the other side of the cut).
+      // The smooth records at x (other than this one), in a fixed order.
+      uint32_t* cand = smooth + all.size();
+      size_t numCand = 0;
       uint32_t lo[3], hi[3];
       for (int a = 0; a < 3; ++a) {
         lo[a] = CellOf(x[a] - tolerance, rule.origin[a], cell);
@@ -273,27 +277,96 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
                 [&](uint32_t i, uint64_t k) { return keyOf(all[i]) < k; });
             for (const uint32_t* it = first; it < smooth + numSmooth && keyOf(all[*it]) == key; ++it) {
               const VertexRecord& r = all[*it];
-              if (r.polygon == s->polygon || &r == below || &r == above) continue;
-              glm::vec3 q(r.pos[0], r.pos[1], r.pos[2]);
-              if (glm::length(q - x) > tolerance) continue;
-              glm::vec3 rn(r.normal[0], r.normal[1], r.normal[2]), rvn(r.vn[0], r.vn[1], r.vn[2]);
-              if (!SmoothTogether(s->normal, s->vn, s->group, rn, rvn, r.group, rule.cosCrease))
-                continue;
-              for (int c = 0; c < 3; ++c) sum[c] += r.sum[c];
-              weight += r.weight;
-              shared = true;
+              if (r.env == env->index() && r.vertex == v) continue;
+              if (glm::length(glm::vec3(r.pos[0], r.pos[1], r.pos[2]) - x) > tolerance) continue;
+              cand[numCand++] = *it;
             }
           }
+      // The polygons that smooth with this one, directly or through others
+      // at x (so that every polygon of the group sees the same set, as with
+      // faces joined by smooth edges around a vertex): grown from this one
+      // until no record joins. Bit 31 marks a member.
+      constexpr uint32_t kMember = 1u << 31;
+      auto together = [&](const VertexRecord& a, const VertexRecord& b) {
+        if (a.polygon == b.polygon) return true;
+        return SmoothTogether(glm::vec3(a.normal[0], a.normal[1], a.normal[2]),
+                              glm::vec3(a.vn[0], a.vn[1], a.vn[2]), a.group,
+                              glm::vec3(b.normal[0], b.normal[1], b.normal[2]),
+                              glm::vec3(b.vn[0], b.vn[1], b.vn[2]), b.group, rule.cosCrease);
+      };
+      for (bool grew = true; grew;) {
+        grew = false;
+        for (size_t c = 0; c < numCand; ++c) {
+          if (cand[c] & kMember) continue;
+          const VertexRecord& r = all[cand[c]];
+          bool join = r.polygon == s->polygon ||
+                      SmoothTogether(s->normal, s->vn, s->group,
+                                     glm::vec3(r.normal[0], r.normal[1], r.normal[2]),
+                                     glm::vec3(r.vn[0], r.vn[1], r.vn[2]), r.group, rule.cosCrease);
+          for (size_t d = 0; d < numCand && !join; ++d)
+            join = (cand[d] & kMember) && together(all[cand[d] & ~kMember], r);
+          if (join) {
+            cand[c] |= kMember;
+            grew = true;
+          }
+        }
+      }
+      // Their values, each record once (not again if it stood for the other
+      // side of the cut; this polygon's own pieces only through the cut).
+      for (size_t c = 0; c < numCand; ++c) {
+        if (!(cand[c] & kMember)) continue;
+        const VertexRecord& r = all[cand[c] & ~kMember];
+        if (r.polygon == s->polygon || &r == below || &r == above) continue;
+        for (int k = 0; k < 3; ++k) sum[k] += r.sum[k];
+        weight += r.weight;
+        shared = matched = true;
+      }
     }
     if (shared && weight > 0.0f) env->SetVertexRadiosity(v, sum / weight);
+    return matched;
   };
 
   for (Environment* env : envs) {
     Span<const uint32_t> cut = env->cutVertices();
-    for (size_t k = 0; k < cut.size(); ++k)
-      share(env, cut[k], true, env->cutNormals()[k], env->FindSmooth(cut[k]));
-    for (const SmoothVertex& s : env->smoothVertices())
-      if (!env->IsCutVertex(s.vertex)) share(env, s.vertex, false, s.normal, &s);
+    Span<const SmoothVertex> sv = env->smoothVertices();
+    for (size_t k = 0; k < cut.size(); ++k) {
+      int64_t s = env->FindSmooth(cut[k]);
+      bool matched = share(env, cut[k], true, env->cutNormals()[k], s < 0 ? nullptr : &sv[size_t(s)]);
+      if (s >= 0) env->SetSmoothMatched(size_t(s), matched);
+    }
+    for (size_t k = 0; k < sv.size(); ++k)
+      if (!env->IsCutVertex(sv[k].vertex)) env->SetSmoothMatched(k, share(env, sv[k].vertex, false, sv[k].normal, &sv[k]));
+    // A smooth vertex inside an outline edge that met no other polygon's
+    // there (the polygons along the edge are subdivided differently): the
+    // line between the nearest vertices of its edge on either side that
+    // did, so that both sides show one function along the edge. A polygon's
+    // vertices are consecutive in sv.
+    for (size_t k = 0; k < sv.size(); ++k) {
+      const SmoothVertex& s = sv[k];
+      if (env->smoothMatched(k) || s.edge[0] != s.edge[1]) continue;
+      const glm::vec3 x = env->vertices()[s.vertex];
+      int64_t below = -1, above = -1;
+      float tBelow = 0.0f, tAbove = 0.0f;
+      auto consider = [&](size_t j) {
+        const SmoothVertex& o = sv[j];
+        if (!env->smoothMatched(j) || (o.edge[0] != s.edge[0] && o.edge[1] != s.edge[0])) return;
+        float t = glm::dot(env->vertices()[o.vertex] - x, s.dir);
+        if (t < -tolerance && (below < 0 || t > tBelow)) {
+          below = static_cast<int64_t>(j);
+          tBelow = t;
+        }
+        if (t > tolerance && (above < 0 || t < tAbove)) {
+          above = static_cast<int64_t>(j);
+          tAbove = t;
+        }
+      };
+      for (size_t j = k; j-- > 0 && sv[j].polygon == s.polygon;) consider(j);
+      for (size_t j = k + 1; j < sv.size() && sv[j].polygon == s.polygon; ++j) consider(j);
+      if (below < 0 || above < 0) continue;
+      float f = -tBelow / (tAbove - tBelow);
+      env->SetVertexRadiosity(s.vertex, (1.0f - f) * env->vertexRadiosity()[sv[size_t(below)].vertex] +
+                                            f * env->vertexRadiosity()[sv[size_t(above)].vertex]);
+    }
   }
 }
 

@@ -117,6 +117,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   vertexInward_ = arena.Alloc<glm::vec3>(numVertices);
   cutNormal_ = arena.Alloc<glm::vec3>(stagedCut_.size());
   smooth_ = arena.Alloc<SmoothVertex>(stagedSmooth_.size());
+  smoothMatched_ = arena.Alloc<uint8_t>(stagedSmooth_.size());
   patchSmoothEdges_ = arena.Alloc<uint8_t>(stagedSmoothEdges_.size());
   part(&footprint_.vertices);
   grid_.Layout(arena, plan);
@@ -853,10 +854,10 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
   return share;
 }
 
-const SmoothVertex* Environment::FindSmooth(uint32_t v) const {
+int64_t Environment::FindSmooth(uint32_t v) const {
   const SmoothVertex* it = std::lower_bound(
       smooth_.begin(), smooth_.end(), v, [](const SmoothVertex& s, uint32_t x) { return s.vertex < x; });
-  return it != smooth_.end() && it->vertex == v ? it : nullptr;
+  return it != smooth_.end() && it->vertex == v ? it - smooth_.begin() : -1;
 }
 
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {

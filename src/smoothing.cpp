@@ -24,7 +24,8 @@ void MarkSmoothVertices(const Scene& source, const Partition& part, float tolera
       if (seen[v]) continue;
       seen[v] = 1;
       const glm::dvec3 x(mesh->vertices[v]);
-      SmoothVertex s{v, src, poly.smoothing, {kNoPatch, kNoPatch}, poly.normal, glm::vec3(0.0f)};
+      SmoothVertex s{v,           src,           poly.smoothing, {kNoPatch, kNoPatch},
+                     poly.normal, glm::vec3(0.0f), glm::vec3(0.0f)};
       // The outline edges within `tolerance` of x; the vertex normal is
       // interpolated along the first.
       for (size_t e = 0; e < m; ++e) {
@@ -35,6 +36,7 @@ void MarkSmoothVertices(const Scene& source, const Partition& part, float tolera
         if (glm::length(a + t * ab - x) > tol) continue;
         if (s.edge[0] == kNoPatch) {
           s.edge[0] = static_cast<uint32_t>(e);
+          s.dir = glm::vec3(glm::normalize(ab));
           if (!poly.vn.empty()) {
             glm::dvec3 n = (1.0 - t) * glm::dvec3(poly.vn[e]) + t * glm::dvec3(poly.vn[(e + 1) % m]);
             double len = glm::length(n);

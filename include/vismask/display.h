@@ -67,12 +67,16 @@ void CollectShared(Span<Environment* const> envs, Span<VertexRecord> out);
 // and (on a cut) the other side's at the same point: the records in `all`
 // (every rank's, padding included) of other environments on the same cut
 // line of the same surface (normal), interpolated between the nearest two
-// (the sides need not be meshed alike); and (smooth) every smooth record of
-// another polygon at the same point that SmoothTogether accepts. Sorts `all`
-// in place and uses `scratch` (at least all.size(), or empty when no record
-// is smooth), so the result does not depend on the order records arrive in
-// or on how environments are dealt to ranks. Allocates nothing; O(cut
-// vertices^2 + smooth vertices log smooth vertices).
+// (the sides need not be meshed alike); and (smooth) the smooth records of
+// the other polygons at the same point that SmoothTogether joins to it,
+// directly or through one another. A smooth vertex inside an outline edge
+// that met no other polygon there (its neighbour is meshed differently)
+// then takes the line between the nearest vertices of that edge which did.
+// Sorts `all` in place and uses `scratch` (at least 2 * all.size(), or
+// empty when no record is smooth), so the result does not depend on the
+// order records arrive in or on how environments are dealt to ranks.
+// Allocates nothing; O(cut vertices^2 + smooth vertices log smooth
+// vertices), and the square of the polygons meeting at a point.
 void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<uint32_t> scratch,
                    const ShareRule& rule);
 

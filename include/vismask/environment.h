@@ -163,8 +163,12 @@ class Environment {
   // display exchanges: cut or smooth, each once (known from Prepare on).
   Span<const SmoothVertex> smoothVertices() const { return smooth_; }
   uint32_t numSharedVertices() const { return numShared_; }
-  // The smooth vertex record of lattice vertex v, or null.
-  const SmoothVertex* FindSmooth(uint32_t v) const;
+  // The index in smoothVertices() of lattice vertex v, or -1.
+  int64_t FindSmooth(uint32_t v) const;
+  // Whether smooth vertex k shared its value with another polygon's at the
+  // same point in the last ShareVertices (display scratch).
+  bool smoothMatched(size_t k) const { return smoothMatched_[k] != 0; }
+  void SetSmoothMatched(size_t k, bool matched) { smoothMatched_[k] = matched ? 1 : 0; }
   // Whether edge k (corner k to k+1) of patch i lies on an outline edge of
   // its polygon whose ends are both smooth vertices: the display
   // interpolates their shared values along it.
@@ -279,6 +283,7 @@ class Environment {
   Span<glm::vec3> cutNormal_;
   uint32_t numCut_ = 0;
   Span<SmoothVertex> smooth_;
+  Span<uint8_t> smoothMatched_;
   Span<uint8_t> patchSmoothEdges_;  // bit k: edge k is smooth (IsSmoothEdge); empty without smooth vertices
   uint32_t numShared_ = 0;
   Grid grid_;

@@ -21,6 +21,7 @@ struct SmoothVertex {
   uint32_t edge[2];  // the source polygon's outline edges it lies on (a corner: two; else edge[1] == edge[0])
   glm::vec3 normal;  // the polygon's geometric normal
   glm::vec3 vn;      // its vertex normal there ('vn', interpolated along the edge), or 0
+  glm::vec3 dir;     // unit direction of outline edge edge[0]
 };
 
 struct Mesh {
