@@ -111,7 +111,7 @@ TEST(SmoothingTest, HardCornersAndPlainScenesAreUntouched) {
   EXPECT_EQ(ReadFile(dir.File("cube/image.pfm")), ReadFile(dir.File("cube-off/image.pfm")));
   for (const char* s : {"on", "off"}) {
     auto r = RunMain({"render", "scenes/cornell.obj", "--quiet", "--width", "64", "--height", "64",
-                      "--envs", "2", "--emitted-rays", "200000", "--smooth", s, "--out",
+                      "--envs", "2", "--max-shots", "400", "--smooth", s, "--out",
                       dir.File(std::string("cornell-") + s)});
     ASSERT_EQ(r.code, 0) << r.err;
   }
