@@ -29,7 +29,7 @@ glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const do
   for (int k = 0; k < n; ++k)
     if (st == roots[k]) return env.vertexRadiosity()[p.vertex[k]];
   // On an edge of the patch along a cut: the line between the edge's two
-  // lattice vertices, whose values are shared with the other side (ShareCuts).
+  // lattice vertices, whose values are shared with the other side (ShareVertices).
   // Likewise along an outline edge whose ends are shared with other
   // polygons (smoothing).
   for (int k = 0; k < n; ++k) {
