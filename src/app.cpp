@@ -23,6 +23,7 @@
 #include "vismask/phase.h"
 #include "vismask/raster.h"
 #include "vismask/scene.h"
+#include "vismask/smoothing.h"
 #include "vismask/solver.h"
 #include "vismask/text_writer.h"
 #include "vismask/transport.h"
@@ -110,9 +111,12 @@ struct Render {
   TextWriter convergence;
   double initSeconds = 0.0;
   double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
-  Span<CutRecord> cutMine, cutAll;  // display values shared across cuts (display.h)
-  uint64_t cutCapacity = 0;         // the most cut vertices any rank's environments hold
-  float cutTolerance = 0.0f;
+  // Display values shared across cuts and smoothed polygons (display.h).
+  Span<VertexRecord> sharedMine, sharedAll;
+  Span<uint32_t> sharedScratch;   // ShareVertices' sort of the smooth records, and those at one point
+  uint64_t sharedCapacity = 0;    // the most shared vertices any rank's environments hold
+  bool anySmooth = false;         // some rank has smooth vertices
+  ShareRule shareRule;
   uint64_t predictedBytes = 0;  // this rank's arenas, as measured before they were made
 
   bool isRoot() const { return transport->rank() == 0; }
@@ -140,9 +144,10 @@ struct Render {
     ambientAll = arena.Alloc<AmbientReport>(size_t(ranks) * layout.perRank);
     ambient = arena.Alloc<AmbientReport>(layout.total);
     part(&rankOutputBytes);
-    // Cut vertices: every rank's block holds cutCapacity records.
-    cutMine = arena.Alloc<CutRecord>(cutCapacity);
-    cutAll = arena.Alloc<CutRecord>(size_t(ranks) * cutCapacity);
+    // Shared vertices: every rank's block holds sharedCapacity records.
+    sharedMine = arena.Alloc<VertexRecord>(sharedCapacity);
+    sharedAll = arena.Alloc<VertexRecord>(size_t(ranks) * sharedCapacity);
+    sharedScratch = arena.Alloc<uint32_t>(anySmooth ? 2 * size_t(ranks) * sharedCapacity : 0);
     part(&rankImageBytes);
     if (!root) return;
     if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
@@ -190,6 +195,8 @@ struct Prepared {
   EnvGrid grid;
   Partition part;
   float patchSize = 0.0f;
+  float tolerance = 0.0f;  // points this close are one: cut and smooth vertices
+  bool smooth = true;      // --smooth
   std::vector<std::vector<uint32_t>> pieces;  // polygon pieces of each environment
   TwinOptions twins;  // --two-sided, --two-sided-emitters
   EnvOptions envOptions;
@@ -207,6 +214,8 @@ Status PrepareScene(const Options& o, Prepared* p) {
   glm::vec3 extent = p->scene.bounds.hi - p->scene.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
   p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
+  p->tolerance = 1e-5f * maxExtent;
+  p->smooth = o.smooth;
   for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
   p->grid.box = p->scene.bounds;
   s = PartitionScene(p->scene, p->grid, &p->part);
@@ -271,6 +280,7 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
     if (e < first) continue;
+    if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh);
     std::vector<uint32_t> ids(mesh.patches.size());
     for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
     envs->push_back(std::make_unique<Environment>());
@@ -321,29 +331,32 @@ int Init(Render* r) {
     return kExitOk;
   };
   // Every rank reaches this collective, whether its load succeeded or not:
-  // each learns the others' status and cut-vertex counts (every block of
-  // the cut exchange is as large as the largest rank's).
+  // each learns the others' status and shared-vertex counts (every block
+  // of the exchange is as large as the largest rank's).
   struct LoadReport {
     int64_t code;
-    uint64_t cuts;
+    uint64_t shared;
+    uint64_t smooth;
     uint64_t twins;
   };
-  LoadReport mine{load(), 0, 0};
+  LoadReport mine{load(), 0, 0, 0};
   for (auto& e : r->envs) {
-    mine.cuts += e->numCutVertices();
+    mine.shared += e->numSharedVertices();
+    mine.smooth += e->smoothVertices().size();
     mine.twins += e->numTwins();
   }
   std::vector<LoadReport> all(static_cast<size_t>(r->transport->size()));
   r->transport->AllGather(&mine, sizeof mine, all.data());
   for (const LoadReport& k : all) {
     if (k.code != kExitOk) return static_cast<int>(k.code);
-    r->cutCapacity = std::max(r->cutCapacity, k.cuts);
+    r->sharedCapacity = std::max(r->sharedCapacity, k.shared);
+    r->anySmooth |= k.smooth > 0;
     r->numTwins += k.twins;
   }
-  {
-    glm::vec3 extent = p.scene.bounds.hi - p.scene.bounds.lo;
-    r->cutTolerance = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
-  }
+  r->shareRule.tolerance = p.tolerance;
+  r->shareRule.origin = p.scene.bounds.lo;
+  // A hair below the cosine, so that equal normals share at --crease 0.
+  r->shareRule.cosCrease = static_cast<float>(std::cos(o.creaseDeg * 3.14159265358979323846 / 180.0)) - 1e-6f;
   Arena measure = Arena::Measure();
   r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot());
   uint64_t envBytes = 0;
@@ -590,6 +603,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
   w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
   w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
+  w.Printf("    \"smooth\": %s,\n    \"crease\": %.9g,\n", o.smooth ? "true" : "false", o.creaseDeg);
   // Only when on, so that a one-sided run.json is what it was before them.
   if (o.twoSided || o.twoSidedEmitters)
     w.Printf("    \"two_sided\": %s,\n    \"two_sided_emitters\": %s,\n",
@@ -744,11 +758,11 @@ void RenderImage(Render* r) {
   AmbientTerm(r->ambient, ambient);
   r->fb.Clear();
   for (Environment* env : r->envPtrs) env->ComputeVertexRadiosity(ambient);
-  if (r->layout.total > 1) {
+  if (r->sharedCapacity > 0) {
     Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
-    CollectCuts(envs, r->cutMine);
-    t->AllGather(r->cutMine.data(), r->cutMine.bytes(), r->cutAll.data());
-    ShareCuts(envs, r->cutAll, r->cutTolerance);
+    CollectShared(envs, r->sharedMine);
+    t->AllGather(r->sharedMine.data(), r->sharedMine.bytes(), r->sharedAll.data());
+    ShareVertices(envs, r->sharedAll, r->sharedScratch, r->shareRule);
   }
   for (Environment* env : r->envPtrs) DrawEnvironment(r->view, *env, ambient, &r->fb);
   // The other ranks' framebuffers, a band of rows at a time (rank 0 holds
@@ -898,9 +912,12 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
     r.layout = EnvsOfRank(total, ranks, k);
     for (int q = 0; q < ranks; ++q) {
       RankEnvs re = EnvsOfRank(total, ranks, q);
-      uint64_t cuts = 0;
-      for (uint32_t e = re.first; e < re.first + re.count; ++e) cuts += envs[e]->numCutVertices();
-      r.cutCapacity = std::max(r.cutCapacity, cuts);
+      uint64_t shared = 0;
+      for (uint32_t e = re.first; e < re.first + re.count; ++e) {
+        shared += envs[e]->numSharedVertices();
+        r.anySmooth |= !envs[e]->smoothVertices().empty();
+      }
+      r.sharedCapacity = std::max(r.sharedCapacity, shared);
     }
     Arena measure = Arena::Measure();
     r.LayoutRank(measure, p.packetBytes, ranks, k == 0);

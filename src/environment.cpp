@@ -1,5 +1,6 @@
 #include "vismask/environment.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
@@ -116,6 +117,9 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   vertexFrac_ = arena.Alloc<float>(numVertices);
   vertexInward_ = arena.Alloc<glm::vec3>(numVertices);
   cutNormal_ = arena.Alloc<glm::vec3>(stagedCut_.size());
+  smooth_ = arena.Alloc<SmoothVertex>(stagedSmooth_.size());
+  smoothMatched_ = arena.Alloc<uint8_t>(stagedSmooth_.size());
+  patchSmoothEdges_ = arena.Alloc<uint8_t>(stagedSmoothEdges_.size());
   part(&footprint_.vertices);
   grid_.Layout(arena, plan);
   part(&footprint_.grid);
@@ -208,6 +212,43 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     }
   }
   numCut_ = static_cast<uint32_t>(stagedCut_.size());
+  // Smooth vertices (local ids, by vertex), and the patch edges between two
+  // on one outline edge of their polygon.
+  stagedSmooth_.clear();
+  stagedSmoothEdges_.clear();
+  if (!mesh.smooth.empty()) {
+    std::vector<uint32_t> at(stagedVertices_.size(), kNoPatch);  // local vertex -> stagedSmooth_
+    for (const SmoothVertex& s : mesh.smooth) {
+      auto it = vertexMap.find(s.vertex);
+      if (it == vertexMap.end()) continue;
+      stagedSmooth_.push_back(s);
+      stagedSmooth_.back().vertex = it->second;
+    }
+    std::sort(stagedSmooth_.begin(), stagedSmooth_.end(),
+              [](const SmoothVertex& a, const SmoothVertex& b) { return a.vertex < b.vertex; });
+    for (uint32_t k = 0; k < stagedSmooth_.size(); ++k) at[stagedSmooth_[k].vertex] = k;
+    if (!stagedSmooth_.empty()) {
+      stagedSmoothEdges_.assign(staged_.size(), 0);
+      for (size_t i = 0; i < staged_.size(); ++i) {
+        const Patch& p = staged_[i];
+        for (uint32_t k = 0; k < p.numCorners; ++k) {
+          uint32_t a = at[p.vertex[k]], b = at[p.vertex[(k + 1) % p.numCorners]];
+          if (a == kNoPatch || b == kNoPatch) continue;
+          const SmoothVertex &sa = stagedSmooth_[a], &sb = stagedSmooth_[b];
+          bool common = false;
+          for (uint32_t ea : sa.edge)
+            for (uint32_t eb : sb.edge) common |= ea == eb;
+          if (common) stagedSmoothEdges_[i] |= static_cast<uint8_t>(1u << k);
+        }
+      }
+    }
+  }
+  numShared_ = numCut_;
+  {
+    std::vector<char> cut(stagedVertices_.size(), 0);
+    for (uint32_t v : stagedCut_) cut[v] = 1;
+    for (const SmoothVertex& s : stagedSmooth_) numShared_ += cut[s.vertex] ? 0 : 1;
+  }
   uint32_t n = static_cast<uint32_t>(staged_.size());
   plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n),
                          Span<const PatchGeom>(stagedGeom_.data(), n), options.gridDensity);
@@ -265,6 +306,10 @@ bool Environment::Build() {
   std::vector<glm::vec3>().swap(stagedVertices_);
   std::vector<uint32_t>().swap(stagedCut_);
   std::vector<glm::vec3>().swap(stagedCutNormal_);
+  for (size_t k = 0; k < stagedSmooth_.size(); ++k) smooth_[k] = stagedSmooth_[k];
+  for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i) patchSmoothEdges_[i] = stagedSmoothEdges_[i];
+  std::vector<SmoothVertex>().swap(stagedSmooth_);
+  std::vector<uint8_t>().swap(stagedSmoothEdges_);
   Reset();
   return true;
 }
@@ -833,6 +878,12 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
     share += (s1 * s1 - s0 * s0) * crossing / cols;
   }
   return share;
+}
+
+int64_t Environment::FindSmooth(uint32_t v) const {
+  const SmoothVertex* it = std::lower_bound(
+      smooth_.begin(), smooth_.end(), v, [](const SmoothVertex& s, uint32_t x) { return s.vertex < x; });
+  return it != smooth_.end() && it->vertex == v ? it - smooth_.begin() : -1;
 }
 
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {

@@ -84,6 +84,12 @@ render options:
                        of the pixel square, computed analytically); off: the
                        pixel centre only, quads as two Gouraud triangles
                        (the images before --aa existed); default on
+  --smooth on|off      on: where polygons with a smoothing group ('s N') or
+                       vertex normals ('vn') meet, the image shades across
+                       them smoothly, within the crease angle; default on
+  --crease DEG         smoothing's crease angle, 0..180: the most two vertex
+                       normals, or two faces of one smoothing group, may
+                       differ by and be shaded as one surface (default 30)
   --quiet              no progress line on stderr
   --strict             refuse degenerate, non-planar and self-intersecting
                        faces (exit 2, file:line) instead of mending them:
@@ -408,6 +414,12 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--aa") {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->aa = v == "on";
+    } else if (a == "--smooth") {
+      if (v != "on" && v != "off") return Bad(a, v, "on or off");
+      o->smooth = v == "on";
+    } else if (a == "--crease") {
+      if (!ParseDouble(v, &d) || !(d >= 0.0) || d > 180.0) return Bad(a, v, "an angle in [0, 180] degrees");
+      o->creaseDeg = static_cast<float>(d);
     } else if (a == "--correct-unshot") {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->correctUnshot = v == "on";

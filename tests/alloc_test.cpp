@@ -245,6 +245,23 @@ TEST(AllocTest, TwoSidedRenderAllocatesNothingAfterInit) {
   }
 }
 
+// Smoothing's shared vertices, in one environment and across four.
+TEST(AllocTest, SmoothingAllocatesNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  for (const char* envs : {"1", "2x2x1"}) {
+    test::TempDir dir;
+    int code = -1;
+    long n = AllocationsAfterInit({"render", "scenes/smooth/sphere-s.obj", "--out", dir.path(), "--envs",
+                                   envs, "--emitted-rays", "200000", "--width", "64", "--height", "64",
+                                   "--quiet"},
+                                  &code);
+    ASSERT_EQ(code, 0);
+    EXPECT_EQ(n, 0) << envs;
+  }
+}
+
 // The point-sampled raster and its band-wise composite (the tests above use
 // the default, antialiased).
 TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {

@@ -69,6 +69,16 @@ TEST(RanksTest, MethodsCAndRGiveTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("R", {"2", "8"}, {"4"});
 }
 
+// Smoothing shares display values between polygons in different
+// environments and ranks, summed in an order that does not depend on them.
+TEST(RanksTest, SmoothingGivesTheSameBytesEverywhere) {
+  const std::vector<std::string> smooth = {
+      "render", "scenes/smooth/sphere-vn.obj", "--envs", "2x2x1", "--emitted-rays", "300000",
+      "--width", "96", "--height", "96", "--mask-res", "24", "--quiet",
+      "--camera", "0,0.3,4,0,0,0,0,1,0,35"};
+  ExpectSameBytesEverywhere("R", {"2", "3", "4"}, {"2"}, smooth);
+}
+
 void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,
                                std::vector<const char*> mpiRanks,
                                const std::vector<std::string>& kindOf) {

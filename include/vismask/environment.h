@@ -161,6 +161,23 @@ class Environment {
   Span<const glm::vec3> cutNormals() const { return cutNormal_; }
   Span<const float> vertexWeights() const { return vertexWeight_; }
   bool IsCutVertex(uint32_t v) const { return vertexCut_[v] != 0; }
+  // The lattice vertices that may share their value with other polygons'
+  // (Mesh::smooth, local vertex ids, by vertex), and how many vertices the
+  // display exchanges: cut or smooth, each once (known from Prepare on).
+  Span<const SmoothVertex> smoothVertices() const { return smooth_; }
+  uint32_t numSharedVertices() const { return numShared_; }
+  // The index in smoothVertices() of lattice vertex v, or -1.
+  int64_t FindSmooth(uint32_t v) const;
+  // Whether smooth vertex k shared its value with another polygon's at the
+  // same point in the last ShareVertices (display scratch).
+  bool smoothMatched(size_t k) const { return smoothMatched_[k] != 0; }
+  void SetSmoothMatched(size_t k, bool matched) { smoothMatched_[k] = matched ? 1 : 0; }
+  // Whether edge k (corner k to k+1) of patch i lies on an outline edge of
+  // its polygon whose ends are both smooth vertices: the display
+  // interpolates their shared values along it.
+  bool IsSmoothEdge(uint32_t i, uint32_t k) const {
+    return !patchSmoothEdges_.empty() && ((patchSmoothEdges_[i] >> k) & 1u);
+  }
   void SetVertexRadiosity(uint32_t v, const glm::vec3& b) { vertexB_[v] = b; }
   uint32_t elementsUsed() const { return nextElement_; }
 
@@ -273,6 +290,10 @@ class Environment {
   Span<glm::vec3> vertexInward_;
   Span<glm::vec3> cutNormal_;
   uint32_t numCut_ = 0;
+  Span<SmoothVertex> smooth_;
+  Span<uint8_t> smoothMatched_;
+  Span<uint8_t> patchSmoothEdges_;  // bit k: edge k is smooth (IsSmoothEdge); empty without smooth vertices
+  uint32_t numShared_ = 0;
   Grid grid_;
   MaxTree tree_;
   // Exchange state: empty for an environment without neighbours.
@@ -296,6 +317,8 @@ class Environment {
   std::vector<glm::vec3> stagedVertices_;
   std::vector<uint32_t> stagedCut_;
   std::vector<glm::vec3> stagedCutNormal_;
+  std::vector<SmoothVertex> stagedSmooth_;
+  std::vector<uint8_t> stagedSmoothEdges_;
   Grid::Plan plan_;
 };
 

@@ -11,12 +11,26 @@
 
 namespace vismask {
 
+// A lattice vertex on the outline of a polygon that asks to be smoothed (a
+// smoothing group or vertex normals): where another polygon's lattice vertex
+// lies at the same point, the display may share their values (smoothing.h).
+struct SmoothVertex {
+  uint32_t vertex;   // in Mesh::vertices
+  uint32_t polygon;  // the source polygon (before partitioning): never shared with itself
+  uint32_t group;    // its smoothing group, 0 for none
+  uint32_t edge[2];  // the source polygon's outline edges it lies on (a corner: two; else edge[1] == edge[0])
+  glm::vec3 normal;  // the polygon's geometric normal
+  glm::vec3 vn;      // its vertex normal there ('vn', interpolated along the edge), or 0
+  glm::vec3 dir;     // unit direction of outline edge edge[0]
+};
+
 struct Mesh {
   std::vector<Patch> patches;        // in polygon order; Patch::globalId == index
   std::vector<glm::vec3> vertices;   // display lattice; Patch::vertex[] index it
   // Two-sided meshes (AddTwins): per patch, the index of its twin, the same
   // patch with its front on the other side, or kNoPatch. Empty: no twins.
   std::vector<uint32_t> twin;
+  std::vector<SmoothVertex> smooth;  // by vertex; empty unless MarkSmoothVertices found some
 };
 
 // Which patches AddTwins copies: every patch (--two-sided), and/or every

@@ -71,6 +71,8 @@ struct Options {
   bool twoSided = false;
   bool twoSidedEmitters = false;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
+  bool smooth = true;        // --smooth on|off: share display values across smoothed polygons (smoothing.h)
+  float creaseDeg = 30.0f;   // --crease DEG: the most two normals may differ by and be smoothed
   double stopError = 0.0;  // --stop-error E: stop when the estimated bias < E; 0: off  // --correct-unshot on: patches.csv's b gets kd * ambient
   // vismask compare A.pfm B.pfm
   std::string compareA, compareB;
