@@ -19,14 +19,18 @@
 #include "vismask/camera.h"
 #include "vismask/environment.h"
 #include "vismask/raster.h"
+#include "vismask/texture.h"
 
 namespace vismask {
 
 // Draws environment `env`'s leaves into `fb`, with `ambient` (Cohen's term,
 // per channel) added as kd * ambient. Its vertex radiosity must be current
-// (Environment::ComputeVertexRadiosity, then ShareCuts). Allocates nothing.
+// (Environment::ComputeVertexRadiosity, then ShareCuts). Textured patches
+// (Environment::patchTexture) are drawn with `textures` (the rank's
+// TextureSet; it must hold theirs), the texture modulating the interpolated
+// value per pixel (texture.h). Allocates nothing.
 void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
-                     Framebuffer* fb);
+                     Framebuffer* fb, Span<const Texture> textures = {});
 
 // One cut vertex as environments exchange it.
 struct CutRecord {

@@ -14,6 +14,7 @@ namespace vismask {
 struct Mesh {
   std::vector<Patch> patches;        // in polygon order; Patch::globalId == index
   std::vector<glm::vec3> vertices;   // display lattice; Patch::vertex[] index it
+  std::vector<PatchTexture> textures;  // one per patch once any is textured (TextureMesh), else empty
 };
 
 // Appends the patches of the given polygons of `scene` to `mesh`, with edges
