@@ -78,16 +78,17 @@ TEST(TextureTest, ReadsPngAndJpegFiles) {
   std::vector<uint8_t> img(8 * 4 * 3);
   for (size_t i = 0; i < img.size(); i += 3) img[i] = 200, img[i + 1] = 100, img[i + 2] = 50;
   ASSERT_NE(stbi_write_png(dir.File("a.png").c_str(), 8, 4, 3, img.data(), 8 * 3), 0);
-  ASSERT_NE(stbi_write_jpg(dir.File("a.jpg").c_str(), 8, 4, 3, img.data(), 100), 0);
-  for (const char* name : {"a.png", "a.jpg"}) {
+  // The same image as a JPEG, committed: stb's JPEG writer (quality 100)
+  // made it; under UBSan that writer shifts negative values, its reader not.
+  for (std::string name : {dir.File("a.png"), std::string("tests/data/flat-8x4.jpg")}) {
     TextureImage t;
-    Status s = ReadTexture(dir.File(name), "m.mtl:3", &t);
+    Status s = ReadTexture(name, "m.mtl:3", &t);
     ASSERT_TRUE(s.ok()) << s.ToString();
     EXPECT_EQ(t.width, 8u);
     EXPECT_EQ(t.height, 4u);
     ASSERT_EQ(t.rgb.size(), 8u * 4u * 3u);
     // PNG exactly; JPEG to within its quantisation of a flat image.
-    double tol = std::string(name) == "a.png" ? 1e-9 : 0.02;
+    double tol = name == dir.File("a.png") ? 1e-9 : 0.02;
     EXPECT_NEAR(t.mean.x, SrgbToLinear(200), tol) << name;
     EXPECT_NEAR(t.mean.y, SrgbToLinear(100), tol) << name;
     EXPECT_NEAR(t.mean.z, SrgbToLinear(50), tol) << name;
