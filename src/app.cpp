@@ -26,6 +26,7 @@
 #include "vismask/smoothing.h"
 #include "vismask/solver.h"
 #include "vismask/text_writer.h"
+#include "vismask/texture.h"
 #include "vismask/transport.h"
 
 namespace vismask {
@@ -117,6 +118,13 @@ struct Render {
   uint64_t sharedCapacity = 0;    // the most shared vertices any rank's environments hold
   bool anySmooth = false;         // some rank has smooth vertices
   ShareRule shareRule;
+  TextureSet textures;              // the textures this rank's patches show (texture.h)
+  // Every scene texture, for run.json (read-only after init).
+  struct TextureInfo {
+    std::string path;
+    uint32_t width, height;
+  };
+  std::vector<TextureInfo> textureInfo;
   uint64_t predictedBytes = 0;  // this rank's arenas, as measured before they were made
 
   bool isRoot() const { return transport->rank() == 0; }
@@ -124,14 +132,18 @@ struct Render {
   // The rank's own arena: exchange buffers, framebuffer, gathered reports;
   // on rank 0 also the second framebuffer, the 8-bit image, the PNG scratch
   // and the writers' buffers.
-  uint64_t rankExchangeBytes = 0, rankImageBytes = 0, rankOutputBytes = 0;
-  void LayoutRank(Arena& arena, uint32_t packetBytes, int ranks, bool root) {
+  // The textures: a display resource like the framebuffer, so the rank's, and
+  // one copy serves all its environments (the solve read them at init only,
+  // into each patch's kd); only those its environments use (`used`).
+  uint64_t rankExchangeBytes = 0, rankImageBytes = 0, rankOutputBytes = 0, rankTextureBytes = 0;
+  void LayoutRank(Arena& arena, uint32_t packetBytes, int ranks, bool root,
+                  const SceneTextures& sceneTextures, const std::vector<uint8_t>& used) {
     size_t mark = arena.used();
     auto part = [&](uint64_t* bytes) {
       *bytes += arena.used() - mark;
       mark = arena.used();
     };
-    rankExchangeBytes = rankImageBytes = rankOutputBytes = 0;
+    rankExchangeBytes = rankImageBytes = rankOutputBytes = rankTextureBytes = 0;
     exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
     part(&rankExchangeBytes);
     fb.Layout(arena, options.width, options.height, options.aa);
@@ -149,6 +161,8 @@ struct Render {
     sharedAll = arena.Alloc<VertexRecord>(size_t(ranks) * sharedCapacity);
     sharedScratch = arena.Alloc<uint32_t>(anySmooth ? 2 * size_t(ranks) * sharedCapacity : 0);
     part(&rankImageBytes);
+    textures.Layout(arena, sceneTextures, used);
+    part(&rankTextureBytes);
     if (!root) return;
     if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
     if (!options.reference.empty())
@@ -192,6 +206,7 @@ int FailInit(const Render* r, const Status& s) {
 // and cut into environments. Heap; dropped at the end of init.
 struct Prepared {
   Scene scene;
+  SceneTextures textures;  // decoded map_Kd images
   EnvGrid grid;
   Partition part;
   float patchSize = 0.0f;
@@ -210,6 +225,8 @@ uint32_t RayCap(const Options& o) {
 
 Status PrepareScene(const Options& o, Prepared* p) {
   Status s = LoadScene(o.scene, &p->scene, o.load);
+  if (!s.ok()) return s;
+  s = LoadSceneTextures(p->scene, &p->textures);
   if (!s.ok()) return s;
   glm::vec3 extent = p->scene.bounds.hi - p->scene.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
@@ -280,6 +297,7 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
     if (e < first) continue;
+    TextureMesh(p.part.scene, p.textures, &mesh);
     if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh);
     std::vector<uint32_t> ids(mesh.patches.size());
     for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
@@ -287,6 +305,23 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
   }
   return Status::Ok();
+}
+
+// Which scene textures environments [first, first + count) show: those of
+// the textured materials of their polygon pieces that have uv.
+std::vector<uint8_t> TexturesUsed(const Prepared& p, uint32_t first, uint32_t count) {
+  std::vector<uint8_t> used(p.textures.images.size(), 0);
+  for (uint32_t e = first; e < first + count; ++e)
+    for (uint32_t i : p.pieces[e]) {
+      const Polygon& poly = p.part.scene.polygons[i];
+      uint32_t t = p.textures.ofMaterial[poly.material];
+      if (t != kNoTexture && !poly.uv.empty()) used[t] = 1;
+    }
+  return used;
+}
+
+void PrintWarnings(const SceneTextures& t) {
+  for (const std::string& w : t.warnings) os::PrintErr("%s\n", w.c_str());
 }
 
 // Init: load, partition, mesh and measure this rank's environments, check
@@ -323,6 +358,7 @@ int Init(Render* r) {
     // Emitters that light nothing (a face wound the wrong way): one line each.
     if (r->isRoot())
       for (const std::string& w : EmitterWarnings(p.scene)) os::PrintErr("%s\n", w.c_str());
+    if (r->isRoot()) PrintWarnings(p.textures);
     r->numPolygons = p.scene.polygons.size();
     r->patchSize = p.patchSize;
     r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
@@ -357,8 +393,11 @@ int Init(Render* r) {
   r->shareRule.origin = p.scene.bounds.lo;
   // A hair below the cosine, so that equal normals share at --crease 0.
   r->shareRule.cosCrease = static_cast<float>(std::cos(o.creaseDeg * 3.14159265358979323846 / 180.0)) - 1e-6f;
+  const std::vector<uint8_t> texturesUsed = TexturesUsed(p, r->layout.first, r->layout.count);
+  for (const TextureImage& t : p.textures.images)
+    r->textureInfo.push_back({t.path, t.width, t.height});
   Arena measure = Arena::Measure();
-  r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot());
+  r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot(), p.textures, texturesUsed);
   uint64_t envBytes = 0;
   for (auto& e : r->envs) envBytes += e->footprint().total;
   uint64_t need = envBytes + ArenaRoundUp(measure.used());
@@ -414,7 +453,8 @@ int Init(Render* r) {
 
   if (!Arena::Reserve(measure.used(), &r->rankArena))
     return refused("the rank's exchange and output buffers", ArenaRoundUp(measure.used()));
-  r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot());
+  r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot(), p.textures,
+                texturesUsed);
   if (!r->isRoot()) return kExitOk;
   for (size_t i = 0; i < r->reference.size(); ++i) r->reference[i] = ref.pixels[i];
   for (size_t i = 0; i < r->exclude.size(); ++i) {
@@ -737,6 +777,18 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   }
   uint64_t peak = os::PeakRssBytes(), files = os::FileRssBytes();
   w.Printf("],\n    \"rank0_arena_bytes\": %zu,\n", r->rankArena.capacity());
+  // map_Kd textures: rank 0's texels (part of its arena), and every texture
+  // of the scene with the 3 bytes a texel each rank showing it holds.
+  w.Printf("    \"rank0_texture_bytes\": %llu,\n    \"textures\": [",
+           static_cast<unsigned long long>(r->rankTextureBytes));
+  for (size_t i = 0; i < r->textureInfo.size(); ++i) {
+    const Render::TextureInfo& t = r->textureInfo[i];
+    w.Printf("%s{\"path\": ", i ? ", " : "");
+    JsonString(&w, t.path.c_str());
+    w.Printf(", \"width\": %u, \"height\": %u, \"texel_bytes\": %llu}", t.width, t.height,
+             static_cast<unsigned long long>(t.width) * t.height * 3);
+  }
+  w.Printf("],\n");
   w.Printf("    \"predicted_bytes\": %llu,\n    \"arena_high_water_bytes\": %llu,\n",
            static_cast<unsigned long long>(r->predictedBytes), static_cast<unsigned long long>(highWater));
   w.Printf("    \"file_rss_bytes\": %llu,\n", static_cast<unsigned long long>(files));
@@ -764,7 +816,7 @@ void RenderImage(Render* r) {
     t->AllGather(r->sharedMine.data(), r->sharedMine.bytes(), r->sharedAll.data());
     ShareVertices(envs, r->sharedAll, r->sharedScratch, r->shareRule);
   }
-  for (Environment* env : r->envPtrs) DrawEnvironment(r->view, *env, ambient, &r->fb);
+  for (Environment* env : r->envPtrs) DrawEnvironment(r->view, *env, ambient, &r->fb, r->textures.textures);
   // The other ranks' framebuffers, a band of rows at a time (rank 0 holds
   // one band), composited in rank order; then the fragments are resolved.
   const Framebuffer& mine = r->fb;
@@ -920,7 +972,8 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
       r.sharedCapacity = std::max(r.sharedCapacity, shared);
     }
     Arena measure = Arena::Measure();
-    r.LayoutRank(measure, p.packetBytes, ranks, k == 0);
+    r.LayoutRank(measure, p.packetBytes, ranks, k == 0, p.textures,
+                 TexturesUsed(p, r.layout.first, r.layout.count));
     f->rankOwn[k] = ArenaRoundUp(measure.used());
     for (uint32_t e = r.layout.first; e < r.layout.first + r.layout.count; ++e)
       f->rankEnvBytes[k] += envs[e]->footprint().total;
@@ -939,6 +992,7 @@ int Footprint(const Options& o) {
   Prepared p;
   Status s = PrepareScene(o, &p);
   if (!s.ok()) return Fail(s);
+  PrintWarnings(p.textures);
   uint32_t total = static_cast<uint32_t>(p.grid.count());
   FootprintFigures fig;
   s = MeasureFootprint(o, p, &fig);
@@ -984,19 +1038,20 @@ int Footprint(const Options& o) {
       const EnvFootprint& f = envs[e]->footprint();
       add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"twin_patches\": %llu, \"grid_cells\": %llu, "
           "\"patch_bytes\": %llu, \"element_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": %llu, "
-          "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"arena_bytes\": %llu}%s\n",
+          "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"texcoord_bytes\": %llu, \"arena_bytes\": %llu}%s\n",
           e, [&] { for (int k = 0; k < ranks; ++k) { RankEnvs re = EnvsOfRank(total, ranks, k); if (e < re.first + re.count) return k; } return 0; }(),
           (ull)f.numPatches, (ull)envs[e]->numTwins(), (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
-          (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.total, e + 1 < total ? "," : "");
+          (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total, e + 1 < total ? "," : "");
     }
     out += "  ],\n  \"ranks\": [\n";
     for (int k = 0; k < ranks; ++k) {
       const Render& r = probes[k];
       add("    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
           "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
-          "\"rank_arena_bytes\": %llu, \"total_bytes\": %llu}%s\n",
+          "\"texture_bytes\": %llu, \"rank_arena_bytes\": %llu, \"total_bytes\": %llu}%s\n",
           k, r.layout.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
-          (ull)r.rankOutputBytes, (ull)rankOwn[k], (ull)rankTotal[k], k + 1 < ranks ? "," : "");
+          (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)rankOwn[k], (ull)rankTotal[k],
+          k + 1 < ranks ? "," : "");
     }
     out += "  ]\n}\n";
   } else {
@@ -1005,23 +1060,24 @@ int Footprint(const Options& o) {
         o.scene.c_str(), total, total == 1 ? "" : "s", ranks, ranks == 1 ? "" : "s",
         MaskMethodName(o.maskMethod), o.maskMethod == MaskMethod::kR ? "N" : "R",
         o.maskMethod == MaskMethod::kR ? RayCap(o) : o.maskRes, p.packetBytes, o.width, o.height);
-    add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches",
+    add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches",
         "grid_cells", "patches_B", "elements_B", "vertices_B", "grid_B", "queue_B", "packets_B",
-        "arena_B");
+        "texcoord_B", "arena_B");
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
       int k = 0;
       while (e >= EnvsOfRank(total, ranks, k).first + EnvsOfRank(total, ranks, k).count) ++k;
-      add("%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
+      add("%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
           (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
-          (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.total);
+          (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total);
     }
-    add("\n%4s %4s %14s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B", "exchange_B",
-        "image_B", "output_B", "total_B");
+    add("\n%4s %4s %14s %12s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B", "exchange_B",
+        "image_B", "output_B", "texture_B", "total_B");
     for (int k = 0; k < ranks; ++k) {
       const Render& r = probes[k];
-      add("%4d %4u %14llu %12llu %12llu %12llu %13llu\n", k, r.layout.count, (ull)rankEnvBytes[k],
-          (ull)r.rankExchangeBytes, (ull)r.rankImageBytes, (ull)r.rankOutputBytes, (ull)rankTotal[k]);
+      add("%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.layout.count, (ull)rankEnvBytes[k],
+          (ull)r.rankExchangeBytes, (ull)r.rankImageBytes, (ull)r.rankOutputBytes,
+          (ull)r.rankTextureBytes, (ull)rankTotal[k]);
     }
     if (p.twins.any())
       add("\n%s: %llu patches, %llu of them twins (one-sided: %llu); %llu bytes in all ranks' "

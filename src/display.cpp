@@ -66,7 +66,7 @@ glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const do
 }  // namespace
 
 void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
-                     Framebuffer* fb) {
+                     Framebuffer* fb, Span<const Texture> textures) {
   Span<const Element> elements = env.elements();
   for (uint32_t i = 0; i < env.patches().size(); ++i) {
     const Patch& p = env.patches()[i];
@@ -77,6 +77,8 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
     // they share corner[0] and their normals are exact negatives, so just
     // one of them faces it, and no coplanar back face takes a fragment.
     if (!facing && env.twinOf(i) != kNoPatch) continue;
+    const PatchTexture* tex = facing ? env.patchTexture(i) : nullptr;
+    CHECK(!tex || (tex->texture < textures.size() && textures[tex->texture].texels));
     // Depth-first over the tree, with a fixed stack (4 entries per level).
     struct Node {
       uint32_t e;
@@ -113,6 +115,12 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       if (n == 3) {
         piece.p[3] = piece.p[2];
         piece.c[3] = piece.c[2];
+      }
+      if (tex) {
+        piece.texture = &textures[tex->texture];
+        piece.ke = kInvPi * p.ke;
+        for (int k = 0; k < n; ++k) piece.uv[k] = PatchUv(*tex, triangle, node.c[k]);
+        piece.uv[3] = piece.uv[n - 1];
       }
       DrawPiece(view, piece, fb);
     }

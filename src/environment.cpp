@@ -121,6 +121,8 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   smoothMatched_ = arena.Alloc<uint8_t>(stagedSmooth_.size());
   patchSmoothEdges_ = arena.Alloc<uint8_t>(stagedSmoothEdges_.size());
   part(&footprint_.vertices);
+  patchTex_ = arena.Alloc<PatchTexture>(stagedTex_.empty() ? 0 : numPatches);
+  part(&footprint_.textures);
   grid_.Layout(arena, plan);
   part(&footprint_.grid);
   // Exchange buffers only where there is someone to exchange with.
@@ -155,7 +157,9 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   // Local copies of the patches and a compact local vertex lattice.
   staged_.clear();
   stagedVertices_.clear();
+  stagedTex_.clear();
   staged_.reserve(ids.size());
+  bool textured = false;
   std::unordered_map<uint32_t, uint32_t> vertexMap;
   for (uint32_t id : ids) {
     Patch p = mesh.patches[id];
@@ -168,6 +172,10 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
       p.vertex[k] = it->second;
     }
     staged_.push_back(p);
+    if (!mesh.textures.empty()) {
+      stagedTex_.push_back(mesh.textures[id]);
+      textured |= mesh.textures[id].texture != kNoTexture;
+    }
   }
   // Ray-test data; a twin's from its original's (TwinGeom), and the pairs.
   stagedGeom_.clear();
@@ -187,6 +195,7 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
       stagedTwin_.push_back(it == local.end() ? kNoPatch : it->second);
     }
   }
+  if (!textured) stagedTex_.clear();
   // Lattice vertices on a face shared with a neighbour.
   stagedCut_.clear();
   stagedCutNormal_.clear();
@@ -272,6 +281,7 @@ bool Environment::Build() {
     kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
   }
   for (size_t i = 0; i < stagedTwin_.size(); ++i) twin_[i] = stagedTwin_[i];
+  for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = stagedTex_[i];
   for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
   for (size_t v = 0; v < vertexCut_.size(); ++v) vertexCut_[v] = 0;
   for (size_t k = 0; k < stagedCut_.size(); ++k) {
@@ -303,6 +313,7 @@ bool Environment::Build() {
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);
   std::vector<uint32_t>().swap(stagedTwin_);
+  std::vector<PatchTexture>().swap(stagedTex_);
   std::vector<glm::vec3>().swap(stagedVertices_);
   std::vector<uint32_t>().swap(stagedCut_);
   std::vector<glm::vec3>().swap(stagedCutNormal_);
@@ -817,6 +828,15 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
   const Patch& p = patches_[patch];
   const Element& el = elements_[e];
   glm::vec3 b;
+  const PatchTexture* t = patchTexture(patch);
+  if (t) {
+    // Reflected light as the material's mean reflectance would give it
+    // (scale = kd_mat / kd): the display multiplies the texture back in.
+    for (int c = 0; c < 3; ++c)
+      b[c] = static_cast<float>(static_cast<double>(p.ke[c]) +
+                                (el.received[c] / el.area + p.kd[c] * ambient[c]) * t->scale[c]);
+    return b;
+  }
   for (int c = 0; c < 3; ++c)
     b[c] = static_cast<float>(static_cast<double>(p.ke[c]) + el.received[c] / el.area +
                               p.kd[c] * ambient[c]);

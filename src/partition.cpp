@@ -15,6 +15,7 @@
 
 #include "geometry_util.h"
 #include "vismask/check.h"
+#include "vismask/texture.h"
 
 namespace vismask {
 namespace {
@@ -228,6 +229,8 @@ Status PartitionScene(const Scene& scene, const EnvGrid& grid, Partition* out) {
       hi = glm::max(hi, v);
     }
     const double repeat = kRepeatTol * glm::length(glm::dvec3(hi) - glm::dvec3(lo));
+    // Texture coordinates of clipped corners: the polygon's affine map.
+    const UvMap uvMap = FitUvMap(poly);
     // Cuts ring `r` to slab j of `axis` (a no-op on an axis the polygon does not cross).
     auto toSlab = [&](const Ring& r, int axis, int j) {
       if (first[axis] == last[axis]) return r;
@@ -252,6 +255,7 @@ Status PartitionScene(const Scene& scene, const EnvGrid& grid, Partition* out) {
             for (const Corner& corner : rx) {
               piece.corners.push_back(corner.p);
               pc.emplace_back(corner.p);
+              if (!poly.uv.empty()) piece.uv.push_back(uvMap.At(corner.p));
             }
             piece.area = glm::length(NewellSum(pc)) / 2;
             if (piece.area <= kMinAreaRatio * poly.area) continue;

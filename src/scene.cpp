@@ -554,6 +554,7 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       // last token; they are not applied, and said so once.
       if (args > 1) Warn(path, line, "ignoring map_Kd options");
       materials.back().mapKd = Beside(path, t.back());
+      materials.back().mapKdWhere = path + ":" + std::to_string(line);
     } else if (key == "Kd" || key == "Ke") {
       if (!haveMaterial) return Status::At(path, line, Quote(key) + " before any 'newmtl'");
       if (args != 3)

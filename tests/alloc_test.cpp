@@ -262,6 +262,27 @@ TEST(AllocTest, SmoothingAllocatesNothingAfterInit) {
   }
 }
 
+// Textures: the per-pixel lookups, on two environments (the floor and back
+// wall are cut, so textured cut vertices are shared), antialiased and point
+// sampled on two ranks.
+TEST(AllocTest, TexturedRenderAllocatesNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  for (const char* aa : {"on", "off"}) {
+    test::TempDir dir;
+    int code = -1;
+    long n = AllocationsAfterInit({"render", "scenes/textured/room.obj", "--out", dir.path(),
+                                   "--envs", "2", "--ranks", "2", "--aa", aa, "--mask-method", "R",
+                                   "--emitted-rays", "100000", "--max-rays", "2048", "--stop-unshot",
+                                   "2e-2", "--width", "64", "--height", "64", "--quiet"},
+                                  &code);
+    EXPECT_EQ(code, 0) << aa << ": a rank failed (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(n, 0) << aa << ": heap allocations after init in rank 0";
+    EXPECT_NE(test::ReadFile(dir.File("run.json")).find("checker.png"), std::string::npos);
+  }
+}
+
 // The point-sampled raster and its band-wise composite (the tests above use
 // the default, antialiased).
 TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {

@@ -121,6 +121,54 @@ TEST(FootprintTest, MemBudgetRefusesBelowTheNeedAndRunsAtIt) {
   EXPECT_TRUE(test::FileExists(dir.File("exact/image.png")));
 }
 
+// Textures: the texels each rank shows are in its arena (3 bytes a texel,
+// only the textures of its own environments), the per-patch uv in each
+// environment's, and a textured render reserves exactly what footprint says.
+TEST(FootprintTest, CountsTextureBytes) {
+  auto footprint = [](const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"footprint", "scenes/textured/room.obj", "--json",
+                                     "--width", "64", "--height", "48"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    testing::internal::CaptureStdout();
+    auto r = RunMain(args);
+    std::string out = testing::internal::GetCapturedStdout();
+    EXPECT_EQ(r.code, 0) << r.err;
+    return out;
+  };
+  const unsigned long long checker = 32 * 32 * 3, stripes = 16 * 16 * 3;
+  std::string one = footprint({});
+  unsigned long long texture = JsonNumber(one, "texture_bytes", one.find("\"ranks\""));
+  EXPECT_GE(texture, checker + stripes);
+  EXPECT_LE(texture, checker + stripes + 2 * 64 + 64);  // two Texture records and alignment
+  EXPECT_GT(JsonNumber(one, "texcoord_bytes"), 0u);
+  // Untextured: nothing.
+  std::string cornell = FootprintJson({});
+  EXPECT_EQ(JsonNumber(cornell, "texture_bytes", cornell.find("\"ranks\"")), 0u);
+  EXPECT_EQ(JsonNumber(cornell, "texcoord_bytes"), 0u);
+  // Two ranks split at x = 5: the striped wall (x = 10) is rank 1's only.
+  std::string two = footprint({"--envs", "2", "--ranks", "2"});
+  size_t r0 = two.find("{\"rank\": 0"), r1 = two.find("{\"rank\": 1");
+  unsigned long long t0 = JsonNumber(two, "texture_bytes", r0), t1 = JsonNumber(two, "texture_bytes", r1);
+  EXPECT_GE(t0, checker);
+  EXPECT_LT(t0, checker + stripes);
+  EXPECT_GE(t1 - t0, stripes);
+  EXPECT_LE(t1 - t0, stripes + 16);
+  // The render reserves and uses exactly that, and reports it.
+  TempDir dir;
+  auto r = RunMain({"render", "scenes/textured/room.obj", "--out", dir.path(), "--width", "64",
+                    "--height", "48", "--emitted-rays", "100000", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string run = ReadFile(dir.File("run.json"));
+  unsigned long long predicted = JsonNumber(one, "total_bytes", one.find("\"ranks\""));
+  EXPECT_EQ(JsonNumber(run, "predicted_bytes"), predicted);
+  EXPECT_EQ(JsonNumber(run, "arena_high_water_bytes"), predicted);
+  EXPECT_EQ(JsonNumber(run, "rank0_texture_bytes"), texture);
+  EXPECT_NE(run.find("\"path\": \"scenes/textured/checker.png\", \"width\": 32, \"height\": 32, "
+                     "\"texel_bytes\": 3072}"),
+            std::string::npos)
+      << run;
+}
+
 TEST(FootprintTest, PeakRssIsExplainedByArenasAndMappedFiles) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "AddressSanitizer's shadow memory is part of the RSS; the claim is about normal builds";

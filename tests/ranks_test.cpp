@@ -58,6 +58,20 @@ TEST(RanksTest, TwoSidedGivesTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("R", {"3"}, {"4"}, base);
 }
 
+// Textures: the patch means at init and the per-pixel lookups of each
+// rank's own patches, composited, do not depend on where they ran.
+const std::vector<std::string> kTexturedBase = {
+    "render", "scenes/textured/room.obj", "--envs", "2x1x1", "--emitted-rays", "300000",
+    "--max-rays", "2048", "--stop-unshot", "2e-2", "--width", "96", "--height", "96",
+    "--mask-res", "24", "--patch-size", "1", "--quiet"};
+
+TEST(RanksTest, TexturedSceneGivesTheSameBytesEverywhere) {
+  ExpectSameBytesEverywhere("B", {"2"}, {"2"}, kTexturedBase);
+  std::vector<std::string> point = kTexturedBase;
+  point.insert(point.end(), {"--envs", "2x1x2", "--aa", "off"});
+  ExpectSameBytesEverywhere("R", {"2", "4"}, {"4"}, point);
+}
+
 TEST(RanksTest, EveryTransportAndRankCountGivesTheSameBytes) {
   ExpectSameBytesEverywhere("B", {"1", "2", "4", "8"}, {"1", "2", "4"});
 }

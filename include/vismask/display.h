@@ -28,14 +28,18 @@
 #include "vismask/camera.h"
 #include "vismask/environment.h"
 #include "vismask/raster.h"
+#include "vismask/texture.h"
 
 namespace vismask {
 
 // Draws environment `env`'s leaves into `fb`, with `ambient` (Cohen's term,
 // per channel) added as kd * ambient. Its vertex radiosity must be current
-// (Environment::ComputeVertexRadiosity, then ShareVertices). Allocates nothing.
+// (Environment::ComputeVertexRadiosity, then ShareVertices). Textured patches
+// (Environment::patchTexture) are drawn with `textures` (the rank's
+// TextureSet; it must hold theirs), the texture modulating the interpolated
+// value per pixel (texture.h). Allocates nothing.
 void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
-                     Framebuffer* fb);
+                     Framebuffer* fb, Span<const Texture> textures = {});
 
 // One shared vertex (on a cut, or smooth, or both) as environments exchange it.
 struct VertexRecord {

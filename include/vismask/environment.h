@@ -61,6 +61,7 @@ struct EnvStats {
 struct EnvFootprint {
   uint64_t patches = 0;   // Patch, PatchGeom, PatchEnergy, shot counts, selection tree
   uint64_t vertices = 0;  // display lattice and its radiosity
+  uint64_t textures = 0;  // textured patches' uv and display scale (0 with none textured)
   uint64_t elements = 0;  // the element pool (roots and children)
   uint64_t grid = 0;      // cell offsets and patch references
   uint64_t queue = 0;     // foreign-shooter slots and their masks
@@ -149,6 +150,8 @@ class Environment {
   void ComputeVertexRadiosity(const double ambient[3]);
   // The display radiosity of leaf element `e` of patch `patch`: the
   // patch's emission + what the leaf received / its area + kd * ambient.
+  // For a textured patch the part after the emission is scaled by
+  // PatchTexture::scale (the material's mean kd over the patch's: texture.h).
   glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;
   // The leaf element of patch `patch` at parameters `st`.
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
@@ -192,6 +195,10 @@ class Environment {
   Span<const PatchEnergy> energy() const { return energy_; }
   Span<const glm::vec3> vertices() const { return vertices_; }
   Span<const glm::vec3> vertexRadiosity() const { return vertexB_; }
+  // Patch i's texture data, or null when it is not textured.
+  const PatchTexture* patchTexture(uint32_t i) const {
+    return patchTex_.empty() || patchTex_[i].texture == kNoTexture ? nullptr : &patchTex_[i];
+  }
   const Grid& grid() const { return grid_; }
   const EnergyLedger& ledger() const { return ledger_; }
   const EnvStats& stats() const { return stats_; }
@@ -294,6 +301,7 @@ class Environment {
   Span<uint8_t> smoothMatched_;
   Span<uint8_t> patchSmoothEdges_;  // bit k: edge k is smooth (IsSmoothEdge); empty without smooth vertices
   uint32_t numShared_ = 0;
+  Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
   Grid grid_;
   MaxTree tree_;
   // Exchange state: empty for an environment without neighbours.
@@ -314,6 +322,7 @@ class Environment {
   std::vector<Patch> staged_;
   std::vector<PatchGeom> stagedGeom_;
   std::vector<uint32_t> stagedTwin_;  // empty without twins
+  std::vector<PatchTexture> stagedTex_;  // empty when no patch is textured
   std::vector<glm::vec3> stagedVertices_;
   std::vector<uint32_t> stagedCut_;
   std::vector<glm::vec3> stagedCutNormal_;

@@ -31,6 +31,7 @@ struct Mesh {
   // patch with its front on the other side, or kNoPatch. Empty: no twins.
   std::vector<uint32_t> twin;
   std::vector<SmoothVertex> smooth;  // by vertex; empty unless MarkSmoothVertices found some
+  std::vector<PatchTexture> textures;  // one per patch once any is textured (TextureMesh), else empty
 };
 
 // Which patches AddTwins copies: every patch (--two-sided), and/or every

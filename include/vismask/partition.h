@@ -34,7 +34,8 @@ struct EnvGrid {
 bool ParseEnvGrid(const char* text, int n[3]);
 
 // The scene after partitioning: `scene.polygons` are the clipped pieces
-// (material, line and normal kept from the source polygon), `env[i]` is the
+// (material, line and normal kept from the source polygon; the uv of a cut
+// piece's corners from the source's affine uv map, texture.h), `env[i]` is the
 // environment of piece i, and `source[i]` the index of the polygon it was cut
 // from. Pieces are ordered by environment, then by source polygon.
 struct Partition {

@@ -9,6 +9,7 @@
 #pragma once
 #include <cstdint>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -55,6 +56,17 @@ struct Patch {
   uint32_t surface;      // index of the source polygon in the scene
   uint32_t vertex[4];    // display-lattice vertices, for Gouraud shading
   uint32_t globalId;     // id in the whole scene, independent of partition
+};
+
+constexpr uint32_t kNoTexture = 0xffffffffu;
+
+// What a textured patch adds (texture.h): its texture, the uv at its corners
+// (corner 3 repeats corner 2 for a triangle), and the display scale
+// kd_mat / kd per channel (0 where the patch's kd is 0: its light is lost).
+struct PatchTexture {
+  uint32_t texture = kNoTexture;
+  glm::vec3 scale{0.0f};
+  glm::vec2 uv[4];
 };
 
 struct PatchEnergy {

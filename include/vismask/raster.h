@@ -27,6 +27,7 @@
 #pragma once
 #include <cstdint>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "vismask/arena.h"
@@ -66,15 +67,23 @@ struct Framebuffer {
   void Clear();
 };
 
+struct Texture;
+
 // A planar convex piece to draw: world corners counter-clockwise from the
 // front (a quad's corners are its bilinear parameter square's (0,0), (1,0),
 // (1,1), (0,1)), the radiance at each corner (already divided by pi), the
-// global patch id. numCorners is 3 or 4.
+// global patch id. numCorners is 3 or 4. A textured piece also has texture
+// coordinates per corner and its emitted radiance `ke`: where the radiance
+// is taken, c interpolated becomes ke + texture->Modulation(uv) * (c - ke)
+// (texture.h), uv interpolated as c is.
 struct DisplayPiece {
   glm::vec3 p[4];
   glm::vec3 c[4];
   uint32_t numCorners;
   uint32_t id;
+  const Texture* texture = nullptr;  // null: untextured (uv and ke unused)
+  glm::vec2 uv[4];
+  glm::vec3 ke;
 };
 
 // Draws one piece: antialiased, the radiance interpolated perspective-correctly

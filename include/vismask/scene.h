@@ -27,6 +27,7 @@ struct Material {
   glm::vec3 ka{0.0f};  // ambient colour as written (read for --emit NAME=ka)
   std::string mapKd;   // map_Kd: the texture's path (relative to the cwd), "" if none
   std::string where;   // "file:line" of its 'newmtl'
+  std::string mapKdWhere = "";  // "file:line" of its 'map_Kd' ("" if none)
 };
 
 // A planar simple polygon with 3 or more corners, counter-clockwise seen from

@@ -1,0 +1,117 @@
+// Texture: map_Kd images. Decoded at init (stb_image: PNG, JPEG, BMP, TGA),
+// and used twice:
+//   - the solve: a patch's reflectance is Kd times the texture's mean over
+//     the patch (linear, sRGB decoded), fixed at init into Patch::kd;
+//   - the display: a textured patch's display value is Ke + kd_mat * E (E
+//     the irradiance-like B_reflected / kd, kd_mat = Kd times the whole
+//     texture's mean: the radiosity the patch would have with the material's
+//     mean reflectance), and each pixel shows Ke + (texel / texture mean) *
+//     (value - Ke), i.e. Ke + texel reflectance * E.
+// Texture coordinates come from an affine map position -> uv fitted to a
+// polygon's corners (exact for triangles, least squares for more corners),
+// so clipped pieces and patches of one polygon agree.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "vismask/arena.h"
+#include "vismask/mesh.h"
+#include "vismask/patch.h"
+#include "vismask/scene.h"
+#include "vismask/span.h"
+#include "vismask/status.h"
+
+namespace vismask {
+
+// The linear value of an 8-bit sRGB code (IEC 61966-2-1), from a table.
+float SrgbToLinear(uint8_t code);
+
+// A texture as the display and the patch means read it: a view over RGB
+// 8-bit sRGB texels, rows top to bottom (the image's first row is v = 1).
+struct Texture {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  const uint8_t* texels = nullptr;  // null: not held by this rank
+  glm::vec3 invMean{0.0f};          // 1 / the mean linear texel, per channel (0 where it is 0)
+
+  // The linear value at `uv`: bilinear between texel centres, wrap mode
+  // repeat. Non-finite coordinates read (0, 0).
+  glm::vec3 Sample(glm::vec2 uv) const;
+  // Sample(uv) / the texture's mean: 1 on average.
+  glm::vec3 Modulation(glm::vec2 uv) const { return Sample(uv) * invMean; }
+};
+
+// A decoded map_Kd at init (heap).
+struct TextureImage {
+  std::string path;   // as resolved by the loader
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<uint8_t> rgb;  // sRGB, 3 bytes a texel
+  glm::dvec3 mean{0.0};      // mean linear texel per channel
+  uint8_t maxCode = 0;       // the largest code of any channel
+  Texture View() const;      // over `rgb`
+};
+
+// Reads and decodes an image file into *image. `where` ("file:line" of the
+// map_Kd) prefixes the error: "where: cannot read texture 'path': reason".
+Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image);
+
+// The affine map x -> uv = (dot(u.xyz, x) + u.w, dot(v.xyz, x) + v.w) on a
+// polygon's plane, fitted to its corners' uv (least squares; exact for a
+// triangle and for corners whose uv is affine). Zero for a polygon without uv.
+struct UvMap {
+  glm::dvec4 u{0.0};
+  glm::dvec4 v{0.0};
+  glm::vec2 At(const glm::vec3& x) const;
+};
+UvMap FitUvMap(const Polygon& polygon);
+
+// uv at parameters `st` of a patch (bilinear for a quad, barycentric for a
+// triangle, as PatchPoint).
+glm::vec2 PatchUv(const PatchTexture& t, bool triangle, glm::vec2 st);
+
+// The mean of `texture` over patch `p` whose corners have texture
+// coordinates `uv`: an area-weighted grid of n x n samples (n from the
+// patch's extent in texels, 2 to 64; sub-triangle centroids for a
+// triangle). Deterministic.
+glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::vec2 uv[4]);
+
+// The scene's textures at init: every distinct map_Kd of a material that
+// some face uses, decoded, and which material uses which.
+struct SceneTextures {
+  std::vector<TextureImage> images;
+  std::vector<uint32_t> ofMaterial;   // per material: index into images, or kNoTexture
+  std::vector<glm::vec3> kdOfMaterial;  // per material: the Kd the map multiplies (1 for Kd 0 0 0)
+  std::vector<std::string> warnings;  // one line each
+  bool any() const { return !images.empty(); }
+};
+
+// Loads the textures of `scene`. Fails on an unreadable image (at its
+// map_Kd line) and on a map whose reflectance would reach 1 (Kd 0 0 0 takes
+// the map alone, so a texel of 255 would be reflectance 1: Kd must stay
+// below 1). Materials with Kd 0 0 0 and a map make one warning naming them
+// all; faces of a textured material without texture coordinates, another
+// (they take the texture's mean, untextured).
+Status LoadSceneTextures(const Scene& scene, SceneTextures* out);
+
+// Sets the reflectance of `mesh`'s textured patches (Kd times the texture's
+// mean over the patch) and fills mesh->textures (one per patch, or empty
+// when none is textured). `scene` is the scene the mesh was made from
+// (Patch::surface indexes its polygons).
+void TextureMesh(const Scene& scene, const SceneTextures& textures, Mesh* mesh);
+
+// The textures a rank's display reads, in the rank's arena: one Texture per
+// scene texture, texels only for those in `used`. Measured and laid out like
+// every arena part; a real arena gets the texels copied in.
+struct TextureSet {
+  Span<Texture> textures;
+  uint64_t bytes = 0;  // what Layout carved
+  void Layout(Arena& arena, const SceneTextures& scene, const std::vector<uint8_t>& used);
+};
+
+}  // namespace vismask

@@ -1,0 +1,333 @@
+#include "vismask/texture.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/geometric.hpp>
+
+// stb_image, compiled here only, for init: it allocates with malloc, which
+// is allowed before the solve starts. Memory in, so the file is read (and a
+// missing one reported) by us.
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_NO_STDIO
+#define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
+#define STBI_ONLY_BMP
+#define STBI_ONLY_TGA
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#pragma GCC diagnostic ignored "-Wsign-compare"
+#pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
+#pragma GCC diagnostic ignored "-Wunused-but-set-variable"
+#include <stb_image.h>
+#pragma GCC diagnostic pop
+
+namespace vismask {
+
+namespace {
+
+// sRGB decoding (IEC 61966-2-1): the files hold encoded values, reflectance
+// is linear. Computed in double once, rounded to float.
+std::array<float, 256> MakeSrgbTable() {
+  std::array<float, 256> t{};
+  for (int i = 0; i < 256; ++i) {
+    double c = i / 255.0;
+    t[i] = static_cast<float>(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+  }
+  return t;
+}
+const std::array<float, 256> kSrgbTable = MakeSrgbTable();
+
+// "file:line" into a Status at that place.
+Status ErrorAt(const std::string& where, const std::string& message) {
+  size_t colon = where.rfind(':');
+  if (colon == std::string::npos) return Status::Error(where + ": " + message);
+  return Status::At(where.substr(0, colon), std::atoi(where.c_str() + colon + 1), message);
+}
+
+// The points and weights PatchTextureMean integrates with, passed to `f`.
+template <class F>
+void ForSamples(const Patch& p, int n, F f) {
+  const double inv = 1.0 / n;
+  if (p.numCorners == 3) {
+    // The centroids of the n x n similar sub-triangles: equal areas.
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i + j < n; ++i) {
+        f(glm::vec2(static_cast<float>((i + 1.0 / 3.0) * inv), static_cast<float>((j + 1.0 / 3.0) * inv)), 1.0);
+        if (i + j + 1 < n)
+          f(glm::vec2(static_cast<float>((i + 2.0 / 3.0) * inv), static_cast<float>((j + 2.0 / 3.0) * inv)), 1.0);
+      }
+    return;
+  }
+  // Cell midpoints of an n x n grid in (s, t), weighted by the bilinear
+  // map's area element there.
+  const glm::dvec3 c0(p.corner[0]), c1(p.corner[1]), c2(p.corner[2]), c3(p.corner[3]), nrm(p.normal);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      double s = (i + 0.5) * inv, t = (j + 0.5) * inv;
+      glm::dvec3 ds = (1 - t) * (c1 - c0) + t * (c2 - c3), dt = (1 - s) * (c3 - c0) + s * (c2 - c1);
+      double w = std::max(0.0, glm::dot(nrm, glm::cross(ds, dt)));
+      f(glm::vec2(static_cast<float>(s), static_cast<float>(t)), w);
+    }
+}
+
+}  // namespace
+
+float SrgbToLinear(uint8_t code) { return kSrgbTable[code]; }
+
+glm::vec3 Texture::Sample(glm::vec2 uv) const {
+  float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
+  if (!(u >= 0.0f && u <= 1.0f)) u = 0.0f;  // NaN or infinite
+  if (!(v >= 0.0f && v <= 1.0f)) v = 0.0f;
+  // Texel centres at (i + 1/2) / width; row 0 is the image's top, v = 1.
+  float x = u * static_cast<float>(width) - 0.5f, y = (1.0f - v) * static_cast<float>(height) - 0.5f;
+  float fx = std::floor(x), fy = std::floor(y);
+  float ax = x - fx, ay = y - fy;
+  int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);  // -1 .. size - 1
+  const int w = static_cast<int>(width), h = static_cast<int>(height);
+  uint32_t i0 = static_cast<uint32_t>(x0 < 0 ? w - 1 : x0), i1 = static_cast<uint32_t>(x0 + 1 >= w ? 0 : x0 + 1);
+  uint32_t j0 = static_cast<uint32_t>(y0 < 0 ? h - 1 : y0), j1 = static_cast<uint32_t>(y0 + 1 >= h ? 0 : y0 + 1);
+  const uint8_t* r0 = texels + size_t(j0) * width * 3;
+  const uint8_t* r1 = texels + size_t(j1) * width * 3;
+  glm::vec3 out;
+  for (int c = 0; c < 3; ++c) {
+    float t00 = kSrgbTable[r0[i0 * 3 + c]], t10 = kSrgbTable[r0[i1 * 3 + c]];
+    float t01 = kSrgbTable[r1[i0 * 3 + c]], t11 = kSrgbTable[r1[i1 * 3 + c]];
+    out[c] = (1.0f - ay) * ((1.0f - ax) * t00 + ax * t10) + ay * ((1.0f - ax) * t01 + ax * t11);
+  }
+  return out;
+}
+
+Texture TextureImage::View() const {
+  Texture t;
+  t.width = width;
+  t.height = height;
+  t.texels = rgb.data();
+  for (int c = 0; c < 3; ++c) t.invMean[c] = mean[c] > 0.0 ? static_cast<float>(1.0 / mean[c]) : 0.0f;
+  return t;
+}
+
+Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image) {
+  auto fail = [&](const std::string& why) {
+    return ErrorAt(where, "cannot read texture '" + path + "': " + why);
+  };
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail("cannot open");
+  std::string bytes;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) bytes.append(buf, static_cast<size_t>(in.gcount()));
+  if (in.bad()) return fail("read error");
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max())) return fail("file too large");
+  int w = 0, h = 0, comp = 0;
+  stbi_uc* data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                                        static_cast<int>(bytes.size()), &w, &h, &comp, 3);
+  if (!data) {
+    std::string why = stbi_failure_reason() ? stbi_failure_reason() : "decoder failed";
+    if (why == "unknown image type") why = "not a PNG, JPEG, BMP or TGA image";
+    return fail(why);
+  }
+  TextureImage img;
+  img.path = path;
+  img.width = static_cast<uint32_t>(w);
+  img.height = static_cast<uint32_t>(h);
+  img.rgb.assign(data, data + size_t(w) * size_t(h) * 3);
+  stbi_image_free(data);
+  glm::dvec3 sum(0.0);
+  for (size_t i = 0; i < img.rgb.size(); i += 3)
+    for (int c = 0; c < 3; ++c) {
+      sum[c] += kSrgbTable[img.rgb[i + c]];
+      img.maxCode = std::max(img.maxCode, img.rgb[i + c]);
+    }
+  img.mean = sum / (static_cast<double>(w) * static_cast<double>(h));
+  *image = std::move(img);
+  return Status::Ok();
+}
+
+glm::vec2 UvMap::At(const glm::vec3& x) const {
+  glm::dvec3 p(x);
+  return glm::vec2(static_cast<float>(u.x * p.x + u.y * p.y + u.z * p.z + u.w),
+                   static_cast<float>(v.x * p.x + v.y * p.y + v.z * p.z + v.w));
+}
+
+UvMap FitUvMap(const Polygon& polygon) {
+  UvMap m;
+  const size_t n = polygon.corners.size();
+  if (polygon.uv.size() != n || n < 3) return m;
+  // Least squares in a frame of the plane, about the corners' centroid:
+  // u = mean_u + c1 a + c2 b (the same for v).
+  glm::dvec3 centroid(0.0);
+  glm::dvec2 meanUv(0.0);
+  for (size_t k = 0; k < n; ++k) {
+    centroid += glm::dvec3(polygon.corners[k]);
+    meanUv += glm::dvec2(polygon.uv[k]);
+  }
+  centroid /= static_cast<double>(n);
+  meanUv /= static_cast<double>(n);
+  const glm::dvec3 normal(polygon.normal);
+  glm::dvec3 e1 = glm::dvec3(polygon.corners[1]) - glm::dvec3(polygon.corners[0]);
+  e1 = glm::normalize(e1 - glm::dot(e1, normal) * normal);
+  const glm::dvec3 e2 = glm::cross(normal, e1);
+  double saa = 0, sab = 0, sbb = 0;
+  glm::dvec2 sau(0.0), sbu(0.0);
+  for (size_t k = 0; k < n; ++k) {
+    glm::dvec3 d = glm::dvec3(polygon.corners[k]) - centroid;
+    double a = glm::dot(d, e1), b = glm::dot(d, e2);
+    glm::dvec2 w = glm::dvec2(polygon.uv[k]) - meanUv;
+    saa += a * a;
+    sab += a * b;
+    sbb += b * b;
+    sau += a * w;
+    sbu += b * w;
+  }
+  double det = saa * sbb - sab * sab;
+  if (!(det > 0.0)) return m;  // cannot happen for a loaded (non-degenerate) face
+  glm::dvec2 c1 = (sbb * sau - sab * sbu) / det, c2 = (saa * sbu - sab * sau) / det;
+  glm::dvec3 gu = c1.x * e1 + c2.x * e2, gv = c1.y * e1 + c2.y * e2;
+  m.u = glm::dvec4(gu, meanUv.x - glm::dot(gu, centroid));
+  m.v = glm::dvec4(gv, meanUv.y - glm::dot(gv, centroid));
+  return m;
+}
+
+glm::vec2 PatchUv(const PatchTexture& t, bool triangle, glm::vec2 st) {
+  if (triangle) return t.uv[0] + st.x * (t.uv[1] - t.uv[0]) + st.y * (t.uv[2] - t.uv[0]);
+  return (1.0f - st.x) * (1.0f - st.y) * t.uv[0] + st.x * (1.0f - st.y) * t.uv[1] +
+         st.x * st.y * t.uv[2] + (1.0f - st.x) * st.y * t.uv[3];
+}
+
+glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::vec2 uv[4]) {
+  // Two samples a texel along the patch's longest extent in texel units.
+  double extent = 0.0;
+  for (uint32_t a = 0; a < p.numCorners; ++a)
+    for (uint32_t b = a + 1; b < p.numCorners; ++b) {
+      glm::vec2 d = uv[a] - uv[b];
+      extent = std::max({extent, std::fabs(double(d.x)) * texture.width, std::fabs(double(d.y)) * texture.height});
+    }
+  int n = 2;
+  if (extent > 1.0) n = static_cast<int>(std::min(64.0, std::ceil(2.0 * extent)));
+  PatchTexture t;
+  for (int k = 0; k < 4; ++k) t.uv[k] = uv[k];
+  const bool triangle = p.numCorners == 3;
+  glm::dvec3 sum(0.0);
+  double weight = 0.0;
+  ForSamples(p, n, [&](glm::vec2 st, double w) {
+    sum += w * glm::dvec3(texture.Sample(PatchUv(t, triangle, st)));
+    weight += w;
+  });
+  return weight > 0.0 ? sum / weight : glm::dvec3(texture.Sample(uv[0]));
+}
+
+Status LoadSceneTextures(const Scene& scene, SceneTextures* out) {
+  SceneTextures r;
+  const size_t nm = scene.materials.size();
+  r.ofMaterial.assign(nm, kNoTexture);
+  r.kdOfMaterial.resize(nm);
+  std::vector<uint8_t> used(nm, 0);
+  int noUvLine = 0;  // the first face of a textured material without uv
+  for (size_t m = 0; m < nm; ++m) r.kdOfMaterial[m] = scene.materials[m].kd;
+  for (const Polygon& p : scene.polygons) used[p.material] = 1;
+  std::map<std::string, uint32_t> byPath;
+  std::string zeroKd;  // materials whose map stands alone
+  std::string zeroKdWhere;
+  for (size_t m = 0; m < nm; ++m) {
+    const Material& mat = scene.materials[m];
+    if (!used[m] || mat.mapKd.empty()) continue;
+    auto it = byPath.find(mat.mapKd);
+    if (it == byPath.end()) {
+      TextureImage img;
+      Status s = ReadTexture(mat.mapKd, mat.mapKdWhere, &img);
+      if (!s.ok()) return s;
+      it = byPath.emplace(mat.mapKd, static_cast<uint32_t>(r.images.size())).first;
+      r.images.push_back(std::move(img));
+    }
+    r.ofMaterial[m] = it->second;
+    if (mat.kd == glm::vec3(0.0f)) {
+      // The map alone is the reflectance, which must stay below 1 as Kd does.
+      if (r.images[it->second].maxCode == 255)
+        return ErrorAt(mat.mapKdWhere,
+                       "map_Kd '" + mat.mapKd + "' with Kd 0 0 0 is the reflectance alone, and its "
+                       "texels of 255 would reflect all the light (reflectance 1; Kd must be below "
+                       "1): give a Kd below 1, say Kd 0.8 0.8 0.8, or darken the texture");
+      r.kdOfMaterial[m] = glm::vec3(1.0f);
+      zeroKd += (zeroKd.empty() ? "'" : ", '") + mat.name + "'";
+      if (zeroKdWhere.empty()) zeroKdWhere = mat.mapKdWhere;
+    }
+  }
+  for (const Polygon& p : scene.polygons)
+    if (r.ofMaterial[p.material] != kNoTexture && p.uv.empty() && noUvLine == 0) noUvLine = p.line;
+  if (!zeroKd.empty())
+    r.warnings.push_back(zeroKdWhere + ": warning: Kd 0 0 0 with map_Kd: the map alone is the "
+                         "reflectance (Kd taken as 1) for material" +
+                         (zeroKd.find(',') == std::string::npos ? " " : "s ") + zeroKd);
+  if (noUvLine != 0)
+    r.warnings.push_back(scene.objPath + ":" + std::to_string(noUvLine) +
+                         ": warning: faces with a map_Kd material but no texture coordinates "
+                         "('vt'): they take the texture's mean reflectance, untextured");
+  *out = std::move(r);
+  return Status::Ok();
+}
+
+void TextureMesh(const Scene& scene, const SceneTextures& textures, Mesh* mesh) {
+  mesh->textures.clear();
+  if (!textures.any()) return;
+  std::vector<PatchTexture> out(mesh->patches.size());
+  bool any = false;
+  uint32_t fitted = kNoPatch;
+  UvMap map;
+  for (size_t i = 0; i < mesh->patches.size(); ++i) {
+    Patch& p = mesh->patches[i];
+    const Polygon& poly = scene.polygons[p.surface];
+    const uint32_t t = textures.ofMaterial[poly.material];
+    if (t == kNoTexture) continue;
+    const TextureImage& img = textures.images[t];
+    const glm::vec3 kd = textures.kdOfMaterial[poly.material];
+    if (poly.uv.empty()) {  // no coordinates: the texture's mean, untextured
+      for (int c = 0; c < 3; ++c) p.kd[c] = static_cast<float>(kd[c] * img.mean[c]);
+      continue;
+    }
+    if (fitted != p.surface) {
+      map = FitUvMap(poly);
+      fitted = p.surface;
+    }
+    PatchTexture& pt = out[i];
+    pt.texture = t;
+    for (int k = 0; k < 4; ++k) pt.uv[k] = map.At(p.corner[k]);
+    glm::dvec3 mean = PatchTextureMean(img.View(), p, pt.uv);
+    for (int c = 0; c < 3; ++c) {
+      p.kd[c] = static_cast<float>(kd[c] * mean[c]);
+      double kdMaterial = kd[c] * img.mean[c];
+      pt.scale[c] = p.kd[c] > 0.0f ? static_cast<float>(kdMaterial / p.kd[c]) : 0.0f;
+    }
+    any = true;
+  }
+  if (any) mesh->textures = std::move(out);
+}
+
+void TextureSet::Layout(Arena& arena, const SceneTextures& scene, const std::vector<uint8_t>& used) {
+  const size_t mark = arena.used();
+  textures = arena.Alloc<Texture>(scene.images.size());
+  for (size_t i = 0; i < scene.images.size(); ++i) {
+    const TextureImage& img = scene.images[i];
+    Span<uint8_t> texels = used[i] ? arena.Alloc<uint8_t>(img.rgb.size()) : Span<uint8_t>();
+    if (arena.measuring()) continue;
+    Texture t = img.View();
+    t.texels = nullptr;
+    if (used[i]) {
+      std::copy(img.rgb.begin(), img.rgb.end(), texels.begin());
+      t.texels = texels.data();
+    }
+    textures[i] = t;
+  }
+  bytes = arena.used() - mark;
+}
+
+}  // namespace vismask
