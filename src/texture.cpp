@@ -251,12 +251,9 @@ Status LoadSceneTextures(const Scene& scene, SceneTextures* out) {
     }
     r.ofMaterial[m] = it->second;
     if (mat.kd == glm::vec3(0.0f)) {
-      // The map alone is the reflectance, which must stay below 1 as Kd does.
-      if (r.images[it->second].maxCode == 255)
-        return ErrorAt(mat.mapKdWhere,
-                       "map_Kd '" + mat.mapKd + "' with Kd 0 0 0 is the reflectance alone, and its "
-                       "texels of 255 would reflect all the light (reflectance 1; Kd must be below "
-                       "1): give a Kd below 1, say Kd 0.8 0.8 0.8, or darken the texture");
+      // The map alone is the reflectance: white texels reflect everything,
+      // as Kd 1 does (issue 16 accepts it; a scene that then cannot lose
+      // power is the loader's to refuse).
       r.kdOfMaterial[m] = glm::vec3(1.0f);
       zeroKd += (zeroKd.empty() ? "'" : ", '") + mat.name + "'";
       if (zeroKdWhere.empty()) zeroKdWhere = mat.mapKdWhere;
