@@ -170,15 +170,7 @@ TEST_F(SceneTest, TextureCoordinatesNormalsAndSmoothingGroups) {
 TEST_F(SceneTest, PerCornerDataIsAllOrNothingAndInRange) {
   Scene scene;
   std::vector<std::string> warnings;
-  Write("m.mtl", kMtl);
-  auto read = [](const std::string& path, std::string* text) {
-    std::ifstream in(path, std::ios::binary);
-    text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    return std::string(in ? "" : "cannot open");
-  };
-  ASSERT_TRUE(LoadSceneFromText(obj(), std::string(kHead) + "vt 0 0\nf 1/1 2 3\nf 1/1 3 4\n", read,
-                                &scene, &warnings)
-                  .ok());
+  ASSERT_TRUE(LoadBodyWarnings("vt 0 0\nf 1/1 2 3\nf 1/1 3 4\n", &scene, &warnings).ok());
   EXPECT_TRUE(scene.polygons[0].uv.empty());
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0], obj() + ":8: warning: texture coordinates on some corners of a face only: ignored");
@@ -193,15 +185,7 @@ TEST_F(SceneTest, AmbientColourAndDiffuseMapAreRead) {
   Write("m.mtl", std::string(kMtl) + "newmtl tex\nKa 20 20 20\nmap_Kd -bm 1 tex/wood.png\n");
   Scene scene;
   std::vector<std::string> warnings;
-  std::string objText = std::string(kHead) + "f 1 2 3\n";
-  Status s = LoadSceneFromText(
-      dir_ + "s.obj", objText,
-      [](const std::string& path, std::string* text) {
-        std::ifstream in(path, std::ios::binary);
-        text->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-        return std::string(in ? "" : "cannot open");
-      },
-      &scene, &warnings);
+  Status s = LoadObjWarnings(Write("s.obj", std::string(kHead) + "f 1 2 3\n"), &scene, &warnings);
   ASSERT_TRUE(s.ok()) << s.ToString();
   ASSERT_EQ(scene.materials.size(), 3u);
   EXPECT_EQ(scene.materials[2].ka, glm::vec3(20.0f));
@@ -546,15 +530,8 @@ TEST_F(SceneTest, MtllibReadsOnlyRegularFilesAndEchoesNothingOfThem) {
   Write("secret", std::string(kMtl) + "root:$6$secrethash:19000:0:99999:7:::\n"
                                       "daemon:*:19000:0:99999:7:::\n\x1b[31mred\n");
   std::vector<std::string> warnings;
-  std::string text;
-  Status st = LoadSceneFromText(
-      obj(), std::string("mtllib secret\n") + (kHead + 12) + "f 1 2 3\n",
-      [](const std::string& path, std::string* out) {
-        std::ifstream in(path, std::ios::binary);
-        out->assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-        return std::string(in ? "" : "cannot open");
-      },
-      &scene, &warnings);
+  Status st = LoadObjWarnings(Write("s.obj", std::string("mtllib secret\n") + (kHead + 12) + "f 1 2 3\n"),
+                              &scene, &warnings);
   ASSERT_TRUE(st.ok()) << st.ToString();
   std::string all;
   for (const std::string& w : warnings) all += w + "\n";
