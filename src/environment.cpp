@@ -132,6 +132,9 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   part(&footprint_.queue);
   size_t scratchMasks = numNeighbours_ == 0 ? 0 : options_.maskMethod == MaskMethod::kC ? 4 : 2;
   scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
+  const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
+                                                 options_.maskMethod == MaskMethod::kC);
+  maskDirections_.Layout(arena, centreRays ? shape_.res : 0);
   outbox_ = arena.Alloc<uint8_t>(size_t(outCapacity_) * packetBytes_);
   part(&footprint_.packets);
   footprint_.total = ArenaRoundUp(arena.used());
@@ -310,6 +313,7 @@ bool Environment::Build() {
     }
   }
   grid_.Build(patches_, geom_);
+  maskDirections_.Fill();
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);
   std::vector<uint32_t>().swap(stagedTwin_);
@@ -557,7 +561,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
         continue;
       }
       Ray ray{centre + options_.rayEpsilon * sampler.frame.n,
-              sampler.frame.ToWorld(MaskPixelCentre(p, shape_.res)), 0.0f,
+              sampler.frame.ToWorld(maskDirections_.Centre(p)), 0.0f,
               std::numeric_limits<float>::infinity()};
       ++cast;
       if (grid_.Occluded(ray, skip)) out->Close(p);

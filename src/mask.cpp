@@ -50,6 +50,28 @@ glm::vec3 MaskPixelCentre(uint32_t pixel, uint32_t res) {
                    static_cast<float>(std::cos(theta)));
 }
 
+void MaskDirections::Layout(Arena& arena, uint32_t res) {
+  res_ = res;
+  rowSin_ = arena.Alloc<double>(res);
+  rowCos_ = arena.Alloc<double>(res);
+  colCos_ = arena.Alloc<double>(size_t(4) * res);
+  colSin_ = arena.Alloc<double>(size_t(4) * res);
+}
+
+void MaskDirections::Fill() {
+  // The angles exactly as MaskPixelCentre forms them.
+  for (uint32_t row = 0; row < res_; ++row) {
+    double theta = (row + 0.5) * kHalfPi / res_;
+    rowSin_[row] = std::sin(theta);
+    rowCos_[row] = std::cos(theta);
+  }
+  for (uint32_t col = 0; col < 4 * res_; ++col) {
+    double phi = (col + 0.5) * kTwoPi / (4 * res_);
+    colCos_[col] = std::cos(phi);
+    colSin_[col] = std::sin(phi);
+  }
+}
+
 void MaskBits::SetAllOpen() {
   for (size_t w = 0; w < words_.size(); ++w) words_[w] = ~uint64_t(0);
   if (bits_ % 64) words_[words_.size() - 1] = (uint64_t(1) << (bits_ % 64)) - 1;

@@ -274,6 +274,7 @@ class Environment {
   uint32_t numNeighbours_ = 0;
   EnvOptions options_;
   MaskShape shape_;
+  MaskDirections maskDirections_;  // B and C with a downstream neighbour: the pixels' centre rays
   uint32_t packetBytes_ = 0;
   Arena arena_ = Arena::Measure();
   Span<Patch> patches_;
