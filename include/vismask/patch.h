@@ -76,6 +76,9 @@ struct PatchEnergy {
                      // received of (kd * share / area)^2 (docs/DESIGN.md)
 };
 
+// A patch's key in the shooting order: its unshot power, channels summed.
+inline double UnshotKey(const PatchEnergy& e) { return e.unshot[0] + e.unshot[1] + e.unshot[2]; }
+
 // Builds a patch's ray-test data from its corners and normal.
 PatchGeom MakePatchGeom(const Patch& p);
 

@@ -1,0 +1,272 @@
+// Environment, its shots and its queue: local shots, the foreign shooters
+// queued from other environments (slots, admission, delivery), forwarding
+// records downstream with their masks, a round's work, and the power still
+// in flight. The rest of Environment is in environment.cpp and trace.cpp.
+#include "vismask/environment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include "vismask/rng.h"
+#include "vismask/sampling.h"
+
+namespace vismask {
+
+namespace {
+
+// The stream of a foreign environment's rays for a shot: fresh samples, as
+// in the paper, where every environment makes its own Monte Carlo estimate.
+uint64_t ForeignStream(uint64_t shotKey, uint32_t env) {
+  return Mix64(shotKey ^ (0x9e3779b97f4a7c15ull * (uint64_t(env) + 1)));
+}
+
+}  // namespace
+
+MaskBits Environment::ScratchMask(uint32_t k) const {
+  size_t w = shape_.words();
+  return MaskBits(scratchWords_.subspan(k * w, w), shape_);
+}
+
+int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
+  int source[3];
+  grid3_.Cell(static_cast<int>(sourceEnv), source);
+  int count = 0;
+  for (int a = 0; a < 3; ++a) {
+    // Downstream: away from the source; both ways on an axis the source shares.
+    for (int step : {-1, 1}) {
+      if (cell_[a] != source[a] && step != (cell_[a] > source[a] ? 1 : -1)) continue;
+      int c[3] = {cell_[0], cell_[1], cell_[2]};
+      c[a] += step;
+      if (c[a] < 0 || c[a] >= grid3_.n[a]) continue;
+      for (int k = 0; k < 3; ++k) next[count][k] = c[k];
+      ++count;
+    }
+  }
+  return count;
+}
+
+void Environment::Forward(PacketHeader h, const MaskBits& mask) {
+  int next[6][3];
+  int count = Downstream(h.sourceEnv, next);
+  h.fromEnv = index_;
+  for (int k = 0; k < count; ++k) {
+    const int* c = next[k];
+    CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
+    uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
+    h.toEnv = static_cast<uint32_t>(grid3_.Index(c[0], c[1], c[2]));
+    h.sequence = outCount_++;
+    WriteHeader(packet, h);
+    if (!shape_.empty()) mask.Pack(MaskBytes(packet));
+    ++stats_.packetsSent;
+  }
+}
+
+void Environment::ShootLocal(uint32_t i) {
+  PatchEnergy& src = energy_[i];
+  const Patch& p = patches_[i];
+  uint32_t shotIndex = shotCount_[i]++;
+  uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
+  double fraction = 1.0;
+  uint32_t rays = ShotRays(src.unshot, key, &fraction);
+  // A partial shot keeps the rest of the power unshot, at the top of the tree.
+  double power[3];
+  for (int c = 0; c < 3; ++c) {
+    power[c] = fraction < 1.0 ? src.unshot[c] * fraction : src.unshot[c];
+    ledger_.unshot[c] -= power[c];
+    src.unshot[c] = fraction < 1.0 ? src.unshot[c] - power[c] : 0.0;
+  }
+  tree_.Set(i, fraction < 1.0 ? UnshotKey(src) : 0.0);
+  ++stats_.shots;
+  // The shooter's rays ignore it and its twin (coplanar, behind them).
+  const Skip skip(i, twinOf(i));
+  if (numNeighbours_ == 0) {
+    Distribute(p, skip, power, key, rays, nullptr, nullptr);
+    return;
+  }
+  MaskBits out = ScratchMask(0);
+  out.SetAllOpen();
+  if (options_.maskMethod == MaskMethod::kR) {
+    for (uint32_t r = rays; r < out.bits(); ++r) out.Close(r);  // bits past the shot's rays
+    TraceAlive(p, skip, power, key, rays, false, &out);
+  } else {
+    Distribute(p, skip, power, key, rays, nullptr, &out);
+  }
+  Forward(ShotHeader(p, power, key, shotIndex, index_, rays), out);
+  ++stats_.recordsCreated;
+  --newRecords_;
+}
+
+MaskBits Environment::SlotMask(uint32_t slot) const {
+  size_t w = shape_.words();
+  return MaskBits(slotWords_.subspan(slot * w, w), shape_);
+}
+
+void Environment::ShootForeign(uint32_t s) {
+  Slot& slot = slots_[s];
+  MaskBits in = SlotMask(s);
+  MaskBits out = ScratchMask(0);
+  out.CopyFrom(in);
+  Patch shooter = PatchFromHeader(slot.header);
+  // The outgoing mask only where there is someone downstream to send it to
+  // (R's bits are also its input: it always keeps them).
+  int next[6][3];
+  bool forward = Downstream(slot.header.sourceEnv, next) > 0;
+  if (options_.maskMethod == MaskMethod::kR)
+    TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
+               &out);
+  else
+    Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_),
+               slot.header.rays, &in, forward ? &out : nullptr);
+  ++stats_.foreignShots;
+  if (forward) Forward(slot.header, out);
+  slot = Slot();
+  --queued_;
+}
+
+int Environment::FindSlot(uint32_t shooterId, uint32_t shotIndex) const {
+  for (uint32_t s = 0; s < slots_.size(); ++s)
+    if (slots_[s].used && slots_[s].header.shooterId == shooterId &&
+        slots_[s].header.shotIndex == shotIndex)
+      return static_cast<int>(s);
+  return -1;
+}
+
+int Environment::BestReadySlot() const {
+  int best = -1;
+  for (uint32_t s = 0; s < slots_.size(); ++s) {
+    const Slot& c = slots_[s];
+    if (!c.used || c.received < c.expected) continue;
+    if (best < 0) {
+      best = static_cast<int>(s);
+      continue;
+    }
+    const Slot& b = slots_[best];
+    if (c.key > b.key || (c.key == b.key && (c.header.shooterId < b.header.shooterId ||
+                                             (c.header.shooterId == b.header.shooterId &&
+                                              c.header.shotIndex < b.header.shotIndex))))
+      best = static_cast<int>(s);
+  }
+  return best;
+}
+
+void Environment::Deliver(const uint8_t* packet) {
+  PacketHeader h = ReadHeader(packet);
+  CHECK(h.toEnv == index_ && numNeighbours_ > 0);
+  int s = FindSlot(h.shooterId, h.shotIndex);
+  bool fresh = s < 0;
+  if (fresh) {
+    for (uint32_t k = 0; k < slots_.size() && s < 0; ++k)
+      if (!slots_[k].used) s = static_cast<int>(k);
+    CHECK_MSG(s >= 0, "foreign-shooter queue full: the admission rule failed");
+    Slot& slot = slots_[s];
+    slot = Slot();
+    slot.header = h;
+    slot.used = 1;
+    int source[3];
+    grid3_.Cell(static_cast<int>(h.sourceEnv), source);
+    for (int a = 0; a < 3; ++a) slot.expected += cell_[a] != source[a];
+    ++queued_;
+  }
+  Slot& slot = slots_[s];
+  MaskBits mask = SlotMask(static_cast<uint32_t>(s));
+  if (!shape_.empty()) {
+    if (fresh) {
+      mask.Unpack(MaskBytes(packet));
+    } else {
+      MaskBits incoming = ScratchMask(1);
+      incoming.Unpack(MaskBytes(packet));
+      mask.And(incoming);
+    }
+  }
+  ++slot.received;
+  if (options_.maskMethod != MaskMethod::kR) {  // R books its flight in the ledger
+    const uint8_t* bits = shape_.empty() ? nullptr : MaskBytes(packet);
+    slot.flightShare += static_cast<float>(FlightShare(h, bits));
+  }
+  double power = h.power[0] + h.power[1] + h.power[2];
+  // Method R's open share is of the shot's own rays (bits past them are closed).
+  if (shape_.empty()) slot.key = power;
+  else if (options_.maskMethod == MaskMethod::kR)
+    slot.key = power * mask.CountOpen() / (h.rays > 0 ? h.rays : 1);
+  else slot.key = power * mask.OpenFraction();
+}
+
+void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords) {
+  newRecords_ = newRecords;
+  for (uint32_t k = 0; k < shotBudget; ++k) {
+    uint32_t local = tree_.Top();
+    double localKey = local == kNoPatch ? 0.0 : tree_.Key(local);
+    bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newRecords_ > 0);
+    int s = numNeighbours_ > 0 ? BestReadySlot() : -1;
+    if (s >= 0 && (!localOk || slots_[s].key >= localKey)) {
+      ShootForeign(static_cast<uint32_t>(s));
+    } else if (localOk) {
+      ShootLocal(local);
+    } else {
+      break;
+    }
+  }
+}
+
+void Environment::FlightPower(double power[3]) const {
+  const bool methodR = options_.maskMethod == MaskMethod::kR;
+  for (int c = 0; c < 3; ++c) power[c] = methodR ? ledger_.inFlight[c] : 0.0;
+  if (methodR) return;
+  for (const Slot& s : slots_)
+    if (s.used)
+      for (int c = 0; c < 3; ++c) power[c] += s.header.power[c] * s.flightShare;
+}
+
+double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) const {
+  // Without a mask, directions on a hemisphere of this resolution.
+  constexpr uint32_t kNoMaskRes = 16;
+  const uint32_t res = bits ? shape_.res : kNoMaskRes, cols = 4 * res;
+  int from[3];
+  grid3_.Cell(static_cast<int>(h.fromEnv), from);
+  int axis = 0;
+  for (int a = 0; a < 3; ++a)
+    if (from[a] != cell_[a]) axis = a;
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+  const double plane = from[axis] < cell_[axis] ? box_.lo[axis] : box_.hi[axis];
+  // The centre ray's origin and frame, as Method B casts it.
+  Patch shooter = PatchFromHeader(h);
+  Frame f = MakePatchSampler(shooter).frame;
+  glm::vec3 centre(0.0f);
+  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
+  centre /= static_cast<float>(shooter.numCorners);
+  const glm::vec3 o = centre + options_.rayEpsilon * f.n;
+  const double halfPi = 1.5707963267948966, step = 6.283185307179586 / cols;
+  const double cs = std::cos(step), sn = std::sin(step);
+  double share = 0.0;
+  for (uint32_t row = 0; row < res; ++row) {
+    double s0 = std::sin(row * halfPi / res), s1 = std::sin((row + 1) * halfPi / res);
+    double theta = (row + 0.5) * halfPi / res, st = std::sin(theta), ct = std::cos(theta);
+    double c = std::cos(0.5 * step), s = std::sin(0.5 * step);  // phi of the column's centre
+    uint32_t crossing = 0;
+    for (uint32_t col = 0; col < cols; ++col) {
+      uint32_t p = row * cols + col;
+      double lx = st * c, ly = st * s;
+      double rc = c * cs - s * sn;  // on to the next column
+      s = s * cs + c * sn;
+      c = rc;
+      if (bits && !((bits[p >> 3] >> (p & 7)) & 1u)) continue;
+      double d[3];
+      for (int a = 0; a < 3; ++a) d[a] = lx * f.t[a] + ly * f.b[a] + ct * f.n[a];
+      if (d[axis] == 0.0) continue;
+      double t = (plane - o[axis]) / d[axis];
+      if (!(t > 0.0)) continue;
+      double q1 = o[a1] + t * d[a1], q2 = o[a2] + t * d[a2];
+      // Half-open, so a direction through an edge enters one box only.
+      if (q1 >= box_.lo[a1] && q1 < box_.hi[a1] && q2 >= box_.lo[a2] && q2 < box_.hi[a2])
+        ++crossing;
+    }
+    share += (s1 * s1 - s0 * s0) * crossing / cols;
+  }
+  return share;
+}
+
+}  // namespace vismask

@@ -1,0 +1,252 @@
+// Environment, its rays: a shot's form-factor rays traced through this
+// environment's grid (Distribute: radiosity received, Method A/B/C masks
+// marked; TraceAlive: Method R's rays in flight), and where a ray leaves the
+// environment's box. The rest of Environment is in environment.cpp (init,
+// receiving, elements, display) and env_queue.cpp (shots and the queue).
+#include "vismask/environment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+#include "vismask/rng.h"
+#include "vismask/sampling.h"
+#include "vismask/sobol.h"
+
+namespace vismask {
+
+namespace {
+
+// The entry and exit parameters of `ray` through `box` (slab test).
+bool Slabs(const Ray& ray, const Bounds& box, float* t0, float* t1) {
+  float lo = -std::numeric_limits<float>::infinity(), hi = std::numeric_limits<float>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (ray.d[a] == 0.0f) {
+      if (ray.o[a] < box.lo[a] || ray.o[a] > box.hi[a]) return false;
+      continue;
+    }
+    float inv = 1.0f / ray.d[a];
+    float ta = (box.lo[a] - ray.o[a]) * inv, tb = (box.hi[a] - ray.o[a]) * inv;
+    if (ta > tb) std::swap(ta, tb);
+    lo = std::fmax(lo, ta);
+    hi = std::fmin(hi, tb);
+  }
+  *t0 = lo;
+  *t1 = hi;
+  return hi >= lo && hi > 0.0f;
+}
+
+// The five uniforms of ray r of a shot, (point: triangle, u, v; direction:
+// u, v): scrambled Sobol' point r (direction in the two best-stratified
+// dimensions), or with `sobol` off the next five PCG32 draws of the shot's
+// stream, in which case rays must be taken in order.
+class RayPoints {
+ public:
+  RayPoints(bool sobol, uint64_t stream)
+      : sobol_(sobol), qmc_(Mix64(stream ^ 0xd1b54a32d192ed03ull)), rng_(ShotRng(stream)) {}
+  // Ray r; with Sobol', `sequential` promises r is the previous call's + 1
+  // (starting at 0), which walks the points one XOR at a time.
+  void Next(uint32_t r, float u[5], bool sequential = false) {
+    if (!sobol_) {
+      for (int k = 0; k < 5; ++k) u[k] = rng_.NextFloat();
+      return;
+    }
+    float p[kSobolDims];
+    if (sequential) qmc_.Next(p);
+    else qmc_.Point(r, p);
+    u[0] = p[4];
+    u[1] = p[2];
+    u[2] = p[3];
+    u[3] = p[0];
+    u[4] = p[1];
+  }
+  bool randomAccess() const { return sobol_; }
+
+ private:
+  bool sobol_;
+  ShotSampler qmc_;
+  Rng rng_;
+};
+
+}  // namespace
+
+bool Environment::LeavesScene(const Ray& ray) const {
+  // The face through which the ray leaves this box: the nearest far plane.
+  float best = std::numeric_limits<float>::infinity();
+  int axis = 0, step = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (ray.d[a] == 0.0f) continue;
+    float t = ((ray.d[a] > 0.0f ? box_.hi[a] : box_.lo[a]) - ray.o[a]) / ray.d[a];
+    if (t < best) {
+      best = t;
+      axis = a;
+      step = ray.d[a] > 0.0f ? 1 : -1;
+    }
+  }
+  int next = cell_[axis] + step;
+  return next < 0 || next >= grid3_.n[axis];
+}
+
+void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
+                             uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out) {
+  const bool masks = shape_.res > 0;
+  const bool foreign = in != nullptr || skip.patch == kNoPatch;
+  // Method C: which open pixels the rays hit in, and which they passed.
+  const bool methodC = masks && out && options_.maskMethod == MaskMethod::kC;
+  MaskBits hitPixels, passedPixels;
+  if (methodC) {
+    hitPixels = ScratchMask(2);
+    passedPixels = ScratchMask(3);
+    hitPixels.SetAllClosed();
+    passedPixels.SetAllClosed();
+  }
+  PatchSampler sampler = MakePatchSampler(shooter);
+  RayPoints points(options_.sobol, stream);
+  double share[3];
+  for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
+  uint64_t traced = 0, hits = 0;
+  double lost[3] = {0, 0, 0};     // left the scene
+  double backHit[3] = {0, 0, 0};  // absorbed by back faces
+  glm::vec3 centre(0.0f);
+  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
+  centre /= static_cast<float>(shooter.numCorners);
+  for (uint32_t r = 0; r < rays; ++r) {
+    float u[5];
+    points.Next(r, u, true);
+    glm::vec3 local = CosineDirection(u[3], u[4]);
+    Ray ray;
+    // The origin is lifted off the shooter's plane and every hit from t = 0
+    // counts (the shooter and its twin are skipped): a ray from near a corner hits
+    // the wall beside it however close. A tMin > 0 instead let such rays
+    // through the wall and out of a closed box, a bias of ~4e-6 of the shot
+    // power a bounce, which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
+    ray.o = sampler.Point(u[0], u[1], u[2]) + options_.rayEpsilon * sampler.frame.n;
+    ray.d = sampler.frame.ToWorld(local);
+    ray.tMin = 0.0f;
+    ray.tMax = std::numeric_limits<float>::infinity();
+    uint32_t pixel = 0;
+    if (foreign) {
+      float t0, t1;
+      if (!Slabs(ray, box_, &t0, &t1)) continue;  // never passes through here
+      if (masks) {
+        // The pixel of the direction from the shooter's centre to where the
+        // ray enters this environment: the centre's view of the same
+        // crossing, so off-centre rays are not judged by a parallel ray that
+        // crosses elsewhere.
+        glm::vec3 q = ray.o + std::fmax(t0, 0.0f) * ray.d - centre;
+        glm::vec3 l(glm::dot(q, sampler.frame.t), glm::dot(q, sampler.frame.b),
+                    glm::dot(q, sampler.frame.n));
+        float len = glm::length(l);
+        pixel = MaskPixel(len > 0.0f && l.z > 0.0f ? l / len : local, shape_.res);
+        if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
+      }
+    } else if (masks) {
+      pixel = MaskPixel(local, shape_.res);
+    }
+    ++traced;
+    Hit hit;
+    if (!grid_.Intersect(ray, skip, &hit)) {
+      if (methodC) passedPixels.Open(pixel);
+      if (LeavesScene(ray))
+        for (int c = 0; c < 3; ++c) lost[c] += share[c];
+      continue;
+    }
+    ++hits;
+    if (masks && out && options_.maskMethod == MaskMethod::kA) out->Close(pixel);
+    if (methodC) hitPixels.Open(pixel);
+    if (!hit.front) {
+      for (int c = 0; c < 3; ++c) backHit[c] += share[c];
+      continue;
+    }
+    Receive(hit.patch, share, ray.o + hit.t * ray.d);
+  }
+  for (int c = 0; c < 3; ++c) {
+    ledger_.escaped[c] += lost[c];
+    ledger_.absorbed[c] += backHit[c];
+  }
+  stats_.rays += traced;
+  stats_.hits += hits;
+
+  // Method B: the mask from the centre alone, one ray through each pixel
+  // still open upstream (the paper's B). Mixing in A's marks would close
+  // every pixel where any off-centre ray hit, losing the rays of that pixel
+  // that pass on: about 14% of the power of the closed box in 2x2x2.
+  // Method C: a pixel whose rays all hit closes, one whose rays all passed
+  // stays open; only pixels with both, or with no ray, take the centre ray.
+  if (masks && out && (options_.maskMethod == MaskMethod::kB || methodC)) {
+    uint32_t pixels = shape_.pixels(), cast = 0;
+    for (uint32_t p = 0; p < pixels; ++p) {
+      if (!out->IsOpen(p)) continue;
+      if (methodC && hitPixels.IsOpen(p) != passedPixels.IsOpen(p)) {
+        if (hitPixels.IsOpen(p)) out->Close(p);
+        continue;
+      }
+      Ray ray{centre + options_.rayEpsilon * sampler.frame.n,
+              sampler.frame.ToWorld(maskDirections_.Centre(p)), 0.0f,
+              std::numeric_limits<float>::infinity()};
+      ++cast;
+      if (grid_.Occluded(ray, skip)) out->Close(p);
+    }
+    stats_.maskRays += cast;
+  }
+}
+
+void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power[3],
+                             uint64_t shotKey, uint32_t rays, bool foreign, MaskBits* alive) {
+  DCHECK(alive->bits() >= rays);
+  PatchSampler sampler = MakePatchSampler(shooter);
+  RayPoints points(options_.sobol, shotKey);
+  double share[3];
+  for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
+  uint64_t traced = 0, hits = 0, entered = 0, left = 0;
+  double lost[3] = {0, 0, 0}, backHit[3] = {0, 0, 0};
+  for (uint32_t r = 0; r < rays; ++r) {
+    // Sequential draws: every environment draws every ray, so ray r is the
+    // same ray everywhere; Sobol' points are drawn by index, live rays only.
+    float u[5];
+    if (!points.randomAccess()) points.Next(r, u);
+    if (!alive->IsOpen(r)) continue;  // absorbed or escaped upstream
+    if (points.randomAccess()) points.Next(r, u);
+    Ray ray;  // lifted off the shooter's plane, hits from t = 0, as in Distribute
+    ray.o = sampler.Point(u[0], u[1], u[2]) + options_.rayEpsilon * sampler.frame.n;
+    ray.d = sampler.frame.ToWorld(CosineDirection(u[3], u[4]));
+    ray.tMin = 0.0f;
+    ray.tMax = std::numeric_limits<float>::infinity();
+    if (foreign) {
+      // Every environment the ray crossed before this one is upstream, and
+      // its bit is the AND of theirs: a hit here is the ray's first.
+      float t0, t1;
+      if (!Slabs(ray, box_, &t0, &t1)) continue;
+      ++entered;
+    }
+    ++traced;
+    Hit hit;
+    if (!grid_.Intersect(ray, skip, &hit)) {
+      if (LeavesScene(ray)) {
+        for (int c = 0; c < 3; ++c) lost[c] += share[c];
+        alive->Close(r);
+      } else {
+        ++left;  // on to the neighbour across the face it leaves by
+      }
+      continue;
+    }
+    ++hits;
+    alive->Close(r);
+    if (!hit.front) {
+      for (int c = 0; c < 3; ++c) backHit[c] += share[c];
+      continue;
+    }
+    Receive(hit.patch, share, ray.o + hit.t * ray.d);
+  }
+  for (int c = 0; c < 3; ++c) {
+    ledger_.escaped[c] += lost[c];
+    ledger_.absorbed[c] += backHit[c];
+    ledger_.inFlight[c] += (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
+  }
+  stats_.rays += traced;
+  stats_.hits += hits;
+}
+
+}  // namespace vismask
