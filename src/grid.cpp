@@ -7,247 +7,27 @@
 
 #include <glm/geometric.hpp>
 
+#include "grid_cells.h"
+
 namespace vismask {
 
 namespace {
 
-// Why the padding: IntersectPatch's float edge tests accept points up to a
-// few ulps of the scene magnitude outside its edge planes (kEdgeRel, which a
-// sharp corner amplifies, so it is kept small), and hit points and the DDA's
-// cell boundaries are rounded too. Every patch is registered with a further
-// margin of kPadRel * (scene magnitude), about 300 ulps of the largest
-// coordinate, which covers the rest while the ray origin is within kFarRel
-// magnitudes of the world origin. Rays from farther away test every patch.
-constexpr float kEdgeRel = 8.0f * std::numeric_limits<float>::epsilon();
-constexpr float kPadRel = 4e-5f;
-constexpr float kFarRel = 8.0f;
+using gridcells::CellFrame;
+using gridcells::ForEachCell;
+using gridcells::FrameOf;
+using gridcells::MakeShape;
+using gridcells::Scale;
+using gridcells::ScaleOf;
+using gridcells::Shape;
+
 constexpr int kMaxRes = 1024;        // cells per axis
 constexpr double kBoundsRel = 1e-3;  // grid margin, relative to the largest extent
-constexpr double kClipRel = 1e4;     // half-size of the clip square, in patch sizes
-constexpr int kMaxPolyVerts = 8;     // a square clipped by four half-planes
-constexpr int kMaxAxes = 1 + 4 * kMaxPolyVerts + 3;
 constexpr double kWallReach = 0.25;  // a wall lies within this many cells of its face
 constexpr double kWallCos = 0.9;     // and faces along the axis (within ~25 degrees)
 constexpr size_t kWallShare = 64;    // a face is a wall's when 1/64 of the patches are on it
 constexpr double kWallPast = 8.0;    // pads between a wall and the next cell plane
 
-// Padding and far limit, from the corners' extent and distance from the origin.
-struct Scale {
-  float edgePad = 0.0f;
-  float pad = 0.0f;
-  float farLimit = 0.0f;
-};
-
-Scale ScaleOf(Span<const Patch> patches) {
-  glm::vec3 lo(std::numeric_limits<float>::infinity());
-  glm::vec3 hi(-std::numeric_limits<float>::infinity());
-  for (const Patch& p : patches) {
-    for (uint32_t k = 0; k < p.numCorners && k < 4; ++k) {
-      lo = glm::min(lo, p.corner[k]);
-      hi = glm::max(hi, p.corner[k]);
-    }
-  }
-  float mag = 0.0f;
-  for (int a = 0; a < 3; ++a) {
-    if (!(lo[a] <= hi[a])) continue;
-    mag = std::max({mag, std::fabs(lo[a]), std::fabs(hi[a]), hi[a] - lo[a]});
-  }
-  Scale s;
-  s.edgePad = kEdgeRel * mag;
-  s.pad = kPadRel * mag;
-  s.farLimit = kFarRel * mag;
-  return s;
-}
-
-// The region where IntersectPatch can report a hit on one patch, widened by
-// the padding: a prism over the patch's (widened) polygon. Kept as a box plus
-// separating axes with the prism's projection on each.
-struct Shape {
-  glm::dvec3 lo;
-  glm::dvec3 hi;
-  int numAxes = 0;
-  glm::dvec3 axis[kMaxAxes];
-  double pMin[kMaxAxes];
-  double pMax[kMaxAxes];
-};
-
-// Conservative fallback for a patch whose plane or edges are not usable.
-void CornerShape(const Patch& p, double pad, Shape* s) {
-  s->lo = glm::dvec3(std::numeric_limits<double>::infinity());
-  s->hi = -s->lo;
-  for (uint32_t k = 0; k < p.numCorners && k < 4; ++k) {
-    s->lo = glm::min(s->lo, glm::dvec3(p.corner[k]) - pad);
-    s->hi = glm::max(s->hi, glm::dvec3(p.corner[k]) + pad);
-  }
-  s->numAxes = 0;
-}
-
-void AddAxis(Shape* s, glm::dvec3 a) {
-  double len = glm::length(a);
-  if (!(len > 1e-9)) return;
-  s->axis[s->numAxes++] = a / len;
-}
-
-// Builds the shape of patch `p` with ray-test data `g` (depends on nothing
-// else, so MakePlan and Build register the same cells).
-void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s) {
-  double pad = scale.pad;
-  glm::dvec3 n(g.n);
-  double nLen = glm::length(n);
-  if (!(nLen > 0.5 && nLen < 2.0) || !std::isfinite(g.d)) return CornerShape(p, pad, s);
-  glm::dvec3 nn = n / nLen;
-  glm::dvec3 u = glm::normalize(
-      glm::cross(nn, std::fabs(nn.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
-  glm::dvec3 v = glm::cross(nn, u);
-  glm::dvec3 p0 = n * (static_cast<double>(g.d) / (nLen * nLen));
-
-  // Clip square around the corners, then clipped by each widened edge.
-  uint32_t nc = std::min<uint32_t>(p.numCorners, 4);
-  glm::dvec3 centre(0.0);
-  double size = 0.0;
-  for (uint32_t k = 0; k < nc; ++k) {
-    centre += glm::dvec3(p.corner[k]);
-    size = std::max(size, glm::length(glm::dvec3(p.corner[(k + 1) % nc] - p.corner[k])));
-  }
-  centre /= static_cast<double>(nc);
-  double ca = glm::dot(u, centre - p0), cb = glm::dot(v, centre - p0);
-  double r = kClipRel * (size + pad);
-  double poly[2][kMaxPolyVerts + 1][2] = {
-      {{ca - r, cb - r}, {ca + r, cb - r}, {ca + r, cb + r}, {ca - r, cb + r}}};
-  int count = 4, cur = 0;
-  for (int i = 0; i < 4; ++i) {
-    const glm::vec4& e = g.edge[i];
-    if (!std::isfinite(e.w)) continue;  // a triangle's missing fourth edge
-    glm::dvec3 ed(e.x, e.y, e.z);
-    double ea = glm::dot(ed, u), eb = glm::dot(ed, v);
-    double c = static_cast<double>(e.w) - scale.edgePad - glm::dot(ed, p0);
-    const double(*in)[2] = poly[cur];
-    double(*out)[2] = poly[cur ^ 1];
-    int outCount = 0;
-    for (int k = 0; k < count; ++k) {
-      const double* a = in[k];
-      const double* b = in[(k + 1) % count];
-      double fa = ea * a[0] + eb * a[1] - c;
-      double fb = ea * b[0] + eb * b[1] - c;
-      if (fa >= 0.0 && outCount < kMaxPolyVerts) {
-        out[outCount][0] = a[0];
-        out[outCount][1] = a[1];
-        ++outCount;
-      }
-      if ((fa >= 0.0) != (fb >= 0.0) && outCount < kMaxPolyVerts) {
-        double w = fa / (fa - fb);
-        out[outCount][0] = a[0] + w * (b[0] - a[0]);
-        out[outCount][1] = a[1] + w * (b[1] - a[1]);
-        ++outCount;
-      }
-    }
-    count = outCount;
-    cur ^= 1;
-  }
-  // Empty, or still reaching the clip square: a degenerate patch (collinear
-  // corners give an unbounded strip). Its corner box keeps the grid sane.
-  if (count < 3) return CornerShape(p, pad, s);
-  for (int k = 0; k < count; ++k) {
-    if (std::fabs(poly[cur][k][0] - ca) > 0.5 * r || std::fabs(poly[cur][k][1] - cb) > 0.5 * r)
-      return CornerShape(p, pad, s);
-  }
-
-  // Prism corners: the polygon shifted by +-pad along the normal.
-  glm::dvec3 verts[2 * kMaxPolyVerts];
-  for (int k = 0; k < count; ++k) {
-    glm::dvec3 x = p0 + poly[cur][k][0] * u + poly[cur][k][1] * v;
-    verts[2 * k] = x - pad * nn;
-    verts[2 * k + 1] = x + pad * nn;
-  }
-  int numVerts = 2 * count;
-  s->lo = glm::dvec3(std::numeric_limits<double>::infinity());
-  s->hi = -s->lo;
-  for (int k = 0; k < numVerts; ++k) {
-    s->lo = glm::min(s->lo, verts[k]);
-    s->hi = glm::max(s->hi, verts[k]);
-  }
-  s->lo -= pad;
-  s->hi += pad;
-  if (!std::isfinite(s->lo.x + s->lo.y + s->lo.z + s->hi.x + s->hi.y + s->hi.z))
-    return CornerShape(p, pad, s);
-
-  // Separating axes beyond the box's own: the plane normal, the side faces and
-  // the edge-edge crosses with the box's axes.
-  const glm::dvec3 boxAxis[3] = {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
-  s->numAxes = 0;
-  AddAxis(s, nn);
-  for (int k = 0; k < count; ++k) {
-    glm::dvec3 edge = verts[2 * ((k + 1) % count)] - verts[2 * k];
-    double len = glm::length(edge);
-    if (!(len > 0.0)) continue;
-    edge /= len;
-    AddAxis(s, glm::cross(nn, edge));
-    for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(edge, b));
-  }
-  for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(nn, b));
-  for (int i = 0; i < s->numAxes; ++i) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int k = 0; k < numVerts; ++k) {
-      double x = glm::dot(s->axis[i], verts[k]);
-      lo = std::min(lo, x);
-      hi = std::max(hi, x);
-    }
-    s->pMin[i] = lo - pad;
-    s->pMax[i] = hi + pad;
-  }
-}
-
-// Cell geometry of a plan, in double for registration.
-struct Frame {
-  glm::dvec3 lo;
-  glm::dvec3 size;
-  glm::dvec3 inv;
-  int res[3];
-};
-
-Frame FrameOf(const Grid::Plan& plan) {
-  Frame f;
-  f.lo = glm::dvec3(plan.bounds.lo);
-  for (int a = 0; a < 3; ++a) {
-    f.res[a] = plan.res[a];
-    double extent = static_cast<double>(plan.bounds.hi[a]) - plan.bounds.lo[a];
-    f.size[a] = extent / plan.res[a];
-    f.inv[a] = plan.res[a] / extent;
-  }
-  return f;
-}
-
-int ClampCell(double x, int res) {
-  if (!(x >= 0.0)) return 0;  // also NaN
-  if (x >= res - 1) return res - 1;
-  return static_cast<int>(x);
-}
-
-// Calls visit(cellIndex) for every cell the shape may overlap, in index order.
-template <class Visit>
-void ForEachCell(const Frame& f, const Shape& s, Visit&& visit) {
-  int lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = ClampCell(std::floor((s.lo[a] - f.lo[a]) * f.inv[a]), f.res[a]);
-    hi[a] = ClampCell(std::floor((s.hi[a] - f.lo[a]) * f.inv[a]), f.res[a]);
-  }
-  glm::dvec3 half = 0.5 * f.size;
-  for (int z = lo[2]; z <= hi[2]; ++z) {
-    for (int y = lo[1]; y <= hi[1]; ++y) {
-      for (int x = lo[0]; x <= hi[0]; ++x) {
-        glm::dvec3 centre = f.lo + (glm::dvec3(x, y, z) + 0.5) * f.size;
-        bool apart = false;
-        for (int i = 0; i < s.numAxes && !apart; ++i) {
-          const glm::dvec3& ax = s.axis[i];
-          double c = glm::dot(ax, centre);
-          double r = std::fabs(ax.x) * half.x + std::fabs(ax.y) * half.y + std::fabs(ax.z) * half.z;
-          apart = c + r < s.pMin[i] || c - r > s.pMax[i];
-        }
-        if (!apart) visit((static_cast<size_t>(z) * f.res[1] + y) * f.res[0] + x);
-      }
-    }
-  }
-}
 
 // Of two hits at the same t, whether patch p (side `front`) beats `best`:
 // a front side beats a back side, then the lower index wins. A total order
@@ -351,7 +131,7 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
   }
 
   // Exact reference count, by the same rule Build uses.
-  Frame frame = FrameOf(plan);
+  CellFrame frame = FrameOf(plan);
   uint64_t refs = 0;
   for (size_t i = 0; i < n; ++i) {
     MakeShape(patches[i], geom[i], scale, &shape);
@@ -381,7 +161,7 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   geom_ = geom;
   Scale scale = ScaleOf(patches);
   farLimit_ = scale.farLimit;
-  Frame frame = FrameOf(plan_);
+  CellFrame frame = FrameOf(plan_);
   size_t cells = cellCount();
   uint32_t* start = cellStart_.data();
 
