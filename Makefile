@@ -2,7 +2,8 @@
 # when mpicxx is found, build/vismask-mpi (Open MPI); `make demo` and
 # `make test` first install what is missing (tools/install-deps), so on a
 # fresh Debian 12 machine they are the whole set-up.
-#   make SAN=1 test     the suite under ASan + UBSan
+#   make SAN=1 test     the suite under ASan + UBSan (DCHECKs on)
+#   make DEBUG=1 test   the suite with DCHECKs on, no sanitizers (build/debug)
 #   make MPI=0          without build/vismask-mpi
 #   make CROSS=aarch64-linux-gnu-   cross build into build/aarch64 (docs/DEPLOY.md)
 #   make CROSS=arm-linux-gnueabihf- 32-bit ARM, into build/armhf
@@ -56,6 +57,15 @@ ifeq ($(SAN),1)
   BUILD := $(BUILD)/san
   CXXFLAGS += -fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer -g
   LDFLAGS += -fsanitize=address,undefined
+endif
+# DCHECK (check.h) is for hot loops: release builds drop it (NDEBUG), SAN=1
+# and DEBUG=1 builds keep it. CHECK is always on.
+DEBUG ?= 0
+ifeq ($(DEBUG),1)
+  BUILD := $(BUILD)/debug
+  CXXFLAGS += -g
+else ifneq ($(SAN),1)
+  CXXFLAGS += -DNDEBUG
 endif
 
 # The transport is chosen by what is linked: each binary gets one of these.

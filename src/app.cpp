@@ -1159,7 +1159,7 @@ int Main(int argc, const char* const* argv) {
   // Every rank learns whether every rank's init succeeded (rank 0 alone
   // opens the outputs) before anyone starts the solve's collectives.
   int32_t mine = rc, all[kMaxRanks] = {};
-  CHECK(r->transport->size() <= kMaxRanks);  // MakeTransport refuses more
+  CHECK_LE(r->transport->size(), kMaxRanks);  // MakeTransport refuses more
   r->transport->AllGather(&mine, sizeof mine, all);
   for (int k = 0; k < r->transport->size(); ++k) rc = std::max(rc, static_cast<int>(all[k]));
   if (rc != kExitOk) return r->transport->Finish(rc);

@@ -6,6 +6,8 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "vismask/check.h"
+
 #include "vismask/arena.h"
 #include "vismask/max_tree.h"
 #include "vismask/patch.h"
@@ -48,6 +50,16 @@ TEST(ArenaDeathTest, OverflowIsCaught) {
         a.Alloc<char>(65);
       },
       "arena overflow");
+}
+
+// CHECK_EQ and the like print both operands (issue 18: a bare CHECK says
+// only which comparison failed).
+TEST(CheckDeathTest, ComparisonsPrintBothOperands) {
+  EXPECT_DEATH(CHECK_EQ(2 + 2, 5), "CHECK\\(2 \\+ 2 == 5\\) failed: 4 against 5");
+  EXPECT_DEATH(CHECK_LT(0.5, -1.25), "CHECK\\(0.5 < -1.25\\) failed: 0.5 against -1.25");
+  size_t big = 7;
+  EXPECT_DEATH(CHECK_LE(big, 3u), "failed: 7 against 3");
+  CHECK_GE(big, 7u);  // holds: nothing happens
 }
 
 TEST(FixedVecDeathTest, PushPastCapacityIsCaught) {
