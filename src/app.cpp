@@ -1039,7 +1039,7 @@ int Footprint(const Options& o) {
       add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"twin_patches\": %llu, \"grid_cells\": %llu, "
           "\"patch_bytes\": %llu, \"element_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": %llu, "
           "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"texcoord_bytes\": %llu, \"arena_bytes\": %llu}%s\n",
-          e, [&] { for (int k = 0; k < ranks; ++k) { RankEnvs re = EnvsOfRank(total, ranks, k); if (e < re.first + re.count) return k; } return 0; }(),
+          e, RankOfEnv(e, total, ranks),
           (ull)f.numPatches, (ull)envs[e]->numTwins(), (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
           (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total, e + 1 < total ? "," : "");
     }
@@ -1065,8 +1065,7 @@ int Footprint(const Options& o) {
         "texcoord_B", "arena_B");
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
-      int k = 0;
-      while (e >= EnvsOfRank(total, ranks, k).first + EnvsOfRank(total, ranks, k).count) ++k;
+      int k = RankOfEnv(e, total, ranks);
       add("%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
           (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
           (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total);

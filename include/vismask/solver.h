@@ -12,6 +12,8 @@
 #include <cstdint>
 
 #include "vismask/environment.h"
+#include "vismask/exchange.h"
+#include "vismask/ranks.h"
 #include "vismask/span.h"
 #include "vismask/text_writer.h"
 #include "vismask/transport.h"
@@ -77,55 +79,6 @@ struct SolveResult {
   double lossEstimate = 0.0;  // LossEstimate of the final totals
 };
 
-// Which environments live on a rank: contiguous blocks, [first, first+count)
-// of `total`; no rank holds more than `perRank`.
-struct RankEnvs {
-  uint32_t total = 1;
-  uint32_t first = 0;
-  uint32_t count = 1;
-  uint32_t perRank = 1;
-};
-RankEnvs EnvsOfRank(uint32_t total, int ranks, int rank);
-
-// What every environment reports between rounds, gathered from all ranks and
-// summed in environment order, so every rank takes the same decisions
-// whatever the grouping.
-struct EnvReport {
-  double unshot;     // local unshot power plus the power in flight booked here
-  double flight;     // the latter (Environment::FlightPower), channels summed
-  double lost;       // emitted - absorbed - escaped - unshot (both parts); summed: the loss
-  double emitted;
-  double elapsed;    // seconds since the solve began, on this rank's clock
-  double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
-  double roundCpu;   // CPU seconds of this rank's shots in the last round (first entry)
-  uint64_t shots;    // local and foreign
-  uint64_t rays;     // form-factor rays traced
-  uint64_t recordsCreated;
-  uint64_t foreignShots;
-  uint64_t shootable;  // local patches with unshot power (0 or 1: any) plus queued shooters
-  double radiosity;  // sum of b * area, channels summed
-  double kdArea;     // sum of kd * area, channels averaged (constant)
-  double area;       // (constant)
-};
-
-struct RoundTotals {
-  double unshot = 0.0;  // local unshot and in flight
-  double flight = 0.0;  // in flight only
-  double lost = 0.0;    // the ledger's residual less the power in flight
-  uint64_t shootable = 0;
-  double emitted = 0.0;
-  double elapsed = 0.0;  // rank 0's clock
-  double waitedMax = 0.0;  // the most any rank has waited
-  double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
-  uint64_t shots = 0;
-  uint64_t rays = 0;
-  uint64_t recordsCreated = 0;
-  uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
-  double radiosity = 0.0;
-  double kdArea = 0.0;
-  double area = 0.0;
-};
-
 // The relative bias of the radiosity from the power not yet shot, estimated
 // from the totals with Cohen's ambient argument: the unshot power U will
 // add rho*U/(1-rho) of radiosity power (rho the area-mean kd) to the
@@ -153,23 +106,6 @@ double LossEstimate(const RoundTotals& totals);
 // nothing was shot or lost yet, which BiasEstimate and LossEstimate report
 // as 1 (no estimate) and AmbientTerm as no ambient term.
 double EffectiveReflectance(double rhoKd, double emitted, double unshot, double radiosity);
-
-// A rank's exchange buffers, carved from its arena at init: one send and one
-// receive block per rank, each large enough for every packet a rank's
-// environments can send in a round, and the gathered reports.
-struct ExchangeBuffers {
-  void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
-              uint32_t packetsPerEnvRound);
-  Span<uint8_t> sendBytes;   // ranks blocks of `blockBytes`
-  Span<uint8_t> recvBytes;
-  Span<Span<const uint8_t>> send;
-  Span<Span<uint8_t>> recv;
-  Span<size_t> received;
-  Span<EnvReport> mine;      // perRank entries
-  Span<EnvReport> all;       // ranks * perRank entries
-  size_t blockBytes = 0;
-  uint32_t packetBytes = 0;
-};
 
 // Per-environment admission: how many new records (local shots with
 // neighbours) environment `env` of `numEnvs` may create this round, given

@@ -1,0 +1,85 @@
+// The exchange between rounds: every environment's report gathered from all
+// ranks and summed in environment order (so every rank takes the same
+// decisions whatever the grouping), and the round's packets moved to the
+// ranks of their receivers and delivered in a fixed order. The buffers are
+// carved from the rank's arena at init; nothing here allocates.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "vismask/arena.h"
+#include "vismask/environment.h"
+#include "vismask/ranks.h"
+#include "vismask/span.h"
+#include "vismask/transport.h"
+
+namespace vismask {
+
+// What every environment reports between rounds, gathered from all ranks and
+// summed in environment order, so every rank takes the same decisions
+// whatever the grouping.
+struct EnvReport {
+  double unshot;     // local unshot power plus the power in flight booked here
+  double flight;     // the latter (Environment::FlightPower), channels summed
+  double lost;       // emitted - absorbed - escaped - unshot (both parts); summed: the loss
+  double emitted;
+  double elapsed;    // seconds since the solve began, on this rank's clock
+  double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
+  double roundCpu;   // CPU seconds of this rank's shots in the last round (first entry)
+  uint64_t shots;    // local and foreign
+  uint64_t rays;     // form-factor rays traced
+  uint64_t recordsCreated;
+  uint64_t foreignShots;
+  uint64_t shootable;  // local patches with unshot power (0 or 1: any) plus queued shooters
+  double radiosity;  // sum of b * area, channels summed
+  double kdArea;     // sum of kd * area, channels averaged (constant)
+  double area;       // (constant)
+};
+
+struct RoundTotals {
+  double unshot = 0.0;  // local unshot and in flight
+  double flight = 0.0;  // in flight only
+  double lost = 0.0;    // the ledger's residual less the power in flight
+  uint64_t shootable = 0;
+  double emitted = 0.0;
+  double elapsed = 0.0;  // rank 0's clock
+  double waitedMax = 0.0;  // the most any rank has waited
+  double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
+  uint64_t shots = 0;
+  uint64_t rays = 0;
+  uint64_t recordsCreated = 0;
+  uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
+  double radiosity = 0.0;
+  double kdArea = 0.0;
+  double area = 0.0;
+};
+
+// A rank's exchange buffers, carved from its arena at init: one send and one
+// receive block per rank, each large enough for every packet a rank's
+// environments can send in a round, and the gathered reports.
+struct ExchangeBuffers {
+  void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
+              uint32_t packetsPerEnvRound);
+  Span<uint8_t> sendBytes;   // ranks blocks of `blockBytes`
+  Span<uint8_t> recvBytes;
+  Span<Span<const uint8_t>> send;
+  Span<Span<uint8_t>> recv;
+  Span<size_t> received;
+  Span<EnvReport> mine;      // perRank entries
+  Span<EnvReport> all;       // ranks * perRank entries
+  size_t blockBytes = 0;
+  uint32_t packetBytes = 0;
+};
+
+// Gathers every environment's report (those of `envs` from this rank) and
+// sums them in environment order; the seconds spent in the collective are
+// added to *waited.
+RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+                         ExchangeBuffers* x, double elapsed, double roundCpu, double* waited);
+
+// Moves the round's packets to their receivers and delivers them: for each
+// receiver, senders in environment order and packets in send order.
+void ExchangePackets(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+                     ExchangeBuffers* x, double* waited);
+
+}  // namespace vismask

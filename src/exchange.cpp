@@ -1,0 +1,148 @@
+#include "vismask/exchange.h"
+
+#include <cstring>
+
+#include "vismask/check.h"
+#include "vismask/os.h"
+#include "vismask/packet.h"
+
+namespace vismask {
+
+void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t bytesPerPacket,
+                             uint32_t packetsPerEnvRound) {
+  packetBytes = bytesPerPacket;
+  blockBytes = size_t(envs.perRank) * packetsPerEnvRound * bytesPerPacket;
+  size_t n = static_cast<size_t>(ranks);
+  sendBytes = arena.Alloc<uint8_t>(n * blockBytes);
+  recvBytes = arena.Alloc<uint8_t>(n * blockBytes);
+  send = arena.Alloc<Span<const uint8_t>>(n);
+  recv = arena.Alloc<Span<uint8_t>>(n);
+  received = arena.Alloc<size_t>(n);
+  mine = arena.Alloc<EnvReport>(envs.perRank);
+  all = arena.Alloc<EnvReport>(n * envs.perRank);
+}
+
+namespace {
+
+double Sum3(const double v[3]) { return v[0] + v[1] + v[2]; }
+
+// Runs a transport collective, adding the time it takes to *waited.
+template <class Call>
+void Timed(double* waited, Call&& call) {
+  double t0 = os::Seconds();
+  call();
+  *waited += os::Seconds() - t0;
+}
+
+}  // namespace
+
+RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+                         ExchangeBuffers* x, double elapsed, double roundCpu, double* waited) {
+  for (uint32_t i = 0; i < layout.perRank; ++i) x->mine[i] = EnvReport{};
+  for (uint32_t i = 0; i < envs.size(); ++i) {
+    const Environment* e = envs[i];
+    EnvReport& r = x->mine[i];
+    double flight[3];
+    e->FlightPower(flight);
+    const EnergyLedger& l = e->ledger();
+    r.flight = Sum3(flight);
+    r.unshot = Sum3(l.unshot) + r.flight;
+    r.emitted = Sum3(l.emitted);
+    r.lost = r.emitted - Sum3(l.absorbed) - Sum3(l.escaped) - r.unshot;
+    uint32_t top = e->TopShooter();
+    r.shootable = e->queuedCount() + (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
+    r.shots = e->stats().shots + e->stats().foreignShots;
+    r.rays = e->stats().rays;
+    r.recordsCreated = e->stats().recordsCreated;
+    r.foreignShots = e->stats().foreignShots;
+    r.radiosity = Sum3(e->ledger().radiosity);
+    r.area = e->totalArea();
+    r.kdArea = e->kdArea();
+  }
+  x->mine[0].elapsed = elapsed;
+  x->mine[0].waited = *waited;
+  x->mine[0].roundCpu = roundCpu;
+  Timed(waited, [&] { t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data()); });
+  // Rank r's block holds its environments first; the rest is padding.
+  RoundTotals tot;
+  tot.elapsed = x->all[0].elapsed;
+  int ranks = t->size();
+  for (int r = 0; r < ranks; ++r) {
+    const EnvReport& first = x->all[size_t(r) * layout.perRank];
+    if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
+    if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
+  }
+  auto report = [&](uint32_t env) -> const EnvReport& {
+    int r = RankOfEnv(env, layout.total, ranks);
+    RankEnvs re = EnvsOfRank(layout.total, ranks, r);
+    return x->all[size_t(r) * layout.perRank + (env - re.first)];
+  };
+  for (uint32_t env = 0; env < layout.total; ++env) {
+    const EnvReport& r = report(env);
+    tot.unshot += r.unshot;
+    tot.flight += r.flight;
+    tot.lost += r.lost;
+    tot.shootable += r.shootable;
+    tot.emitted += r.emitted;
+    tot.shots += r.shots;
+    tot.rays += r.rays;
+    tot.recordsCreated += r.recordsCreated;
+    tot.radiosity += r.radiosity;
+    tot.kdArea += r.kdArea;
+    tot.area += r.area;
+  }
+  for (uint32_t env = 0; env < layout.total; ++env) {
+    const EnvReport& r = report(env);
+    uint64_t outstanding = tot.recordsCreated - r.recordsCreated - r.foreignShots;
+    if (outstanding > tot.maxOutstanding) tot.maxOutstanding = outstanding;
+  }
+  return tot;
+}
+
+void ExchangePackets(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+                     ExchangeBuffers* x, double* waited) {
+  int ranks = t->size(), me = t->rank();
+  if (ranks > 1) {
+    for (int r = 0; r < ranks; ++r) {
+      RankEnvs re = EnvsOfRank(layout.total, ranks, r);
+      uint8_t* block = x->sendBytes.data() + size_t(r) * x->blockBytes;
+      size_t used = 0;
+      if (r != me) {
+        for (Environment* src : envs) {
+          for (uint32_t k = 0; k < src->outboxCount(); ++k) {
+            const uint8_t* packet = src->OutboxPacket(k);
+            uint32_t to = ReadHeader(packet).toEnv;
+            if (to < re.first || to >= re.first + re.count) continue;
+            CHECK(used + x->packetBytes <= x->blockBytes);
+            std::memcpy(block + used, packet, x->packetBytes);
+            used += x->packetBytes;
+          }
+        }
+      }
+      x->send[r] = Span<const uint8_t>(block, used);
+      x->recv[r] = Span<uint8_t>(x->recvBytes.data() + size_t(r) * x->blockBytes, x->blockBytes);
+    }
+    Timed(waited, [&] { t->AllToAll(x->send.data(), x->recv.data(), x->received.data()); });
+  }
+  for (Environment* dest : envs) {
+    for (int r = 0; r < ranks; ++r) {
+      if (r == me) {
+        for (Environment* src : envs) {
+          for (uint32_t k = 0; k < src->outboxCount(); ++k) {
+            const uint8_t* packet = src->OutboxPacket(k);
+            if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
+          }
+        }
+      } else {
+        CHECK(x->received[r] % x->packetBytes == 0);
+        for (size_t off = 0; off < x->received[r]; off += x->packetBytes) {
+          const uint8_t* packet = x->recv[r].data() + off;
+          if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
+        }
+      }
+    }
+  }
+  for (Environment* e : envs) e->ClearOutbox();
+}
+
+}  // namespace vismask
