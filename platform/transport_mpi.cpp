@@ -29,6 +29,7 @@
 // exit 3. If mpirun itself is killed, the ranks end within 3 s.
 #include <mpi.h>
 
+#include <sched.h>
 #include <time.h>
 
 #include <climits>
@@ -265,7 +266,9 @@ void MpiTransport::Wait(const char* call) {
     }
     if (done > 0) {
       lastDone = now;
-    } else if (now - lastDone > kSpinSeconds) {
+    } else if (now - lastDone <= kSpinSeconds) {
+      sched_yield();  // a rank that shares a core with another runs it
+    } else {
       double idle = (now - lastDone) / 8.0;
       double seconds = idle < kMinNap ? kMinNap : idle > kMaxNap ? kMaxNap : idle;
       timespec nap = {0, static_cast<long>(seconds * 1e9)};
