@@ -179,8 +179,9 @@ outputs (in --out DIR):
   run.json          options, counts, energy balance, timings, memory
 
 exit status: 0 success; 1 an output could not be written; 2 bad input or
-options (the message names file:line or the option); 3 a rank was lost;
-4 the solve stalled (no environment could shoot while power was left)
+options (the message names file:line or the option); 3 a rank was lost
+or silent (--rank-timeout); 4 the solve stalled (no environment could shoot
+while power was left)
 )";
 }
 
