@@ -1,11 +1,13 @@
 // POSIX implementation of include/vismask/os.h.
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
@@ -32,7 +34,132 @@ void SetWhy(char* why, const char* what, const char* path) {
   if (why) std::snprintf(why, kWhyBytes, "%s '%s': %s", what, path, std::strerror(errno));
 }
 
+// The temporary names a fatal signal removes: OutFile's, from Open until
+// its file is renamed or removed. Written by the main thread only; `used`
+// is set after the name, so a handler never reads half a name.
+constexpr int kMaxTempFiles = 32;
+struct TempSlot {
+  volatile sig_atomic_t used;
+  char path[kMaxPath + 24];
+};
+TempSlot gTemp[kMaxTempFiles];
+// While CommitAll renames, a fatal signal only records itself (gDeferred)
+// and CommitAll raises it again when it is done. Atomics: the handler may
+// run on another thread (Open MPI's), not the one committing.
+std::atomic<int> gCommitting{0};
+std::atomic<int> gDeferred{0};
+std::atomic<bool> gHandlersInstalled{false};
+volatile sig_atomic_t gWaitSelf = -1;
+volatile sig_atomic_t gWaitPeer = -1;
+constexpr int kFatalSignals[] = {SIGINT, SIGTERM, SIGHUP};
+
+int ClaimTempSlot(const char* path) {
+  for (int i = 0; i < kMaxTempFiles; ++i) {
+    if (gTemp[i].used) continue;
+    std::snprintf(gTemp[i].path, sizeof gTemp[i].path, "%s", path);
+    std::atomic_signal_fence(std::memory_order_seq_cst);
+    gTemp[i].used = 1;
+    return i;
+  }
+  return -1;  // more files than the table: removed only by Discard
+}
+
+void ReleaseTempSlot(int* slot) {
+  if (*slot >= 0) gTemp[*slot].used = 0;
+  *slot = -1;
+}
+
+// Async-signal-safe text: appends `s`, or `v` in decimal, to buf[*n].
+void Append(char* buf, size_t cap, size_t* n, const char* s) {
+  while (*s && *n + 1 < cap) buf[(*n)++] = *s++;
+}
+void Append(char* buf, size_t cap, size_t* n, long v) {
+  char digits[24];
+  int k = 0;
+  unsigned long u = v < 0 ? 0ul - static_cast<unsigned long>(v) : static_cast<unsigned long>(v);
+  do {
+    digits[k++] = static_cast<char>('0' + u % 10);
+    u /= 10;
+  } while (u > 0);
+  if (v < 0) digits[k++] = '-';
+  while (k > 0 && *n + 1 < cap) buf[(*n)++] = digits[--k];
+}
+
+const char* SignalName(int sig) {
+  switch (sig) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    default: return "a signal";
+  }
+}
+
+void OnFatalSignal(int sig) {
+  int savedErrno = errno;
+  if (gCommitting.load()) {
+    gDeferred.store(sig);
+    errno = savedErrno;
+    return;
+  }
+  RemoveTempFiles();
+  int self = gWaitSelf, peer = gWaitPeer;
+  if (peer >= 0) {
+    char line[128];
+    size_t n = 0;
+    Append(line, sizeof line, &n, "vismask: rank ");
+    Append(line, sizeof line, &n, static_cast<long>(self));
+    Append(line, sizeof line, &n, ": ended by ");
+    Append(line, sizeof line, &n, SignalName(sig));
+    Append(line, sizeof line, &n, " while waiting for rank ");
+    Append(line, sizeof line, &n, static_cast<long>(peer));
+    Append(line, sizeof line, &n, "\n");
+    WriteAll(2, line, n);
+  }
+  // The signal's own course: blocked while this handler runs, it ends the
+  // process when the handler returns.
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+  errno = savedErrno;
+}
+
+// Marks CommitAll's renames; a fatal signal that came meanwhile is raised
+// again at the end.
+struct CommitGuard {
+  CommitGuard() { gCommitting.store(1); }
+  ~CommitGuard() {
+    gCommitting.store(0);
+    int sig = gDeferred.exchange(0);
+    if (sig != 0) ::raise(sig);
+  }
+};
+
 }  // namespace
+
+void RemoveTempFiles() {
+  for (int i = 0; i < kMaxTempFiles; ++i) {
+    if (gTemp[i].used) ::unlink(gTemp[i].path);
+  }
+}
+
+void InstallSignalCleanup() {
+  if (gHandlersInstalled.exchange(true)) return;
+  for (int sig : kFatalSignals) {
+    struct sigaction old = {};
+    // A signal the caller ignores (nohup) or handles stays as it is.
+    if (::sigaction(sig, nullptr, &old) != 0 || old.sa_handler != SIG_DFL) continue;
+    struct sigaction act = {};
+    act.sa_handler = OnFatalSignal;
+    act.sa_flags = SA_RESTART;
+    sigemptyset(&act.sa_mask);
+    for (int other : kFatalSignals) sigaddset(&act.sa_mask, other);
+    ::sigaction(sig, &act, nullptr);
+  }
+}
+
+void NoteWaiting(int self, int peer) {
+  gWaitSelf = self;
+  gWaitPeer = peer;
+}
 
 double Seconds() {
   timespec ts;
@@ -166,6 +293,8 @@ bool OutFile::Open(const char* path, char* why) {
     SetWhy(why, "cannot open", tmpPath_);
     return false;
   }
+  tempSlot_ = ClaimTempSlot(tmpPath_);
+  InstallSignalCleanup();
   writeErrno_ = 0;
   return true;
 }
@@ -194,6 +323,8 @@ bool OutFile::Close(char* why) {
   int failed = writeErrno_;
   if (::close(fd_) != 0 && failed == 0) failed = errno;
   fd_ = -1;
+  // CommitAll (the only caller) renames or removes it before a signal is handled.
+  ReleaseTempSlot(&tempSlot_);
   if (failed != 0) {
     if (why) std::snprintf(why, kWhyBytes, "cannot write '%s': %s", tmpPath_, std::strerror(failed));
     ::unlink(tmpPath_);
@@ -210,9 +341,11 @@ void OutFile::Discard() {
     fd_ = -1;
     ::unlink(tmpPath_);
   }
+  ReleaseTempSlot(&tempSlot_);
 }
 
 bool CommitAll(OutFile* files, int n, char* why) {
+  CommitGuard guard;
   bool ok = true;
   for (int i = 0; i < n; ++i) {
     if (!ok) {

@@ -13,6 +13,15 @@
 // PR_SET_PDEATHSIG) prints "vismask: rank R: lost rank K (why)" and ends the
 // process with kExitLostRank. A process that exits closes its pipes, so the
 // others see EOF in turn: nobody waits on a dead rank.
+//
+// A silent rank (stopped, hung): while a call waits, each awaited peer's
+// clock restarts whenever poll reports its pipe ready; a peer silent for the
+// wait limit (transport.h) ends the run. Rank 0 kills a silent child with
+// SIGKILL (which also ends a stopped one) and exits; a child that finds
+// rank 0 silent sends it SIGUSR1 and SIGCONT, and rank 0's SIGUSR1 handler
+// removes its temporary files and exits with kExitLostRank. Either way the
+// others see EOF. If this rank's own poll loop did not run for kStoppedGap
+// (it was stopped itself, or the host suspended), the clocks restart.
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
@@ -40,6 +49,9 @@ namespace {
 constexpr int kMaxPipeRanks = kMaxRanks;
 // How long a waiting rank sleeps in poll() before it checks that its peers live.
 constexpr int kPollMs = 100;
+// A gap this long between two turns of a wait loop means this rank itself
+// was stopped (or not scheduled): the peers' silence clocks restart.
+constexpr double kStoppedGap = 1.0;
 // Length word of the frame a child sends from Finish (no data frame is this long).
 constexpr uint64_t kFinishWord = ~uint64_t{0};
 constexpr size_t kWordBytes = sizeof(uint64_t);
@@ -83,6 +95,12 @@ void ChildSigterm(int) {
   ::raise(SIGTERM);
 }
 
+// Rank 0's SIGUSR1: a child found rank 0 silent and ends the run (it said why).
+void EndedByAChild(int) {
+  os::RemoveTempFiles();
+  ::_exit(kExitLostRank);
+}
+
 // "killed by signal 9", "exited with status 7" for a wait status.
 void DescribeWaitStatus(int status, char* out, size_t n) {
   if (WIFSIGNALED(status)) {
@@ -118,8 +136,9 @@ class PipeTransport final : public Transport {
   void Recv(int from, void* data, size_t bytes) override;
   int Finish(int exitCode) override;
 
-  // Creates the pipes and forks the children; each process leaves with its rank.
-  Status Start(int ranks);
+  // Creates the pipes and forks the children; each process leaves with its
+  // rank. `timeout`: --rank-timeout (0: none).
+  Status Start(int ranks, double timeout);
 
  private:
   // This process's ends of the pipes to and from one peer.
@@ -153,6 +172,14 @@ class PipeTransport final : public Transport {
   };
 
   [[noreturn]] void Lost(int peer, const char* why);
+  // Ends the run: `peer` has been silent for `limit` seconds (reading: this
+  // rank waited for its bytes; else for it to take this rank's).
+  [[noreturn]] void Silent(int peer, bool reading, double limit);
+  // The wait limit now (transport.h), 0 for none.
+  double WaitLimit() const;
+  // Rank 0 about to exit: resume stopped children, so that they can take
+  // the SIGTERM rank 0's death sends them.
+  void ContinueChildren();
   // Ends the run if a peer is known dead: rank 0 reaps children that died
   // (killed, or exited with kExitLostRank); a child checks its parent.
   void CheckPeers();
@@ -170,8 +197,14 @@ class PipeTransport final : public Transport {
   int size_ = 1;
   bool finished_ = false;
   bool sigpipeSaved_ = false;
+  bool sigusr1Saved_ = false;
   pid_t rankZeroPid_ = 0;
+  double timeout_ = 0.0;      // --rank-timeout; 0: none
+  double longestWait_ = 0.0;  // the longest Pump so far, seconds
   struct sigaction oldSigpipe_ = {};
+  struct sigaction oldSigusr1_ = {};
+  // When each awaited peer last made its pipe ready in the current Pump.
+  double heard_[kMaxPipeRanks];
   Peer peers_[kMaxPipeRanks];
   OutFrame out_[kMaxPipeRanks];
   InFrame in_[kMaxPipeRanks];
@@ -206,10 +239,11 @@ PipeTransport::~PipeTransport() {
   RestoreSigpipe();
 }
 
-Status PipeTransport::Start(int ranks) {
+Status PipeTransport::Start(int ranks, double timeout) {
   size_ = ranks;
   rank_ = 0;
   rankZeroPid_ = ::getpid();
+  timeout_ = timeout;
   if (ranks == 1) return Status::Ok();
 
   // 2*N*(N-1) descriptors are open in rank 0 until every child is forked.
@@ -315,6 +349,11 @@ Status PipeTransport::Start(int ranks) {
     // Start only once rank 0 has forked every child (it kills them otherwise).
     Recv(0, nullptr, 0);
   } else {
+    // A child that finds rank 0 silent ends it with SIGUSR1.
+    struct sigaction ended = {};
+    ended.sa_handler = EndedByAChild;
+    sigemptyset(&ended.sa_mask);
+    sigusr1Saved_ = ::sigaction(SIGUSR1, &ended, &oldSigusr1_) == 0;
     for (int p = 1; p < ranks; ++p) Send(p, nullptr, 0);
   }
   return Status::Ok();
@@ -327,7 +366,46 @@ void PipeTransport::Lost(int peer, const char* why) {
   sigaddset(&term, SIGTERM);
   ::sigprocmask(SIG_BLOCK, &term, nullptr);
   os::PrintErr("vismask: rank %d: lost rank %d (%s)\n", rank_, peer, why);
+  if (rank_ == 0) {
+    os::RemoveTempFiles();
+    ContinueChildren();
+  }
   ::_exit(kExitLostRank);
+}
+
+void PipeTransport::Silent(int peer, bool reading, double limit) {
+  sigset_t term;
+  sigemptyset(&term);
+  sigaddset(&term, SIGTERM);
+  ::sigprocmask(SIG_BLOCK, &term, nullptr);
+  char scaled[96] = "";
+  if (limit > timeout_)
+    std::snprintf(scaled, sizeof scaled, ", %g times this run's longest wait; --rank-timeout is %g s",
+                  kRankTimeoutScale, timeout_);
+  os::PrintErr("vismask: rank %d: rank %d %s for %.3g s (--rank-timeout%s); ending the run\n",
+               rank_, peer, reading ? "sent nothing" : "took none of this rank's bytes", limit,
+               scaled);
+  if (rank_ == 0) {
+    os::RemoveTempFiles();
+    if (!peers_[peer].reaped && peers_[peer].pid > 0) ::kill(peers_[peer].pid, SIGKILL);
+    ContinueChildren();
+  } else if (peer == 0 && ::getppid() == rankZeroPid_) {
+    ::kill(rankZeroPid_, SIGUSR1);
+    ::kill(rankZeroPid_, SIGCONT);
+  }
+  ::_exit(kExitLostRank);
+}
+
+double PipeTransport::WaitLimit() const {
+  if (timeout_ <= 0.0) return 0.0;
+  double scaled = kRankTimeoutScale * longestWait_;
+  return scaled > timeout_ ? scaled : timeout_;
+}
+
+void PipeTransport::ContinueChildren() {
+  for (int p = 1; p < size_; ++p) {
+    if (!peers_[p].reaped && peers_[p].pid > 0) ::kill(peers_[p].pid, SIGCONT);
+  }
 }
 
 void PipeTransport::ReapChild(int peer, bool block) {
@@ -455,6 +533,10 @@ void PipeTransport::ReadSome(int peer) {
 }
 
 void PipeTransport::Pump(bool atFinish) {
+  const double start = os::Seconds();
+  const double limit = WaitLimit();
+  double lastTurn = start;
+  for (int p = 0; p < size_; ++p) heard_[p] = start;
   for (;;) {
     int n = 0;
     for (int p = 0; p < size_; ++p) {
@@ -467,23 +549,40 @@ void PipeTransport::Pump(bool atFinish) {
         pollPeer_[n++] = p + kMaxPipeRanks;
       }
     }
-    if (n == 0) return;
-    int ready = ::poll(pollFds_, static_cast<nfds_t>(n), kPollMs);
-    if (ready < 0) {
-      CHECK_MSG(errno == EINTR, "poll failed");
-      continue;
+    if (n == 0) {
+      double waited = os::Seconds() - start;
+      if (waited > longestWait_) longestWait_ = waited;
+      return;
     }
+    int ready = ::poll(pollFds_, static_cast<nfds_t>(n), kPollMs);
+    if (ready < 0) CHECK_MSG(errno == EINTR, "poll failed");
+    const double now = os::Seconds();
+    // This rank was not running: its peers' silence is not theirs.
+    if (now - lastTurn > kStoppedGap) {
+      for (int p = 0; p < size_; ++p) heard_[p] = now;
+    }
+    lastTurn = now;
     if (ready == 0) {
       // At Finish, children are expected to exit: EOF tells the rest.
       if (!atFinish) CheckPeers();
-      continue;
     }
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; ready > 0 && i < n; ++i) {
       if (pollFds_[i].revents == 0) continue;
+      int peer = pollPeer_[i] % kMaxPipeRanks;
+      heard_[peer] = now;
       if (pollPeer_[i] < kMaxPipeRanks) {
-        WriteSome(pollPeer_[i]);
+        WriteSome(peer);
       } else {
-        ReadSome(pollPeer_[i] - kMaxPipeRanks);
+        ReadSome(peer);
+      }
+    }
+    if (limit <= 0.0) continue;
+    // A peer silent for longer than the limit ends the run; one this rank
+    // waits to read from is named before one it only writes to.
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int p = 0; p < size_; ++p) {
+        bool awaited = pass == 0 ? in_[p].active : out_[p].active;
+        if (awaited && now - heard_[p] > limit) Silent(p, pass == 0, limit);
       }
     }
   }
@@ -613,6 +712,8 @@ void PipeTransport::CloseAll() {
 }
 
 void PipeTransport::RestoreSigpipe() {
+  if (sigusr1Saved_) ::sigaction(SIGUSR1, &oldSigusr1_, nullptr);
+  sigusr1Saved_ = false;
   if (!sigpipeSaved_) return;
   ::sigaction(SIGPIPE, &oldSigpipe_, nullptr);
   sigpipeSaved_ = false;
@@ -643,7 +744,7 @@ std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status
   }
   if (name == "pipe" || name.empty()) {
     auto transport = std::make_unique<PipeTransport>();
-    Status s = transport->Start(request.ranks);
+    Status s = transport->Start(request.ranks, request.rankTimeout);
     if (!s.ok()) {
       *error = s;
       return nullptr;

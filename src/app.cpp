@@ -634,6 +634,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"queue\": %u,\n",
            o.maskRes, o.roundShots, o.queue);
+  w.Printf("    \"rank_timeout\": %.17g,\n", o.rankTimeout);
   w.Printf("    \"reference\": ");
   if (o.reference.empty()) w.Printf("null");
   else JsonString(&w, o.reference.c_str());
@@ -1141,7 +1142,8 @@ int Main(int argc, const char* const* argv) {
   if (r->options.command == "compare") return Compare(r->options);
   if (r->options.command == "footprint") return Footprint(r->options);
   // The pipe transport forks here: every rank carries on from this point.
-  r->transport = MakeTransport(TransportRequest{r->options.transport, r->options.ranks}, &s);
+  r->transport = MakeTransport(
+      TransportRequest{r->options.transport, r->options.ranks, r->options.rankTimeout}, &s);
   // An error with no text: another rank (rank 0) reports it.
   if (!r->transport) return s.message().empty() ? kExitUsage : Fail(s);
   int rc = kExitUsage;

@@ -3,11 +3,14 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "vismask/os.h"
+
 namespace vismask {
 
 void CheckFailed(const char* file, int line, const char* expr, const char* msg) {
   std::fprintf(stderr, "%s:%d: internal error: CHECK(%s) failed%s%s\n", file, line, expr,
                msg ? ": " : "", msg ? msg : "");
+  os::RemoveTempFiles();  // no output of a failed run is left, not even a temporary one
   std::abort();
 }
 

@@ -151,6 +151,14 @@ local environments and visibility masks:
   --transport T        loop | pipe | mpi: loop keeps every environment in
                        one process; pipe is the default for --ranks > 1; mpi
                        is what build/vismask-mpi uses (under mpirun)
+  --rank-timeout S     a rank that waits for a peer and hears nothing from
+                       it for S seconds ends the run (exit 3, naming the
+                       silent rank; a stopped or hung rank). The limit is
+                       S or 10 times the longest wait of the run so far,
+                       whichever is longer, so S must exceed how much
+                       longer one rank's round or init takes than another's
+                       and rank 0's output writing (default 60; 0: wait
+                       forever)
   --mem-budget BYTES   refuse at init (exit 2, with the numbers) when a rank
                        would reserve more than BYTES (suffix K, M or G for
                        KiB, MiB, GiB); a run that starts never runs out
@@ -171,8 +179,9 @@ outputs (in --out DIR):
   run.json          options, counts, energy balance, timings, memory
 
 exit status: 0 success; 1 an output could not be written; 2 bad input or
-options (the message names file:line or the option); 3 a rank was lost;
-4 the solve stalled (no environment could shoot while power was left)
+options (the message names file:line or the option); 3 a rank was lost
+or silent (--rank-timeout); 4 the solve stalled (no environment could shoot
+while power was left)
 )";
 }
 
@@ -386,6 +395,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--ranks") {
       if (!ParseU64(v, &u) || u < 1 || u > 256) return Bad(a, v, "an integer in [1, 256]");
       o->ranks = static_cast<int>(u);
+    } else if (a == "--rank-timeout") {
+      if (!ParseDouble(v, &d) || d < 0.0 || d > 1e9) return Bad(a, v, "seconds in [0, 1e9] (0: none)");
+      o->rankTimeout = d;
     } else if (a == "--transport") {
       if (v != "loop" && v != "pipe" && v != "mpi") return Bad(a, v, "loop, pipe or mpi");
       o->transport = v;

@@ -67,7 +67,7 @@ struct RankRun {
 // Runs `body` as every rank of a `pipe` transport of `ranks` ranks, in a
 // process forked from the test, and finishes each rank with body's result.
 RankRun RunPipeRanks(int ranks, const std::function<int(Transport&)>& body,
-                     double timeoutSeconds = 60.0) {
+                     double timeoutSeconds = 60.0, double rankTimeout = kDefaultRankTimeout) {
   test::TempDir dir;
   std::string errPath = dir.File("stderr");
   RankRun run;
@@ -77,7 +77,7 @@ RankRun RunPipeRanks(int ranks, const std::function<int(Transport&)>& body,
     int fd = open(errPath.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     if (fd < 0 || dup2(fd, 2) < 0) _exit(100);
     Status error;
-    std::unique_ptr<Transport> t = MakeTransport({"pipe", ranks}, &error);
+    std::unique_ptr<Transport> t = MakeTransport({"pipe", ranks, rankTimeout}, &error);
     if (!t) {
       os::PrintErr("MakeTransport: %s\n", error.ToString().c_str());
       _exit(101);
@@ -357,6 +357,48 @@ TEST(TransportTest, PipeRankZeroNoticesADeadChildAtItsNextCall) {
   EXPECT_EQ(ExitCode(run), kExitLostRank) << run.err;
   EXPECT_NE(run.err.find("vismask: rank 0: lost rank 2 (killed by signal 9)\n"), std::string::npos)
       << run.err;
+}
+
+// A child that stops (SIGSTOP) in the middle of the run: rank 0 hears
+// nothing from it for --rank-timeout, says so, kills it and ends the run.
+TEST(TransportTest, PipeSilentChildEndsTheRun) {
+  double start = os::Seconds();
+  RankRun run = RunPipeRanks(
+      3,
+      [](Transport& t) {
+        uint8_t all[3];
+        uint8_t me = static_cast<uint8_t>(t.rank());
+        t.AllGather(&me, 1, all);
+        if (t.rank() == 2) raise(SIGSTOP);
+        t.AllGather(&me, 1, all);
+        return 0;
+      },
+      20.0, 1.0);
+  double took = os::Seconds() - start;
+  EXPECT_EQ(ExitCode(run), kExitLostRank) << run.err;
+  EXPECT_NE(run.err.find("rank 2 sent nothing for 1 s (--rank-timeout); ending the run\n"),
+            std::string::npos)
+      << run.err;
+  EXPECT_LT(took, 5.0) << run.err;
+}
+
+// The wait limit grows to 10 times the longest wait of the run: a first
+// wait of 0.4 s lets a later one last 1.5 s with --rank-timeout 1.
+TEST(TransportTest, PipeWaitLimitGrowsWithTheLongestWait) {
+  RankRun run = RunPipeRanks(
+      2,
+      [](Transport& t) {
+        uint8_t all[2];
+        uint8_t me = static_cast<uint8_t>(t.rank());
+        if (t.rank() == 1) usleep(400000);
+        t.AllGather(&me, 1, all);
+        if (t.rank() == 1) usleep(1500000);
+        t.AllGather(&me, 1, all);
+        return 0;
+      },
+      20.0, 1.0);
+  EXPECT_EQ(ExitCode(run), 0) << run.err;
+  EXPECT_EQ(run.err, "");
 }
 
 // Runs `ranks` ranks in an endless loop of AllToAll calls, kills rank `victim`

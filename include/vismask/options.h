@@ -11,6 +11,7 @@
 #include "vismask/mask.h"
 #include "vismask/scene.h"
 #include "vismask/status.h"
+#include "vismask/transport.h"
 
 namespace vismask {
 
@@ -58,6 +59,7 @@ struct Options {
   std::vector<uint32_t> envOrder;
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
   int ranks = 1;          // --ranks N (pipe)
+  double rankTimeout = kDefaultRankTimeout;  // --rank-timeout S: a silent peer ends the run; 0: never
   uint64_t memBudget = 0; // --mem-budget BYTES per rank; 0: none
   bool json = false;      // footprint --json
   std::string reference;  // --reference REF.pfm: the error of the image against it

@@ -53,10 +53,26 @@ uint64_t PeakRssBytes();
 // Rss - Anonymous from /proc/self/smaps_rollup; 0 if unknown.
 uint64_t FileRssBytes();
 
+// Temporary files and fatal signals. While an OutFile's temporary file
+// exists, its name is in a fixed table (no allocation); RemoveTempFiles()
+// unlinks every name there, and is async-signal-safe. The first
+// OutFile::Open, or InstallSignalCleanup(), installs handlers for SIGINT,
+// SIGTERM and SIGHUP (those not ignored) that remove the temporary files,
+// write the NoteWaiting line if one is set, and let the signal end the
+// process as it would have. A signal that arrives during CommitAll waits
+// until the commit is done (complete outputs, or the previous ones).
+void RemoveTempFiles();
+void InstallSignalCleanup();
+// For the signal handler's line: rank `self` is waiting for rank `peer`
+// (peer < 0: not waiting). It then writes "vismask: rank SELF: ended by
+// signal N while waiting for rank PEER" (under mpirun, the rank that died).
+void NoteWaiting(int self, int peer);
+
 // An output file written under a temporary name ("NAME.tmp.PID", unique to
 // the process) and renamed to its final name only by Commit() or CommitAll(),
 // so an interrupted run never leaves a file that looks complete. Discard()
-// (or destruction without a commit) removes the temporary file.
+// (or destruction without a commit), a fatal signal (above) and
+// RemoveTempFiles() remove the temporary file.
 class OutFile {
  public:
   OutFile() = default;
@@ -83,6 +99,7 @@ class OutFile {
   bool Close(char* why);
 
   int fd_ = -1;
+  int tempSlot_ = -1;  // the temporary name's entry in the signal handler's table
   int writeErrno_ = 0;  // errno of the first failed write, 0 if none
   char path_[kMaxPath] = {};
   char tmpPath_[kMaxPath + 24] = {};

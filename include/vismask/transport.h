@@ -8,7 +8,16 @@
 // Failure: a rank that dies or a connection that closes is fatal. The
 // transport prints "vismask: rank R: lost rank K (...)" and ends the process
 // with exit status 3 (kExitLostRank), so no rank ever waits forever on a dead
-// one. Calls return only on success.
+// one. A peer that is alive but silent (stopped, hung) is fatal too: a rank
+// that waits in a call and hears nothing from a peer for the wait limit
+// prints "vismask: rank R: rank K sent nothing for S s (--rank-timeout);
+// ending the run" and ends the run with status 3 (pipe: rank 0 kills the
+// silent child, a child ends rank 0; mpi: MPI_Abort). The wait limit is
+// TransportRequest::rankTimeout, or 10 times the longest wait a call of this
+// run has ended normally after, if that is longer; time this rank itself
+// was stopped does not count. Before a rank ends the process this way it
+// removes the temporary output files (os::RemoveTempFiles). Calls return
+// only on success.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -21,6 +30,10 @@
 namespace vismask {
 
 constexpr int kExitLostRank = 3;
+// The default --rank-timeout, seconds (see Failure above).
+constexpr double kDefaultRankTimeout = 60.0;
+// A call's wait limit is at least this many times the longest wait of the run so far.
+constexpr double kRankTimeoutScale = 10.0;
 
 // The most ranks a run may have, whatever the transport: rank-indexed
 // tables (the pipe transport's peers, init's agreement on every rank's
@@ -76,6 +89,9 @@ class Transport {
 struct TransportRequest {
   std::string name;  // "loop", "pipe", "mpi" or "" (the binary's default)
   int ranks = 1;     // --ranks (pipe)
+  // --rank-timeout: seconds a waiting rank hears nothing from a peer before
+  // it ends the run (0: wait forever).
+  double rankTimeout = kDefaultRankTimeout;
 };
 
 // The transport this binary provides for `request` (platform/). Called once,
