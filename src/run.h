@@ -1,0 +1,241 @@
+// The render pipeline's shared pieces (internal to src/): the run's state on
+// one rank (Render), what init prepares (Prepared), and the stages that
+// src/app.cpp (dispatch, compare, Main), src/render_init.cpp (init),
+// src/output.cpp (the image and the outputs), src/run_json.cpp (run.json)
+// and src/footprint.cpp (`vismask footprint`) define.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <new>
+#include <string>
+#include <vector>
+#include <glm/geometric.hpp>
+#include "vismask/display.h"
+#include "vismask/emitter_check.h"
+#include "vismask/environment.h"
+#include "vismask/image_io.h"
+#include "vismask/mesh.h"
+#include "vismask/options.h"
+#include "vismask/partition.h"
+#include "vismask/os.h"
+#include "vismask/phase.h"
+#include "vismask/raster.h"
+#include "vismask/scene.h"
+#include "vismask/smoothing.h"
+#include "vismask/solver.h"
+#include "vismask/text_writer.h"
+#include "vismask/texture.h"
+#include "vismask/transport.h"
+
+namespace vismask::run {
+
+constexpr int kExitOk = 0;
+constexpr int kExitOutput = 1;
+constexpr int kExitUsage = 2;
+constexpr int kExitStalled = 4;  // (3 is the transport's kExitLostRank)
+constexpr uint64_t kMaxPatches = 50000000;
+constexpr size_t kTextBufferBytes = 64 * 1024;
+
+enum OutputFile { kPng, kPfm, kPatchesCsv, kConvergenceCsv, kRunJson, kNumOutputs };
+const char* const kOutputNames[kNumOutputs] = {"image.png", "image.pfm", "patches.csv",
+                                               "convergence.csv", "run.json"};
+
+// What rank 0 needs of every environment for run.json, gathered at output.
+struct EnvSummary {
+  EnergyLedger ledger;
+  EnvStats stats;
+  // The stated error of patches.csv's b (see ErrorSums).
+  double relVarArea;   // sum over patches and channels with b > 0 of area * var / b^2
+  double weight;       // sum of the areas counted there
+  double bArea[3];     // sum of b * area, as written (with the correction when on)
+  double ambientArea[3];  // sum of kd * ambient * area
+  uint64_t arenaBytes;
+  uint64_t patches;
+  uint64_t vertices;
+  uint64_t gridCells;
+  uint64_t gridRefs;
+  uint64_t elementsUsed;     // roots included
+  uint64_t elementCapacity;
+  uint64_t leaves;
+  uint64_t elementDepth;     // the deepest leaf
+};
+
+// One row of patches.csv as a rank sends it to rank 0.
+struct PatchRecord {
+  uint32_t id;
+  uint32_t env;
+  float c[3];
+  float n[3];
+  float area;
+  float kd[3];
+  float ke[3];
+  double b[3];
+};
+constexpr size_t kPatchChunk = 2048;  // records per transfer to rank 0
+constexpr int kBandRows = 16;         // framebuffer rows per transfer to rank 0
+
+// Everything a render needs after init, carved from arenas at init.
+struct Render {
+  Options options;
+  std::unique_ptr<Transport> transport;
+  RankEnvs layout;
+  size_t numPolygons = 0;
+  uint64_t numTwins = 0;  // twin patches, all ranks (--two-sided, --two-sided-emitters)
+  float patchSize = 0.0f;
+  std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
+  std::vector<Environment*> envPtrs;
+  Camera camera;  // the one used (--camera or a side's)
+  bool hasSide = false;  // the camera is a side's: --view or chosen (not --camera)
+  bool sideChosen = false;  // chosen by ChooseViewSide (not --view)
+  ViewSide side = ViewSide::kFront;
+  View view;
+  Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
+  ExchangeBuffers exchange;
+  Framebuffer fb;
+  Framebuffer incoming;  // rank 0 with several ranks: kBandRows rows of another rank's image
+  Span<float> reference;  // rank 0 with --reference: the reference image, RGB floats
+  Span<uint8_t> exclude;  // rank 0 with --exclude: nonzero where a pixel is left out of the error
+  size_t excludedPixels = 0;
+  Span<uint8_t> rgb8;
+  Span<uint8_t> pngScratch;
+  Span<char> convBuffer;
+  Span<char> textBuffer;
+  Span<PatchRecord> records;
+  Span<EnvSummary> summaryMine, summaryAll, summary;  // summary: by environment
+  Span<AmbientReport> ambientMine, ambientAll, ambient;
+  os::DirLock outLock;  // rank 0: --out is ours until the process ends
+  os::OutFile files[kNumOutputs];
+  TextWriter convergence;
+  double initSeconds = 0.0;
+  double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
+  // Display values shared across cuts and smoothed polygons (display.h).
+  Span<VertexRecord> sharedMine, sharedAll;
+  Span<uint32_t> sharedScratch;   // ShareVertices' sort of the smooth records, and those at one point
+  uint64_t sharedCapacity = 0;    // the most shared vertices any rank's environments hold
+  bool anySmooth = false;         // some rank has smooth vertices
+  ShareRule shareRule;
+  TextureSet textures;              // the textures this rank's patches show (texture.h)
+  // Every scene texture, for run.json (read-only after init).
+  struct TextureInfo {
+    std::string path;
+    uint32_t width, height;
+  };
+  std::vector<TextureInfo> textureInfo;
+  uint64_t predictedBytes = 0;  // this rank's arenas, as measured before they were made
+
+  bool isRoot() const { return transport->rank() == 0; }
+
+  // The rank's own arena: exchange buffers, framebuffer, gathered reports;
+  // on rank 0 also the second framebuffer, the 8-bit image, the PNG scratch
+  // and the writers' buffers.
+  // The textures: a display resource like the framebuffer, so the rank's, and
+  // one copy serves all its environments (the solve read them at init only,
+  // into each patch's kd); only those its environments use (`used`).
+  uint64_t rankExchangeBytes = 0, rankImageBytes = 0, rankOutputBytes = 0, rankTextureBytes = 0;
+  void LayoutRank(Arena& arena, uint32_t packetBytes, int ranks, bool root,
+                  const SceneTextures& sceneTextures, const std::vector<uint8_t>& used) {
+    size_t mark = arena.used();
+    auto part = [&](uint64_t* bytes) {
+      *bytes += arena.used() - mark;
+      mark = arena.used();
+    };
+    rankExchangeBytes = rankImageBytes = rankOutputBytes = rankTextureBytes = 0;
+    exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
+    part(&rankExchangeBytes);
+    fb.Layout(arena, options.width, options.height, options.aa);
+    part(&rankImageBytes);
+    records = arena.Alloc<PatchRecord>(kPatchChunk);
+    summaryMine = arena.Alloc<EnvSummary>(layout.perRank);
+    summaryAll = arena.Alloc<EnvSummary>(size_t(ranks) * layout.perRank);
+    summary = arena.Alloc<EnvSummary>(layout.total);
+    ambientMine = arena.Alloc<AmbientReport>(layout.perRank);
+    ambientAll = arena.Alloc<AmbientReport>(size_t(ranks) * layout.perRank);
+    ambient = arena.Alloc<AmbientReport>(layout.total);
+    part(&rankOutputBytes);
+    // Shared vertices: every rank's block holds sharedCapacity records.
+    sharedMine = arena.Alloc<VertexRecord>(sharedCapacity);
+    sharedAll = arena.Alloc<VertexRecord>(size_t(ranks) * sharedCapacity);
+    sharedScratch = arena.Alloc<uint32_t>(anySmooth ? 2 * size_t(ranks) * sharedCapacity : 0);
+    part(&rankImageBytes);
+    textures.Layout(arena, sceneTextures, used);
+    part(&rankTextureBytes);
+    if (!root) return;
+    if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
+    if (!options.reference.empty())
+      reference = arena.Alloc<float>(size_t(options.width) * size_t(options.height) * 3);
+    if (!options.exclude.empty())
+      exclude = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height));
+    rgb8 = arena.Alloc<uint8_t>(size_t(options.width) * size_t(options.height) * 3);
+    part(&rankImageBytes);
+    pngScratch = arena.Alloc<uint8_t>(PngScratchBytes(options.width, options.height));
+    convBuffer = arena.Alloc<char>(kTextBufferBytes);
+    textBuffer = arena.Alloc<char>(kTextBufferBytes);
+    part(&rankOutputBytes);
+  }
+};
+
+// Gathers one fixed-size record per environment from every rank into
+// `byEnv`, in environment order (rank blocks are padded to perRank).
+template <class T>
+void GatherByEnv(Render* r, Span<T> mine, Span<T> all, Span<T> byEnv) {
+  r->transport->AllGather(mine.data(), mine.bytes(), all.data());
+  int ranks = r->transport->size();
+  for (int k = 0; k < ranks; ++k) {
+    RankEnvs re = EnvsOfRank(r->layout.total, ranks, k);
+    for (uint32_t i = 0; i < re.count; ++i) byEnv[re.first + i] = all[size_t(k) * r->layout.perRank + i];
+  }
+}
+
+inline int Fail(const Status& s) {
+  std::string text = s.ToString() + "\n";
+  os::WriteErr(text.data(), text.size());
+  return kExitUsage;
+}
+
+// A user error found at init: every rank finds it, rank 0 reports it.
+inline int FailInit(const Render* r, const Status& s) {
+  if (r->isRoot()) return Fail(s);
+  return kExitUsage;
+}
+
+// The init work `render` and `footprint` share: the scene loaded, checked
+// and cut into environments. Heap; dropped at the end of init.
+struct Prepared {
+  Scene scene;
+  SceneTextures textures;  // decoded map_Kd images
+  EnvGrid grid;
+  Partition part;
+  float patchSize = 0.0f;
+  float tolerance = 0.0f;  // points this close are one: cut and smooth vertices
+  bool smooth = true;      // --smooth
+  std::vector<std::vector<uint32_t>> pieces;  // polygon pieces of each environment
+  TwinOptions twins;  // --two-sided, --two-sided-emitters
+  EnvOptions envOptions;
+  uint32_t packetBytes = 0;
+};
+
+// The most rays one shot traces: Method R's packet bits.
+inline uint32_t RayCap(const Options& o) {
+  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
+}
+
+Status PrepareScene(const Options& o, Prepared* p);
+Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
+                   std::vector<std::unique_ptr<Environment>>* envs);
+std::vector<uint8_t> TexturesUsed(const Prepared& p, uint32_t first, uint32_t count);
+int Init(Render* r);
+void PrintWarnings(const SceneTextures& t);
+void WritePatchesCsv(Render* r);
+void JsonString(TextWriter* w, const char* s);
+std::string JsonQuoted(const std::string& s);
+void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outputSeconds);
+void RenderImage(Render* r);
+int WriteOutputs(Render* r, const SolveResult& res);
+int Footprint(const Options& o);
+int Compare(const Options& o);
+
+}  // namespace vismask::run
