@@ -1,4 +1,4 @@
-// Unit tests of the building blocks: arena, FixedVec, MaxTree, RNG, sampling.
+// Unit tests of the building blocks: arena, checks, MaxTree, RNG, sampling.
 #include <cmath>
 #include <random>
 #include <vector>
@@ -60,16 +60,6 @@ TEST(CheckDeathTest, ComparisonsPrintBothOperands) {
   size_t big = 7;
   EXPECT_DEATH(CHECK_LE(big, 3u), "failed: 7 against 3");
   CHECK_GE(big, 7u);  // holds: nothing happens
-}
-
-TEST(FixedVecDeathTest, PushPastCapacityIsCaught) {
-  int storage[3];
-  FixedVec<int> v(Span<int>(storage, 3));
-  v.push_back(1);
-  v.push_back(2);
-  v.push_back(3);
-  EXPECT_TRUE(v.full());
-  EXPECT_DEATH(v.push_back(4), "capacity exceeded");
 }
 
 TEST(MaxTreeTest, AgreesWithLinearScan) {
