@@ -23,8 +23,8 @@ def section(data):
              "with other work: exec/s is noisy, the counts are not.*\n")
     L.append("libFuzzer targets (`tests/fuzz/`, built by clang with ASan and UBSan, "
              "`-fno-sanitize-recover=undefined`), each run from its committed seeds alone into a "
-             "fresh corpus. *executions* is libFuzzer's `stat::number_of_executed_units`, *exec/s* "
-             "its `stat::average_exec_per_sec`; *cov* is the number of instrumented edges covered "
+             "fresh corpus. *executions* is libFuzzer's `stat::number_of_executed_units`, *seconds* "
+             "the run's wall time (start-up and seeds included), *exec/s* the one over the other; *cov* is the number of instrumented edges covered "
              "(`cov:`) and *ft* libFuzzer's features (`ft:`, edges with hit counts and the like), "
              "after the seeds and at the end of the run; *corpus* the inputs kept at the end "
              "(`corp:`). A crash, sanitizer report, leak, timeout (10 s) or RSS above 2 GB would "
@@ -33,8 +33,8 @@ def section(data):
              "| corpus at end | peak RSS MB | result | run on |")
     L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for t in targets:
-        L.append("| %s | %s | %d | %d | %d | %d | %d, %d | %d, %d | %d inputs, %s | %d | %s | %s |" %
-                 (t["name"], t["reads"], t["seeds"], t["runs"], t["seconds"], t["exec_per_sec"],
+        L.append("| %s | %s | %d | %d | %.1f | %.0f | %d, %d | %d, %d | %d inputs, %s | %d | %s | %s |" %
+                 (t["name"], t["reads"], t["seeds"], t["runs"], t["seconds"], t["runs"] / max(t["seconds"], 0.1),
                   t["inited_cov"], t["cov"], t["inited_ft"], t["ft"], t["corpus_units"],
                   t["corpus_size"], t["peak_rss_mb"],
                   t["result"] if t["result"] == "no crash" else "**%s**" % t["result"], t["date"]))
