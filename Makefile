@@ -268,10 +268,12 @@ cluster-experiments:
 # coverage, from an archive (build/fuzz/libvismask.a), so each takes what
 # its entry point needs and no list of sources has to follow the loader.
 # make fuzz-report runs each for FUZZ_REPORT_RUNS executions from its seeds
-# and writes the figures into docs/STABILITY.md (tools/fuzz-report).
+# and writes the figures into docs/STABILITY.md (tools/fuzz-report);
+# FUZZ_REPORT_SECONDS=S stops each earlier, and the report says so.
 FUZZ_SECONDS ?= 30
 FUZZ_RUNS ?=
 FUZZ_REPORT_RUNS ?= 10000000
+FUZZ_REPORT_SECONDS ?=
 FUZZ_CXX ?= clang++
 FUZZ_TARGETS := scene image
 FUZZ_BIN := $(patsubst %,build/fuzz/%_fuzz,$(FUZZ_TARGETS))
@@ -305,7 +307,7 @@ fuzz: fuzz-deps
 	done
 fuzz-report: fuzz-deps
 	$(MAKE) $(FUZZ_BIN)
-	FUZZ_RUNS=$(FUZZ_REPORT_RUNS) tools/fuzz-report $(FUZZ_TARGETS)
+	FUZZ_RUNS=$(FUZZ_REPORT_RUNS) FUZZ_MAX_SECONDS=$(FUZZ_REPORT_SECONDS) tools/fuzz-report $(FUZZ_TARGETS)
 
 # docs/STABILITY.md and docs/stability/ from one run of the stiff and extreme
 # suites (tools/stability; 2 to 5 minutes on 2 shared cores).

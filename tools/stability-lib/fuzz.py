@@ -37,7 +37,7 @@ def section(data):
                  (t["name"], t["reads"], t["seeds"], t["runs"], t["seconds"], t["runs"] / max(t["seconds"], 0.1),
                   t["inited_cov"], t["cov"], t["inited_ft"], t["ft"], t["corpus_units"],
                   t["corpus_size"], t["peak_rss_mb"],
-                  t["result"] if t["result"] == "no crash" else "**%s**" % t["result"], t["date"]))
+                  t["result"] if t["result"].startswith("no crash") else "**%s**" % t["result"], t["date"]))
     short = [t for t in targets if t["runs"] < t["requested_runs"]]
     for t in short:
         L.append("\n%s: %d of the %d executions asked for." % (t["name"], t["runs"], t["requested_runs"]))
