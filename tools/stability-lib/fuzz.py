@@ -28,7 +28,8 @@ def section(data):
              "(`cov:`) and *ft* libFuzzer's features (`ft:`, edges with hit counts and the like), "
              "after the seeds and at the end of the run; *corpus* the inputs kept at the end "
              "(`corp:`). A crash, sanitizer report, leak, timeout (10 s) or RSS above 2 GB would "
-             "stop the run and be saved as an artifact.\n")
+             "stop the run and be saved as an artifact; each one found so far is fixed and its "
+             "input kept as a test in `make test` (tests/scene_test.cpp, tests/image_test.cpp).\n")
     L.append("| target | reads | seeds | executions | seconds | exec/s | cov (seeds, end) | ft (seeds, end) "
              "| corpus at end | peak RSS MB | result | run on |")
     L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
