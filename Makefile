@@ -10,7 +10,8 @@
 #   make test-cross     the aarch64 tests and a render under qemu, compared with native
 #   make experiments    the paper's figures and table as numbers: docs/RESULTS.md
 #   make cluster-experiments  (root) simulated Pi clusters, docs/CLUSTER.md
-#   make fuzz FUZZ_SECONDS=N   libFuzzer on the scene loader (clang)
+#   make fuzz FUZZ_SECONDS=N   libFuzzer on the scene loader and the image readers (clang)
+#   make fuzz-report    10 M executions of each fuzz target: docs/STABILITY.md
 #   make stability      the stiff and extreme suites: docs/STABILITY.md
 
 CROSS ?=
@@ -110,7 +111,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments bench fuzz stability
+.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments bench fuzz fuzz-deps fuzz-report stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -269,20 +270,56 @@ cluster-experiments:
 	$(MAKE) all $(BUILD)/mpi-wait.so
 	tools/cluster-experiments
 
-# The scene loader under libFuzzer with ASan + UBSan (clang; tests/fuzz/).
-# New inputs go to build/fuzz/corpus, seeds are read from tests/fuzz/corpus,
-# a crash is written to build/fuzz/crash-* (and make fails).
+# libFuzzer with ASan + UBSan (clang: tools/install-deps --fuzz; tests/fuzz/):
+# build/fuzz/scene_fuzz, the OBJ/MTL loader (seeds tests/fuzz/corpus), and
+# build/fuzz/image_fuzz, the PFM and PGM readers (seeds
+# tests/fuzz/image-corpus). make fuzz runs each for FUZZ_SECONDS (or
+# FUZZ_RUNS executions, when given), one after the other; new inputs go to
+# build/fuzz/corpus-TARGET, a crash to build/fuzz/TARGET-crash-* (and make
+# fails). The targets link the library's objects compiled by clang with
+# coverage, from an archive (build/fuzz/libvismask.a), so each takes what
+# its entry point needs and no list of sources has to follow the loader.
+# make fuzz-report runs each for FUZZ_REPORT_RUNS executions from its seeds
+# and writes the figures into docs/STABILITY.md (tools/fuzz-report);
+# FUZZ_REPORT_SECONDS=S stops each earlier, and the report says so.
 FUZZ_SECONDS ?= 30
+FUZZ_RUNS ?=
+FUZZ_REPORT_RUNS ?= 10000000
+FUZZ_REPORT_SECONDS ?=
 FUZZ_CXX ?= clang++
-FUZZ_SRC := tests/fuzz/scene_fuzz.cpp src/scene.cpp src/status.cpp
-build/fuzz/scene_fuzz: $(FUZZ_SRC) include/vismask/scene.h include/vismask/status.h src/geometry_util.h
+FUZZ_TARGETS := scene image
+FUZZ_BIN := $(patsubst %,build/fuzz/%_fuzz,$(FUZZ_TARGETS))
+FUZZ_CXXFLAGS := -std=c++17 -O1 -g -Wall -Wextra -fsanitize=address,undefined -fno-sanitize-recover=undefined \
+                 -Iinclude -Iplatform -I/usr/include/stb -MMD -MP
+FUZZ_OBJ := $(patsubst %.cpp,build/fuzz/obj/%.o,$(LIB_SRC))
+FUZZ_LIMIT := $(if $(FUZZ_RUNS),-runs=$(FUZZ_RUNS),-max_total_time=$(FUZZ_SECONDS))
+# The options tools/fuzz-report uses too (it reads them from here).
+FUZZ_OPTIONS := -max_len=8192 -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
+export FUZZ_OPTIONS
+
+build/fuzz/obj/%.o: %.cpp
 	@mkdir -p $(dir $@)
-	$(FUZZ_CXX) -std=c++17 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-	  -Iinclude $(FUZZ_SRC) -o $@
-fuzz: build/fuzz/scene_fuzz
-	@mkdir -p build/fuzz/corpus
-	build/fuzz/scene_fuzz build/fuzz/corpus tests/fuzz/corpus -max_total_time=$(FUZZ_SECONDS) \
-	  -max_len=8192 -timeout=10 -rss_limit_mb=2048 -artifact_prefix=build/fuzz/ -print_final_stats=1
+	$(FUZZ_CXX) $(FUZZ_CXXFLAGS) -fsanitize=fuzzer-no-link -c $< -o $@
+build/fuzz/libvismask.a: $(FUZZ_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+build/fuzz/%_fuzz: build/fuzz/obj/tests/fuzz/%_fuzz.o build/fuzz/libvismask.a
+	$(FUZZ_CXX) -fsanitize=fuzzer,address,undefined $^ -o $@ $(LDLIBS)
+
+fuzz-deps:
+	@tools/install-deps --fuzz
+fuzz: fuzz-deps
+	$(MAKE) $(FUZZ_BIN)
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p build/fuzz/corpus-$$t; \
+	  seeds=tests/fuzz/corpus; [ $$t = scene ] || seeds=tests/fuzz/$$t-corpus; \
+	  echo "build/fuzz/$${t}_fuzz build/fuzz/corpus-$$t $$seeds $(FUZZ_LIMIT) $(FUZZ_OPTIONS) -artifact_prefix=build/fuzz/$$t-"; \
+	  build/fuzz/$${t}_fuzz build/fuzz/corpus-$$t $$seeds $(FUZZ_LIMIT) $(FUZZ_OPTIONS) \
+	    -artifact_prefix=build/fuzz/$$t- || exit 1; \
+	done
+fuzz-report: fuzz-deps
+	$(MAKE) $(FUZZ_BIN)
+	FUZZ_RUNS=$(FUZZ_REPORT_RUNS) FUZZ_MAX_SECONDS=$(FUZZ_REPORT_SECONDS) tools/fuzz-report $(FUZZ_TARGETS)
 
 # docs/STABILITY.md and docs/stability/ from one run of the stiff and extreme
 # suites (tools/stability; 2 to 5 minutes on 2 shared cores).
@@ -294,3 +331,4 @@ clean:
 	rm -rf build out
 
 -include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+-include $(shell find build/fuzz/obj -name '*.d' 2>/dev/null)

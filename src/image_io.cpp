@@ -5,8 +5,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <sstream>
+#include <istream>
+#include <limits>
+#include <streambuf>
+#include <system_error>
+#include <utility>
 
 #include "vismask/check.h"
 
@@ -168,97 +173,122 @@ ImageError CompareImages(Span<const float> a, Span<const float> b, Span<const ui
 
 namespace {
 
-// The bytes left in `in` after its current position (-1 if unknown).
-long long BytesLeft(std::ifstream& in) {
-  std::streampos here = in.tellg();
-  if (here < 0) return -1;
-  in.seekg(0, std::ios::end);
-  std::streampos end = in.tellg();
-  in.seekg(here);
-  return end < here ? -1 : static_cast<long long>(end - here);
+// Reads the whole file at `path` into *bytes; an error message, empty on
+// success. Only regular files: a device (/dev/zero) or a FIFO would be read
+// until memory runs out.
+std::string ReadBytes(const std::string& path, std::string* bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "cannot open";
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return "cannot read: not a regular file";
+  uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) return "cannot read (" + ec.message() + ")";
+  if (size > static_cast<uintmax_t>(std::numeric_limits<std::streamsize>::max()))
+    return "cannot read: " + std::to_string(size) + " bytes";
+  std::string all(static_cast<size_t>(size), '\0');
+  in.read(&all[0], static_cast<std::streamsize>(size));
+  if (static_cast<uintmax_t>(in.gcount()) != size) return "cannot read (the file changed while read)";
+  *bytes = std::move(all);
+  return "";
 }
 
-// Checks a w x h image of `bytesPerPixel` against the bytes the file still
-// holds, before anything is allocated: a header may claim any size.
-std::string CheckPixelBytes(std::ifstream& in, int w, int h, int bytesPerPixel, const char* kind) {
-  long long left = BytesLeft(in);
+// A read-only stream buffer over bytes in memory (no copy), so that a header
+// is parsed with the same istream >> as a file would be.
+class MemoryBuf : public std::streambuf {
+ public:
+  MemoryBuf(const char* data, size_t size) {
+    char* p = const_cast<char*>(data);  // never written: no put area, no putback of a new char
+    setg(p, p, p + size);
+  }
+  size_t Offset() const { return static_cast<size_t>(gptr() - eback()); }
+};
+
+// Checks a w x h image of `bytesPerPixel` against the `left` bytes after its
+// header, before anything is allocated: a header may claim any size.
+std::string CheckPixelBytes(size_t left, int w, int h, int bytesPerPixel, const char* kind) {
   // w * h * bytesPerPixel without overflow: w, h < 2^31, so compare by division.
   unsigned long long perRow = static_cast<unsigned long long>(w) * bytesPerPixel;
-  if (left < 0 || static_cast<unsigned long long>(left) / perRow < static_cast<unsigned long long>(h))
+  if (left / perRow < static_cast<unsigned long long>(h))
     return std::string("truncated ") + kind + ": the header says " + std::to_string(w) + " x " +
            std::to_string(h) + " pixels (" +
            std::to_string(static_cast<unsigned long long>(w) * static_cast<unsigned long long>(h)) +
-           " x " + std::to_string(bytesPerPixel) + " bytes), the file holds " +
-           std::to_string(left < 0 ? 0 : left) + " bytes after it";
+           " x " + std::to_string(bytesPerPixel) + " bytes), the file holds " + std::to_string(left) +
+           " bytes after it";
   return "";
 }
 
 }  // namespace
 
 Status ReadPfm(const std::string& path, PfmImage* image) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::At(path, 0, "cannot open");
+  std::string bytes;
+  std::string err = ReadBytes(path, &bytes);
+  if (!err.empty()) return Status::At(path, 0, err);
+  return ReadPfmFromBytes(path, bytes, image);
+}
+
+Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmImage* image) {
+  MemoryBuf buf(bytes.data(), bytes.size());
+  std::istream in(&buf);
   std::string magic;
   int w = 0, h = 0;
   double scale = 0.0;
   in >> magic >> w >> h >> scale;
   if (!in || magic != "PF" || w <= 0 || h <= 0 || scale == 0.0 || !std::isfinite(scale))
-    return Status::At(path, 0, "not a colour PFM (expected 'PF', width, height, scale)");
+    return Status::At(name, 0, "not a colour PFM (expected 'PF', width, height, scale)");
   in.get();  // the single whitespace byte after the scale
-  std::string err = CheckPixelBytes(in, w, h, 12, "PFM");
-  if (!err.empty()) return Status::At(path, 0, err);
-  size_t n = size_t(w) * size_t(h) * 3;
-  std::vector<float> data(n);
-  in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(n * sizeof(float)));
-  if (static_cast<size_t>(in.gcount()) != n * sizeof(float))
-    return Status::At(path, 0, "truncated PFM: expected " + std::to_string(n * sizeof(float)) +
-                                   " bytes of pixels");
-  if (scale > 0.0) {  // big-endian file
-    for (float& f : data) {
-      uint32_t u;
-      std::memcpy(&u, &f, 4);
-      u = __builtin_bswap32(u);
-      std::memcpy(&f, &u, 4);
-    }
-  }
-  // A NaN would compare as a perfect match and an Inf write -nan into JSON.
-  for (size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(data[i])) {
-      size_t pixel = i / 3;
-      size_t x = pixel % size_t(w), yFromBottom = pixel / size_t(w);
-      return Status::At(path, 0,
-                        "pixel (" + std::to_string(x) + ", " + std::to_string(size_t(h) - 1 - yFromBottom) +
-                            ") (x, y from the top left) is not finite: " +
-                            (std::isnan(data[i]) ? "NaN" : "Inf"));
+  const size_t start = buf.Offset();
+  std::string err = CheckPixelBytes(bytes.size() - start, w, h, 12, "PFM");
+  if (!err.empty()) return Status::At(name, 0, err);
+  const bool bigEndian = scale > 0.0;
+  const size_t rowFloats = size_t(w) * 3;
+  std::vector<float> pixels(rowFloats * size_t(h));
+  for (size_t y = 0; y < size_t(h); ++y) {  // PFM rows run bottom to top
+    float* row = &pixels[(size_t(h) - 1 - y) * rowFloats];
+    std::memcpy(row, bytes.data() + start + y * rowFloats * 4, rowFloats * 4);
+    for (size_t i = 0; i < rowFloats; ++i) {
+      if (bigEndian) {
+        uint32_t u;
+        std::memcpy(&u, &row[i], 4);
+        u = __builtin_bswap32(u);
+        std::memcpy(&row[i], &u, 4);
+      }
+      // A NaN would compare as a perfect match and an Inf write -nan into JSON.
+      if (!std::isfinite(row[i]))
+        return Status::At(name, 0,
+                          "pixel (" + std::to_string(i / 3) + ", " + std::to_string(size_t(h) - 1 - y) +
+                              ") (x, y from the top left) is not finite: " +
+                              (std::isnan(row[i]) ? "NaN" : "Inf"));
     }
   }
   image->width = w;
   image->height = h;
-  image->pixels.assign(n, 0.0f);
-  for (int y = 0; y < h; ++y)  // PFM rows run bottom to top
-    std::memcpy(&image->pixels[size_t(h - 1 - y) * w * 3], &data[size_t(y) * w * 3], size_t(w) * 3 * 4);
+  image->pixels = std::move(pixels);
   return Status::Ok();
 }
 
 Status ReadPgm(const std::string& path, PgmImage* image) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::At(path, 0, "cannot open");
+  std::string bytes;
+  std::string err = ReadBytes(path, &bytes);
+  if (!err.empty()) return Status::At(path, 0, err);
+  return ReadPgmFromBytes(path, bytes, image);
+}
+
+Status ReadPgmFromBytes(const std::string& name, const std::string& bytes, PgmImage* image) {
+  MemoryBuf buf(bytes.data(), bytes.size());
+  std::istream in(&buf);
   std::string magic;
   int w = 0, h = 0, maxval = 0;
   in >> magic >> w >> h >> maxval;
   if (!in || magic != "P5" || w <= 0 || h <= 0 || maxval <= 0 || maxval > 255)
-    return Status::At(path, 0, "not an 8-bit binary PGM (expected 'P5', width, height, maxval <= 255)");
+    return Status::At(name, 0, "not an 8-bit binary PGM (expected 'P5', width, height, maxval <= 255)");
   in.get();  // the single whitespace byte after maxval
-  std::string err = CheckPixelBytes(in, w, h, 1, "PGM");
-  if (!err.empty()) return Status::At(path, 0, err);
-  size_t n = size_t(w) * size_t(h);
-  std::vector<uint8_t> data(n);
-  in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(n));
-  if (static_cast<size_t>(in.gcount()) != n)
-    return Status::At(path, 0, "truncated PGM: expected " + std::to_string(n) + " bytes of pixels");
+  const size_t start = buf.Offset();
+  std::string err = CheckPixelBytes(bytes.size() - start, w, h, 1, "PGM");
+  if (!err.empty()) return Status::At(name, 0, err);
+  const uint8_t* p = reinterpret_cast<const uint8_t*>(bytes.data()) + start;
   image->width = w;
   image->height = h;
-  image->pixels = std::move(data);
+  image->pixels.assign(p, p + size_t(w) * size_t(h));
   return Status::Ok();
 }
 

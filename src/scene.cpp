@@ -574,7 +574,9 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       if (!haveMaterial) continue;
       Finish& f = finishes_.back();
       double v[3];
-      if (key == "illum" && LenientFloats(t, 1, v)) f.illum = static_cast<int>(v[0]);
+      // Models are 0 to 10: a number beyond them is none (as if not given),
+      // never converted to int (outside its range that is undefined).
+      if (key == "illum" && LenientFloats(t, 1, v)) f.illum = v[0] >= 0.0 && v[0] < 11.0 ? static_cast<int>(v[0]) : -1;
       if (key == "Ks" && LenientFloats(t, 3, v)) f.ks = v[0] > 0.0 || v[1] > 0.0 || v[2] > 0.0;
       if (key == "Tf" && LenientFloats(t, 3, v)) f.tf = v[0] < 1.0 || v[1] < 1.0 || v[2] < 1.0;
       if (key == "d" && LenientFloats(t, 1, v)) f.d = v[0];

@@ -2,6 +2,9 @@
 // mapping, and the order-independent depth test used for compositing.
 #include <cstring>
 #include <random>
+#include <set>
+#include <string>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <filesystem>
@@ -64,6 +67,69 @@ TEST(ImageTest, PfmRowsRunBottomToTop) {
   std::memcpy(v, s.data() + head.size(), 24);
   EXPECT_EQ(v[0], 4.0f);  // the bottom row first
   EXPECT_EQ(v[3], 1.0f);
+}
+
+// The image fuzz target's seeds (tests/fuzz/image-corpus, make fuzz): the
+// valid ones read the same from the file and from bytes, the others are
+// refused naming the file; a PFM reads the same in either byte order.
+TEST(ImageTest, ImageFuzzSeedsReadOrAreRefusedWithTheName) {
+  const std::string dir = "tests/fuzz/image-corpus/";
+  const std::set<std::string> goodPfm = {"pfm-le-1x1", "pfm-le-2x2", "pfm-be-2x2", "pfm-be-3x1-scale2",
+                                         "pfm-le-crlf"};
+  const std::set<std::string> goodPgm = {"pgm-4x3", "pgm-1x1-maxval1", "pgm-comment-free-tabs"};
+  int seen = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string(), path = entry.path().string();
+    const std::string bytes = test::ReadFile(path);
+    ++seen;
+    PfmImage a, b;
+    Status fromFile = ReadPfm(path, &a), fromBytes = ReadPfmFromBytes(path, bytes, &b);
+    EXPECT_EQ(fromFile.ToString(), fromBytes.ToString()) << name;
+    EXPECT_EQ(fromFile.ok(), goodPfm.count(name) == 1) << name << ": " << fromFile.ToString();
+    if (fromFile.ok()) {
+      EXPECT_EQ(a.pixels, b.pixels) << name;
+      EXPECT_EQ(a.pixels.size(), size_t(a.width) * size_t(a.height) * 3) << name;
+    } else {
+      EXPECT_EQ(fromFile.file(), path);
+    }
+    PgmImage g, h;
+    fromFile = ReadPgm(path, &g);
+    fromBytes = ReadPgmFromBytes(path, bytes, &h);
+    EXPECT_EQ(fromFile.ToString(), fromBytes.ToString()) << name;
+    EXPECT_EQ(fromFile.ok(), goodPgm.count(name) == 1) << name << ": " << fromFile.ToString();
+    if (fromFile.ok()) {
+      EXPECT_EQ(g.pixels, h.pixels) << name;
+    }
+  }
+  EXPECT_EQ(seen, 17);
+  PfmImage le, be;
+  ASSERT_TRUE(ReadPfm(dir + "pfm-le-2x2", &le).ok());
+  ASSERT_TRUE(ReadPfm(dir + "pfm-be-2x2", &be).ok());
+  EXPECT_EQ(le.pixels, be.pixels);
+  // Row 0 is the top, the file's last row.
+  std::vector<float> want = {3.5f, 7.0f, 0.125f, 1e6f, 0.75f, 0.0f, 0.25f, 0.5f, 1.0f, 2.0f, 0.0f, 1e-3f};
+  EXPECT_EQ(le.pixels, want);
+  PgmImage pgm;
+  ASSERT_TRUE(ReadPgm(dir + "pgm-4x3", &pgm).ok());
+  EXPECT_EQ(pgm.width, 4);
+  EXPECT_EQ(pgm.height, 3);
+  EXPECT_EQ(pgm.pixels[1], 255);
+}
+
+// A device or a directory is refused by its name, before anything is read
+// (/dev/zero would be read until memory runs out).
+TEST(ImageTest, ImageReadersTakeOnlyRegularFiles) {
+  test::TempDir dir;
+  PfmImage pfm;
+  PgmImage pgm;
+  for (const std::string& path : {std::string("/dev/zero"), dir.path()}) {
+    Status s = ReadPfm(path, &pfm);
+    EXPECT_FALSE(s.ok()) << path;
+    EXPECT_EQ(s.ToString(), path + ": cannot read: not a regular file");
+    s = ReadPgm(path, &pgm);
+    EXPECT_EQ(s.ToString(), path + ": cannot read: not a regular file");
+  }
+  EXPECT_EQ(ReadPfm(dir.File("none.pfm"), &pfm).ToString(), dir.File("none.pfm") + ": cannot open");
 }
 
 TEST(ImageTest, ToneMapClampsAndEncodesSrgb) {

@@ -840,6 +840,28 @@ TEST_F(SceneTest, RadiosityBeyondFloatRangeIsRefused) {
   ExpectError(LoadScene(obj(), &scene), obj(), 7, "below");
 }
 
+// An illum number beyond int (found by the fuzzer, make fuzz-report: it was
+// converted to int, undefined behaviour that UBSan stops at) is no model:
+// with Ks the material is named for its Ks, as without illum.
+TEST_F(SceneTest, IllumBeyondAnyModelIsNone) {
+  Scene scene;
+  Status s = LoadFuzzInput(std::string("mtllib m\0newmtl 5\nillum 8836427427", 34), &scene);
+  EXPECT_FALSE(s.ok());  // no face: refused, and nothing undefined on the way
+  Write("m.mtl", std::string(kMtl) +
+                     "newmtl big\nKd 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum 8836427427\n"
+                     "newmtl neg\nKd 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum -1e300\n"
+                     "newmtl eleven\nKd 0.3 0.3 0.3\nillum 11\n");
+  std::vector<std::string> warnings;
+  s = LoadObjWarnings(Write("s.obj", kHead + std::string("f 1 2 3\nusemtl big\nf 1 2 3\nusemtl neg\nf 1 2 3\n"
+                                                         "usemtl eleven\nf 1 2 3\n")),
+                      &scene, &warnings);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("rendered as diffuse with their Kd: big (Ks), neg (Ks)"), std::string::npos)
+      << warnings[0];
+  EXPECT_EQ(warnings[0].find("eleven"), std::string::npos) << warnings[0];
+}
+
 // Every seed of the fuzz corpus through the fuzz target's entry: loaded, or
 // refused with a line (0 only for scene-wide errors), never a crash.
 TEST_F(SceneTest, FuzzCorpusLoadsOrFailsWithALine) {

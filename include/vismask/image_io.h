@@ -34,8 +34,14 @@ struct PfmImage {
   int height = 0;
   std::vector<float> pixels;  // 3 per pixel
 };
-// Reads a colour PFM ("PF"), either byte order. Errors name the file.
+// Reads a colour PFM ("PF"), either byte order. Errors name the file. The
+// header is checked against the bytes that follow it before the pixels are
+// allocated; a NaN or Inf pixel is refused.
 Status ReadPfm(const std::string& path, PfmImage* image);
+// ReadPfm on the file's bytes already in memory (errors name `name`): the
+// same parser and checks, which ReadPfm is with the file read whole (the
+// fuzz target tests/fuzz/image_fuzz.cpp feeds it arbitrary bytes).
+Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmImage* image);
 
 // An 8-bit greyscale PGM ("P5", maxval <= 255) read at init (heap): one byte
 // a pixel, row 0 at the top. Errors name the file.
@@ -45,6 +51,8 @@ struct PgmImage {
   std::vector<uint8_t> pixels;
 };
 Status ReadPgm(const std::string& path, PgmImage* image);
+// ReadPgm on bytes in memory, as ReadPfmFromBytes.
+Status ReadPgmFromBytes(const std::string& name, const std::string& bytes, PgmImage* image);
 
 // How far image `a` is from image `b` (same size, floats in any layout as
 // long as both share it): the relative RMSE sqrt(sum (a-b)^2 / sum b^2) over
