@@ -70,7 +70,42 @@ class RayPoints {
   Rng rng_;
 };
 
+// Ray r of a shot from its five uniforms (RayPoints): its origin on the
+// shooter lifted `lift` off the plane, its direction cosine-distributed about
+// the normal (*local: in the shooter's frame). Every hit from t = 0 counts
+// (the shooter and its twin are skipped): a ray from near a corner hits the
+// wall beside it however close. A tMin > 0 instead let such rays through the
+// wall and out of a closed box, a bias of ~4e-6 of the shot power a bounce,
+// which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
+Ray ShotRay(const PatchSampler& sampler, const float u[5], float lift, glm::vec3* local) {
+  *local = CosineDirection(u[3], u[4]);
+  Ray ray;
+  ray.o = sampler.Point(u[0], u[1], u[2]) + lift * sampler.frame.n;
+  ray.d = sampler.frame.ToWorld(*local);
+  ray.tMin = 0.0f;
+  ray.tMax = std::numeric_limits<float>::infinity();
+  return ray;
+}
+
 }  // namespace
+
+void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally) {
+  ++tally->hits;
+  if (!hit.front) {
+    for (int c = 0; c < 3; ++c) tally->backHit[c] += share[c];
+    return;
+  }
+  Receive(hit.patch, share, ray.o + hit.t * ray.d);
+}
+
+void Environment::Book(const ShotTally& tally) {
+  for (int c = 0; c < 3; ++c) {
+    ledger_.escaped[c] += tally.lost[c];
+    ledger_.absorbed[c] += tally.backHit[c];
+  }
+  stats_.rays += tally.traced;
+  stats_.hits += tally.hits;
+}
 
 bool Environment::LeavesScene(const Ray& ray) const {
   // The face through which the ray leaves this box: the nearest far plane.
@@ -106,26 +141,15 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   RayPoints points(options_.sobol, stream);
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
-  uint64_t traced = 0, hits = 0;
-  double lost[3] = {0, 0, 0};     // left the scene
-  double backHit[3] = {0, 0, 0};  // absorbed by back faces
+  ShotTally tally;
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     points.Next(r, u, true);
-    glm::vec3 local = CosineDirection(u[3], u[4]);
-    Ray ray;
-    // The origin is lifted off the shooter's plane and every hit from t = 0
-    // counts (the shooter and its twin are skipped): a ray from near a corner hits
-    // the wall beside it however close. A tMin > 0 instead let such rays
-    // through the wall and out of a closed box, a bias of ~4e-6 of the shot
-    // power a bounce, which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
-    ray.o = sampler.Point(u[0], u[1], u[2]) + options_.rayEpsilon * sampler.frame.n;
-    ray.d = sampler.frame.ToWorld(local);
-    ray.tMin = 0.0f;
-    ray.tMax = std::numeric_limits<float>::infinity();
+    glm::vec3 local;
+    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
     uint32_t pixel = 0;
     if (foreign) {
       float t0, t1;
@@ -145,29 +169,19 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     } else if (masks) {
       pixel = MaskPixel(local, shape_.res);
     }
-    ++traced;
+    ++tally.traced;
     Hit hit;
     if (!grid_.Intersect(ray, skip, &hit)) {
       if (methodC) passedPixels.Open(pixel);
       if (LeavesScene(ray))
-        for (int c = 0; c < 3; ++c) lost[c] += share[c];
+        for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
       continue;
     }
-    ++hits;
     if (masks && out && options_.maskMethod == MaskMethod::kA) out->Close(pixel);
     if (methodC) hitPixels.Open(pixel);
-    if (!hit.front) {
-      for (int c = 0; c < 3; ++c) backHit[c] += share[c];
-      continue;
-    }
-    Receive(hit.patch, share, ray.o + hit.t * ray.d);
+    Land(ray, hit, share, &tally);
   }
-  for (int c = 0; c < 3; ++c) {
-    ledger_.escaped[c] += lost[c];
-    ledger_.absorbed[c] += backHit[c];
-  }
-  stats_.rays += traced;
-  stats_.hits += hits;
+  Book(tally);
 
   // Method B: the mask from the centre alone, one ray through each pixel
   // still open upstream (the paper's B). Mixing in A's marks would close
@@ -200,8 +214,8 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   RayPoints points(options_.sobol, shotKey);
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
-  uint64_t traced = 0, hits = 0, entered = 0, left = 0;
-  double lost[3] = {0, 0, 0}, backHit[3] = {0, 0, 0};
+  ShotTally tally;
+  uint64_t entered = 0, left = 0;
   for (uint32_t r = 0; r < rays; ++r) {
     // Sequential draws: every environment draws every ray, so ray r is the
     // same ray everywhere; Sobol' points are drawn by index, live rays only.
@@ -209,11 +223,8 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
     if (!points.randomAccess()) points.Next(r, u);
     if (!alive->IsOpen(r)) continue;  // absorbed or escaped upstream
     if (points.randomAccess()) points.Next(r, u);
-    Ray ray;  // lifted off the shooter's plane, hits from t = 0, as in Distribute
-    ray.o = sampler.Point(u[0], u[1], u[2]) + options_.rayEpsilon * sampler.frame.n;
-    ray.d = sampler.frame.ToWorld(CosineDirection(u[3], u[4]));
-    ray.tMin = 0.0f;
-    ray.tMax = std::numeric_limits<float>::infinity();
+    glm::vec3 local;
+    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
     if (foreign) {
       // Every environment the ray crossed before this one is upstream, and
       // its bit is the AND of theirs: a hit here is the ray's first.
@@ -221,32 +232,23 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
       if (!Slabs(ray, box_, &t0, &t1)) continue;
       ++entered;
     }
-    ++traced;
+    ++tally.traced;
     Hit hit;
     if (!grid_.Intersect(ray, skip, &hit)) {
       if (LeavesScene(ray)) {
-        for (int c = 0; c < 3; ++c) lost[c] += share[c];
+        for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
         alive->Close(r);
       } else {
         ++left;  // on to the neighbour across the face it leaves by
       }
       continue;
     }
-    ++hits;
     alive->Close(r);
-    if (!hit.front) {
-      for (int c = 0; c < 3; ++c) backHit[c] += share[c];
-      continue;
-    }
-    Receive(hit.patch, share, ray.o + hit.t * ray.d);
+    Land(ray, hit, share, &tally);
   }
-  for (int c = 0; c < 3; ++c) {
-    ledger_.escaped[c] += lost[c];
-    ledger_.absorbed[c] += backHit[c];
+  Book(tally);
+  for (int c = 0; c < 3; ++c)
     ledger_.inFlight[c] += (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
-  }
-  stats_.rays += traced;
-  stats_.hits += hits;
 }
 
 }  // namespace vismask

@@ -244,6 +244,17 @@ class Environment {
   MaskBits ScratchMask(uint32_t k) const;
   // Patch j receives `share` (W per channel) at point `x`.
   void Receive(uint32_t j, const double share[3], const glm::vec3& x);
+  // What a shot's rays did here, summed in ray order and booked once a shot
+  // (Distribute and TraceAlive share it, trace.cpp).
+  struct ShotTally {
+    uint64_t traced = 0, hits = 0;
+    double lost[3] = {0, 0, 0};     // left the scene
+    double backHit[3] = {0, 0, 0};  // absorbed by back faces
+  };
+  // A ray's first hit here: a front side receives `share`, a back side absorbs it.
+  void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
+  // The tally into the ledger and the statistics.
+  void Book(const ShotTally& tally);
   // The leaf of patch `patch` holding `st`, which is left in the leaf's own
   // parameters; with `path`, the children taken are appended there (*depth
   // of them, at most the element depth).
