@@ -43,6 +43,7 @@
 #include "vismask/check.h"
 #include "vismask/os.h"
 #include "vismask/transport.h"
+#include "rank_wait.h"
 
 namespace vismask {
 namespace {
@@ -56,9 +57,6 @@ constexpr int kTagPoint = 0, kTagAllToAll = 1, kTagAllGather = 2, kTagFinish = 3
 // kMinNap to kMaxNap: a wait is lengthened by at most 1/8 (and 1 ms).
 constexpr double kSpinSeconds = 1e-3;
 constexpr double kMinNap = 5e-5, kMaxNap = 1e-3;
-// A gap this long between two turns of the wait loop means this rank itself
-// was stopped: the peers' silence clocks restart.
-constexpr double kStoppedGap = 1.0;
 
 class MpiTransport final : public Transport {
  public:
@@ -201,20 +199,10 @@ void MpiTransport::Post(int rc, int peer, bool recv, const char* call) {
   ++posted_;
 }
 
-double MpiTransport::WaitLimit() const {
-  if (timeout_ <= 0.0) return 0.0;
-  double scaled = kRankTimeoutScale * longestWait_;
-  return scaled > timeout_ ? scaled : timeout_;
-}
+double MpiTransport::WaitLimit() const { return RankWaitLimit(timeout_, longestWait_); }
 
 void MpiTransport::Silent(int peer, bool reading, double limit) {
-  char scaled[96] = "";
-  if (limit > timeout_)
-    std::snprintf(scaled, sizeof scaled, ", %g times this run's longest wait; --rank-timeout is %g s",
-                  kRankTimeoutScale, timeout_);
-  os::PrintErr("vismask: rank %d: rank %d %s for %.3g s (--rank-timeout%s); ending the run\n",
-               rank_, peer, reading ? "sent nothing" : "took none of this rank's bytes", limit,
-               scaled);
+  PrintSilentRank(rank_, peer, reading, limit, timeout_);
   os::RemoveTempFiles();
   MPI_Abort(MPI_COMM_WORLD, kExitLostRank);
   std::_Exit(kExitLostRank);  // MPI_Abort does not return

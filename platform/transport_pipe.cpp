@@ -42,6 +42,7 @@
 #include "vismask/check.h"
 #include "vismask/os.h"
 #include "vismask/transport.h"
+#include "rank_wait.h"
 #include "transport_local.h"
 
 namespace vismask {
@@ -50,13 +51,9 @@ namespace {
 constexpr int kMaxPipeRanks = kMaxRanks;
 // How long a waiting rank sleeps in poll() before it checks that its peers live.
 constexpr int kPollMs = 100;
-// A gap this long between two turns of a wait loop means this rank itself
-// was stopped (or not scheduled): the peers' silence clocks restart.
-constexpr double kStoppedGap = 1.0;
 // Length word of the frame a child sends from Finish (no data frame is this long).
 constexpr uint64_t kFinishWord = ~uint64_t{0};
 constexpr size_t kWordBytes = sizeof(uint64_t);
-
 
 // For the SIGTERM handler of a child: its parent's pid and a ready message.
 pid_t gRankZeroPid = 0;
@@ -358,13 +355,7 @@ void PipeTransport::Silent(int peer, bool reading, double limit) {
   sigemptyset(&term);
   sigaddset(&term, SIGTERM);
   ::sigprocmask(SIG_BLOCK, &term, nullptr);
-  char scaled[96] = "";
-  if (limit > timeout_)
-    std::snprintf(scaled, sizeof scaled, ", %g times this run's longest wait; --rank-timeout is %g s",
-                  kRankTimeoutScale, timeout_);
-  os::PrintErr("vismask: rank %d: rank %d %s for %.3g s (--rank-timeout%s); ending the run\n",
-               rank_, peer, reading ? "sent nothing" : "took none of this rank's bytes", limit,
-               scaled);
+  PrintSilentRank(rank_, peer, reading, limit, timeout_);
   if (rank_ == 0) {
     os::RemoveTempFiles();
     if (!peers_[peer].reaped && peers_[peer].pid > 0) ::kill(peers_[peer].pid, SIGKILL);
@@ -376,11 +367,7 @@ void PipeTransport::Silent(int peer, bool reading, double limit) {
   ::_exit(kExitLostRank);
 }
 
-double PipeTransport::WaitLimit() const {
-  if (timeout_ <= 0.0) return 0.0;
-  double scaled = kRankTimeoutScale * longestWait_;
-  return scaled > timeout_ ? scaled : timeout_;
-}
+double PipeTransport::WaitLimit() const { return RankWaitLimit(timeout_, longestWait_); }
 
 void PipeTransport::ContinueChildren() {
   for (int p = 1; p < size_; ++p) {
