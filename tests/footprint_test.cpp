@@ -22,8 +22,10 @@ unsigned long long JsonNumber(const std::string& json, const std::string& key, s
   return std::stoull(json.substr(at + key.size() + 4));
 }
 
-std::string FootprintJson(const std::vector<std::string>& options) {
-  std::vector<std::string> args = {"footprint", "scenes/cornell.obj", "--json"};
+// `vismask footprint SCENE --json OPTIONS...`'s standard output.
+std::string FootprintJson(const std::vector<std::string>& options,
+                          const std::string& scene = "scenes/cornell.obj") {
+  std::vector<std::string> args = {"footprint", scene, "--json"};
   args.insert(args.end(), options.begin(), options.end());
   testing::internal::CaptureStdout();
   auto r = RunMain(args);
@@ -125,15 +127,9 @@ TEST(FootprintTest, MemBudgetRefusesBelowTheNeedAndRunsAtIt) {
 // only the textures of its own environments), the per-patch uv in each
 // environment's, and a textured render reserves exactly what footprint says.
 TEST(FootprintTest, CountsTextureBytes) {
-  auto footprint = [](const std::vector<std::string>& extra) {
-    std::vector<std::string> args = {"footprint", "scenes/textured/room.obj", "--json",
-                                     "--width", "64", "--height", "48"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    testing::internal::CaptureStdout();
-    auto r = RunMain(args);
-    std::string out = testing::internal::GetCapturedStdout();
-    EXPECT_EQ(r.code, 0) << r.err;
-    return out;
+  auto footprint = [](std::vector<std::string> extra) {
+    extra.insert(extra.begin(), {"--width", "64", "--height", "48"});
+    return FootprintJson(extra, "scenes/textured/room.obj");
   };
   const unsigned long long checker = 32 * 32 * 3, stripes = 16 * 16 * 3;
   std::string one = footprint({});
