@@ -211,7 +211,7 @@ TEST(EnvTest, MethodRLedgerClosesInTwoAndEightEnvironments) {
 // (all that is emitted is absorbed, 1 - rho of what arrives), so it is 1 up
 // to the 1e-4 left unshot and the rays that slip through the cube's edges,
 // for any method that neither loses nor double-counts rays, whatever its
-// noise. tools/experiments/closed-box-methods, 4 seeds at these settings
+// noise. tools/closed-box-methods, 4 seeds at these settings
 // (stop 1e-5): mean B / exact = 0.999995 +- 0.000001 for R, 0.999992 for one
 // environment, 0.99285 +- 0.00094 for B (its discretisation bias). The
 // patches' scatter around E / (1 - rho) is Monte Carlo noise, RMS 1.41% for
