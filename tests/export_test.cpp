@@ -349,6 +349,14 @@ TEST(ExportTest, OptionIsAGlbPath) {
   EXPECT_NE(r.err.find("--export"), std::string::npos) << r.err;
   EXPECT_FALSE(FileExists(dir.File("out/run.json")));
   EXPECT_FALSE(FileExists(dir.File("out/image.pfm")));
+  // A directory of that name is refused at init too (it could not be replaced).
+  ASSERT_EQ(std::system(("mkdir " + dir.File("d.glb")).c_str()), 0);
+  args = kCornell;
+  args.insert(args.end(), {"--out", dir.File("out"), "--export", dir.File("d.glb")});
+  r = RunMain(args);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("exists and is not a regular file"), std::string::npos) << r.err;
+  EXPECT_FALSE(FileExists(dir.File("out/run.json")));
   // Upper case is a .glb too; --help names the option.
   args = kCornell;
   args.insert(args.end(), {"--out", dir.File("out"), "--export", dir.File("X.GLB")});

@@ -312,13 +312,13 @@ TEST(RanksTest, StoppedPipeChildEndsTheRunWithExitThree) { StopOnePipeRank(2); }
 
 TEST(RanksTest, StoppedPipeRankZeroEndsTheRunWithExitThree) { StopOnePipeRank(0); }
 
-// SIGTERM (or Ctrl-C) to a run: no output, no temporary file, and the
-// signal's own status.
+// SIGTERM (or Ctrl-C) to a run: no output, no temporary file (the --export
+// .glb's, outside --out, included), and the signal's own status.
 TEST(RanksTest, SigtermLeavesNoTemporaryFiles) {
   TempDir dir;
   std::string out = dir.File("out");
-  pid_t pid = StartCommand(Bin() + kEndless + " --envs 2 --ranks 2 --out " + out + " 2>" +
-                           dir.File("err"));
+  pid_t pid = StartCommand(Bin() + kEndless + " --envs 2 --ranks 2 --out " + out + " --export " +
+                           dir.File("scene.glb") + " 2>" + dir.File("err"));
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(WaitForTheSolve(out)) << ReadFile(dir.File("err"));
   ASSERT_EQ(kill(pid, SIGTERM), 0);
@@ -329,6 +329,8 @@ TEST(RanksTest, SigtermLeavesNoTemporaryFiles) {
   EXPECT_TRUE(TempFilesIn(out).empty()) << TempFilesIn(out).front();
   EXPECT_FALSE(FileExists(out + "/run.json"));
   EXPECT_FALSE(RankLeft(out));
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find("scene.glb"), std::string::npos) << e.path();
 }
 
 // Under mpirun (skipped when build/vismask-mpi or mpirun is missing): rank
