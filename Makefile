@@ -199,7 +199,7 @@ test: deps
 experiments: deps
 	@tools/install-deps --reference
 	$(MAKE) $(BUILD)/vismask
-	VISMASK_BIN=$(BUILD)/vismask tools/experiments/all
+	VISMASK_BIN=$(BUILD)/vismask tools/experiments
 
 # make test-cross (after make CROSS=aarch64-linux-gnu-; CROSS defaults to
 # that): the unit tests under qemu-user, then one pipe-transport Cornell

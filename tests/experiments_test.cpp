@@ -28,7 +28,7 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   TempDir dir;
   const char* bin = std::getenv("VISMASK_BIN");
   std::string cmd = std::string("VISMASK_BIN=") + (bin ? bin : "build/vismask") +
-                    " tools/experiments/all --mini --out " + dir.path() + " 2> " +
+                    " tools/experiments --quick --out " + dir.path() + " 2> " +
                     dir.File("log.txt");
   ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadFile(dir.File("log.txt"));
 

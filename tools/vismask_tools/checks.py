@@ -2,12 +2,9 @@
 patches.csv's b or in image.pfm, and the energy ledger of run.json."""
 import json
 import math
-import os
-import sys
 
-# The PFM reader of the experiments (tools/experiments/lib.py).
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments"))
-from lib import read_pfm  # noqa: E402
+
+from .files import read_pfm
 
 
 def check(out):

@@ -1,8 +1,9 @@
 """The experiment steps of issue #6 (see docs/RESULTS.md). Each step runs
 what it needs (runs are cached by their command line under the runs
 directory) and writes its CSV tables and images into the results directory.
-Run them through the wrappers beside this file: references, quality, timing,
-leak, error-time, report, or all."""
+Run them with tools/experiments [STEP...] [--quick] [--out DIR]: references,
+quality, timing, leak, error-time, closed-box, ground-truth, report, or all
+(the default)."""
 
 import json
 import math
@@ -12,15 +13,23 @@ import subprocess
 import sys
 import time
 
-import groundtruth
-import lib
+from . import ROOT, groundtruth
+from .scales import CAMERA, SCALES, SEED_MINUTES, SPLIT, arg, context
+from .cli import parse
+from .cornell import SCENE, ShadowRegion, region_patch_mean
+from .files import load_json, read_csv, read_pfm, write_csv, write_png
+from .images import average_pfm, diff_png, rel_rmse
+from .machine import commit, facts, loadavg
+from .plot import gnuplot
+from .runner import log, render
+from .stats import median
 
 METHODS_CURVES = ["A", "B", "C"]  # masks of R x 4R pixels, at each R
 SINGLE = ("none", "R")  # no resolution: one run each
 
 
 def mask_args(method, res):
-    return lib.SPLIT + ["--mask-method", method] + (
+    return SPLIT + ["--mask-method", method] + (
         [] if method in SINGLE else ["--mask-res", str(res)])
 
 
@@ -40,16 +49,16 @@ def references(ctx):
     jsons = [ctx.run(f"ref-b-seed{k}", ["--envs", "1"] + s["ref_b"] + ["--seed", str(k)])
              for k in seeds]
     ref_b = ref_b_path(ctx)
-    lib.average_pfm([ctx.path(f"ref-b-seed{k}", "image.pfm") for k in seeds], ref_b)
-    _, _, a = lib.read_pfm(ctx.path(f"ref-b-seed{seeds[0]}", "image.pfm"))
-    _, _, b = lib.read_pfm(ctx.path(f"ref-b-seed{seeds[1]}", "image.pfm"))
+    average_pfm([ctx.path(f"ref-b-seed{k}", "image.pfm") for k in seeds], ref_b)
+    _, _, a = read_pfm(ctx.path(f"ref-b-seed{seeds[0]}", "image.pfm"))
+    _, _, b = read_pfm(ctx.path(f"ref-b-seed{seeds[1]}", "image.pfm"))
     mask = region_mask(ctx, jsons[0])
     # Two independent solves differ by sqrt(2) sigma; their mean has sigma/sqrt(2).
-    d_whole, d_region = lib.rel_rmse(a, b), lib.rel_rmse(a, b, mask)
+    d_whole, d_region = rel_rmse(a, b), rel_rmse(a, b, mask)
     rows = [["b", "1 environment " + " ".join(s["ref_b"]) + f" seeds {seeds[0]} and {seeds[1]} averaged",
              sum(j["result"]["shots"] for j in jsons), sum(j["timings"]["solve_seconds"] for j in jsons),
              d_whole / 2, d_region / 2]]
-    lib.write_csv(ctx.result("references.csv"),
+    write_csv(ctx.result("references.csv"),
                   ["reference", "what", "shots", "solve_seconds", "noise_whole", "noise_region"], rows)
     # The reference images themselves.
     os.makedirs(ctx.result("img"), exist_ok=True)
@@ -66,7 +75,7 @@ def region_mask(ctx, run_json, right_only=False):
     right_only, only its part in the second environment (x < 278)."""
     w, h = run_json["options"]["width"], run_json["options"]["height"]
     cache = os.path.join(ctx.runs, f"region-{w}x{h}.txt")
-    mask = lib.ShadowRegion().pixel_mask(run_json["options"]["camera"], w, h, cache)
+    mask = ShadowRegion().pixel_mask(run_json["options"]["camera"], w, h, cache)
     return [1 if (m == 2 if right_only else m > 0) else 0 for m in mask]
 
 
@@ -100,31 +109,31 @@ def quality(ctx):
     ref_a_name, ref_a_json = curve_run(ctx, "B", s["ref_res"])
     mask = region_mask(ctx, ref_a_json)
     right = region_mask(ctx, ref_a_json, right_only=True)
-    _, _, ra = lib.read_pfm(ctx.path(ref_a_name, "image.pfm"))
-    w, h, rb = lib.read_pfm(ref_b)
+    _, _, ra = read_pfm(ctx.path(ref_a_name, "image.pfm"))
+    w, h, rb = read_pfm(ref_b)
     gt = groundtruth.exp_reference(ctx)
     rows = []
     os.makedirs(ctx.result("img"), exist_ok=True)
     for r in s["table_res"] + [s["ref_res"]]:
         name, j = curve_run(ctx, "B", r)
-        _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
+        _, _, img = read_pfm(ctx.path(name, "image.pfm"))
         ref = r == s["ref_res"]
-        rows.append([r, "" if ref else lib.rel_rmse(img, ra),
-                     "" if ref else lib.rel_rmse(img, ra, mask),
-                     "" if ref else lib.rel_rmse(img, ra, right),
-                     lib.rel_rmse(img, rb), lib.rel_rmse(img, rb, mask), lib.rel_rmse(img, rb, right),
+        rows.append([r, "" if ref else rel_rmse(img, ra),
+                     "" if ref else rel_rmse(img, ra, mask),
+                     "" if ref else rel_rmse(img, ra, right),
+                     rel_rmse(img, rb), rel_rmse(img, rb, mask), rel_rmse(img, rb, right),
                      j["timings"]["solve_seconds"]] + gt_columns(gt, img, mask, right))
         shutil.copy(ctx.path(name, "image.png"), ctx.result(f"img/fig2-B-{r}.png"))
-        lib.diff_png(ctx.result(f"img/fig2-B-{r}-diff.png"), w, h, img, ra, 10, mask)
+        diff_png(ctx.result(f"img/fig2-B-{r}-diff.png"), w, h, img, ra, 10, mask)
     # The noise floor of a comparison between two 2-environment runs: the
     # lowest R again with another seed.
     low = s["table_res"][0]
     j2 = ctx.run(f"B-{low}-seed2", mask_args("B", low) + ["--seed", "2"])
-    _, _, x1 = lib.read_pfm(ctx.path(f"B-{low}", "image.pfm"))
-    _, _, x2 = lib.read_pfm(ctx.path(f"B-{low}-seed2", "image.pfm"))
-    rows.append([f"{low} (seed 2 vs seed 1)", lib.rel_rmse(x2, x1), lib.rel_rmse(x2, x1, mask),
-                 lib.rel_rmse(x2, x1, right), "", "", "", j2["timings"]["solve_seconds"], "", "", ""])
-    lib.write_csv(ctx.result("fig2-quality.csv"),
+    _, _, x1 = read_pfm(ctx.path(f"B-{low}", "image.pfm"))
+    _, _, x2 = read_pfm(ctx.path(f"B-{low}-seed2", "image.pfm"))
+    rows.append([f"{low} (seed 2 vs seed 1)", rel_rmse(x2, x1), rel_rmse(x2, x1, mask),
+                 rel_rmse(x2, x1, right), "", "", "", j2["timings"]["solve_seconds"], "", "", ""])
+    write_csv(ctx.result("fig2-quality.csv"),
                   ["mask_res", "vs_ref_a_whole", "vs_ref_a_region", "vs_ref_a_right",
                    "vs_ref_b_whole", "vs_ref_b_region", "vs_ref_b_right", "solve_seconds",
                    "vs_gt_whole", "vs_gt_region", "vs_gt_right"], rows)
@@ -163,7 +172,7 @@ def region_png(ctx, w, h, ref, mask):
         for c in range(3):
             v = max(0.0, min(1.0, ref[3 * i + c] * ex * k))
             out.append(int(255 * (v ** (1 / 2.2))))
-    lib.write_png(ctx.result("img/region.png"), w, h, out)
+    write_png(ctx.result("img/region.png"), w, h, out)
 
 
 # --- Table 1 -> table -----------------------------------------------------------
@@ -182,13 +191,13 @@ def timing(ctx):
                 j = ctx.run(f"time-{m}-{r}-{k}", mask_args(m, r), fresh=True)
             secs.append(j["timings"]["solve_seconds"])
         res = j["result"]
-        seed = lib.SEED_MINUTES.get((m, r))
-        med = lib.median(secs)
+        seed = SEED_MINUTES.get((m, r))
+        med = median(secs)
         rows.append([m, "" if m in SINGLE else r, med, min(secs), max(secs), res["shots"],
                      res["rays"], res["mask_rays"], res["bytes_sent"],
                      "" if seed is None else f"{int(seed)}m {round(60 * (seed - int(seed)))}s",
                      "" if seed is None else med / (seed * 60)])
-    lib.write_csv(ctx.result("table1-time.csv"),
+    write_csv(ctx.result("table1-time.csv"),
                   ["method", "mask_res", "median_solve_seconds", "min_seconds", "max_seconds",
                    "shots", "rays", "mask_rays", "bytes_sent", "seed_time",
                    "ratio_to_seed"], rows)
@@ -199,16 +208,16 @@ def timing(ctx):
 def leak(ctx):
     s = ctx.s
     ensure_references(ctx)
-    region = lib.ShadowRegion()
+    region = ShadowRegion()
     seeds = s["ref_seeds"]
-    refs = [lib.region_patch_mean(ctx.path(f"ref-b-seed{k}", "patches.csv"), region, True)
+    refs = [region_patch_mean(ctx.path(f"ref-b-seed{k}", "patches.csv"), region, True)
             for k in seeds]
     ref_mean = sum(m for m, _ in refs) / len(refs)
     # Beside the patch measure, the same in the image: the mean over the
     # right part's pixels, against (b)'s image and against the ground truth's.
     gt = groundtruth.exp_reference(ctx)
-    _, _, rb = lib.read_pfm(ref_b_path(ctx))
-    right = region_mask(ctx, lib.load_json(ctx.path(f"ref-b-seed{seeds[0]}", "run.json")), right_only=True)
+    _, _, rb = read_pfm(ref_b_path(ctx))
+    right = region_mask(ctx, load_json(ctx.path(f"ref-b-seed{seeds[0]}", "run.json")), right_only=True)
     if gt is not None:
         right_gt = [k and m for k, m in zip(gt.keep, right)]
         gt_mean = region_mean(gt.px, right_gt)
@@ -218,14 +227,14 @@ def leak(ctx):
              "" if gt is None else 100 * (region_mean(rb, right_gt) - gt_mean) / gt_mean]]
     for m, r in configs(s["curve_res"]):
         name, j = curve_run(ctx, m, r)
-        mean, area = lib.region_patch_mean(ctx.path(name, "patches.csv"), region, True)
+        mean, area = region_patch_mean(ctx.path(name, "patches.csv"), region, True)
         res = j["result"]
-        _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
+        _, _, img = read_pfm(ctx.path(name, "image.pfm"))
         rows.append([m, "" if m in SINGLE else r, 100 * (mean - ref_mean) / ref_mean, area,
                      res["rays"], res["mask_rays"], res["bytes_sent"],
                      j["timings"]["solve_seconds"], 100 * (region_mean(img, right) - b_img) / b_img,
                      "" if gt is None else 100 * (region_mean(img, right_gt) - gt_mean) / gt_mean])
-    lib.write_csv(ctx.result("fig3-leak.csv"),
+    write_csv(ctx.result("fig3-leak.csv"),
                   ["method", "mask_res", "leak_percent", "region_area", "rays", "mask_rays",
                    "bytes_sent", "solve_seconds", "image_leak_vs_b_percent",
                    "image_leak_vs_gt_percent"], rows)
@@ -235,10 +244,10 @@ def leak(ctx):
     # Against B at the same R and seed: the same Monte Carlo rays, so what
     # differs is the mask.
     b_name, _ = curve_run(ctx, "B", s["leak_res"])
-    w, h, rb = lib.read_pfm(ctx.path(b_name, "image.pfm"))
-    _, _, img = lib.read_pfm(ctx.path(name, "image.pfm"))
-    j = lib.load_json(ctx.path(name, "run.json"))
-    lib.diff_png(ctx.result(f"img/fig3-{name}-diff.png"), w, h, img, rb, 10,
+    w, h, rb = read_pfm(ctx.path(b_name, "image.pfm"))
+    _, _, img = read_pfm(ctx.path(name, "image.pfm"))
+    j = load_json(ctx.path(name, "run.json"))
+    diff_png(ctx.result(f"img/fig3-{name}-diff.png"), w, h, img, rb, 10,
                  region_mask(ctx, j, right_only=True))
 
 
@@ -248,7 +257,7 @@ def error_time(ctx):
     runs = curve_runs(ctx)
     points, series = [], []
     for name, j in runs:
-        header, rows = lib.read_csv(ctx.path(name, "convergence.csv"))
+        header, rows = read_csv(ctx.path(name, "convergence.csv"))
         ix = {k: i for i, k in enumerate(header)}
         data = [(float(r[ix["seconds"]]), float(r[ix["relative_rmse"]]), int(r[ix["shot"]]))
                 for r in rows if len(r) > ix["relative_rmse"] and r[ix["relative_rmse"]]]
@@ -285,10 +294,10 @@ def error_time(ctx):
     gt = groundtruth.exp_reference(ctx)
     final_gt = {}
     for name, _, _ in series:
-        final_gt[name] = "" if gt is None else gt.error(lib.read_pfm(ctx.path(name, "image.pfm"))[2])
+        final_gt[name] = "" if gt is None else gt.error(read_pfm(ctx.path(name, "image.pfm"))[2])
     for r in rows:
         r.append(final_gt[r[2]])
-    lib.write_csv(ctx.result("pareto.csv"), ["budget_seconds", "lowest_relative_rmse", "run", "at_seconds",
+    write_csv(ctx.result("pareto.csv"), ["budget_seconds", "lowest_relative_rmse", "run", "at_seconds",
                                              "run_final_vs_gt"], rows)
     # Per run: the final error, its time, what measuring cost.
     rows = []
@@ -296,7 +305,7 @@ def error_time(ctx):
         rows.append([name, j["result"]["shots"], j["timings"]["solve_seconds"],
                      j["result"]["relative_rmse"], j["result"]["error_measurements"],
                      j["timings"]["error_seconds"], final_gt[name]])
-    lib.write_csv(ctx.result("curves.csv"), ["run", "shots", "solve_seconds", "final_relative_rmse",
+    write_csv(ctx.result("curves.csv"), ["run", "shots", "solve_seconds", "final_relative_rmse",
                                              "error_measurements", "error_seconds", "final_vs_gt"], rows)
     plot_curves(ctx, series)
 
@@ -318,7 +327,7 @@ def plot_curves(ctx, series):
     lo, hi = min(errs) / 1.15, max(errs) * 1.15
     step = 10 ** math.floor(math.log10(hi - lo))  # a tick every step, as a list
     ticks = ", ".join(f"'{k * step:g}' {k * step:g}" for k in range(int(lo / step) + 1, int(hi / step) + 1))
-    lib.gnuplot(f"""set terminal pngcairo size 900,600 noenhanced font ',11'
+    gnuplot(f"""set terminal pngcairo size 900,600 noenhanced font ',11'
 set output '{png}'
 set logscale xy
 set yrange [{lo}:{hi}]
@@ -335,12 +344,12 @@ plot {', '.join(plots)}
 # --- Methods C and R in the closed box ----------------------------------------------
 
 def closed_box(ctx):
-    """tools/experiments/closed-box-methods (issue #10): a closed box of one
+    """tools/closed-box-methods (issue #10): a closed box of one
     material around a block, split 2x2x2: mean B against E/(1-rho) over
     several seeds, with its standard error, for none (1 env), B and R."""
     seeds, rays = ("4", "500") if ctx.scale == "full" else ("2", "100")
     env = dict(os.environ, RAYS=rays, VISMASK_BIN=ctx.bin)
-    out = subprocess.run([os.path.join(lib.ROOT, "tools", "experiments", "closed-box-methods"),
+    out = subprocess.run([os.path.join(ROOT, "tools", "closed-box-methods"),
                           os.path.join(ctx.runs, "closed-box"), seeds], env=env, check=True,
                          capture_output=True, text=True).stdout
     with open(ctx.result("closed-box.csv"), "w") as f:
@@ -350,7 +359,7 @@ def closed_box(ctx):
 # --- docs/RESULTS.md --------------------------------------------------------------
 
 def table_md(path, header_map=None, digits=None):
-    header, rows = lib.read_csv(path)
+    header, rows = read_csv(path)
     names = [header_map.get(h, h) if header_map else h for h in header]
     out = ["| " + " | ".join(names) + " |", "|" + "---|" * len(names)]
     for r in rows:
@@ -382,7 +391,7 @@ def pretty(v, h):
 
 
 def rows_of(ctx, f):
-    header, rows = lib.read_csv(ctx.result(f))
+    header, rows = read_csv(ctx.result(f))
     return [dict(zip(header, r)) for r in rows]
 
 
@@ -394,7 +403,7 @@ def report(ctx, meta=None):
         with open(meta_path, "w") as f:
             json.dump(meta, f, indent=1)
     elif os.path.exists(meta_path):
-        meta = lib.load_json(meta_path)
+        meta = load_json(meta_path)
     meta = meta or {}
     doc = os.path.join(os.path.dirname(ctx.out), "RESULTS.md") if ctx.out.endswith(
         os.path.join("docs", "results")) else os.path.join(ctx.out, "RESULTS.md")
@@ -418,10 +427,10 @@ def report(ctx, meta=None):
     L = []
     w = L.append
     w("# Results: the paper's figures and table as numbers\n")
-    w("Generated by `make experiments` (tools/experiments/all); every figure below comes from "
+    w("Generated by `make experiments` (tools/experiments); every figure below comes from "
       "that run. Do not edit by hand.\n")
     if meta:
-        w(f"- command: `{meta.get('command', 'tools/experiments/all')}`, scale `{ctx.scale}`")
+        w(f"- command: `{meta.get('command', 'tools/experiments')}`, scale `{ctx.scale}`")
         w(f"- commit {meta.get('commit', '?')}, {meta.get('date', '?')}")
         w(f"- machine: {meta.get('cpu', '?')}, {meta.get('cores', '?')} cores; load average "
           f"{meta.get('load_start', '?')} at the start, {meta.get('load_end', '?')} at the end")
@@ -525,14 +534,14 @@ def report(ctx, meta=None):
     w("\n".join(cmp_rows) + "\n")
     rr = by.get(("R", ""))
     if rr:
-        n = int(lib.arg(s["common"], "--rays"))
+        n = int(arg(s["common"], "--rays"))
         w(f"Method R: leak {float(rr['leak_percent']):+.1f}%, {num(rr['bytes_sent'])} bytes sent "
           f"({num(rr['rays'])} rays traced, no mask rays), {float(rr['solve_seconds']):.1f} s. Its "
           "packet is 128 + N/8 bytes for N rays a shot, a mask's 128 + 4R²/8: here N = "
           f"{n}, so R's packet is the size of a mask of R = {math.sqrt(n / 4):.0f}, smaller than "
           "the masks above it and larger than those below.\n")
     if os.path.exists(ctx.result("closed-box.csv")):
-        w("**The closed box** (tools/experiments/closed-box-methods): a unit cube around a block "
+        w("**The closed box** (tools/closed-box-methods): a unit cube around a block "
           "[0.3, 0.7]³, one material (kd 0.5, Ke 2, so B = 4 everywhere), split 2×2×2; the mean of B "
           "over the patches against 4, with its standard error over the seeds, the noise of one "
           "patch (RMS), and the ledger's largest residual (emitted − absorbed − escaped − unshot − "
@@ -562,8 +571,8 @@ def report(ctx, meta=None):
       + " Over the whole image the mask's effect is swamped by that noise: the shadow edge is a "
       "small part of the picture.")
     ratio = [tm[("B", int_or(r))] / tm[("A", int_or(r))] for r in s["table_res"]]
-    seed_ratio = [lib.SEED_MINUTES[("B", r)] / lib.SEED_MINUTES[("A", r)]
-                  for r in s["table_res"] if ("B", r) in lib.SEED_MINUTES]
+    seed_ratio = [SEED_MINUTES[("B", r)] / SEED_MINUTES[("A", r)]
+                  for r in s["table_res"] if ("B", r) in SEED_MINUTES]
     b_slower = all(x > 1.0 for x in ratio)
     w(f"- **Time (Table 1).** Method A costs {fmt_pct(tm[('A', int_or(r_lo))] / none_s - 1)} to "
       f"{fmt_pct(tm[('A', int_or(r_hi))] / none_s - 1)} over no mask (marking, packing, sending, "
@@ -634,7 +643,7 @@ def report(ctx, meta=None):
     w("")
     with open(doc, "w") as f:
         f.write("\n".join(L) + "\n")
-    lib.log(f"wrote {doc}")
+    log(f"wrote {doc}")
     return doc
 
 
@@ -656,19 +665,10 @@ def fmt_pct(x):
 # --- all ----------------------------------------------------------------------------
 
 def meta_info(ctx, start, load_start):
-    def sh(cmd):
-        try:
-            return subprocess.run(cmd, shell=True, capture_output=True, text=True).stdout.strip()
-        except OSError:
-            return "?"
-    return dict(command="make experiments" if ctx.scale == "full" else "tools/experiments/all --mini",
-                commit=sh(f"git -C {lib.ROOT} rev-parse --short HEAD") + (
-                    " (with local changes)" if sh(f"git -C {lib.ROOT} status --porcelain -- src include platform") else ""),
-                date=time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-                cpu=sh("lscpu | sed -n 's/^Model name: *//p'") or "?",
-                cores=os.cpu_count(), load_start=load_start,
-                load_end=" ".join(f"{x:.2f}" for x in os.getloadavg()),
-                seconds=time.time() - start)
+    f = facts()
+    return dict(command="make experiments" if ctx.scale == "full" else "tools/experiments --quick",
+                commit=f["commit"], date=f["date"], cpu=f["cpu"], cores=f["cores"],
+                load_start=load_start, load_end=loadavg(), seconds=time.time() - start)
 
 
 STEPS = {"references": references, "quality": quality, "timing": timing, "leak": leak,
@@ -676,19 +676,31 @@ STEPS = {"references": references, "quality": quality, "timing": timing, "leak":
          "ground-truth": groundtruth.ground_truth, "report": report}
 
 
-def main(step, doc):
-    ctx = lib.context_from_argv(sys.argv, doc)
-    if step != "all":
-        STEPS[step](ctx)
+ORDER = ["references", "quality", "leak", "error-time", "timing", "closed-box", "ground-truth"]
+
+
+def main(argv, doc):
+    """tools/experiments [STEP...] [--quick] [--out DIR]: the steps named, or
+    all of them and the report ('all', the default)."""
+    args = parse(argv, doc, positional=len(STEPS) + 1)
+    steps = args.positional or ["all"]
+    for s in steps:
+        if s != "all" and s not in STEPS:
+            print(f"{argv[0]}: unknown step '{s}' (steps: all, {', '.join(STEPS)})", file=sys.stderr)
+            sys.exit(2)
+    ctx = context(args)
+    if steps != ["all"]:
+        for s in steps:
+            STEPS[s](ctx)
         return
     start = time.time()
-    load_start = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    load_start = loadavg()
     # Every figure from this run: no run is reused from an earlier one.
     shutil.rmtree(ctx.runs, ignore_errors=True)
     os.makedirs(ctx.runs)
-    for name in ["references", "quality", "leak", "error-time", "timing", "closed-box", "ground-truth"]:
+    for name in ORDER:
         t0 = time.time()
-        lib.log(f"experiments: {name}")
+        log(f"experiments: {name}")
         STEPS[name](ctx)
-        lib.log(f"experiments: {name} done in {time.time() - t0:.0f} s")
+        log(f"experiments: {name} done in {time.time() - t0:.0f} s")
     report(ctx, meta_info(ctx, start, load_start))

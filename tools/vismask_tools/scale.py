@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""tools/reference-lib/scale.py IMAGE.pfm REF.pfm [MASK.pgm]: how IMAGE relates
+"""tools/vismask_tools/scale.py IMAGE.pfm REF.pfm [MASK.pgm]: how IMAGE relates
 to REF over the pixels outside MASK (nonzero = left out): the relative RMSE
 (as vismask compare --exclude), the least-squares scale s = sum(a*b)/sum(b*b)
 overall and per channel, the ratio of the means, and the relative RMSE left

@@ -10,11 +10,17 @@ import os
 import shutil
 import subprocess
 
-import lib
+from . import ROOT
+from .cornell import SCENE
+from .files import load_json, read_pgm, read_csv, read_pfm, write_csv as write_csv_, write_png
+from .images import rel_rmse
+from .plot import gnuplot
+from .runner import log
+from .scales import CAMERA, arg
 
 # The Cornell box's original camera (eye, target, up, vertical fov).
 ORIGINAL = "278,273,-800,278,273,0,0,1,0,39.3076"
-COMMITTED = os.path.join(lib.ROOT, "docs", "results", "reference")
+COMMITTED = os.path.join(ROOT, "docs", "results", "reference")
 
 # Issue 15's configurations. "today" is the render before issue 15.
 TODAY = ["--rays", "4096", "--sampler", "random", "--elements", "0", "--aa", "off"]
@@ -27,7 +33,7 @@ def today(ctx):
 
 
 def configs(ctx):
-    """Issue 15's configurations; at mini scale "default" is made cheaper."""
+    """Issue 15's configurations; at quick scale "default" is made cheaper."""
     d = ctx.s["gt"]["default"]
     return [("today", today(ctx)), ("default", d), ("elements-0", d + ["--elements", "0"]),
             ("aa-off", d + ["--aa", "off"])]
@@ -50,8 +56,8 @@ POINTS = {"minus_1_env_points", "step_left_minus_right"}
 
 
 def write_csv(path, header, rows):
-    """lib.write_csv with no comma inside a cell (lib.read_csv splits on them)."""
-    lib.write_csv(path, header, [[c.replace(",", ";") if isinstance(c, str) else c for c in r]
+    """files.write_csv with no comma inside a cell (files.read_csv splits on them)."""
+    write_csv_(path, header, [[c.replace(",", ";") if isinstance(c, str) else c for c in r]
                                  for r in rows])
 
 
@@ -67,24 +73,15 @@ class Reference:
 
     def __init__(self, pfm, pgm, noise, what):
         self.pfm, self.pgm, self.noise, self.what = pfm, pgm, noise, what
-        self.w, self.h, self.px = lib.read_pfm(pfm)
-        self.keep = [0 if m else 1 for m in read_pgm(pgm)]
+        self.w, self.h, self.px = read_pfm(pfm)
+        self.keep = [0 if m else 1 for m in read_pgm(pgm)[2]]
 
     def args(self):
         return ["--reference", self.pfm, "--exclude", self.pgm]
 
     def error(self, img, mask=None):
         keep = self.keep if mask is None else [k and m for k, m in zip(self.keep, mask)]
-        return lib.rel_rmse(img, self.px, keep)
-
-
-def read_pgm(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    parts = data.split(maxsplit=4)
-    assert parts[0] == b"P5", path
-    w, h = int(parts[1]), int(parts[2])
-    return list(data[len(data) - w * h:])
+        return rel_rmse(img, self.px, keep)
 
 
 def render_reference(ctx, name, camera, size, spp):
@@ -92,12 +89,12 @@ def render_reference(ctx, name, camera, size, spp):
     d = os.path.join(ctx.runs, "gt")
     os.makedirs(d, exist_ok=True)
     out = os.path.join(d, f"{name}.pfm")
-    cmd = [os.path.join(lib.ROOT, "tools", "reference"), lib.SCENE] + (
+    cmd = [os.path.join(ROOT, "tools", "reference"), SCENE] + (
         ["--camera", camera] if camera else []) + [
         "--size", str(size), str(size), "--spp", str(spp), "--halves", "--quiet", "--out", out]
-    lib.log("  " + " ".join(os.path.relpath(c, lib.ROOT) if c.startswith(lib.ROOT) else c for c in cmd))
+    log("  " + " ".join(os.path.relpath(c, ROOT) if c.startswith(ROOT) else c for c in cmd))
     subprocess.run(cmd, check=True, env=dict(os.environ, VISMASK_BIN=ctx.bin))
-    meta = lib.load_json(out[:-4] + ".json")
+    meta = load_json(out[:-4] + ".json")
     return Reference(out, out[:-4] + ".mask.pgm", meta["noise_relative_rmse"],
                      f"tools/reference scenes/cornell.obj{' --camera ' + camera.replace(',', ' ') if camera else ''} "
                      f"--size {size} {size} "
@@ -125,7 +122,7 @@ def committed(ctx, stem):
                 break
     if ".mask.pgm" not in out:
         return None
-    meta = lib.load_json(out[".json"]) if ".json" in out else {}
+    meta = load_json(out[".json"]) if ".json" in out else {}
     noise = meta.get("noise_relative_rmse", meta.get("noise", float("nan")))
     return Reference(out[".pfm"], out[".mask.pgm"], noise,
                      f"docs/results/reference/{stem}.pfm.gz (committed: "
@@ -145,16 +142,16 @@ def demo_reference(ctx):
 
 
 def experiments_reference(ctx):
-    """At the experiments' own camera and size (lib.CAMERA): the committed one
+    """At the experiments' own camera and size (CAMERA): the committed one
     when there is one, else rendered; None without blender."""
     g = ctx.s["gt"]
-    w = int(lib.arg(ctx.s["common"], "--width"))
+    w = int(arg(ctx.s["common"], "--width"))
     ref = committed(ctx, f"cornell-experiments-{w}") if ctx.scale == "full" else None
     if ref:
         return ref
     if not have_blender():
         return None
-    return render_reference(ctx, f"cornell-experiments-{w}", lib.arg(lib.CAMERA, "--camera"), w,
+    return render_reference(ctx, f"cornell-experiments-{w}", arg(CAMERA, "--camera"), w,
                             g["exp_spp"])
 
 
@@ -171,7 +168,7 @@ def run(ctx, name, args, ref, every=None, camera=ORIGINAL):
 
 
 def image(ctx, name):
-    return lib.read_pfm(ctx.path("gt-" + name, "image.pfm"))[2]
+    return read_pfm(ctx.path("gt-" + name, "image.pfm"))[2]
 
 
 def verdict(ok):
@@ -185,7 +182,7 @@ def in_quadrature(total, *parts):
 
 
 def curve(ctx, name):
-    header, rows = lib.read_csv(ctx.path("gt-" + name, "convergence.csv"))
+    header, rows = read_csv(ctx.path("gt-" + name, "convergence.csv"))
     ix = {k: i for i, k in enumerate(header)}
     return [(float(r[ix["seconds"]]), float(r[ix["relative_rmse"]]))
             for r in rows if len(r) > ix["relative_rmse"] and r[ix["relative_rmse"]]]
@@ -206,7 +203,7 @@ def signed_png(path, w, h, a, b, keep, scale):
         v = max(-1.0, min(1.0, d))
         k = int(255 * (1 - abs(v)))
         out += [255, k, k] if v > 0 else [k, k, 255]
-    lib.write_png(path, w, h, out)
+    write_png(path, w, h, out)
 
 
 # --- the step -----------------------------------------------------------------------
@@ -222,7 +219,7 @@ def ground_truth(ctx):
         with open(skip, "w") as f:
             f.write("blender not found: the ground-truth section was skipped "
                     "(tools/install-deps --reference installs it)\n")
-        lib.log("experiments: blender not found, ground-truth section skipped")
+        log("experiments: blender not found, ground-truth section skipped")
         return
     g = ctx.s["gt"]
     ref = original_reference(ctx)
@@ -238,7 +235,7 @@ def ground_truth(ctx):
         j2 = run(ctx, name + "-seed2", args + ["--seed", "2"], ref)
         every = max(1, j2["result"]["shots"] // g["points"])
         j = run(ctx, name, args, ref, every)
-        e, noise = j["result"]["relative_rmse"], lib.rel_rmse(image(ctx, name + "-seed2"), image(ctx, name),
+        e, noise = j["result"]["relative_rmse"], rel_rmse(image(ctx, name + "-seed2"), image(ctx, name),
                                                               ref.keep) / math.sqrt(2)
         rows.append([name, " ".join(args) or "(defaults)", j["result"]["shots"], j["result"]["rays"],
                      j["timings"]["solve_seconds"], j["result"]["stop_reason"], e,
@@ -304,9 +301,9 @@ def ground_truth(ctx):
                       verdict(ed <= GOAL_DEMO and td <= GOAL_DEMO_S),
                       verdict(in_quadrature(ed, dref.noise)[0] <= GOAL_DEMO and td <= GOAL_DEMO_S)])
     else:
-        j = lib.load_json(ctx.path("gt-default", "run.json"))
+        j = load_json(ctx.path("gt-default", "run.json"))
         ed, td = j["result"]["relative_rmse"], j["timings"]["solve_seconds"]
-        goals.append(["make demo's options (mini: the default run above at the original camera)",
+        goals.append(["make demo's options (quick: the default run above at the original camera)",
                       f"<= {100 * GOAL_DEMO:.1f}% in <= {GOAL_DEMO_S:g} s", ed,
                       in_quadrature(ed, ref.noise)[0], f"solve {td:.3g} s",
                       verdict(ed <= GOAL_DEMO and td <= GOAL_DEMO_S),
@@ -336,7 +333,7 @@ def decomposition(ctx, ref):
     """Noise, aliasing and discretisation for each configuration."""
     rows = []
     for name, args in configs(ctx):
-        aa_off = "--aa" in args and lib.arg(args, "--aa") == "off"
+        aa_off = "--aa" in args and arg(args, "--aa") == "off"
         base = [a for i, a in enumerate(args) if a != "--aa" and (i == 0 or args[i - 1] != "--aa")]
         # Plain runs (no curve), so that configurations share them.
         key = lambda aa, seed: f"plain-{'-'.join(base).replace('--', '') or 'default'}-aa{aa}-seed{seed}"
@@ -349,8 +346,8 @@ def decomposition(ctx, ref):
         same = open(ctx.path("gt-" + key(me, 1), "patches.csv")).read() == open(
             ctx.path("gt-" + key(other, 1), "patches.csv")).read()
         total = j1["result"]["relative_rmse"]
-        noise = lib.rel_rmse(x2, x1, ref.keep) / math.sqrt(2)
-        aa_diff = lib.rel_rmse(x1, xt, ref.keep)
+        noise = rel_rmse(x2, x1, ref.keep) / math.sqrt(2)
+        aa_diff = rel_rmse(x1, xt, ref.keep)
         alias = aa_diff if aa_off else 0.0
         disc, clamped = in_quadrature(total, noise, alias, ref.noise)
         rows.append([name, " ".join(args) or "(defaults)", j1["timings"]["solve_seconds"], total, noise,
@@ -422,7 +419,7 @@ def environments(ctx, ref):
     write_csv(ctx.result("gt-seam.csv"),
                   ["run", "row_from", "row_to", "max_abs_at_seam", "mean_abs_elsewhere",
                    "step_left_minus_right"], seam)
-    lib.gnuplot(f"""set terminal pngcairo size 900,400 noenhanced font ',11'
+    gnuplot(f"""set terminal pngcairo size 900,400 noenhanced font ',11'
 set output '{ctx.result("gt-seam.png")}'
 set grid
 set xlabel 'pixel column (x = 278 projects between columns {w // 2 - 1} and {w // 2})'
@@ -447,7 +444,7 @@ def plot(ctx, series, noise):
     for what, t, e in RENDERPARK:
         plots.append(f"'-' using 1:2 with points pt 7 ps 1.5 lc rgb '#7f7f7f' notitle")
     data = "".join(f"{t} {e}\ne\n" for _, t, e in RENDERPARK)
-    lib.gnuplot(f"""set terminal pngcairo size 900,600 noenhanced font ',11'
+    gnuplot(f"""set terminal pngcairo size 900,600 noenhanced font ',11'
 set output '{png}'
 set logscale xy
 set grid
@@ -474,7 +471,7 @@ def exp_reference(ctx):
 # --- the report's section -------------------------------------------------------------
 
 def rows_of(path):
-    header, rows = lib.read_csv(path)
+    header, rows = read_csv(path)
     return [dict(zip(header, r)) for r in rows]
 
 
@@ -551,7 +548,7 @@ def report_section(ctx, w, link, table_md):
       + (f"The demo row is `make demo`'s command itself at its own camera (vismask's default, "
          f"which frames the scene's box: eye 278,274.4,−809.7), against a second reference "
          f"at that camera: {refs[1]['what']}, noise {pc(refs[1]['noise'])}."
-         if len(refs) > 1 else "At mini scale the demo row is the default run above.") + "\n")
+         if len(refs) > 1 else "At quick scale the demo row is the default run above.") + "\n")
 
     w("### RenderPark, quoted\n")
     w("Measured by an earlier session on this machine (issue 15), **not rerun by make "

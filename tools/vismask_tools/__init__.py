@@ -1,0 +1,22 @@
+"""vismask's tools library: what every report script under tools/ uses.
+
+  cli        the scripts' shared arguments (--quick, --out DIR, --help)
+  runner     running vismask (with a run cache keyed by the command line)
+  files      JSON, CSV, PFM, PGM and PNG files, run.json
+  images     image error (relative RMSE, as `vismask compare`), difference images
+  stats      medians with their min-max, percentages
+  plot       gnuplot
+  markdown   Markdown tables and generated sections of docs/*.md
+  machine    facts about the machine and the commit, for reports
+  cornell    the Cornell box's shadow region (the experiments' leak figures)
+  experiments, groundtruth   the steps of make experiments (docs/RESULTS.md)
+  checks     the checks of one output directory (make stability)
+  fuzz       the Fuzzing section of docs/STABILITY.md (make fuzz-report)
+  blender_render, scale      run by tools/reference: inside Blender, and its check
+
+Scripts in tools/ import it as `from vismask_tools import ...` (Python puts
+the script's own directory first on sys.path); it needs only Python 3's
+standard library, except scale.py (numpy, /usr/bin/python3)."""
+import os
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))

@@ -1,0 +1,25 @@
+"""Small statistics for reports: medians with their spread."""
+
+import statistics
+
+
+def median(xs):
+    return statistics.median(xs)
+
+
+def spread(xs):
+    """(median, min, max) of a non-empty list."""
+    return statistics.median(xs), min(xs), max(xs)
+
+
+def fmt_spread(xs, fmt="{:.2f}"):
+    """"median (min-max)" of a list, or the one value of a list of one."""
+    m, lo, hi = spread(xs)
+    if len(xs) == 1:
+        return fmt.format(m)
+    return f"{fmt.format(m)} ({fmt.format(lo)}–{fmt.format(hi)})"
+
+
+def pct(x, digits=2):
+    """A fraction as a percentage string."""
+    return f"{100 * x:.{digits}f}%"
