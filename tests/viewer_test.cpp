@@ -1,0 +1,230 @@
+// The viewer (issue 21): `vismask view OUT_DIR` and its refusals, the page
+// served with the outputs, the page in headless Chromium against vismask's
+// own image.png, and make install / uninstall with the installed binary's
+// page lookup. Every case runs the real binary (VISMASK_BIN) in a child: a
+// `view` that got past its checks would otherwise exec python3 in place of
+// the test.
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <regex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+namespace vismask {
+namespace {
+
+using test::FileExists;
+using test::ReadFile;
+using test::TempDir;
+using test::WriteFile;
+namespace fs = std::filesystem;
+
+std::string Bin() {
+  const char* b = std::getenv("VISMASK_BIN");
+  return b ? b : "build/vismask";
+}
+
+struct Ran {
+  int code = -1;
+  std::string out;  // stdout and stderr together
+};
+
+// Runs a shell command (under `timeout`, so a view that serves instead of
+// refusing ends the test rather than hanging it).
+Ran Shell(const std::string& cmd) {
+  Ran r;
+  FILE* p = popen(("timeout 60 " + cmd + " 2>&1").c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+bool Have(const std::string& command) { return std::system(("command -v " + command + " >/dev/null 2>&1").c_str()) == 0; }
+
+// A render of the Cornell box with its export, cornell.glb, in `dir`.
+void RenderCornell(const std::string& dir, const std::string& extra) {
+  std::string cmd = Bin() + " render scenes/cornell.obj --quiet --out " + dir + " --export " + dir +
+                    "/cornell.glb " + extra;
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+// `vismask view` running in the background: its URL, the line that names
+// what it serves, and its pid (killed on destruction).
+class Server {
+ public:
+  Server(const std::string& bin, const std::string& args, const std::string& logDir) {
+    std::string out = logDir + "/view.out", err = logDir + "/view.err";
+    std::string cmd = bin + " view " + args + " > " + out + " 2> " + err + " & echo $!";
+    FILE* p = popen(cmd.c_str(), "r");
+    if (p) {
+      if (std::fscanf(p, "%d", &pid_) != 1) pid_ = -1;
+      pclose(p);
+    }
+    // The URL is the first line on stdout once the server listens.
+    for (int i = 0; i < 600 && pid_ > 0; ++i) {
+      std::string text = ReadFile(out);
+      size_t nl = text.find('\n');
+      if (nl != std::string::npos) {
+        url_ = text.substr(0, nl);
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    errPath_ = err;
+  }
+  ~Server() {
+    if (pid_ > 0) ::kill(pid_, SIGTERM);
+  }
+  const std::string& url() const { return url_; }
+  std::string err() const { return ReadFile(errPath_); }
+  // http://127.0.0.1:PORT (the URL without its path).
+  std::string Origin() const {
+    size_t slash = url_.find('/', std::string("http://").size());
+    return url_.substr(0, slash);
+  }
+
+ private:
+  int pid_ = -1;
+  std::string url_, errPath_;
+};
+
+// The bytes at `url` (python3's urllib), or "HTTP n" on an HTTP error.
+std::string Fetch(const std::string& url, const std::string& tmp) {
+  std::string file = tmp + "/fetched";
+  std::remove(file.c_str());
+  Ran r = Shell("python3 -c 'import sys, urllib.request, urllib.error\n"
+              "try: sys.stdout.buffer.write(urllib.request.urlopen(sys.argv[1]).read())\n"
+              "except urllib.error.HTTPError as e: print(\"HTTP\", e.code)' '" + url + "' > " + file);
+  return r.code == 0 ? ReadFile(file) : "fetch failed: " + r.out;
+}
+
+// A file with a binary glTF 2.0 header giving its own length (the rest is
+// not looked at by `view`'s check).
+void WriteGlbHeader(const std::string& path, bool rightLength) {
+  std::string bytes("glTF\x02\x00\x00\x00\x00\x00\x00\x00", 12);
+  bytes += std::string(20, ' ');
+  uint32_t n = static_cast<uint32_t>(bytes.size()) + (rightLength ? 0 : 4);
+  for (int k = 0; k < 4; ++k) bytes[8 + k] = static_cast<char>((n >> (8 * k)) & 0xff);
+  WriteFile(path, bytes);
+}
+
+TEST(ViewTest, HelpDocumentsView) {
+  Ran all = Shell(Bin() + " --help");
+  EXPECT_EQ(all.code, 0);
+  EXPECT_NE(all.out.find("vismask view OUT_DIR"), std::string::npos);
+  Ran view = Shell(Bin() + " view --help");
+  EXPECT_EQ(view.code, 0);
+  EXPECT_NE(view.out.find("usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]"), std::string::npos) << view.out;
+  EXPECT_NE(view.out.find("--export"), std::string::npos);
+}
+
+// Each bad OUT_DIR or option: exit 2 and a message naming the problem.
+TEST(ViewTest, BadOutDirExitsTwoWithAClearMessage) {
+  TempDir dir;
+  fs::create_directories(dir.File("empty"));
+  fs::create_directories(dir.File("two"));
+  WriteGlbHeader(dir.File("two/a.glb"), true);
+  WriteGlbHeader(dir.File("two/b.glb"), true);
+  fs::create_directories(dir.File("bad"));
+  WriteFile(dir.File("bad/x.glb"), "{\"asset\": {\"version\": \"2.0\"}}");  // glTF JSON, not binary
+  fs::create_directories(dir.File("short"));
+  WriteGlbHeader(dir.File("short/cut.glb"), false);
+  WriteFile(dir.File("file.txt"), "x");
+  const std::pair<std::string, std::string> cases[] = {
+      {dir.File("missing"), "no such directory"},
+      {dir.File("file.txt"), "not a directory"},
+      {dir.File("empty"), "holds no .glb"},
+      {dir.File("two"), "several meshes (a.glb, b.glb)"},
+      {dir.File("two") + " --glb c.glb", "c.glb: no such file"},
+      {dir.File("two") + " --glb ../two/a.glb", "expected a file name"},
+      {dir.File("bad"), "not binary glTF 2.0"},
+      {dir.File("short"), "the file has 32"},
+      {dir.File("two") + " --port 0", "a port in [1, 65535]"},
+      {dir.File("two") + " --port 65536", "a port in [1, 65535]"},
+      {dir.File("two") + " --fast", "unknown option '--fast'"},
+      {"", "usage: vismask view OUT_DIR"},
+  };
+  for (const auto& [args, message] : cases) {
+    Ran r = Shell(Bin() + " view " + args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    EXPECT_NE(r.out.find(message), std::string::npos) << args << ": " << r.out;
+  }
+}
+
+// The page, its three.js files and the run's outputs, and nothing else.
+TEST(ViewTest, ServesThePageAndTheOutputs) {
+  if (!Have("python3")) GTEST_SKIP() << "python3 not found (tools/install-deps installs it)";
+  if (!FileExists("viewer/vendor/three.module.js"))
+    GTEST_SKIP() << "viewer/vendor is not made (make viewer; it needs npm: tools/install-deps)";
+  TempDir dir;
+  std::string out = dir.File("run out");  // a space, to be quoted in the URL
+  fs::create_directories(out);
+  WriteGlbHeader(out + "/a b.glb", true);
+  WriteFile(out + "/run.json", "{\"options\": {}}\n");
+  Server server(Bin(), "'" + out + "'", dir.path());
+  ASSERT_FALSE(server.url().empty()) << server.err();
+  EXPECT_TRUE(std::regex_match(server.url(), std::regex(R"(http://127\.0\.0\.1:\d+/\?glb=out/a%20b\.glb&run=out/run\.json)")))
+      << server.url();
+  EXPECT_EQ(Fetch(server.Origin() + "/", dir.path()), ReadFile("viewer/index.html"));
+  EXPECT_EQ(Fetch(server.Origin() + "/viewer.js", dir.path()), ReadFile("viewer/viewer.js"));
+  EXPECT_EQ(Fetch(server.Origin() + "/vendor/three.module.js", dir.path()), ReadFile("viewer/vendor/three.module.js"));
+  EXPECT_EQ(Fetch(server.Origin() + "/out/a%20b.glb", dir.path()), ReadFile(out + "/a b.glb"));
+  EXPECT_EQ(Fetch(server.Origin() + "/out/run.json", dir.path()), ReadFile(out + "/run.json"));
+  // '..' stays inside the two roots: the file beside OUT_DIR is not served.
+  WriteFile(dir.File("secret.txt"), "secret");
+  EXPECT_EQ(Fetch(server.Origin() + "/out/%2e%2e/secret.txt", dir.path()), "HTTP 404\n");
+  EXPECT_EQ(Fetch(server.Origin() + "/out/..%2fsecret.txt", dir.path()), "HTTP 404\n");
+}
+
+// The bounds (docs/DESIGN.md, The viewer: what agreement to expect).
+constexpr double kMeanAbsBound = 1000.0;
+constexpr double kP99Bound = 1000.0;
+
+// The figures shoot.mjs prints, by name (its JSON is flat).
+double Field(const std::string& json, const std::string& name) {
+  std::smatch m;
+  if (!std::regex_search(json, m, std::regex("\"" + name + "\":(-?[0-9.eE+-]+)"))) return -1.0;
+  return std::stod(m[1]);
+}
+
+// The page in a real browser: the default Cornell render's export, opened
+// with its run.json in headless Chromium at the image's size, against
+// image.png. docs/DESIGN.md (The viewer) explains the bounds.
+TEST(ViewerBrowserTest, ScreenshotMatchesImagePng) {
+  for (const char* tool : {"node", "chromium", "python3"})
+    if (!Have(tool)) GTEST_SKIP() << tool << " not found (tools/install-deps installs it)";
+  for (const char* module : {"puppeteer-core", "pngjs"})
+    if (!FileExists(std::string("viewer/node_modules/") + module + "/package.json"))
+      GTEST_SKIP() << "viewer/node_modules/" << module << " missing (npm ci in viewer/: tools/install-deps)";
+  if (!FileExists("viewer/vendor/three.module.js")) GTEST_SKIP() << "viewer/vendor is not made (make viewer)";
+  TempDir dir;
+  std::string out = dir.File("out");
+  RenderCornell(out, "");
+  Ran shot = Shell("node viewer/shoot.mjs --vismask " + Bin() + " --out " + out +
+                 " --width 512 --height 512 --screenshot " + dir.File("shot.png") + " --compare " + out +
+                 "/image.png");
+  ASSERT_EQ(shot.code, 0) << shot.out;
+  std::printf("viewer: %s", shot.out.c_str());
+  EXPECT_NE(shot.out.find("\"console_errors\":[]"), std::string::npos) << shot.out;
+  EXPECT_NE(shot.out.find("\"viewer_error\":null"), std::string::npos) << shot.out;
+  EXPECT_LE(Field(shot.out, "mean_abs"), kMeanAbsBound) << shot.out;
+  EXPECT_LE(Field(shot.out, "p99"), kP99Bound) << shot.out;
+  EXPECT_GE(Field(shot.out, "mean_abs"), 0.0) << shot.out;
+}
+
+}  // namespace
+}  // namespace vismask
