@@ -267,11 +267,16 @@ demo: deps
 # The bench binary too, when its libraries are there (tools/install-deps
 # --bench), so that make test keeps it compiling; make bench runs it.
 BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildcard /usr/include/benchmark/benchmark.h)),$(BUILD)/vismask_bench)
+# The viewer's three.js files too, when npm is there (tools/install-deps
+# installs it), for the viewer's tests; VISMASK_MAKE_ARGS tells the install
+# test which build make install should take.
+VIEWER_IF_NPM := $(if $(shell command -v npm 2>/dev/null),viewer)
 test: deps
-	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT)
+	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT) $(VIEWER_IF_NPM)
 	@if command -v blender >/dev/null; then VISMASK_BIN=$(BUILD)/vismask tools/reference --selftest; \
 	 else echo "make: blender not found: tools/reference --selftest skipped (tools/install-deps --reference)"; fi
-	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
+	VISMASK_BIN=$(BUILD)/vismask VISMASK_MAKE_ARGS="BUILD=$(BUILD) SAN=$(SAN) DEBUG=$(DEBUG) MPI=$(MPI)" \
+	  $(BUILD)/vismask_tests
 
 # docs/RESULTS.md and docs/results/ from one run of every step in
 # tools/experiments (runs under build/experiments/full; about 25 minutes on
@@ -297,8 +302,9 @@ experiments: deps
 # long convergence tests (~20x slower under qemu: 10 minutes), the peak-RSS
 # test (VmHWM is then qemu's own, translator included), and the two tests
 # that make the test process a child subreaper (qemu-user 7.2 answers
-# prctl(PR_SET_CHILD_SUBREAPER) with EINVAL).
-CROSS_TEST_FILTER ?= -EnvTest.ClosedBoxInEightEnvironmentsConverges:EnvTest.MethodALeaksLightAtHighResolutionAndBDoesNot:FootprintTest.PeakRssIsExplainedByArenasAndMappedFiles:TransportTest.PipeSurvivorsExitWhenAChildIsKilled:TransportTest.PipeChildrenExitWhenRankZeroIsKilled
+# prctl(PR_SET_CHILD_SUBREAPER) with EINVAL), and the install and browser
+# tests (they install and serve the native binary's files).
+CROSS_TEST_FILTER ?= -InstallTest.*:ViewerBrowserTest.*:EnvTest.ClosedBoxInEightEnvironmentsConverges:EnvTest.MethodALeaksLightAtHighResolutionAndBDoesNot:FootprintTest.PeakRssIsExplainedByArenasAndMappedFiles:TransportTest.PipeSurvivorsExitWhenAChildIsKilled:TransportTest.PipeChildrenExitWhenRankZeroIsKilled
 CROSS_ARGS := render scenes/cornell.obj --envs 2 --ranks 2 --rays 512 --max-shots 2000 \
               --patch-size 50 --width 128 --height 128 --quiet
 ifeq ($(CROSS),)
