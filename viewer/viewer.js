@@ -65,7 +65,7 @@ const material = new THREE.RawShaderMaterial({
   glslVersion: THREE.GLSL3,
   vertexShader: kVertexShader,
   fragmentShader: kFragmentShader,
-  uniforms: { exposure: { value: 1.0 } },
+  uniforms: { exposure: { value: 1.0 } },  // run.json's exposure x 2^stops x the file's radianceScale
   side: THREE.DoubleSide,
 });
 
@@ -85,7 +85,7 @@ let needsRender = true;
 // What a view starts from (run.json's camera, or the front of the bounds).
 const home = {
   eye: new THREE.Vector3(), target: new THREE.Vector3(), up: new THREE.Vector3(0, 1, 0),
-  fovy: 39.3, aspect: 1, exposure: 1, size: 1,
+  fovy: 39.3, aspect: 1, exposure: 1, size: 1, radianceScale: 1,
 };
 
 function Fit() {
@@ -119,7 +119,7 @@ const exposureValue = document.getElementById('exposure-value');
 function SetStops(stops) {
   slider.value = String(stops);
   const e = home.exposure * Math.pow(2, Number(slider.value));
-  material.uniforms.exposure.value = e;
+  material.uniforms.exposure.value = e * home.radianceScale;
   const s = Number(slider.value);
   exposureValue.textContent = e.toPrecision(4) + (s === 0 ? '' : ' (' + (s > 0 ? '+' : '') + s.toFixed(2) + ' stops)');
   needsRender = true;
@@ -282,6 +282,17 @@ function TakeMesh(gltf) {
     if (mesh.isSkinnedMesh || mesh.isInstancedMesh) throw new Error('not a plain mesh');
     mesh.material = material;
   }
+  // COLOR_0 may be stored divided by a power of two, extras.radianceScale
+  // (so that it fits in [0, 1]); radiance = COLOR_0 x scale, and a power of
+  // two makes COLOR_0 x (scale x exposure) round as radiance x exposure.
+  const scales = meshes.map((m) => {
+    const s = m.geometry.userData.radianceScale;
+    if (s === undefined) return 1;
+    if (!(Number.isFinite(s) && s > 0)) throw new Error('extras.radianceScale is not a positive number');
+    return s;
+  });
+  if (scales.some((s) => s !== scales[0])) throw new Error('the primitives differ in extras.radianceScale');
+  home.radianceScale = scales[0];
   const used = gltf.parser.json.extensionsUsed || [];
   if (!used.includes('KHR_materials_unlit'))
     console.warn('vismask viewer: KHR_materials_unlit is not in extensionsUsed (the export format has it)');
@@ -297,10 +308,19 @@ async function Main() {
   }
   document.getElementById('title').textContent = 'vismask viewer: ' + glb;
   const runUrl = params.get('run');
-  const [gltf, run] = await Promise.all([
-    new GLTFLoader().loadAsync(glb).catch((e) => { throw new Error(glb + ': ' + (e.message || e)); }),
+  // The file's bytes whole (response.arrayBuffer()), then parsed: a
+  // streamed read (GLTFLoader.load) sometimes left Chromium reporting the
+  // finished request as aborted.
+  const [bytes, run] = await Promise.all([
+    fetch(glb).then((r) => {
+      if (!r.ok) throw new Error(glb + ': HTTP ' + r.status);
+      return r.arrayBuffer();
+    }),
     runUrl ? FetchJson(runUrl) : Promise.resolve(null),
   ]);
+  const gltf = await new GLTFLoader().parseAsync(bytes, '').catch((e) => {
+    throw new Error(glb + ': ' + (e.message || e));
+  });
   const meshes = TakeMesh(gltf);
   scene.add(gltf.scene);
   gltf.scene.updateMatrixWorld(true);
