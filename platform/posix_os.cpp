@@ -344,17 +344,17 @@ void OutFile::Discard() {
   ReleaseTempSlot(&tempSlot_);
 }
 
-bool CommitAll(OutFile* files, int n, char* why) {
+bool CommitAll(OutFile* const* files, int n, char* why) {
   CommitGuard guard;
   bool ok = true;
   for (int i = 0; i < n; ++i) {
     if (!ok) {
-      files[i].Discard();
+      files[i]->Discard();
       continue;
     }
-    ok = files[i].Close(why);
+    ok = files[i]->Close(why);
     if (!ok)
-      for (int j = 0; j < i; ++j) ::unlink(files[j].tmpPath_);
+      for (int j = 0; j < i; ++j) ::unlink(files[j]->tmpPath_);
   }
   if (!ok) return false;
   // The files that exist keep a second name (a hard link, "NAME.old.PID")
@@ -362,25 +362,25 @@ bool CommitAll(OutFile* files, int n, char* why) {
   constexpr int kMax = 16;
   if (n > kMax) {
     if (why) std::snprintf(why, kWhyBytes, "too many files to commit at once (%d)", n);
-    for (int i = 0; i < n; ++i) ::unlink(files[i].tmpPath_);
+    for (int i = 0; i < n; ++i) ::unlink(files[i]->tmpPath_);
     return false;
   }
   char old[kMax][kMaxPath + 24];
   bool kept[kMax] = {};
   int renamed = 0;
   for (int i = 0; i < n && ok; ++i) {
-    std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i].path_, static_cast<long>(::getpid()));
+    std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i]->path_, static_cast<long>(::getpid()));
     ::unlink(old[i]);
-    if (::link(files[i].path_, old[i]) == 0) {
+    if (::link(files[i]->path_, old[i]) == 0) {
       kept[i] = true;
     } else if (errno != ENOENT) {
-      SetWhy(why, "cannot keep the previous", files[i].path_);
+      SetWhy(why, "cannot keep the previous", files[i]->path_);
       ok = false;
     }
   }
   for (int i = 0; i < n && ok; ++i) {
-    if (::rename(files[i].tmpPath_, files[i].path_) != 0) {
-      SetWhy(why, "cannot rename", files[i].tmpPath_);
+    if (::rename(files[i]->tmpPath_, files[i]->path_) != 0) {
+      SetWhy(why, "cannot rename", files[i]->tmpPath_);
       ok = false;
     } else {
       ++renamed;
@@ -389,13 +389,25 @@ bool CommitAll(OutFile* files, int n, char* why) {
   for (int i = 0; i < n; ++i) {
     if (!ok && i < renamed) {
       // Put back what was there: the previous file, or nothing.
-      if (kept[i]) ::rename(old[i], files[i].path_);
-      else ::unlink(files[i].path_);
+      if (kept[i]) ::rename(old[i], files[i]->path_);
+      else ::unlink(files[i]->path_);
     }
-    if (!ok && i >= renamed) ::unlink(files[i].tmpPath_);
+    if (!ok && i >= renamed) ::unlink(files[i]->tmpPath_);
     if (kept[i]) ::unlink(old[i]);  // a no-op after the rename back
   }
   return ok;
+}
+
+bool CommitAll(OutFile* files, int n, char* why) {
+  constexpr int kMax = 16;
+  if (n > kMax) {
+    if (why) std::snprintf(why, kWhyBytes, "too many files to commit at once (%d)", n);
+    for (int i = 0; i < n; ++i) files[i].Discard();
+    return false;
+  }
+  OutFile* list[kMax];
+  for (int i = 0; i < n; ++i) list[i] = &files[i];
+  return CommitAll(list, n, why);
 }
 
 DirLock::~DirLock() {

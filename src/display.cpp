@@ -13,8 +13,6 @@ namespace vismask {
 
 namespace {
 
-constexpr float kInvPi = 0.318309886183790672f;
-
 bool Inside(bool triangle, glm::vec2 st) {
   if (st.x < 0.0f || st.y < 0.0f) return false;
   return triangle ? st.x + st.y <= 1.0f : st.x <= 1.0f && st.y <= 1.0f;
@@ -110,7 +108,7 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       piece.id = p.surface;
       for (int k = 0; k < n; ++k) {
         piece.p[k] = PatchPoint(p, node.c[k]);
-        piece.c[k] = facing ? kInvPi * CornerValue(env, i, node.c[k], ambient) : glm::vec3(0.0f);
+        piece.c[k] = facing ? DisplayRadiance(CornerValue(env, i, node.c[k], ambient)) : glm::vec3(0.0f);
       }
       if (n == 3) {
         piece.p[3] = piece.p[2];
@@ -118,7 +116,7 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       }
       if (tex) {
         piece.texture = &textures[tex->texture];
-        piece.ke = kInvPi * p.ke;
+        piece.ke = DisplayRadiance(p.ke);
         for (int k = 0; k < n; ++k) piece.uv[k] = PatchUv(*tex, triangle, node.c[k]);
         piece.uv[3] = piece.uv[n - 1];
       }

@@ -201,6 +201,10 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
                          Span<const PatchGeom>(stagedGeom_.data(), n), options.gridDensity);
   Arena measure = Arena::Measure();
   Layout(measure, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  // What --export will write of this environment (src/export.cpp).
+  footprint_.numVertices = stagedVertices_.size();
+  footprint_.numTriangles = 0;
+  for (const Patch& p : staged_) footprint_.numTriangles += p.numCorners == 4 ? 2 : 1;
   return footprint_;
 }
 

@@ -12,6 +12,7 @@ struct FootprintFigures {
   std::vector<Render> probes;  // per rank: its own buffers' layout
   std::vector<uint64_t> rankTotal, rankEnvBytes, rankOwn;
   uint64_t patches = 0, twins = 0, envBytes = 0, total = 0;
+  GlbMesh exportMesh;  // counts only: what --export would write
 };
 
 Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f) {
@@ -50,6 +51,8 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
     f->patches += e->footprint().numPatches;
     f->twins += e->numTwins();
     f->envBytes += e->footprint().total;
+    f->exportMesh.vertices += e->footprint().numVertices;
+    f->exportMesh.triangles += e->footprint().numTriangles;
   }
   return Status::Ok();
 }
@@ -90,6 +93,10 @@ int Footprint(const Options& o) {
     out += "{\n  \"scene\": " + JsonQuoted(o.scene) + ",\n";
     add("  \"mask_method\": \"%s\",\n  \"packet_size_bytes\": %u,\n", MaskMethodName(o.maskMethod),
         p.packetBytes);
+    if (!o.exportPath.empty())  // the .glb --export would write
+      add("  \"export\": {\"vertices\": %llu, \"triangles\": %llu, \"max_file_bytes\": %llu},\n",
+          (ull)fig.exportMesh.vertices, (ull)fig.exportMesh.triangles,
+          (ull)GlbMaxFileBytes(fig.exportMesh));
     // What --two-sided / --two-sided-emitters cost against the one-sided
     // mesh (all patches, all ranks; total_bytes: every rank's arenas).
     add("  \"two_sided\": {\"two_sided\": %s, \"two_sided_emitters\": %s, \"patches\": %llu, "
@@ -114,9 +121,11 @@ int Footprint(const Options& o) {
       const Render& r = probes[k];
       add("    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
           "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
-          "\"texture_bytes\": %llu, \"rank_arena_bytes\": %llu, \"total_bytes\": %llu}%s\n",
+          "\"texture_bytes\": %llu, \"export_bytes\": %llu, \"rank_arena_bytes\": %llu, "
+          "\"total_bytes\": %llu}%s\n",
           k, r.layout.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
-          (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)rankOwn[k], (ull)rankTotal[k],
+          (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)r.rankExportBytes, (ull)rankOwn[k],
+          (ull)rankTotal[k],
           k + 1 < ranks ? "," : "");
     }
     out += "  ]\n}\n";
@@ -144,6 +153,14 @@ int Footprint(const Options& o) {
           (ull)r.rankExchangeBytes, (ull)r.rankImageBytes, (ull)r.rankOutputBytes,
           (ull)r.rankTextureBytes, (ull)rankTotal[k]);
     }
+    if (!o.exportPath.empty())
+      add("\n--export: %llu vertices, %llu triangles, a .glb of at most %llu bytes; %llu bytes of\n"
+          "buffers on rank 0%s (in total_B): counts, a %llu-byte chunk the mesh streams through,\n"
+          "and rank 0's %llu-byte head of the .glb\n",
+          (ull)fig.exportMesh.vertices, (ull)fig.exportMesh.triangles,
+          (ull)GlbMaxFileBytes(fig.exportMesh), (ull)probes[0].rankExportBytes,
+          ranks > 1 ? (", " + std::to_string(probes[1].rankExportBytes) + " on each other rank").c_str() : "",
+          (ull)kExportChunkBytes, (ull)kGlbHeadBytes);
     if (p.twins.any())
       add("\n%s: %llu patches, %llu of them twins (one-sided: %llu); %llu bytes in all ranks' "
           "arenas, %+lld (%+.1f%%) against one-sided\n",

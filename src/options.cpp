@@ -1,5 +1,6 @@
 #include "vismask/options.h"
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -31,6 +32,13 @@ usage:
 
 render options:
   --out DIR            output directory (default out/); created if missing
+  --export FILE.glb    also write the solved mesh as binary glTF 2.0 to
+                       FILE.glb (a path from the current directory, not
+                       under --out; its directory must exist): every
+                       patch's lattice vertices and triangles, COLOR_0 the
+                       linear display radiance image.pfm shows there
+                       (emission included, unclamped), an unlit material;
+                       scene units and the OBJ's axes
   --patch-size L       longest patch edge, scene units (default: largest
                        scene extent / 28)
   --ray-alloc power|fixed
@@ -182,6 +190,7 @@ outputs (in --out DIR):
                     rows where the error was measured; error_seconds is the
                     total spent measuring so far, not part of seconds)
   run.json          options, counts, energy balance, timings, memory
+  FILE.glb          with --export (where it names): the solved mesh, glTF 2.0
 
 view (vismask view OUT_DIR):
   serves, on 127.0.0.1 with python3's http.server, the viewer page and
@@ -334,6 +343,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     if (a == "--out") {
       if (v.empty()) return Bad(a, v, "a directory");
       o->outDir = v;
+    } else if (a == "--export") {
+      // A file name ending in .glb (any case), not a directory.
+      bool glb = v.size() > 4 && v[v.size() - 5] != '/';
+      for (size_t k = 0; glb && k < 4; ++k)
+        glb = std::tolower(static_cast<unsigned char>(v[v.size() - 4 + k])) == ".glb"[k];
+      if (!glb) return Bad(a, v, "a file name ending in .glb (binary glTF)");
+      o->exportPath = v;
     } else if (a == "--patch-size") {
       if (!ParseDouble(v, &d) || !(d > 0.0) || d > 3.4e38) return Bad(a, v, "a length > 0");
       if (d < kFloatMin) return Bad(a, v, "a length float can hold (>= 1.2e-38; smaller is 0)");

@@ -169,6 +169,7 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   double start = os::Seconds();
   RenderImage(r);
   WritePatchesCsv(r);
+  WriteExport(r);
   for (uint32_t i = 0; i < r->layout.perRank; ++i) r->summaryMine[i] = EnvSummary{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) {
     const Environment& e = *r->envPtrs[i];
@@ -205,9 +206,17 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   WriteRunJson(r, res, exposure, os::Seconds() - start);
   // Commit only when every file was written: all outputs are this run's, or
   // none is replaced (run.json, last, marks a complete run).
-  if (ok) ok = os::CommitAll(r->files, kNumOutputs, why);
+  // The .glb (with --export) is committed with them, before run.json.
+  os::OutFile* commit[kNumOutputs + 1];
+  int n = 0;
+  for (int f = 0; f < kNumOutputs; ++f) {
+    if (f == kRunJson && r->exportFile.isOpen()) commit[n++] = &r->exportFile;
+    commit[n++] = &r->files[f];
+  }
+  if (ok) ok = os::CommitAll(commit, n, why);
   if (!ok) {
     for (auto& f : r->files) f.Discard();
+    r->exportFile.Discard();
     os::PrintErr("vismask: cannot write the outputs in '%s': %s\n", r->options.outDir.c_str(), why);
     return kExitOutput;
   }

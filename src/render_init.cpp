@@ -155,20 +155,40 @@ int Init(Render* r) {
     uint64_t shared;
     uint64_t smooth;
     uint64_t twins;
+    uint64_t vertices;   // --export: lattice vertices
+    uint64_t triangles;  // and triangles (a quad patch gives two)
   };
-  LoadReport mine{load(), 0, 0, 0};
+  LoadReport mine{load(), 0, 0, 0, 0, 0};
   for (auto& e : r->envs) {
     mine.shared += e->numSharedVertices();
     mine.smooth += e->smoothVertices().size();
     mine.twins += e->numTwins();
+    mine.vertices += e->footprint().numVertices;
+    mine.triangles += e->footprint().numTriangles;
   }
   std::vector<LoadReport> all(static_cast<size_t>(r->transport->size()));
   r->transport->AllGather(&mine, sizeof mine, all.data());
+  GlbMesh exportMesh;
   for (const LoadReport& k : all) {
     if (k.code != kExitOk) return static_cast<int>(k.code);
     r->sharedCapacity = std::max(r->sharedCapacity, k.shared);
     r->anySmooth |= k.smooth > 0;
     r->numTwins += k.twins;
+    exportMesh.vertices += k.vertices;
+    exportMesh.triangles += k.triangles;
+  }
+  // --export: the file's size follows from the mesh; a .glb holds 4 GiB
+  // and 32-bit indices.
+  if (!o.exportPath.empty() &&
+      (exportMesh.triangles == 0 || exportMesh.vertices >= 0xffffffffull ||
+       GlbMaxFileBytes(exportMesh) > kGlbMaxBytes)) {
+    std::string why = exportMesh.triangles == 0
+                          ? "the mesh has no triangles"
+                          : "the mesh's " + std::to_string(exportMesh.vertices) + " vertices and " +
+                                std::to_string(exportMesh.triangles) + " triangles need up to " +
+                                std::to_string(GlbMaxFileBytes(exportMesh)) +
+                                " bytes, more than a .glb holds (4 GiB); raise --patch-size";
+    return FailInit(r, Status::Error("vismask: --export: " + o.exportPath + ": " + why));
   }
   r->shareRule.tolerance = p.tolerance;
   r->shareRule.origin = p.scene.bounds.lo;
@@ -258,6 +278,10 @@ int Init(Render* r) {
       os::PrintErr("vismask: %s\n", why);
       return kExitOutput;
     }
+  }
+  if (!o.exportPath.empty() && !r->exportFile.Open(o.exportPath.c_str(), why)) {
+    os::PrintErr("vismask: --export: %s\n", why);
+    return kExitOutput;
   }
   r->convergence = TextWriter(&r->files[kConvergenceCsv], r->convBuffer);
   return kExitOk;

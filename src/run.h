@@ -17,6 +17,7 @@
 #include "vismask/display.h"
 #include "vismask/emitter_check.h"
 #include "vismask/environment.h"
+#include "vismask/gltf.h"
 #include "vismask/image_io.h"
 #include "vismask/mesh.h"
 #include "vismask/options.h"
@@ -77,6 +78,10 @@ struct PatchRecord {
 };
 constexpr size_t kPatchChunk = 2048;  // records per transfer to rank 0
 constexpr int kBandRows = 16;         // framebuffer rows per transfer to rank 0
+// --export: the chunk each rank streams the .glb's vertices and triangles
+// through (a whole number of either: 2048 vertices, 4096 triangles).
+constexpr size_t kExportChunkBytes = 2048 * kGlbVertexBytes;
+static_assert(kExportChunkBytes % kGlbTriangleBytes == 0, "whole triangles per chunk");
 
 // Everything a render needs after init, carved from arenas at init.
 struct Render {
@@ -109,6 +114,14 @@ struct Render {
   Span<AmbientReport> ambientMine, ambientAll, ambient;
   os::DirLock outLock;  // rank 0: --out is ours until the process ends
   os::OutFile files[kNumOutputs];
+  // --export FILE.glb (export.cpp): every environment's counts and bounds,
+  // the chunk the vertices and triangles stream through, and on rank 0 the
+  // file's head; the file itself is committed with the outputs.
+  Span<GlbMesh> exportMine, exportAll, exportByEnv;
+  Span<uint8_t> exportChunk, exportHead;
+  os::OutFile exportFile;
+  GlbMesh exportWhole;       // the whole mesh, after the export (rank 0: for run.json)
+  uint64_t exportBytes = 0;  // the file's size (rank 0)
   TextWriter convergence;
   double initSeconds = 0.0;
   double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
@@ -135,7 +148,8 @@ struct Render {
   // The textures: a display resource like the framebuffer, so the rank's, and
   // one copy serves all its environments (the solve read them at init only,
   // into each patch's kd); only those its environments use (`used`).
-  uint64_t rankExchangeBytes = 0, rankImageBytes = 0, rankOutputBytes = 0, rankTextureBytes = 0;
+  uint64_t rankExchangeBytes = 0, rankImageBytes = 0, rankOutputBytes = 0, rankTextureBytes = 0,
+           rankExportBytes = 0;
   void LayoutRank(Arena& arena, uint32_t packetBytes, int ranks, bool root,
                   const SceneTextures& sceneTextures, const std::vector<uint8_t>& used) {
     size_t mark = arena.used();
@@ -143,7 +157,7 @@ struct Render {
       *bytes += arena.used() - mark;
       mark = arena.used();
     };
-    rankExchangeBytes = rankImageBytes = rankOutputBytes = rankTextureBytes = 0;
+    rankExchangeBytes = rankImageBytes = rankOutputBytes = rankTextureBytes = rankExportBytes = 0;
     exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
     part(&rankExchangeBytes);
     fb.Layout(arena, options.width, options.height, options.aa);
@@ -163,6 +177,14 @@ struct Render {
     part(&rankImageBytes);
     textures.Layout(arena, sceneTextures, used);
     part(&rankTextureBytes);
+    if (!options.exportPath.empty()) {
+      exportMine = arena.Alloc<GlbMesh>(layout.perRank);
+      exportAll = arena.Alloc<GlbMesh>(size_t(ranks) * layout.perRank);
+      exportByEnv = arena.Alloc<GlbMesh>(layout.total);
+      exportChunk = arena.Alloc<uint8_t>(kExportChunkBytes);
+      if (root) exportHead = arena.Alloc<uint8_t>(kGlbHeadBytes);
+    }
+    part(&rankExportBytes);
     if (!root) return;
     if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
     if (!options.reference.empty())
@@ -230,6 +252,8 @@ std::vector<uint8_t> TexturesUsed(const Prepared& p, uint32_t first, uint32_t co
 int Init(Render* r);
 void PrintWarnings(const SceneTextures& t);
 void WritePatchesCsv(Render* r);
+GlbMesh ExportMeshOf(const Environment& env);
+void WriteExport(Render* r);
 void JsonString(TextWriter* w, const char* s);
 std::string JsonQuoted(const std::string& s);
 void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outputSeconds);

@@ -83,6 +83,12 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   if (o.twoSided || o.twoSidedEmitters)
     w.Printf("    \"two_sided\": %s,\n    \"two_sided_emitters\": %s,\n",
              o.twoSided ? "true" : "false", o.twoSidedEmitters ? "true" : "false");
+  // Only with --export, so that a run.json without it is what it was.
+  if (!o.exportPath.empty()) {
+    w.Printf("    \"export\": ");
+    JsonString(&w, o.exportPath.c_str());
+    w.Printf(",\n");
+  }
   w.Printf("    \"stop_error\": %.17g\n  },\n", o.stopError);
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {
@@ -98,7 +104,13 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"vertices\": %zu,\n    \"environments\": %zu,\n", vertices, r->summary.size());
   w.Printf("    \"ranks\": %d,\n    \"transport\": \"%s\",\n", r->transport->size(),
            r->transport->name());
-  w.Printf("    \"grid_cells\": %zu,\n    \"grid_refs\": %zu\n  },\n", cells, refs);
+  w.Printf("    \"grid_cells\": %zu,\n    \"grid_refs\": %zu", cells, refs);
+  if (!o.exportPath.empty())  // the .glb: its vertices, triangles and bytes
+    w.Printf(",\n    \"export\": {\"vertices\": %llu, \"triangles\": %llu, \"bytes\": %llu}",
+             static_cast<unsigned long long>(r->exportWhole.vertices),
+             static_cast<unsigned long long>(r->exportWhole.triangles),
+             static_cast<unsigned long long>(r->exportBytes));
+  w.Printf("\n  },\n");
   EnvStats st;
   for (const EnvSummary& e : r->summary) {
     st.shots += e.stats.shots;
@@ -214,6 +226,8 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("],\n    \"rank0_arena_bytes\": %zu,\n", r->rankArena.capacity());
   // map_Kd textures: rank 0's texels (part of its arena), and every texture
   // of the scene with the 3 bytes a texel each rank showing it holds.
+  if (!r->options.exportPath.empty())  // --export's buffers in rank 0's arena
+    w.Printf("    \"rank0_export_bytes\": %llu,\n", static_cast<unsigned long long>(r->rankExportBytes));
   w.Printf("    \"rank0_texture_bytes\": %llu,\n    \"textures\": [",
            static_cast<unsigned long long>(r->rankTextureBytes));
   for (size_t i = 0; i < r->textureInfo.size(); ++i) {

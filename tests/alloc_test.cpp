@@ -299,6 +299,27 @@ TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {
   EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
 }
 
+// --export: every rank streams its vertices and triangles through its
+// chunk, and rank 0 writes the .glb (one process; 2x2 environments on two
+// pipe ranks, whose forked rank dies on an allocation after init).
+TEST(AllocTest, ExportAllocatesNothingAfterInit) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  for (const char* ranks : {"1", "2"}) {
+    test::TempDir dir;
+    int code = -1;
+    std::string err;
+    long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2x2",
+                                   "--ranks", ranks, "--rays", "256", "--max-shots", "400", "--width",
+                                   "48", "--height", "48", "--export", dir.File("scene.glb"), "--quiet"},
+                                  &code, &err);
+    ASSERT_EQ(code, 0) << ranks << " ranks: " << err << " (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(n, 0) << ranks << " ranks: heap allocations after init in rank 0";
+    EXPECT_GT(test::ReadFile(dir.File("scene.glb")).size(), 10000u);
+  }
+}
+
 // The default camera's side is chosen at init; the check for a black image
 // runs in the output phase, on a scene whose walls face away from the
 // camera (a box closed on -z, open on +z, seen with --view front).

@@ -1,5 +1,6 @@
 // The same render on one process, on 1-8 forked processes over pipes and (if
-// built) under mpirun gives the same bytes; a rank that dies ends the run.
+// built) under mpirun gives the same bytes (image.pfm, patches.csv and the
+// --export .glb); a rank that dies ends the run.
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -104,7 +105,7 @@ void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipe
   base.insert(base.end(), {"--mask-method", method});
   auto run = [&](const std::string& out, std::vector<std::string> extra) {
     auto args = base;
-    args.insert(args.end(), {"--out", dir.File(out)});
+    args.insert(args.end(), {"--out", dir.File(out), "--export", dir.File(out + "/scene.glb")});
     args.insert(args.end(), extra.begin(), extra.end());
     auto r = RunMain(args);
     ASSERT_EQ(r.code, 0) << out << ": " << r.err;
@@ -125,12 +126,14 @@ void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipe
       std::string cmd = "ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun -np " +
                         std::string(n) + " --oversubscribe " + mpiBin;
       for (const auto& a : base) cmd += " " + a;
-      cmd += " --out " + dir.File(std::string("mpi") + n) + " >" + dir.File("mpi.log") + " 2>&1";
+      const std::string out = dir.File(std::string("mpi") + n);
+      cmd += " --out " + out + " --export " + out + "/scene.glb >" + dir.File("mpi.log") + " 2>&1";
       ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << ReadFile(dir.File("mpi.log"));
       outs.push_back(std::string("mpi") + n);
     }
   }
-  for (const char* f : {"image.pfm", "patches.csv"}) {
+  // --export's .glb too (rank 0 writes it from every rank's vertices).
+  for (const char* f : {"image.pfm", "patches.csv", "scene.glb"}) {
     std::string ref = ReadFile(dir.File(std::string("loop/") + f));
     ASSERT_GT(ref.size(), 100u);
     for (const auto& o : outs)
@@ -309,13 +312,13 @@ TEST(RanksTest, StoppedPipeChildEndsTheRunWithExitThree) { StopOnePipeRank(2); }
 
 TEST(RanksTest, StoppedPipeRankZeroEndsTheRunWithExitThree) { StopOnePipeRank(0); }
 
-// SIGTERM (or Ctrl-C) to a run: no output, no temporary file, and the
-// signal's own status.
+// SIGTERM (or Ctrl-C) to a run: no output, no temporary file (the --export
+// .glb's, outside --out, included), and the signal's own status.
 TEST(RanksTest, SigtermLeavesNoTemporaryFiles) {
   TempDir dir;
   std::string out = dir.File("out");
-  pid_t pid = StartCommand(Bin() + kEndless + " --envs 2 --ranks 2 --out " + out + " 2>" +
-                           dir.File("err"));
+  pid_t pid = StartCommand(Bin() + kEndless + " --envs 2 --ranks 2 --out " + out + " --export " +
+                           dir.File("scene.glb") + " 2>" + dir.File("err"));
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(WaitForTheSolve(out)) << ReadFile(dir.File("err"));
   ASSERT_EQ(kill(pid, SIGTERM), 0);
@@ -326,6 +329,8 @@ TEST(RanksTest, SigtermLeavesNoTemporaryFiles) {
   EXPECT_TRUE(TempFilesIn(out).empty()) << TempFilesIn(out).front();
   EXPECT_FALSE(FileExists(out + "/run.json"));
   EXPECT_FALSE(RankLeft(out));
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find("scene.glb"), std::string::npos) << e.path();
 }
 
 // Under mpirun (skipped when build/vismask-mpi or mpirun is missing): rank

@@ -32,6 +32,13 @@
 
 namespace vismask {
 
+// The radiance the image (image.pfm) shows for display radiosity b: b / pi,
+// a diffuse surface's. The glTF export's COLOR_0 is the same value.
+inline glm::vec3 DisplayRadiance(const glm::vec3& b) {
+  constexpr float kInvPi = 0.318309886183790672f;
+  return kInvPi * b;
+}
+
 // Draws environment `env`'s leaves into `fb`, with `ambient` (Cohen's term,
 // per channel) added as kd * ambient. Its vertex radiosity must be current
 // (Environment::ComputeVertexRadiosity, then ShareVertices). Textured patches

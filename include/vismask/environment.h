@@ -69,6 +69,8 @@ struct EnvFootprint {
   uint64_t total = 0;     // the arena's size (rounded up to Arena::kAlign)
   uint64_t numPatches = 0;
   uint64_t gridCells = 0;
+  uint64_t numVertices = 0;   // display lattice vertices
+  uint64_t numTriangles = 0;  // the patches as triangles (a quad is two): --export's
 };
 
 struct EnvOptions {

@@ -21,6 +21,7 @@ struct Options {
   std::string scene;
   LoadOptions load;  // --strict, --emit NAME=R,G,B|ka (repeatable)
   std::string outDir = "out";
+  std::string exportPath;  // --export FILE.glb: the solved mesh as binary glTF (gltf.h); empty: none
   float patchSize = 0.0f;  // 0: automatic (largest scene extent / kAutoPatchDivisions)
   // Ray allocation: kPower (the default) gives a shot rays in proportion
   // to its power; kFixed (chosen by --rays N alone) gives every shot N.

@@ -110,7 +110,7 @@ class OutFile {
   const char* path() const { return path_; }
 
  private:
-  friend bool CommitAll(OutFile* files, int n, char* why);
+  friend bool CommitAll(OutFile* const* files, int n, char* why);
   // Closes; false (with *why) if a write or the close failed.
   bool Close(char* why);
 
@@ -127,6 +127,8 @@ class OutFile {
 // is left. Files are renamed in array order: put the one that marks a run
 // complete (run.json) last.
 bool CommitAll(OutFile* files, int n, char* why);
+// The same for files that are not in one array (at most 16).
+bool CommitAll(OutFile* const* files, int n, char* why);
 
 // An exclusive lock on an output directory, held until destruction or the
 // process's end (flock on DIR/.vismask.lock, which holds the holder's pid).
