@@ -190,10 +190,6 @@ TEST(ViewTest, ServesThePageAndTheOutputs) {
   EXPECT_EQ(Fetch(server.Origin() + "/out/..%2fsecret.txt", dir.path()), "HTTP 404\n");
 }
 
-// The bounds (docs/DESIGN.md, The viewer: what agreement to expect).
-constexpr double kMeanAbsBound = 1000.0;
-constexpr double kP99Bound = 1000.0;
-
 // The figures shoot.mjs prints, by name (its JSON is flat).
 double Field(const std::string& json, const std::string& name) {
   std::smatch m;
@@ -201,29 +197,69 @@ double Field(const std::string& json, const std::string& name) {
   return std::stod(m[1]);
 }
 
-// The page in a real browser: the default Cornell render's export, opened
-// with its run.json in headless Chromium at the image's size, against
-// image.png. docs/DESIGN.md (The viewer) explains the bounds.
-TEST(ViewerBrowserTest, ScreenshotMatchesImagePng) {
+// Why the browser tests skip: what they need and how it is installed.
+std::string BrowserMissing() {
   for (const char* tool : {"node", "chromium", "python3"})
-    if (!Have(tool)) GTEST_SKIP() << tool << " not found (tools/install-deps installs it)";
+    if (!Have(tool)) return std::string(tool) + " not found (tools/install-deps installs it)";
   for (const char* module : {"puppeteer-core", "pngjs"})
     if (!FileExists(std::string("viewer/node_modules/") + module + "/package.json"))
-      GTEST_SKIP() << "viewer/node_modules/" << module << " missing (npm ci in viewer/: tools/install-deps)";
-  if (!FileExists("viewer/vendor/three.module.js")) GTEST_SKIP() << "viewer/vendor is not made (make viewer)";
-  TempDir dir;
-  std::string out = dir.File("out");
-  RenderCornell(out, "");
+      return std::string("viewer/node_modules/") + module + " missing (npm ci in viewer/: tools/install-deps)";
+  if (!FileExists("viewer/vendor/three.module.js")) return "viewer/vendor is not made (make viewer)";
+  return "";
+}
+
+// The page in headless Chromium at the image's size, with run.json's
+// camera and exposure, against image.png: shoot.mjs's JSON.
+std::string Shoot(const TempDir& dir, const std::string& out, const std::string& extra) {
   Ran shot = Shell("node viewer/shoot.mjs --vismask " + Bin() + " --out " + out +
-                 " --width 512 --height 512 --screenshot " + dir.File("shot.png") + " --compare " + out +
-                 "/image.png");
-  ASSERT_EQ(shot.code, 0) << shot.out;
+                   " --width 512 --height 512 --screenshot " + dir.File("shot.png") + " --compare " + out +
+                   "/image.png " + extra);
+  EXPECT_EQ(shot.code, 0) << shot.out;
   std::printf("viewer: %s", shot.out.c_str());
   EXPECT_NE(shot.out.find("\"console_errors\":[]"), std::string::npos) << shot.out;
   EXPECT_NE(shot.out.find("\"viewer_error\":null"), std::string::npos) << shot.out;
-  EXPECT_LE(Field(shot.out, "mean_abs"), kMeanAbsBound) << shot.out;
-  EXPECT_LE(Field(shot.out, "p99"), kP99Bound) << shot.out;
-  EXPECT_GE(Field(shot.out, "mean_abs"), 0.0) << shot.out;
+  return shot.out;
+}
+
+// Sampled alike (vismask --aa off: each pixel's centre, quads as the two
+// triangles the export has; --elements 0: the image interpolates exactly
+// the lattice values the file holds; the page with aa=0), the page must
+// give vismask's picture: same radiance, exposure, clamp and sRGB transfer,
+// same framing. Measured 0.023 codes mean, 99.9% of pixels within 1 code,
+// 0.016% beyond 16 (pixel centres on an edge, which the two rasterisers
+// give to different sides); a half-pixel shift of the camera gives ~0.3 mean
+// and 1% beyond 16 (docs/DESIGN.md, The viewer).
+TEST(ViewerBrowserTest, SampledAlikeTheScreenshotIsImagePng) {
+  std::string missing = BrowserMissing();
+  if (!missing.empty()) GTEST_SKIP() << missing;
+  TempDir dir;
+  std::string out = dir.File("out");
+  RenderCornell(out, "--elements 0 --aa off --emitted-rays 1000000");
+  std::string json = Shoot(dir, out, "--aa off");
+  EXPECT_LE(Field(json, "mean_abs"), 0.1) << json;
+  EXPECT_LE(Field(json, "p999"), 2.0) << json;
+  EXPECT_LE(Field(json, "over_16"), 0.001) << json;
+  EXPECT_GE(Field(json, "mean_abs"), 0.0) << json;
+}
+
+// The default render (elements, exact pixel coverage) and the page as a
+// user gets it (4x multisampling): the file holds the lattice only, not the
+// elements' finer shading, and edges are filtered differently, so edge and
+// shadow pixels differ. Measured: 0.51 codes mean, half the pixels exact,
+// 90% within 1, 99% within 14. The bounds (docs/DESIGN.md, The viewer) sit
+// between that and what a 10% exposure error (4.5 mean, p90 10) or a 1%
+// field-of-view error (p99 118) gives.
+TEST(ViewerBrowserTest, ScreenshotMatchesImagePng) {
+  std::string missing = BrowserMissing();
+  if (!missing.empty()) GTEST_SKIP() << missing;
+  TempDir dir;
+  std::string out = dir.File("out");
+  RenderCornell(out, "");
+  std::string json = Shoot(dir, out, "");
+  EXPECT_LE(Field(json, "mean_abs"), 0.75) << json;
+  EXPECT_LE(Field(json, "p90"), 1.0) << json;
+  EXPECT_LE(Field(json, "p99"), 24.0) << json;
+  EXPECT_GE(Field(json, "mean_abs"), 0.0) << json;
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 // (tests/viewer_test.cpp) and make viewer-screenshot use it.
 //
 //   node viewer/shoot.mjs --vismask build/vismask --out OUT_DIR
-//        --width W --height H --screenshot SHOT.png [--panel]
+//        --width W --height H --screenshot SHOT.png [--panel] [--aa off]
 //        [--compare OUT_DIR/image.png] [--diff DIFF.png] [--chromium PATH]
 //
 // JSON: url, renderer (WebGL's), console_errors (console.error, uncaught
@@ -99,7 +99,7 @@ async function Main() {
   const server = StartServer(a.vismask, a.out, a.glb);
   let browser = null;
   try {
-    const url = (await server.url) + (a.panel ? '' : '&panel=0');
+    const url = (await server.url) + (a.panel ? '' : '&panel=0') + (a.aa === 'off' ? '&aa=0' : '');
     browser = await puppeteer.launch({
       executablePath: a.chromium,
       headless: true,

@@ -9,7 +9,8 @@
 //
 // URL parameters: glb=PATH (the mesh, required), run=PATH (run.json: camera,
 // exposure, image size; optional), panel=0 (no control panel, for
-// screenshots). When it has drawn its first frame, window.vismaskViewer.ready
+// screenshots), aa=0 (no multisampling: one sample at each pixel's centre,
+// as vismask's --aa off). When it has drawn its first frame, window.vismaskViewer.ready
 // is true; errors go to the page and to console.error.
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
@@ -69,7 +70,7 @@ const material = new THREE.RawShaderMaterial({
   side: THREE.DoubleSide,
 });
 
-const renderer = new THREE.WebGLRenderer({ antialias: true });
+const renderer = new THREE.WebGLRenderer({ antialias: params.get('aa') !== '0' });
 renderer.toneMapping = THREE.NoToneMapping;
 renderer.setClearColor(0x000000, 1);
 renderer.setPixelRatio(window.devicePixelRatio);
