@@ -227,13 +227,14 @@ view: $(BUILD)/vismask viewer
 	$(BUILD)/vismask view $(OUT)
 
 # make viewer-screenshot: docs/img/viewer.png, the viewer on a Cornell
-# export in headless Chromium (viewer/shoot.mjs), for the README.
+# export in headless Chromium (viewer/shoot.mjs), orbited a little by a
+# mouse drag, for the README.
 viewer-screenshot: $(BUILD)/vismask viewer
 	@rm -rf $(BUILD)/viewer-screenshot
 	$(BUILD)/vismask render scenes/cornell.obj --out $(BUILD)/viewer-screenshot \
 	  --export $(BUILD)/viewer-screenshot/cornell.glb --quiet
 	node viewer/shoot.mjs --vismask $(BUILD)/vismask --out $(BUILD)/viewer-screenshot \
-	  --width 900 --height 600 --panel --screenshot docs/img/viewer.png
+	  --width 900 --height 600 --panel --drag -35,12 --screenshot docs/img/viewer.png
 
 # make install PREFIX=/usr/local DESTDIR=...: the binaries in bin/, the
 # viewer (with its three.js files) in share/vismask/viewer/ and a man page

@@ -227,8 +227,9 @@ std::string Shoot(const TempDir& dir, const std::string& out, const std::string&
 // give vismask's picture: same radiance, exposure, clamp and sRGB transfer,
 // same framing. Measured 0.023 codes mean, 99.9% of pixels within 1 code,
 // 0.016% beyond 16 (pixel centres on an edge, which the two rasterisers
-// give to different sides); a half-pixel shift of the camera gives ~0.3 mean
-// and 1% beyond 16 (docs/DESIGN.md, The viewer).
+// give to different sides). Measured against: a half-pixel shift of the
+// view gives 0.52 mean and 0.6% beyond 16, a 2.2 sRGB exponent instead of
+// 2.4 gives 6.1 mean (docs/DESIGN.md, The viewer).
 TEST(ViewerBrowserTest, SampledAlikeTheScreenshotIsImagePng) {
   std::string missing = BrowserMissing();
   if (!missing.empty()) GTEST_SKIP() << missing;

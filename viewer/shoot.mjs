@@ -7,6 +7,7 @@
 //   node viewer/shoot.mjs --vismask build/vismask --out OUT_DIR
 //        --width W --height H --screenshot SHOT.png [--panel] [--aa off]
 //        [--compare OUT_DIR/image.png] [--diff DIFF.png] [--chromium PATH]
+//        [--drag DX,DY]   (a mouse drag from the centre before the shot: orbits)
 //
 // JSON: url, renderer (WebGL's), console_errors (console.error, uncaught
 // exceptions, failed requests and HTTP errors), viewer_error, and with
@@ -126,6 +127,16 @@ async function Main() {
         renderer: gl ? gl.getParameter(ext ? ext.UNMASKED_RENDERER_WEBGL : gl.RENDERER) : null,
       };
     });
+    if (a.drag) {
+      const [dx, dy] = a.drag.split(',').map(Number);
+      const x = a.width / 2, y = a.height / 2;
+      await page.mouse.move(x, y);
+      await page.mouse.down();
+      for (let i = 1; i <= 10; ++i) await page.mouse.move(x + dx * i / 10, y + dy * i / 10);
+      await page.mouse.up();
+      // Two frames: the one drawn after the drag, presented.
+      await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+    }
     await page.screenshot({ path: a.screenshot, type: 'png' });
     const result = { url, renderer: info.renderer, viewer_error: info.error, console_errors: errors };
     if (a.compare) {

@@ -133,6 +133,7 @@ const fly = { on: false, keys: new Set(), dragging: false, lastX: 0, lastY: 0, d
 const flyBox = document.getElementById('fly');
 const keysText = document.getElementById('keys');
 function SetFly(on) {
+  const wasFlying = fly.on;
   fly.on = on;
   flyBox.checked = on;
   if (on) {
@@ -140,10 +141,13 @@ function SetFly(on) {
     controls.enabled = false;
     keysText.textContent = 'drag: look; W A S D / arrows: move; E Q: up, down; Shift: faster';
   } else {
-    // Orbit about the point the fly camera looks at, as far as before.
-    const forward = new THREE.Vector3();
-    camera.getWorldDirection(forward);
-    controls.target.copy(camera.position).addScaledVector(forward, fly.distance);
+    // Back from flying: orbit about the point the camera looks at, as far
+    // away as the orbit's target was when the flight began.
+    if (wasFlying) {
+      const forward = new THREE.Vector3();
+      camera.getWorldDirection(forward);
+      controls.target.copy(camera.position).addScaledVector(forward, fly.distance);
+    }
     controls.enabled = true;
     controls.update();
     keysText.textContent = 'drag: orbit; right drag: pan; wheel: zoom';
