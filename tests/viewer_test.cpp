@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -236,11 +237,32 @@ TEST(ViewerBrowserTest, SampledAlikeTheScreenshotIsImagePng) {
   TempDir dir;
   std::string out = dir.File("out");
   RenderCornell(out, "--elements 0 --aa off --emitted-rays 1000000");
-  std::string json = Shoot(dir, out, "--aa off");
+  std::string json = Shoot(dir, out, "--aa off --probe-orbit");
   EXPECT_LE(Field(json, "mean_abs"), 0.1) << json;
   EXPECT_LE(Field(json, "p999"), 2.0) << json;
   EXPECT_LE(Field(json, "over_16"), 0.001) << json;
   EXPECT_GE(Field(json, "mean_abs"), 0.0) << json;
+  // A drag orbits about run.json's target: the eye moves, the target and
+  // the eye's distance to it stay.
+  double target[3] = {0, 0, 0};
+  ASSERT_EQ(std::sscanf(ReadFile(out + "/run.json").substr(ReadFile(out + "/run.json").find("\"camera\"")).c_str(),
+                        "\"camera\": [%*f, %*f, %*f, %lf, %lf, %lf", &target[0], &target[1], &target[2]),
+            3);
+  std::smatch m;
+  const std::string num = "(-?[0-9.eE+-]+)", vec = "\\[" + num + "," + num + "," + num + "\\]";
+  ASSERT_TRUE(std::regex_search(json, m, std::regex("\"orbit\":\\{\"before\":\\{\"eye\":" + vec + ",\"target\":" + vec +
+                                                    "\\},\"after\":\\{\"eye\":" + vec + ",\"target\":" + vec)))
+      << json;
+  double v[12];
+  for (int k = 0; k < 12; ++k) v[k] = std::stod(m[k + 1]);
+  auto dist = [](const double* a, const double* b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+  };
+  const double radius = dist(v, v + 3);
+  EXPECT_LT(dist(v + 3, target), 1e-3) << json;   // orbiting about run.json's target
+  EXPECT_LT(dist(v + 9, target), 1e-3) << json;   // still, after the drag
+  EXPECT_NEAR(dist(v + 6, v + 9), radius, 1e-6 * radius) << json;
+  EXPECT_GT(dist(v, v + 6), 0.1 * radius) << json;  // the eye moved
 }
 
 // The default render (elements, exact pixel coverage) and the page as a

@@ -8,6 +8,8 @@
 //        --width W --height H --screenshot SHOT.png [--panel] [--aa off]
 //        [--compare OUT_DIR/image.png] [--diff DIFF.png] [--chromium PATH]
 //        [--drag DX,DY]   (a mouse drag from the centre before the shot: orbits)
+//        [--probe-orbit]  (after the shot, a drag; the JSON's orbit gives the
+//                          eye and target before and after it)
 //
 // JSON: url, renderer (WebGL's), console_errors (console.error, uncaught
 // exceptions, failed requests and HTTP errors), viewer_error, and with
@@ -26,6 +28,7 @@ function Args(argv) {
   for (let i = 2; i < argv.length; ++i) {
     const k = argv[i].replace(/^--/, '');
     if (k === 'panel') a.panel = true;
+    else if (k === 'probe-orbit') a[k] = true;
     else a[k] = argv[++i];
   }
   for (const k of ['vismask', 'out', 'width', 'height', 'screenshot'])
@@ -127,8 +130,8 @@ async function Main() {
         renderer: gl ? gl.getParameter(ext ? ext.UNMASKED_RENDERER_WEBGL : gl.RENDERER) : null,
       };
     });
-    if (a.drag) {
-      const [dx, dy] = a.drag.split(',').map(Number);
+    const drag = async (spec) => {
+      const [dx, dy] = spec.split(',').map(Number);
       const x = a.width / 2, y = a.height / 2;
       await page.mouse.move(x, y);
       await page.mouse.down();
@@ -136,9 +139,15 @@ async function Main() {
       await page.mouse.up();
       // Two frames: the one drawn after the drag, presented.
       await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-    }
+    };
+    if (a.drag) await drag(a.drag);
     await page.screenshot({ path: a.screenshot, type: 'png' });
     const result = { url, renderer: info.renderer, viewer_error: info.error, console_errors: errors };
+    if (a['probe-orbit'] !== undefined) {
+      const before = await page.evaluate(() => window.vismaskViewer.view());
+      await drag('-40,10');
+      result.orbit = { before, after: await page.evaluate(() => window.vismaskViewer.view()) };
+    }
     if (a.compare) {
       const shot = PNG.sync.read(fs.readFileSync(a.screenshot));
       const ref = PNG.sync.read(fs.readFileSync(a.compare));

@@ -348,6 +348,8 @@ async function Main() {
   SetStops(0);
   SetFly(false);
   window.addEventListener('resize', Fit);
+  // For tests: where the camera is and what it orbits about.
+  state.view = () => ({ eye: camera.position.toArray(), target: controls.target.toArray() });
   requestAnimationFrame(Frame);
 }
 
