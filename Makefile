@@ -21,6 +21,17 @@ SAN ?= 0
 MPI ?= 1
 MPICXX ?= mpicxx
 
+# V=1 shows the full compiler and linker lines; by default make says
+# "CXX src/foo.cpp" and "LD build/vismask".
+V ?= 0
+ifeq ($(V),1)
+  Q :=
+  SAY := @true
+else
+  Q := @
+  SAY := @printf '%-4s %s\n'
+endif
+
 CXXFLAGS := -std=c++17 -O2 -Wall -Wextra -Werror -ffp-contract=off -fno-plt \
             -Iinclude -Iplatform -MMD -MP
 LDLIBS := -lz
@@ -111,7 +122,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test headers clean test-cross experiments cluster-experiments bench fuzz fuzz-deps fuzz-report stability
+.PHONY: all deps demo test viewer view viewer-screenshot install uninstall headers clean test-cross experiments cluster-experiments bench fuzz fuzz-deps fuzz-report stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -128,20 +139,24 @@ endif
 
 $(BUILD)/obj/%.o: %.cpp $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
-	$(CXX) $(CXXFLAGS) -c $< -o $@
+	$(SAY) CXX $<
+	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
 
 $(BUILD)/vismask: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(POSIX_OBJ)
-	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS)
+	$(SAY) LD $@
+	$(Q)$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS)
 
 # Open MPI's wrapper around the same compiler (OMPI_CXX); only the mpi
 # transport sees <mpi.h>, without the deprecated C++ bindings.
 ifeq ($(MPI_MODE),wrapper)
 $(MPI_OBJ): platform/transport_mpi.cpp
 	@mkdir -p $(dir $@)
-	OMPI_CXX=$(CXX) $(MPICXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -c $< -o $@
+	$(SAY) CXX $<
+	$(Q)OMPI_CXX=$(CXX) $(MPICXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -c $< -o $@
 
 $(BUILD)/vismask-mpi: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(MPI_OBJ)
-	OMPI_CXX=$(CXX) $(MPICXX) $(LDFLAGS) $^ -o $@ $(LDLIBS)
+	$(SAY) LD $@
+	$(Q)OMPI_CXX=$(CXX) $(MPICXX) $(LDFLAGS) $^ -o $@ $(LDLIBS)
 else
 # What mpicxx would add, for the target's Open MPI in the sysroot. Only libmpi
 # and the Open MPI libraries it names are in the sysroot; the rest of its
@@ -149,14 +164,17 @@ else
 # --allow-shlib-undefined.
 $(MPI_OBJ): platform/transport_mpi.cpp | $(SYSROOT)/.base-ok $(SYSROOT)/.mpi-ok
 	@mkdir -p $(dir $@)
-	$(CXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -isystem $(MPI_INC) -c $< -o $@
+	$(SAY) CXX $<
+	$(Q)$(CXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -isystem $(MPI_INC) -c $< -o $@
 
 $(BUILD)/vismask-mpi: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(MPI_OBJ)
-	$(CXX) $(LDFLAGS) -L$(MPI_LIBDIR) -Wl,--allow-shlib-undefined $^ -o $@ $(LDLIBS) -lmpi
+	$(SAY) LD $@
+	$(Q)$(CXX) $(LDFLAGS) -L$(MPI_LIBDIR) -Wl,--allow-shlib-undefined $^ -o $@ $(LDLIBS) -lmpi
 endif
 
 $(BUILD)/vismask_tests: $(TEST_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
-	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lgtest -pthread
+	$(SAY) LD $@
+	$(Q)$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lgtest -pthread
 
 # The benchmark binary: the only one that links Embree and Google Benchmark
 # (tools/install-deps --bench installs them). make bench runs it and the
@@ -164,7 +182,8 @@ $(BUILD)/vismask_tests: $(TEST_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
 BENCH_SRC := $(wildcard bench/*.cpp)
 BENCH_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(BENCH_SRC))
 $(BUILD)/vismask_bench: $(BENCH_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
-	$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lembree3 -lbenchmark -pthread
+	$(SAY) LD $@
+	$(Q)$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS) -lembree3 -lbenchmark -pthread
 
 bench:
 	tools/install-deps --bench
@@ -177,6 +196,71 @@ $(BUILD)/headers/%.ok: include/vismask/%.h $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
 	@echo '#include "vismask/$*.h"' | $(CXX) $(CXXFLAGS) -x c++ -fsyntax-only - && touch $@
 
+# The viewer (viewer/, docs/DESIGN.md "The viewer"): index.html, viewer.js
+# and serve.py, with the three.js files it imports copied from
+# viewer/node_modules (npm ci, pinned by viewer/package-lock.json) into
+# viewer/vendor/ (not committed), so that the page works offline and
+# installs as it is. make view OUT=DIR serves DIR (vismask view).
+VIEWER_FILES := index.html viewer.js serve.py
+THREE := viewer/node_modules/three
+VENDOR := viewer/vendor
+VENDOR_FILES := $(VENDOR)/three.module.js $(VENDOR)/three.core.js $(VENDOR)/LICENSE \
+  $(VENDOR)/addons/loaders/GLTFLoader.js $(VENDOR)/addons/controls/OrbitControls.js \
+  $(VENDOR)/addons/utils/BufferGeometryUtils.js $(VENDOR)/addons/utils/SkeletonUtils.js
+viewer/node_modules/.package-lock.json: viewer/package-lock.json viewer/package.json
+	@command -v npm >/dev/null || { echo "make: npm not found: tools/install-deps installs it" >&2; exit 1; }
+	cd viewer && npm ci --no-audit --no-fund
+	@touch $@
+$(THREE)/%: viewer/node_modules/.package-lock.json ;
+$(VENDOR)/three.%: $(THREE)/build/three.%
+	@mkdir -p $(dir $@)
+	cp $< $@
+$(VENDOR)/LICENSE: $(THREE)/LICENSE
+	@mkdir -p $(dir $@)
+	cp $< $@
+$(VENDOR)/addons/%: $(THREE)/examples/jsm/%
+	@mkdir -p $(dir $@)
+	cp $< $@
+viewer: $(VENDOR_FILES)
+OUT ?= out
+view: $(BUILD)/vismask viewer
+	$(BUILD)/vismask view $(OUT)
+
+# make viewer-screenshot: docs/img/viewer.png, the viewer on a Cornell
+# export in headless Chromium (viewer/shoot.mjs), orbited a little by a
+# mouse drag, for the README.
+viewer-screenshot: $(BUILD)/vismask viewer
+	@rm -rf $(BUILD)/viewer-screenshot
+	$(BUILD)/vismask render scenes/cornell.obj --out $(BUILD)/viewer-screenshot \
+	  --export $(BUILD)/viewer-screenshot/cornell.glb --quiet
+	node viewer/shoot.mjs --vismask $(BUILD)/vismask --out $(BUILD)/viewer-screenshot \
+	  --width 900 --height 600 --panel --drag -35,12 --screenshot docs/img/viewer.png
+
+# make install PREFIX=/usr/local DESTDIR=...: the binaries in bin/, the
+# viewer (with its three.js files) in share/vismask/viewer/ and a man page
+# made from --help by help2man in share/man/man1/. make uninstall removes
+# them (share/vismask/ whole; bin/ and share/man/man1/ stay).
+PREFIX ?= /usr/local
+DESTDIR ?=
+BINDIR := $(DESTDIR)$(PREFIX)/bin
+SHAREDIR := $(DESTDIR)$(PREFIX)/share/vismask
+MAN1DIR := $(DESTDIR)$(PREFIX)/share/man/man1
+$(BUILD)/vismask.1: $(BUILD)/vismask
+	@command -v help2man >/dev/null || { echo "make: help2man not found: tools/install-deps installs it" >&2; exit 1; }
+	help2man --no-info --no-discard-stderr --version-string=1 --name="fixed-memory parallel radiosity renderer" \
+	  --output=$@ $(BUILD)/vismask
+install: all viewer $(BUILD)/vismask.1
+	install -d $(BINDIR) $(SHAREDIR)/viewer $(MAN1DIR)
+	install -m 755 $(BUILD)/vismask $(MPI_BIN) $(BINDIR)/
+	install -m 644 $(addprefix viewer/,$(VIEWER_FILES)) $(SHAREDIR)/viewer/
+	cd viewer && for f in $(patsubst viewer/%,%,$(VENDOR_FILES)); do \
+	  install -D -m 644 $$f $(abspath $(SHAREDIR))/viewer/$$f || exit 1; done
+	install -m 644 $(BUILD)/vismask.1 $(MAN1DIR)/vismask.1
+	$(if $(MPI_BIN),echo '.so man1/vismask.1' > $(MAN1DIR)/vismask-mpi.1 && chmod 644 $(MAN1DIR)/vismask-mpi.1)
+uninstall:
+	rm -f $(BINDIR)/vismask $(BINDIR)/vismask-mpi $(MAN1DIR)/vismask.1 $(MAN1DIR)/vismask-mpi.1
+	rm -rf $(SHAREDIR)
+
 demo: deps
 	$(MAKE) $(BUILD)/vismask
 	$(BUILD)/vismask render scenes/cornell.obj --out out
@@ -184,11 +268,16 @@ demo: deps
 # The bench binary too, when its libraries are there (tools/install-deps
 # --bench), so that make test keeps it compiling; make bench runs it.
 BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildcard /usr/include/benchmark/benchmark.h)),$(BUILD)/vismask_bench)
+# The viewer's three.js files too, when npm is there (tools/install-deps
+# installs it), for the viewer's tests; VISMASK_MAKE_ARGS tells the install
+# test which build make install should take.
+VIEWER_IF_NPM := $(if $(shell command -v npm 2>/dev/null),viewer)
 test: deps
-	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT)
+	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT) $(VIEWER_IF_NPM)
 	@if command -v blender >/dev/null; then VISMASK_BIN=$(BUILD)/vismask tools/reference --selftest; \
 	 else echo "make: blender not found: tools/reference --selftest skipped (tools/install-deps --reference)"; fi
-	VISMASK_BIN=$(BUILD)/vismask $(BUILD)/vismask_tests
+	VISMASK_BIN=$(BUILD)/vismask VISMASK_MAKE_ARGS="BUILD=$(BUILD) SAN=$(SAN) DEBUG=$(DEBUG) MPI=$(MPI)" \
+	  $(BUILD)/vismask_tests
 
 # docs/RESULTS.md and docs/results/ from one run of every step in
 # tools/experiments (runs under build/experiments/full; about 25 minutes on
@@ -214,8 +303,9 @@ experiments: deps
 # long convergence tests (~20x slower under qemu: 10 minutes), the peak-RSS
 # test (VmHWM is then qemu's own, translator included), and the two tests
 # that make the test process a child subreaper (qemu-user 7.2 answers
-# prctl(PR_SET_CHILD_SUBREAPER) with EINVAL).
-CROSS_TEST_FILTER ?= -EnvTest.ClosedBoxInEightEnvironmentsConverges:EnvTest.MethodALeaksLightAtHighResolutionAndBDoesNot:FootprintTest.PeakRssIsExplainedByArenasAndMappedFiles:TransportTest.PipeSurvivorsExitWhenAChildIsKilled:TransportTest.PipeChildrenExitWhenRankZeroIsKilled
+# prctl(PR_SET_CHILD_SUBREAPER) with EINVAL), and the install and browser
+# tests (they install and serve the native binary's files).
+CROSS_TEST_FILTER ?= -InstallTest.*:ViewerBrowserTest.*:EnvTest.ClosedBoxInEightEnvironmentsConverges:EnvTest.MethodALeaksLightAtHighResolutionAndBDoesNot:FootprintTest.PeakRssIsExplainedByArenasAndMappedFiles:TransportTest.PipeSurvivorsExitWhenAChildIsKilled:TransportTest.PipeChildrenExitWhenRankZeroIsKilled
 CROSS_ARGS := render scenes/cornell.obj --envs 2 --ranks 2 --rays 512 --max-shots 2000 \
               --patch-size 50 --width 128 --height 128 --quiet
 ifeq ($(CROSS),)

@@ -1,6 +1,7 @@
 #include "vismask/app.h"
 
 #include "run.h"
+#include "vismask/viewer.h"
 
 namespace vismask {
 namespace run {
@@ -71,12 +72,13 @@ int Main(int argc, const char* const* argv) {
   Status s = ParseArgs(argc, argv, &r->options);
   if (!s.ok()) return Fail(s);
   if (r->options.help) {
-    const char* text = HelpText();
+    const char* text = r->options.command == "view" ? ViewHelpText() : HelpText();
     os::WriteOut(text, std::strlen(text));
     return kExitOk;
   }
   if (r->options.command == "compare") return Compare(r->options);
   if (r->options.command == "footprint") return Footprint(r->options);
+  if (r->options.command == "view") return View(r->options);
   // The pipe transport forks here: every rank carries on from this point.
   r->transport = MakeTransport(
       TransportRequest{r->options.transport, r->options.ranks, r->options.rankTimeout}, &s);

@@ -23,6 +23,11 @@ usage:
                                          relative RMSE and max abs error of A
                                          against B (pixels where MASK.pgm is
                                          nonzero left out)
+  vismask view OUT_DIR [--glb NAME.glb] [--port P]
+                                         serve the solved mesh (render
+                                         --export) in the viewer page on
+                                         localhost and print its URL
+                                         ('vismask view --help')
   vismask --help                         this text
 
 render options:
@@ -187,7 +192,18 @@ outputs (in --out DIR):
   run.json          options, counts, energy balance, timings, memory
   FILE.glb          with --export (where it names): the solved mesh, glTF 2.0
 
-exit status: 0 success; 1 an output could not be written; 2 bad input or
+view (vismask view OUT_DIR):
+  serves, on 127.0.0.1 with python3's http.server, the viewer page and
+  OUT_DIR, and prints the URL: the mesh 'render --export OUT_DIR/NAME.glb'
+  wrote, shown as image.png shows it (exposure slider, sRGB), to orbit
+  (drag) or fly through (F; W A S D), starting from run.json's camera.
+  --glb NAME.glb       the mesh in OUT_DIR (default: the one .glb there)
+  --port P             the port (default: any free port)
+  The page is found beside the binary: PREFIX/share/vismask/viewer when
+  installed (make install), viewer/ in the source tree (make viewer).
+
+exit status: 0 success; 1 an output could not be written (view: the viewer
+page or python3 is missing); 2 bad input or
 options (the message names file:line or the option); 3 a rank was lost
 or silent (--rank-timeout); 4 the solve stalled (no environment could shoot
 while power was left)
@@ -243,6 +259,38 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     o->compareA = args[1];
     o->compareB = args[2];
     if (mask) o->exclude = args[4];
+    return Status::Ok();
+  }
+  if (args[0] == "view") {
+    o->command = "view";
+    for (i = 1; i < args.size(); ++i) {
+      const std::string& a = args[i];
+      if (a == "--help" || a == "-h") {
+        o->help = true;
+        return Status::Ok();
+      }
+      if (a == "--glb" || a == "--port") {
+        if (i + 1 >= args.size()) return Status::Error("vismask: view: " + a + ": missing value");
+        const std::string& v = args[++i];
+        uint64_t u = 0;
+        if (a == "--glb") {
+          if (v.empty()) return Bad(a, v, "a file name");
+          o->viewGlb = v;
+        } else {
+          if (!ParseU64(v, &u) || u < 1 || u > 65535) return Bad(a, v, "a port in [1, 65535]");
+          o->viewPort = static_cast<int>(u);
+        }
+        continue;
+      }
+      if (a.rfind("--", 0) == 0)
+        return Status::Error("vismask: view: unknown option '" + a + "' (try 'vismask view --help')");
+      if (!o->viewDir.empty())
+        return Status::Error("vismask: view: unexpected argument '" + a + "' (one OUT_DIR)");
+      if (a.empty()) return Status::Error("vismask: view: OUT_DIR is empty");
+      o->viewDir = a;
+    }
+    if (o->viewDir.empty())
+      return Status::Error("vismask: view: usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]");
     return Status::Ok();
   }
   if (args[0] != "render" && args[0] != "footprint")

@@ -16,7 +16,7 @@
 namespace vismask {
 
 struct Options {
-  std::string command;  // "render", "footprint" or "compare"; empty with --help
+  std::string command;  // "render", "footprint", "compare" or "view"; empty with --help
   bool help = false;
   std::string scene;
   LoadOptions load;  // --strict, --emit NAME=R,G,B|ka (repeatable)
@@ -79,6 +79,10 @@ struct Options {
   double stopError = 0.0;  // --stop-error E: stop when the estimated bias < E; 0: off  // --correct-unshot on: patches.csv's b gets kd * ambient
   // vismask compare A.pfm B.pfm
   std::string compareA, compareB;
+  // vismask view OUT_DIR [--glb NAME.glb] [--port P] (viewer.h)
+  std::string viewDir;
+  std::string viewGlb;  // empty: the one .glb in viewDir
+  int viewPort = 0;     // 0: any free port
 };
 
 constexpr float kAutoPatchDivisions = 28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)

@@ -5,6 +5,8 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <vector>
 
 namespace vismask::os {
 
@@ -39,6 +41,20 @@ bool MakeDirs(const char* path, char* why);
 
 // True if `path` exists (any kind of file).
 bool Exists(const char* path);
+
+// True if `path` is a directory (following symbolic links).
+bool IsDirectory(const char* path);
+
+// Init-time services for `vismask view` (they allocate; platform/posix_exec.cpp).
+// The names in directory `dir` other than "." and "..", sorted bytewise.
+// False (with *why) if it cannot be read.
+bool ListDirectory(const char* dir, std::vector<std::string>* names, std::string* why);
+// The directory holding the running executable (/proc/self/exe, symbolic
+// links resolved); empty if unknown.
+std::string ExecutableDir();
+// Replaces the process with the program `argv[0]` (looked up in PATH),
+// given argv (argv.size() >= 1). Returns only on failure, with *why.
+void Exec(const std::vector<std::string>& argv, std::string* why);
 
 // MemAvailable from /proc/meminfo: what the host can give new allocations
 // without swapping, bytes; 0 if unknown.
