@@ -25,6 +25,12 @@ int Percent(double share) { return static_cast<int>(std::floor(100.0 * share + 1
 
 }  // namespace
 
+uint32_t EmitterCheckRays(uint64_t emitters) {
+  if (emitters == 0) return kEmitterCheckRays;
+  const uint64_t share = kEmitterCheckRayBudget / emitters;
+  return static_cast<uint32_t>(std::max<uint64_t>(kEmitterCheckMinRays, std::min<uint64_t>(kEmitterCheckRays, share)));
+}
+
 std::vector<EmitterEstimate> EstimateEmitters(const Scene& scene) {
   std::vector<EmitterEstimate> out;
   const glm::vec3 extent = scene.bounds.hi - scene.bounds.lo;
@@ -56,6 +62,10 @@ std::vector<EmitterEstimate> EstimateEmitters(const Scene& scene) {
                                                      std::fmax(mag.x, std::fmax(mag.y, mag.z)));
   const double nearDistance = kEmitterNearShare * largest;
 
+  uint64_t emitters = 0;
+  for (const Polygon& poly : scene.polygons) emitters += Emits(scene.materials[poly.material]);
+  const uint32_t rays = EmitterCheckRays(emitters);
+
   // Patches of a polygon are consecutive (mesh order is polygon order).
   size_t first = 0;
   while (first < n) {
@@ -75,9 +85,9 @@ std::vector<EmitterEstimate> EstimateEmitters(const Scene& scene) {
     double nearSum = 0.0;
     size_t k = first;
     double below = 0.0;  // area of the patches before k
-    for (uint32_t r = 0; r < kEmitterCheckRays; ++r) {
+    for (uint32_t r = 0; r < rays; ++r) {
       // Stratified over the polygon's area: ray r's share of it picks the patch.
-      double at = (r + 0.5) / kEmitterCheckRays * area;
+      double at = (r + 0.5) / rays * area;
       while (k + 1 < end && below + mesh.patches[k].area <= at) below += mesh.patches[k++].area;
       for (int side = 0; side < 2; ++side) {
         Patch p = mesh.patches[k];
@@ -100,10 +110,10 @@ std::vector<EmitterEstimate> EstimateEmitters(const Scene& scene) {
         }
       }
     }
-    e.nearShare = static_cast<double>(nearHits) / kEmitterCheckRays;
+    e.nearShare = static_cast<double>(nearHits) / rays;
     e.nearDistance = nearHits > 0 ? nearSum / nearHits : 0.0;
-    e.escapeShare = static_cast<double>(escaped) / kEmitterCheckRays;
-    e.backEscapeShare = static_cast<double>(backEscaped) / kEmitterCheckRays;
+    e.escapeShare = static_cast<double>(escaped) / rays;
+    e.backEscapeShare = static_cast<double>(backEscaped) / rays;
     out.push_back(e);
     first = end;
   }

@@ -1,5 +1,6 @@
 // Two-sided scenes (--two-sided, --two-sided-emitters: mesh.h's twins) and
 // the emitter check (emitter_check.h).
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -445,3 +446,16 @@ TEST(EmitterCheckTest, ShippedScenesAreSilent) {
 
 }  // namespace
 }  // namespace vismask
+
+// The emitter check's rays a polygon: all of them up to the budget's share,
+// then fewer, never below the floor, so that a scene of very many emitting
+// faces is checked in bounded time before init can refuse it.
+TEST(EmitterCheckTest, RaysPerPolygonShrinkWithinTheBudget) {
+  EXPECT_EQ(vismask::EmitterCheckRays(0), vismask::kEmitterCheckRays);
+  EXPECT_EQ(vismask::EmitterCheckRays(1), vismask::kEmitterCheckRays);
+  EXPECT_EQ(vismask::EmitterCheckRays(vismask::kEmitterCheckRayBudget / vismask::kEmitterCheckRays), vismask::kEmitterCheckRays);
+  EXPECT_EQ(vismask::EmitterCheckRays(2 * vismask::kEmitterCheckRayBudget / vismask::kEmitterCheckRays), vismask::kEmitterCheckRays / 2);
+  EXPECT_EQ(vismask::EmitterCheckRays(300000), vismask::kEmitterCheckMinRays);
+  for (uint64_t n : {1ull, 100ull, 5000ull, 40000ull, 300000ull})
+    EXPECT_LE(uint64_t(vismask::EmitterCheckRays(n)) * n, std::max<uint64_t>(vismask::kEmitterCheckRayBudget, vismask::kEmitterCheckMinRays * n));
+}

@@ -2,8 +2,10 @@
 // nothing, which is what a face wound the wrong way does in a real scene (a
 // ceiling light facing the ceiling it hangs under). Estimated at init with a
 // fixed, deterministic set of cosine-weighted rays per emitting polygon
-// (kEmitterCheckRays, a fixed seed) traced against the whole scene, one
-// patch per polygon. Init-time only; uses the heap.
+// (EmitterCheckRays: kEmitterCheckRays, fewer when the scene has so many
+// emitting polygons that the total would pass kEmitterCheckRayBudget; a
+// fixed seed) traced against the whole scene, one patch per polygon.
+// Init-time only; uses the heap.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -14,6 +16,16 @@
 namespace vismask {
 
 constexpr uint32_t kEmitterCheckRays = 512;  // per emitting polygon, per side
+// The whole check's rays a side: a scene of 300 000 emitting faces would
+// otherwise trace 3e8 rays before init could refuse it for memory. A
+// polygon gets no fewer than kEmitterCheckMinRays (a share's standard error
+// of at most 0.09 against the 0.5 threshold: still a clear verdict on a face
+// wound the wrong way).
+constexpr uint64_t kEmitterCheckRayBudget = 1u << 20;
+constexpr uint32_t kEmitterCheckMinRays = 32;
+
+// Rays per emitting polygon and side for a scene of `emitters` of them.
+uint32_t EmitterCheckRays(uint64_t emitters);
 constexpr double kEmitterNearShare = 0.02;   // "nearby": within 2% of the scene's largest extent
 constexpr double kEmitterMostShare = 0.5;    // warn above half of the polygon's power
 
