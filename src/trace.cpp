@@ -191,6 +191,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // stays open; only pixels with both, or with no ray, take the centre ray.
   if (masks && out && (options_.maskMethod == MaskMethod::kB || methodC)) {
     uint32_t pixels = shape_.pixels(), cast = 0;
+    uint32_t hint = kNoPatch;  // the last pixel's occluder: neighbours' rays often hit it too
     for (uint32_t p = 0; p < pixels; ++p) {
       if (!out->IsOpen(p)) continue;
       if (methodC && hitPixels.IsOpen(p) != passedPixels.IsOpen(p)) {
@@ -201,7 +202,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
               sampler.frame.ToWorld(maskDirections_.Centre(p)), 0.0f,
               std::numeric_limits<float>::infinity()};
       ++cast;
-      if (grid_.Occluded(ray, skip)) out->Close(p);
+      if (grid_.Occluded(ray, skip, &hint)) out->Close(p);
     }
     stats_.maskRays += cast;
   }
