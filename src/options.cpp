@@ -146,7 +146,7 @@ local environments and visibility masks:
   --mask-cache K       KiB per environment for Methods B and C's centre masks
                        of local shooters, kept for their later shots (the
                        mask depends only on the shooter); same output,
-                       fewer centre rays; 0: none (default 4096)
+                       fewer centre rays; 0: none (default 8192)
   --queue Q            foreign shooters an environment holds at once
                        (default 64); a full queue holds back new ones
   --ranks N            run on N processes on this host, connected by POSIX

@@ -65,7 +65,7 @@ struct EnvFootprint {
   uint64_t elements = 0;  // the element pool (roots and children)
   uint64_t grid = 0;      // cell offsets and patch references
   uint64_t queue = 0;     // foreign-shooter slots and their masks
-  uint64_t packets = 0;   // outbox and working masks
+  uint64_t packets = 0;   // outbox, working masks and the centre-mask cache
   uint64_t total = 0;     // the arena's size (rounded up to Arena::kAlign)
   uint64_t numPatches = 0;
   uint64_t gridCells = 0;
@@ -92,7 +92,7 @@ struct EnvOptions {
   // Methods B and C: bytes for the centre masks of local shooters, one slot
   // per patch (direct-mapped) while they fit; kept for the patch's later
   // shots, since a local shooter's centre mask depends only on its geometry.
-  uint64_t maskCacheBytes = uint64_t{4} << 20;
+  uint64_t maskCacheBytes = uint64_t{8} << 20;
   ElementOptions elements;
 };
 
