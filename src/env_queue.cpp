@@ -93,7 +93,11 @@ void Environment::ShootLocal(uint32_t i) {
     for (uint32_t r = rays; r < out.bits(); ++r) out.Close(r);  // bits past the shot's rays
     TraceAlive(p, skip, power, key, rays, false, &out);
   } else {
-    Distribute(p, skip, power, key, rays, nullptr, &out);
+    // B and C: the shooter's centre mask from the cache (cast on a miss).
+    MaskBits centre, known;
+    bool cached = CachedCentre(i, &centre, &known);
+    Distribute(p, skip, power, key, rays, nullptr, &out, cached ? &centre : nullptr,
+               cached && options_.maskMethod == MaskMethod::kC ? &known : nullptr);
   }
   Forward(ShotHeader(p, power, key, shotIndex, index_, rays), out);
   ++stats_.recordsCreated;
@@ -254,12 +258,14 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
       s = s * cs + c * sn;
       c = rc;
       if (bits && !((bits[p >> 3] >> (p & 7)) & 1u)) continue;
-      double d[3];
-      for (int a = 0; a < 3; ++a) d[a] = lx * f.t[a] + ly * f.b[a] + ct * f.n[a];
-      if (d[axis] == 0.0) continue;
-      double t = (plane - o[axis]) / d[axis];
+      // The crossing axis first: about half the directions point away.
+      double dAxis = lx * f.t[axis] + ly * f.b[axis] + ct * f.n[axis];
+      if (dAxis == 0.0) continue;
+      double t = (plane - o[axis]) / dAxis;
       if (!(t > 0.0)) continue;
-      double q1 = o[a1] + t * d[a1], q2 = o[a2] + t * d[a2];
+      double d1 = lx * f.t[a1] + ly * f.b[a1] + ct * f.n[a1];
+      double d2 = lx * f.t[a2] + ly * f.b[a2] + ct * f.n[a2];
+      double q1 = o[a1] + t * d1, q2 = o[a2] + t * d2;
       // Half-open, so a direction through an edge enters one box only.
       if (q1 >= box_.lo[a1] && q1 < box_.hi[a1] && q2 >= box_.lo[a2] && q2 < box_.hi[a2])
         ++crossing;

@@ -70,6 +70,13 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
                                                  options_.maskMethod == MaskMethod::kC);
   maskDirections_.Layout(arena, centreRays ? shape_.res : 0);
+  // The centre-mask cache: a slot per patch while they fit (C: a second
+  // mask per slot, the pixels whose centre ray is known).
+  size_t cacheSlots = 0, perSlot = (options_.maskMethod == MaskMethod::kC ? 2 : 1) * shape_.words();
+  if (centreRays && perSlot > 0)
+    cacheSlots = std::min<uint64_t>(numPatches, options_.maskCacheBytes / (8 * perSlot));
+  cacheWords_ = arena.Alloc<uint64_t>(cacheSlots * perSlot);
+  cacheTag_ = arena.Alloc<uint32_t>(cacheSlots);
   outbox_ = arena.Alloc<uint8_t>(size_t(outCapacity_) * packetBytes_);
   part(&footprint_.packets);
   footprint_.total = ArenaRoundUp(arena.used());
@@ -253,6 +260,7 @@ bool Environment::Build() {
   }
   grid_.Build(patches_, geom_);
   maskDirections_.Fill();
+  for (uint32_t& tag : cacheTag_) tag = kNoPatch;
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);
   std::vector<uint32_t>().swap(stagedTwin_);

@@ -209,7 +209,10 @@ bool Grid::TestAll(const Ray& ray, Skip skip, Hit* hit) const {
     float t;
     bool front;
     if (p == skip.patch || p == skip.twin || !IntersectPatch(geom[p], ray, &t, &front)) continue;
-    if (kAnyHit) return true;
+    if (kAnyHit) {
+      if (hit) hit->patch = p;
+      return true;
+    }
     // The nearest; of equal t, TieWins (patches rise with p).
     if (best.patch == kNoPatch || t < best.t ||
         (t == best.t && TieWins(p, front, best.patch, best.front)))
@@ -309,7 +312,10 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
       float t;
       bool front;
       if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
-      if (kAnyHit) return true;
+      if (kAnyHit) {
+        if (hit) hit->patch = p;
+        return true;
+      }
       // t <= bestT here. On a tie a front side, then the lower index, so
       // that of two coplanar twins the ray lands on the one it faces.
       if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
@@ -352,6 +358,18 @@ bool Grid::Intersect(const Ray& ray, Skip skip, Hit* hit) const {
 
 bool Grid::Occluded(const Ray& ray, Skip skip) const {
   return Walk<true>(ray, skip, nullptr);
+}
+
+bool Grid::Occluded(const Ray& ray, Skip skip, uint32_t* hint) const {
+  uint32_t h = *hint;
+  float t;
+  bool front;
+  if (h != kNoPatch && h != skip.patch && h != skip.twin && IntersectPatch(geom_[h], ray, &t, &front))
+    return true;
+  Hit hit;
+  if (!Walk<true>(ray, skip, &hit)) return false;
+  *hint = hit.patch;
+  return true;
 }
 
 }  // namespace vismask

@@ -1,6 +1,7 @@
 #include "vismask/mask.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 
 namespace vismask {
@@ -86,6 +87,16 @@ void MaskBits::And(const MaskBits& other) {
   for (size_t w = 0; w < words_.size(); ++w) words_[w] &= other.words_[w];
 }
 
+void MaskBits::Or(const MaskBits& other) {
+  DCHECK(other.words_.size() == words_.size());
+  for (size_t w = 0; w < words_.size(); ++w) words_[w] |= other.words_[w];
+}
+
+void MaskBits::AndNot(const MaskBits& other) {
+  DCHECK(other.words_.size() == words_.size());
+  for (size_t w = 0; w < words_.size(); ++w) words_[w] &= ~other.words_[w];
+}
+
 void MaskBits::CopyFrom(const MaskBits& other) {
   DCHECK(other.words_.size() == words_.size());
   for (size_t w = 0; w < words_.size(); ++w) words_[w] = other.words_[w];
@@ -99,11 +110,23 @@ double MaskBits::OpenFraction() const {
   uint32_t cols = 4 * res_;
   for (uint32_t row = 0; row < res_; ++row) {
     double s0 = std::sin(row * kHalfPi / res_), s1 = std::sin((row + 1) * kHalfPi / res_);
-    uint32_t open = 0;
-    for (uint32_t c = 0; c < cols; ++c) open += IsOpen(row * cols + c);
+    uint32_t open = CountOpen(row * cols, (row + 1) * cols);
     total += (s1 * s1 - s0 * s0) * open / cols;
   }
   return total;
+}
+
+uint32_t MaskBits::CountOpen(uint32_t begin, uint32_t end) const {
+  uint32_t n = 0;
+  while (begin < end) {
+    uint32_t w = begin >> 6, lo = begin & 63;
+    uint32_t hi = std::min<uint32_t>(64, lo + (end - begin));  // bits [lo, hi) of word w
+    uint64_t word = words_[w] >> lo;
+    if (hi - lo < 64) word &= (uint64_t(1) << (hi - lo)) - 1;
+    n += static_cast<uint32_t>(__builtin_popcountll(word));
+    begin += hi - lo;
+  }
+  return n;
 }
 
 uint32_t MaskBits::CountOpen() const {

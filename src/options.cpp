@@ -156,6 +156,10 @@ local environments and visibility masks:
   --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
                        1 <= R <= 4096 (default 50; not used by R)
   --round-shots K      shots per environment per round (default 1)
+  --mask-cache K       KiB per environment for Methods B and C's centre masks
+                       of local shooters, kept for their later shots (the
+                       mask depends only on the shooter); same output,
+                       fewer centre rays; 0: none (default 8192)
   --queue Q            foreign shooters an environment holds at once
                        (default 64); a full queue holds back new ones
   --ranks N            run on N processes on this host, connected by POSIX
@@ -521,6 +525,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         e.ke = glm::vec3(c[0], c[1], c[2]);
       }
       o->load.emit.push_back(e);
+    } else if (a == "--mask-cache") {
+      if (!ParseU64(v, &u) || u > (uint64_t{1} << 26)) return Bad(a, v, "an integer in [0, 2^26] (KiB)");
+      o->maskCacheKiB = static_cast<uint32_t>(u);
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);

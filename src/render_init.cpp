@@ -49,6 +49,7 @@ Status PrepareScene(const Options& o, Prepared* p) {
   e.maskRes = o.maskRes;
   e.roundShots = o.roundShots;
   e.queueCapacity = o.queue;
+  e.maskCacheBytes = uint64_t{o.maskCacheKiB} << 10;
   e.elements.perPatch = o.elementsPerPatch;
   e.elements.maxDepth = o.elementDepth;
   e.elements.threshold = o.elementSpread;

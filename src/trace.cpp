@@ -125,7 +125,8 @@ bool Environment::LeavesScene(const Ray& ray) const {
 }
 
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
-                             uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out) {
+                             uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out,
+                             MaskBits* centreMask, MaskBits* known) {
   const bool masks = shape_.res > 0;
   const bool foreign = in != nullptr || skip.patch == kNoPatch;
   // Method C: which open pixels the rays hit in, and which they passed.
@@ -189,22 +190,76 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // that pass on: about 14% of the power of the closed box in 2x2x2.
   // Method C: a pixel whose rays all hit closes, one whose rays all passed
   // stays open; only pixels with both, or with no ray, take the centre ray.
-  if (masks && out && (options_.maskMethod == MaskMethod::kB || methodC)) {
-    uint32_t pixels = shape_.pixels(), cast = 0;
+  if (masks && out && options_.maskMethod == MaskMethod::kB) {
+    if (centreMask) out->And(*centreMask);
+    else CastCentres(shooter, skip, out);
+  } else if (methodC) {
+    // hitPixels becomes the pixels left to the centre ray: open here, and
+    // with both kinds of ray or none.
+    uint32_t pixels = shape_.pixels();
     for (uint32_t p = 0; p < pixels; ++p) {
-      if (!out->IsOpen(p)) continue;
-      if (methodC && hitPixels.IsOpen(p) != passedPixels.IsOpen(p)) {
-        if (hitPixels.IsOpen(p)) out->Close(p);
-        continue;
+      bool left = false;
+      if (out->IsOpen(p)) {
+        bool hit = hitPixels.IsOpen(p);
+        if (hit != passedPixels.IsOpen(p)) {
+          if (hit) out->Close(p);
+        } else {
+          left = true;
+        }
       }
-      Ray ray{centre + options_.rayEpsilon * sampler.frame.n,
-              sampler.frame.ToWorld(maskDirections_.Centre(p)), 0.0f,
-              std::numeric_limits<float>::infinity()};
-      ++cast;
-      if (grid_.Occluded(ray, skip)) out->Close(p);
+      if (left) hitPixels.Open(p);
+      else hitPixels.Close(p);
     }
-    stats_.maskRays += cast;
+    if (centreMask) {
+      // Cast only the pixels left whose centre ray is not known yet, into the cache.
+      passedPixels.CopyFrom(hitPixels);
+      passedPixels.AndNot(*known);
+      known->Or(passedPixels);
+      centreMask->AndNot(passedPixels);
+      CastCentres(shooter, skip, &passedPixels);  // open: cast and unoccluded
+      centreMask->Or(passedPixels);
+      hitPixels.AndNot(*centreMask);  // left, and occluded from the centre
+    } else {
+      passedPixels.CopyFrom(hitPixels);
+      CastCentres(shooter, skip, &hitPixels);  // closes the occluded ones
+      passedPixels.AndNot(hitPixels);
+      hitPixels.CopyFrom(passedPixels);
+    }
+    out->AndNot(hitPixels);
   }
+}
+
+void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
+  PatchSampler sampler = MakePatchSampler(shooter);
+  glm::vec3 centre(0.0f);
+  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
+  centre /= static_cast<float>(shooter.numCorners);
+  const glm::vec3 origin = centre + options_.rayEpsilon * sampler.frame.n;
+  uint32_t pixels = shape_.pixels(), cast = 0;
+  uint32_t hint = kNoPatch;  // the last pixel's occluder: neighbours' rays often hit it too
+  for (uint32_t p = 0; p < pixels; ++p) {
+    if (!mask->IsOpen(p)) continue;
+    Ray ray{origin, sampler.frame.ToWorld(maskDirections_.Centre(p)), 0.0f,
+            std::numeric_limits<float>::infinity()};
+    ++cast;
+    if (grid_.Occluded(ray, skip, &hint)) mask->Close(p);
+  }
+  stats_.maskRays += cast;
+}
+
+bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
+  if (cacheTag_.empty()) return false;
+  const bool methodC = options_.maskMethod == MaskMethod::kC;
+  size_t slot = i % cacheTag_.size(), w = shape_.words(), per = methodC ? 2 : 1;
+  *centre = MaskBits(cacheWords_.subspan(slot * per * w, w), shape_);
+  if (methodC) *known = MaskBits(cacheWords_.subspan((slot * per + 1) * w, w), shape_);
+  if (cacheTag_[slot] != i) {
+    centre->SetAllOpen();
+    if (methodC) known->SetAllClosed();
+    else CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
+    cacheTag_[slot] = i;
+  }
+  return true;
 }
 
 void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power[3],

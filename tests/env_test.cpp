@@ -65,6 +65,41 @@ TEST(EnvTest, PermutedEnvironmentOrderGivesIdenticalBytes) {
   EXPECT_EQ(json.find("\"foreign_shots\": 0,"), std::string::npos) << json;
 }
 
+// The centre-mask cache (--mask-cache) only saves centre rays: B and C give
+// the same bytes with it, with it too small for every patch (slots shared),
+// and without it, and it casts fewer rays.
+TEST(EnvTest, MaskCacheKeepsOutputsAndSavesCentreRays) {
+  TempDir dir;
+  for (const char* method : {"B", "C"}) {
+    std::vector<std::string> base = {"scenes/cornell.obj", "--envs", "2x1x2", "--emitted-rays", "100000",
+                                     "--max-shots", "300", "--width", "32", "--height", "32",
+                                     "--mask-res", "24", "--patch-size", "90",
+                                     "--mask-method", method};
+    auto run = [&](const std::string& out, const char* cache) {
+      auto args = base;
+      args.insert(args.end(), {"--out", dir.File(out), "--mask-cache", cache});
+      Render(args);
+      return ReadFile(dir.File(out + "/run.json"));
+    };
+    std::string m = method;
+    // 1 KiB: 3 slots of 288 bytes, shared by the patches.
+    std::string none = run(m + "0", "0"), all = run(m + "4", "4096"), some = run(m + "s", "1");
+    for (const char* f : {"image.pfm", "patches.csv"}) {
+      std::string a = ReadFile(dir.File(m + "0/" + f));
+      ASSERT_FALSE(a.empty());
+      EXPECT_EQ(a, ReadFile(dir.File(m + "4/" + f))) << method << " " << f;
+      EXPECT_EQ(a, ReadFile(dir.File(m + "s/" + f))) << method << " " << f;
+    }
+    auto maskRays = [](const std::string& json) {
+      size_t at = json.find("\"mask_rays\": ");
+      return at == std::string::npos ? -1.0 : std::atof(json.c_str() + at + 13);
+    };
+    EXPECT_GT(maskRays(none), 0.0) << method;
+    EXPECT_LT(maskRays(all), maskRays(none)) << method;
+    EXPECT_LE(maskRays(all), maskRays(some)) << method;
+  }
+}
+
 TEST(EnvTest, ClosedBoxInEightEnvironmentsConverges) {
   TempDir dir;
   const double rho = 0.5, e = 2.0, exact = e / (1.0 - rho);

@@ -185,15 +185,22 @@ struct Checker {
   int rays = 0;
   int hits = 0;
   int failures = 0;
+  uint32_t hint = kNoPatch;
 
   void Check(const Ray& ray, uint32_t skip, const char* kind) {
     Hit want, got;
     bool wantHit = BruteIntersect(scene, ray, skip, &want);
     bool gotHit = grid.Intersect(ray, skip, &got);
     bool occluded = grid.Occluded(ray, skip);
+    // With a hint: the last occluder found (kept from ray to ray, as Method
+    // B's centre rays keep it), and any patch at all.
+    bool hinted = grid.Occluded(ray, skip, &hint);
+    uint32_t anyPatch = static_cast<uint32_t>((rays * 2654435761u) % scene.patches.size());
+    bool anyHinted = grid.Occluded(ray, skip, &anyPatch);
     ++rays;
     hits += wantHit;
-    bool same = wantHit == gotHit && occluded == wantHit &&
+    bool same = wantHit == gotHit && occluded == wantHit && hinted == wantHit &&
+                anyHinted == wantHit &&
                 (!wantHit || (want.patch == got.patch && Bits(want.t) == Bits(got.t) &&
                               want.front == got.front));
     if (!same && ++failures <= 5) {
@@ -205,7 +212,7 @@ struct Checker {
                     << ", grid "
                     << (gotHit ? std::to_string(got.patch) + "@" + std::to_string(got.t)
                                : std::string("miss"))
-                    << ", occluded " << occluded;
+                    << ", occluded " << occluded << " (hinted " << hinted << ", " << anyHinted << ")";
     }
   }
 

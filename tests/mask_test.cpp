@@ -34,6 +34,24 @@ TEST(MaskTest, RowsRunFromTheNormalAndColumnsFromTheTangent) {
   EXPECT_EQ(MaskPixel(glm::normalize(glm::vec3(-1, 0.001f, 0.2f)), 10) % 40, 19u);  // phi ~ pi
 }
 
+TEST(MaskTest, CountOpenOverARangeCountsItsBits) {
+  const uint32_t res = 7;  // 196 pixels: rows of 28 bits straddle words
+  std::vector<uint64_t> words(MaskShape{res}.words());
+  MaskBits m(Span<uint64_t>(words.data(), words.size()), res);
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 20; ++trial) {
+    m.SetAllClosed();
+    for (uint32_t p = 0; p < m.bits(); ++p)
+      if (rng() % 3 == 0) m.Open(p);
+    for (uint32_t begin = 0; begin <= m.bits(); begin += 1 + rng() % 9)
+      for (uint32_t end = begin; end <= m.bits(); end += 1 + rng() % 23) {
+        uint32_t want = 0;
+        for (uint32_t p = begin; p < end; ++p) want += m.IsOpen(p);
+        ASSERT_EQ(m.CountOpen(begin, end), want) << begin << ".." << end;
+      }
+  }
+}
+
 TEST(MaskTest, OpenFractionIsCosineWeighted) {
   const uint32_t res = 20;
   std::vector<uint64_t> words(MaskShape{res}.words());

@@ -65,7 +65,7 @@ struct EnvFootprint {
   uint64_t elements = 0;  // the element pool (roots and children)
   uint64_t grid = 0;      // cell offsets and patch references
   uint64_t queue = 0;     // foreign-shooter slots and their masks
-  uint64_t packets = 0;   // outbox and working masks
+  uint64_t packets = 0;   // outbox, working masks and the centre-mask cache
   uint64_t total = 0;     // the arena's size (rounded up to Arena::kAlign)
   uint64_t numPatches = 0;
   uint64_t gridCells = 0;
@@ -91,6 +91,10 @@ struct EnvOptions {
   uint32_t maskRes = 50;
   uint32_t roundShots = 1;   // shots per environment per round
   uint32_t queueCapacity = 64;  // foreign shooters held at once
+  // Methods B and C: bytes for the centre masks of local shooters, one slot
+  // per patch (direct-mapped) while they fit; kept for the patch's later
+  // shots, since a local shooter's centre mask depends only on its geometry.
+  uint64_t maskCacheBytes = uint64_t{8} << 20;
   ElementOptions elements;
 };
 
@@ -231,8 +235,19 @@ class Environment {
   // pixel is closed in `in` are skipped; with a mask method, `out` loses the
   // pixels of rays that hit here (A), of centre rays that hit (B), or of
   // pixels the rays only hit and those whose centre ray hits (C).
+  // `centre`, when given, is this shooter's slot of the centre-mask cache
+  // (CachedCentre): B reads every pixel from it; C reads the pixels set in
+  // *known, and casts the others it needs into it.
   void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
-                  uint32_t rays, const MaskBits* in, MaskBits* out);
+                  uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
+                  MaskBits* known = nullptr);
+  // Local patch i's slot of the centre-mask cache: false when the cache has
+  // no slots. *centre: a pixel is open iff its centre ray from the shooter's
+  // centre hits nothing here. B: every pixel, cast on a miss. C: the pixels
+  // set in *known (none after a miss), which Distribute adds to.
+  bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
+  // Casts the centre ray of every pixel open in *mask and closes those that hit.
+  void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
   // Method R: regenerates the shot's rays from its key, traces those whose
   // bit is set in `alive` (restricted to this box when `foreign`), and
   // clears the bits of the rays it absorbs or lets escape the scene.
@@ -322,6 +337,8 @@ class Environment {
   Span<Slot> slots_;
   Span<uint64_t> slotWords_;  // slot s's mask: words [s * shape_.words(), ...)
   Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
+  Span<uint64_t> cacheWords_;    // B, C: cached centre masks of local shooters, slot by slot
+  Span<uint32_t> cacheTag_;      // the local patch each slot holds, or kNoPatch
   Span<uint8_t> outbox_;
   uint32_t outCapacity_ = 0;
   uint32_t outCount_ = 0;

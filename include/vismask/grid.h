@@ -53,6 +53,12 @@ class Grid {
   bool Intersect(const Ray& ray, Skip skip, Hit* hit) const;
   // True if anything is hit in (ray.tMin, ray.tMax), ignoring `skip`.
   bool Occluded(const Ray& ray, Skip skip) const;
+  // The same, for coherent rays (Method B's centre rays, all from one
+  // point): patch *hint (kNoPatch: none) is tried before the walk, and the
+  // patch that occluded the ray is left in *hint for the next one. The
+  // answer is Occluded's wherever the walk agrees with testing every patch
+  // (tests/grid_test.cpp), because a hit on any patch is a hit.
+  bool Occluded(const Ray& ray, Skip skip, uint32_t* hint) const;
 
   const Plan& plan() const { return plan_; }
   size_t cellCount() const { return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2]; }

@@ -89,11 +89,17 @@ class MaskBits {
   void Open(uint32_t p) { words_[p >> 6] |= uint64_t(1) << (p & 63); }
   // Keeps a pixel open only if it is open in `other` too.
   void And(const MaskBits& other);
+  // Opens the pixels open in `other` (this |= other).
+  void Or(const MaskBits& other);
+  // Closes the pixels open in `other` (this &= ~other).
+  void AndNot(const MaskBits& other);
   void CopyFrom(const MaskBits& other);
   // The cosine-weighted fraction of the hemisphere that is open: the share of
   // a patch's power its open pixels carry. Per ray: the share of rays open.
   double OpenFraction() const;
   uint32_t CountOpen() const;
+  // The open pixels among [begin, end).
+  uint32_t CountOpen(uint32_t begin, uint32_t end) const;
   // Packing to and from the packet's ceil(bits / 8) bytes (little-endian).
   void Pack(uint8_t* out) const;
   void Unpack(const uint8_t* in);

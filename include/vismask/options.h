@@ -57,6 +57,7 @@ struct Options {
   uint32_t maskRes = 50;
   uint32_t roundShots = 1;
   uint32_t queue = 64;
+  uint32_t maskCacheKiB = 8192;  // --mask-cache: B/C centre masks kept per environment
   std::vector<uint32_t> envOrder;
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
   int ranks = 1;          // --ranks N (pipe)
