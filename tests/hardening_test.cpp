@@ -22,11 +22,7 @@ namespace {
 
 using test::ReadFile;
 using test::TempDir;
-
-std::string Bin() {
-  const char* b = std::getenv("VISMASK_BIN");
-  return b ? b : "build/vismask";
-}
+using test::VismaskBin;
 
 // With descriptor 0, 1 or 2 closed, the first output file opened used to get
 // that number: with 2>&- the progress lines went into image.png.
@@ -34,7 +30,7 @@ TEST(HardeningTest, ClosedStandardDescriptorsNeverBecomeOutputs) {
   TempDir dir;
   for (const char* redirect : {"2>&-", "1>&- 2>&-", "0<&- 1>&- 2>&-"}) {
     std::string out = dir.File("out");
-    std::string cmd = Bin() + " render scenes/cornell.obj --width 32 --height 32 --max-shots 300 --out " +
+    std::string cmd = VismaskBin() + " render scenes/cornell.obj --width 32 --height 32 --max-shots 300 --out " +
                       out + " " + redirect;
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     std::string png = ReadFile(out + "/image.png");
@@ -61,7 +57,7 @@ TEST(HardeningTest, RefusedArenaMemoryIsAUserError) {
   };
   for (const std::string& extra : cases) {
     std::string out = dir.File("out");
-    std::string cmd = "(ulimit -v 4000000; " + Bin() + " render scenes/cornell.obj " + extra +
+    std::string cmd = "(ulimit -v 4000000; " + VismaskBin() + " render scenes/cornell.obj " + extra +
                       " --out " + out + " 2> " + dir.File("err") + ")";
     int status = std::system(cmd.c_str());
     ASSERT_TRUE(WIFEXITED(status)) << cmd;
@@ -161,7 +157,7 @@ TEST(HardeningTest, UnreplaceableOutputIsRefusedAtInit) {
 TEST(HardeningTest, SecondRunIntoTheSameDirectoryIsRefused) {
   TempDir dir;
   std::string out = dir.File("out");
-  std::string first = Bin() + " render scenes/cornell.obj --width 32 --height 32 --rays 4096 "
+  std::string first = VismaskBin() + " render scenes/cornell.obj --width 32 --height 32 --rays 4096 "
                       "--max-shots 1000000 --max-seconds 6 --quiet --out " + out +
                       " 2> " + dir.File("first.err") + " & echo $! > " + dir.File("pid");
   ASSERT_EQ(std::system(first.c_str()), 0);
@@ -225,7 +221,7 @@ TEST(HardeningTest, SceneTooBigToLoadIsRefused) {
   }
   test::WriteFile(dir.File("big.obj"), obj);
   test::WriteFile(dir.File("big.mtl"), "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
-  std::string cmd = "(ulimit -v 250000; " + Bin() + " render " + dir.File("big.obj") + " --quiet --out " +
+  std::string cmd = "(ulimit -v 250000; " + VismaskBin() + " render " + dir.File("big.obj") + " --quiet --out " +
                     dir.File("out") + " 2> " + dir.File("err") + ")";
   int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
@@ -268,7 +264,7 @@ TEST(HardeningTest, FootprintJsonEscapesTheScenePath) {
   std::string odd = dir.File("q\"x\\y.obj");
   std::filesystem::copy_file("scenes/cornell.obj", odd);
   std::filesystem::copy_file("scenes/cornell.mtl", dir.File("cornell.mtl"));
-  std::string cmd = Bin() + " footprint '" + odd + "' --json > " + dir.File("fp.json");
+  std::string cmd = VismaskBin() + " footprint '" + odd + "' --json > " + dir.File("fp.json");
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::string json = ReadFile(dir.File("fp.json"));
   EXPECT_NE(json.find("q\\\"x\\\\y.obj\""), std::string::npos) << json.substr(0, 200);

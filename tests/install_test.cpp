@@ -21,22 +21,11 @@ namespace {
 using test::FileExists;
 using test::ReadFile;
 using test::TempDir;
+using test::VismaskBin;
 namespace fs = std::filesystem;
 
-std::string Bin() {
-  const char* b = std::getenv("VISMASK_BIN");
-  return b ? b : "build/vismask";
-}
-
-int Sh(const std::string& cmd, std::string* out) {
-  FILE* p = popen(("timeout 300 " + cmd + " 2>&1").c_str(), "r");
-  if (!p) return -1;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
-  int status = pclose(p);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
+// A shell command, stopped after 300 s.
+int Sh(const std::string& cmd, std::string* out) { return test::ShellOutput(cmd, 300, out); }
 
 // make in the source tree, outside the make that runs the suite (its
 // jobserver and flags are not for this one); VISMASK_MAKE_ARGS (set by make
@@ -60,8 +49,8 @@ TEST(InstallTest, InstallsFindsItsPageAndUninstalls) {
   ASSERT_EQ(Make("install PREFIX=" + prefix + " DESTDIR=" + dest, &log), 0) << log;
 
   // The files, as a Debian tool lays them out.
-  const bool mpi = FileExists(fs::path(Bin()).parent_path().string() + "/vismask-mpi");
-  EXPECT_EQ(ReadFile(root + "/bin/vismask"), ReadFile(Bin()));
+  const bool mpi = FileExists(fs::path(VismaskBin()).parent_path().string() + "/vismask-mpi");
+  EXPECT_EQ(ReadFile(root + "/bin/vismask"), ReadFile(VismaskBin()));
   EXPECT_TRUE(fs::status(root + "/bin/vismask").permissions() == fs::perms(0755));
   EXPECT_EQ(FileExists(root + "/bin/vismask-mpi"), mpi);
   for (const char* f : {"index.html", "viewer.js", "serve.py"})

@@ -23,15 +23,11 @@ using test::FileExists;
 using test::ReadFile;
 using test::RunMain;
 using test::TempDir;
+using test::VismaskBin;
 
 const std::vector<std::string> kBase = {
     "render", "scenes/cornell.obj", "--envs", "4x1x2", "--rays", "512", "--max-shots", "1200",
     "--width", "96", "--height", "96", "--mask-res", "24", "--patch-size", "50", "--quiet"};
-
-std::string Bin() {
-  const char* b = std::getenv("VISMASK_BIN");
-  return b ? b : "build/vismask";
-}
 
 // `kBase` with --mask-method `method`: the same bytes on one process, on
 // forked processes (`pipeRanks`) and under mpirun (`mpiRanks`, when built).
@@ -117,7 +113,7 @@ void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipe
     outs.push_back(std::string("pipe") + n);
   }
   // Under Open MPI too, when build/vismask-mpi exists (make MPI=1).
-  std::string mpiBin = Bin() + "-mpi";
+  std::string mpiBin = VismaskBin() + "-mpi";
   bool mpi = FileExists(mpiBin) && std::system("command -v mpirun >/dev/null 2>&1") == 0;
   if (mpi) {
     for (const char* n : mpiRanks) {
@@ -151,7 +147,7 @@ void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipe
 // and no image written.
 TEST(RanksTest, KilledPipeChildEndsTheRunWithExitThree) {
   TempDir dir;
-  std::string cmd = Bin() + " render scenes/cornell.obj --envs 4 --ranks 4 --rays 256 --out " +
+  std::string cmd = VismaskBin() + " render scenes/cornell.obj --envs 4 --ranks 4 --rays 256 --out " +
                     dir.File("out") + " --max-shots 100000000 --stop-unshot 0 --quiet 2>" +
                     dir.File("err");
   pid_t pid = fork();
@@ -281,7 +277,7 @@ const char kEndless[] =
 void StopOnePipeRank(int victim) {
   TempDir dir;
   std::string out = dir.File("out");
-  pid_t pid = StartCommand(Bin() + kEndless + " --envs 4 --ranks 4 --out " + out + " 2>" +
+  pid_t pid = StartCommand(VismaskBin() + kEndless + " --envs 4 --ranks 4 --out " + out + " 2>" +
                            dir.File("err"));
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(WaitForTheSolve(out)) << ReadFile(dir.File("err"));
@@ -317,7 +313,7 @@ TEST(RanksTest, StoppedPipeRankZeroEndsTheRunWithExitThree) { StopOnePipeRank(0)
 TEST(RanksTest, SigtermLeavesNoTemporaryFiles) {
   TempDir dir;
   std::string out = dir.File("out");
-  pid_t pid = StartCommand(Bin() + kEndless + " --envs 2 --ranks 2 --out " + out + " --export " +
+  pid_t pid = StartCommand(VismaskBin() + kEndless + " --envs 2 --ranks 2 --out " + out + " --export " +
                            dir.File("scene.glb") + " 2>" + dir.File("err"));
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(WaitForTheSolve(out)) << ReadFile(dir.File("err"));
@@ -346,7 +342,7 @@ struct MpiRun {
 };
 
 bool HaveMpi() {
-  return FileExists(Bin() + "-mpi") && std::system("command -v mpirun >/dev/null 2>&1") == 0;
+  return FileExists(VismaskBin() + "-mpi") && std::system("command -v mpirun >/dev/null 2>&1") == 0;
 }
 
 MpiRun SignalOneMpiRank(int victim, int sig) {
@@ -355,7 +351,7 @@ MpiRun SignalOneMpiRank(int victim, int sig) {
   std::string out = dir.File("out");
   pid_t pid = StartCommand(
       "env ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-      "mpirun -np 3 --oversubscribe " + Bin() + "-mpi" + kEndless + " --envs 3 --out " + out +
+      "mpirun -np 3 --oversubscribe " + VismaskBin() + "-mpi" + kEndless + " --envs 3 --out " + out +
       " >" + dir.File("log") + " 2>&1");
   EXPECT_GT(pid, 0);
   if (!WaitForTheSolve(out)) {

@@ -1,5 +1,8 @@
 #include "test_util.h"
 
+#include <sys/wait.h>
+
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -58,6 +61,21 @@ std::vector<std::vector<std::string>> ReadCsv(const std::string& path) {
     rows.push_back(row);
   }
   return rows;
+}
+
+std::string VismaskBin() {
+  const char* b = std::getenv("VISMASK_BIN");
+  return b ? b : "build/vismask";
+}
+
+int ShellOutput(const std::string& cmd, int timeoutSeconds, std::string* out) {
+  FILE* p = popen(("timeout " + std::to_string(timeoutSeconds) + " " + cmd + " 2>&1").c_str(), "r");
+  if (!p) return -1;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
+  int status = pclose(p);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 }  // namespace vismask::test

@@ -22,6 +22,15 @@ std::string ReadFile(const std::string& path);
 void WriteFile(const std::string& path, const std::string& text);
 bool FileExists(const std::string& path);
 
+// The vismask binary under test: $VISMASK_BIN (make test sets it), else
+// build/vismask.
+std::string VismaskBin();
+
+// Runs `cmd` in a shell under `timeout timeoutSeconds`, its stdout and
+// stderr together appended to *out; returns its exit status, or -1 when it
+// could not start or did not exit normally.
+int ShellOutput(const std::string& cmd, int timeoutSeconds, std::string* out);
+
 struct RunResult {
   int code = -1;
   std::string err;  // what was written to stderr

@@ -27,13 +27,9 @@ namespace {
 using test::FileExists;
 using test::ReadFile;
 using test::TempDir;
+using test::VismaskBin;
 using test::WriteFile;
 namespace fs = std::filesystem;
-
-std::string Bin() {
-  const char* b = std::getenv("VISMASK_BIN");
-  return b ? b : "build/vismask";
-}
 
 struct Ran {
   int code = -1;
@@ -44,13 +40,7 @@ struct Ran {
 // refusing ends the test rather than hanging it).
 Ran Shell(const std::string& cmd) {
   Ran r;
-  FILE* p = popen(("timeout 60 " + cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.code = test::ShellOutput(cmd, 60, &r.out);
   return r;
 }
 
@@ -58,7 +48,7 @@ bool Have(const std::string& command) { return std::system(("command -v " + comm
 
 // A render of the Cornell box with its export, cornell.glb, in `dir`.
 void RenderCornell(const std::string& dir, const std::string& extra) {
-  std::string cmd = Bin() + " render scenes/cornell.obj --quiet --out " + dir + " --export " + dir +
+  std::string cmd = VismaskBin() + " render scenes/cornell.obj --quiet --out " + dir + " --export " + dir +
                     "/cornell.glb " + extra;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 }
@@ -124,10 +114,10 @@ void WriteGlbHeader(const std::string& path, bool rightLength) {
 }
 
 TEST(ViewTest, HelpDocumentsView) {
-  Ran all = Shell(Bin() + " --help");
+  Ran all = Shell(VismaskBin() + " --help");
   EXPECT_EQ(all.code, 0);
   EXPECT_NE(all.out.find("vismask view OUT_DIR"), std::string::npos);
-  Ran view = Shell(Bin() + " view --help");
+  Ran view = Shell(VismaskBin() + " view --help");
   EXPECT_EQ(view.code, 0);
   EXPECT_NE(view.out.find("usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]"), std::string::npos) << view.out;
   EXPECT_NE(view.out.find("--export"), std::string::npos);
@@ -160,7 +150,7 @@ TEST(ViewTest, BadOutDirExitsTwoWithAClearMessage) {
       {"", "usage: vismask view OUT_DIR"},
   };
   for (const auto& [args, message] : cases) {
-    Ran r = Shell(Bin() + " view " + args);
+    Ran r = Shell(VismaskBin() + " view " + args);
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
     EXPECT_NE(r.out.find(message), std::string::npos) << args << ": " << r.out;
   }
@@ -176,7 +166,7 @@ TEST(ViewTest, ServesThePageAndTheOutputs) {
   fs::create_directories(out);
   WriteGlbHeader(out + "/a b.glb", true);
   WriteFile(out + "/run.json", "{\"options\": {}}\n");
-  Server server(Bin(), "'" + out + "'", dir.path());
+  Server server(VismaskBin(), "'" + out + "'", dir.path());
   ASSERT_FALSE(server.url().empty()) << server.err();
   EXPECT_TRUE(std::regex_match(server.url(), std::regex(R"(http://127\.0\.0\.1:\d+/\?glb=out/a%20b\.glb&run=out/run\.json)")))
       << server.url();
@@ -212,7 +202,7 @@ std::string BrowserMissing() {
 // The page in headless Chromium at the image's size, with run.json's
 // camera and exposure, against image.png: shoot.mjs's JSON.
 std::string Shoot(const TempDir& dir, const std::string& out, const std::string& extra) {
-  Ran shot = Shell("node viewer/shoot.mjs --vismask " + Bin() + " --out " + out +
+  Ran shot = Shell("node viewer/shoot.mjs --vismask " + VismaskBin() + " --out " + out +
                    " --width 512 --height 512 --screenshot " + dir.File("shot.png") + " --compare " + out +
                    "/image.png " + extra);
   EXPECT_EQ(shot.code, 0) << shot.out;
