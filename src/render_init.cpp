@@ -4,46 +4,220 @@
 
 namespace vismask::run {
 
-Status PrepareScene(const Options& o, Prepared* p) {
-  Status s = LoadScene(o.scene, &p->scene, o.load);
+Status CountScene(const Options& o, Prepared* p) { return CountObj(o.scene, &p->info); }
+
+namespace {
+
+// The heap a polygon holds (its vectors, with malloc's 16 bytes each).
+uint64_t PolygonBytes(const Polygon& poly) {
+  return sizeof(Polygon) + 16 * 3 + poly.corners.capacity() * sizeof(glm::vec3) +
+         poly.uv.capacity() * sizeof(glm::vec2) + poly.vn.capacity() * sizeof(glm::vec3);
+}
+
+// Whether material m emits once --emit has been applied (pass 1 sees the
+// MTL's Ke; ScanObj applies --emit at its end).
+bool EmitsAfterOverrides(const Material& m, const LoadOptions& load) {
+  glm::vec3 ke = m.ke;
+  for (const EmitOverride& e : load.emit)
+    if (e.material == m.name) ke = e.fromKa ? m.ka : e.ke;
+  return ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
+}
+
+bool Emits(const Material& m) { return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z > 0.0f; }
+
+}  // namespace
+
+uint64_t Prepared::MeshBound(uint32_t e) const {
+  // Per patch: the mesh's patch (up to 3 copies while AddTwins grows the
+  // vector past its reserve), the staged patch, geometry and texture, twin
+  // ids, the grid plan's scratch; per lattice vertex: the mesh's and the
+  // staged copy (3 while growing), smooth-vertex records (mesh, found,
+  // staged), a seen flag.
+  constexpr uint64_t kPerPatch = 4 * sizeof(Patch) + sizeof(PatchGeom) + 3 * sizeof(PatchTexture) +
+                                 4 * sizeof(uint32_t) + 64;
+  constexpr uint64_t kPerVertex = 4 * sizeof(glm::vec3) + 3 * sizeof(SmoothVertex) + 8;
+  return static_cast<uint64_t>(envPatches[e]) * kPerPatch +
+         static_cast<uint64_t>(envVertices[e]) * kPerVertex;
+}
+
+uint64_t Prepared::InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
+                            uint64_t rankArena, uint64_t held) const {
+  uint64_t pieceBytes = 0, meshBytes = 0;
+  for (uint32_t e = first; e < end; ++e) {
+    pieceBytes += envPieceBytes[e];
+    meshBytes += MeshBound(e);
+  }
+  // Per environment of the whole grid: its counts.
+  held += kInitBaseBytes + textureBytes + 4 * sizeof(double) * envPatches.size();
+  const uint64_t parse = info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes() + (root ? checkBytes : 0);
+  const uint64_t mesh = pieceBytes + meshBytes;
+  const uint64_t build = meshBytes + envArenas + rankArena;
+  return held + std::max(parse, std::max(mesh, build));
+}
+
+Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end, bool root) {
+  SceneInfo& info = p->info;
+  const bool chooseSide = !o.hasCamera && !o.hasView;
+  // Pass 1: parse, mend and check; keep the emitting polygons for the
+  // emitter check (rank 0), nothing else of the polygons.
+  std::vector<std::pair<uint32_t, Polygon>> emitters;
+  size_t numEmitters = 0;
+  Status s = ScanObj(o.scene, o.load, [&](uint32_t i, const Polygon& poly) {
+    if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
+    ++numEmitters;
+    if (root) emitters.emplace_back(i, poly);
+  }, &info);
   if (!s.ok()) return s;
-  s = LoadSceneTextures(p->scene, &p->textures);
+  // Rank 0's emitter check (the same figure on every rank, for footprint).
+  p->checkBytes =
+      EmitterCheck::HeapBytes(numEmitters, std::min<size_t>(kEmitterCheckChunk, info.numPolygons)) +
+      numEmitters * 256;
+  // Every rank prints the loader's warnings, as LoadScene did.
+  for (const std::string& w : info.warnings) std::fprintf(stderr, "%s\n", w.c_str());
+  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine, &p->textures);
   if (!s.ok()) return s;
-  glm::vec3 extent = p->scene.bounds.hi - p->scene.bounds.lo;
+  for (const TextureImage& t : p->textures.images) p->textureBytes += uint64_t{t.width} * t.height * 4;
+  p->scene.objPath = o.scene;
+  p->scene.materials = info.materials;
+  p->scene.bounds = info.bounds;
+  glm::vec3 extent = info.bounds.hi - info.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
   p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
   p->tolerance = 1e-5f * maxExtent;
   p->smooth = o.smooth;
   for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
-  p->grid.box = p->scene.bounds;
-  s = PartitionScene(p->scene, p->grid, &p->part);
+  p->grid.box = info.bounds;
+  p->first = first;
+  p->end = end;
+  const uint32_t total = static_cast<uint32_t>(p->grid.count());
+  p->envPatches.assign(total, 0.0);
+  p->envTwins.assign(total, 0.0);
+  p->envVertices.assign(total, 0.0);
+  p->envPieceBytes.assign(total, 0);
+  p->twins.all = o.twoSided;
+  p->twins.emitters = o.twoSidedEmitters;
+
+  // Pass 2: every polygon clipped into the environments; this rank keeps
+  // the pieces of its own and counts the patches of every environment (ids
+  // are global, environment-major). The camera's side and the emitter
+  // check take their polygons here too.
+  std::unique_ptr<ViewProbe> probe;
+  if (chooseSide) probe = std::make_unique<ViewProbe>(info.bounds);
+  std::unique_ptr<EmitterCheck> check;
+  if (root) {
+    check = std::make_unique<EmitterCheck>(info.bounds, info.materials, emitters, kEmitterCheckChunk);
+  }
+  emitters.clear();
+  emitters.shrink_to_fit();
+  struct OwnPiece {
+    uint32_t env, source;  // source: in p->scene.polygons
+    Polygon polygon;
+  };
+  std::vector<OwnPiece> own;
+  std::vector<std::pair<uint32_t, double>> emitted;  // (environment, emitted power) per emitting piece
+  Status failed;
+  Scene one;
+  one.objPath = o.scene;
+  one.bounds = info.bounds;
+  Partition cut;
+  s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
+    if (probe) probe->Add(i, poly);
+    if (check) check->Add(i, poly);
+    if (!failed.ok()) return;
+    one.polygons.assign(1, poly);
+    Status st = PartitionScene(one, p->grid, &cut);
+    if (!st.ok()) {
+      failed = st;
+      return;
+    }
+    const Material& mat = info.materials[poly.material];
+    uint32_t source = kNoPatch;
+    for (size_t k = 0; k < cut.scene.polygons.size(); ++k) {
+      const uint32_t e = cut.env[k];
+      const Polygon& piece = cut.scene.polygons[k];
+      double patches = 0.0;
+      st = CountPolygonPatches(o.scene, piece, p->patchSize, &patches, &p->envVertices[e]);
+      if (!st.ok()) {
+        failed = Status::Error("vismask: --patch-size: " + st.ToString());
+        return;
+      }
+      p->envPatches[e] += patches;
+      if (p->twins.all || (p->twins.emitters && Emits(mat))) p->envTwins[e] += patches;
+      if (Emits(mat))
+        emitted.emplace_back(e, (static_cast<double>(mat.ke.x) + mat.ke.y + mat.ke.z) * piece.area);
+      if (e < first || e >= end) continue;
+      if (source == kNoPatch) {
+        source = static_cast<uint32_t>(p->scene.polygons.size());
+        p->scene.polygons.push_back(poly);
+        p->sourceIds.push_back(i);
+        p->envPieceBytes[e] += PolygonBytes(poly) + sizeof(uint32_t);
+      }
+      // The piece twice: in the list made here and in the partition.
+      p->envPieceBytes[e] += 2 * (PolygonBytes(piece) + 3 * sizeof(uint32_t));
+      own.push_back({e, source, piece});
+    }
+  });
   if (!s.ok()) return s;
-  p->pieces.assign(p->grid.count(), {});
-  for (uint32_t i = 0; i < p->part.scene.polygons.size(); ++i)
-    p->pieces[p->part.env[i]].push_back(i);
+  if (!failed.ok()) return failed;
+  if (probe) p->side = probe->Side();
+  if (check)
+    p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
+  probe.reset();
+  check.reset();
+  // Environment by environment, as meshing each would refuse it.
+  for (uint32_t e = 0; e < total; ++e) {
+    if (p->envPatches[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: " +
+                           MeshSizeError(p->envPatches[e], p->patchSize, kMaxPatches).message());
+    if (p->envPatches[e] + p->envTwins[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: the mesh needs " +
+                           std::to_string(static_cast<uint64_t>(p->envPatches[e] + p->envTwins[e])) +
+                           " patches with both sides, more than the limit of " +
+                           std::to_string(kMaxPatches));
+  }
+  for (uint32_t e = 0; e < total; ++e) {
+    p->envPatches[e] += p->envTwins[e];
+    // A twin's lattice is a copy of its original's (at most all of them).
+    if (p->envTwins[e] > 0.0) p->envVertices[e] *= 2.0;
+    if (e < first) p->idBase += static_cast<uint32_t>(p->envPatches[e]);
+  }
+  // The power a ray carries: the emitted power (channels summed, in piece
+  // order by environment, the same on every rank) over --emitted-rays.
+  std::stable_sort(emitted.begin(), emitted.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  double power = 0.0;
+  for (const auto& [e, w] : emitted) power += w;
+  if (o.twoSidedEmitters) power *= 2.0;  // every emitter's twin emits as much
+
+  // This rank's pieces, by environment (within one, in source order).
+  std::stable_sort(own.begin(), own.end(), [](const OwnPiece& a, const OwnPiece& b) { return a.env < b.env; });
+  p->part.grid = p->grid;
+  p->part.scene.objPath = o.scene;
+  p->part.scene.materials = info.materials;
+  p->part.scene.bounds = info.bounds;
+  p->pieces.assign(total, {});
+  for (OwnPiece& piece : own) {
+    p->pieces[piece.env].push_back(static_cast<uint32_t>(p->part.scene.polygons.size()));
+    p->part.scene.polygons.push_back(std::move(piece.polygon));
+    p->part.env.push_back(piece.env);
+    p->part.source.push_back(piece.source);
+  }
+  own.clear();
+  own.shrink_to_fit();
+
   EnvOptions& e = p->envOptions;
   // 1e-6 of the scene's size, and at least 8 float steps of its largest
   // coordinate, so that the lift survives rounding far from the origin.
-  glm::vec3 mag = glm::max(glm::abs(p->scene.bounds.lo), glm::abs(p->scene.bounds.hi));
+  glm::vec3 mag = glm::max(glm::abs(info.bounds.lo), glm::abs(info.bounds.hi));
   float largest = std::fmax(mag.x, std::fmax(mag.y, mag.z));
   e.rayEpsilon = std::fmax(1e-6f * glm::length(extent),
                            8.0f * std::numeric_limits<float>::epsilon() * largest);
   e.rays = RayCap(o);
   e.sobol = o.sobol;
   if (o.rayAlloc == Options::RayAlloc::kPower) {
-    // The power a ray carries: the emitted power (channels summed, summed in
-    // polygon order, the same on every rank) over --emitted-rays.
-    double emitted = 0.0;
-    for (const Polygon& poly : p->part.scene.polygons) {
-      const glm::vec3& ke = p->part.scene.materials[poly.material].ke;
-      emitted += (static_cast<double>(ke.x) + ke.y + ke.z) * poly.area;
-    }
-    if (o.twoSidedEmitters) emitted *= 2.0;  // every emitter's twin emits as much
-    e.rayQuantum = emitted / static_cast<double>(o.emittedRays);
+    e.rayQuantum = power / static_cast<double>(o.emittedRays);
     e.minRays = o.minRays;
   }
-  p->twins.all = o.twoSided;
-  p->twins.emitters = o.twoSidedEmitters;
   e.seed = o.seed;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
@@ -58,13 +232,15 @@ Status PrepareScene(const Options& o, Prepared* p) {
   return Status::Ok();
 }
 
-// Meshes environments 0..end-1 in order, one at a time, giving each patch
-// its global (environment-major) id, and prepares those from `first` on
-// into `envs` (the earlier ones are meshed only to count their patches).
+// Meshes environments [first, end), which `p` holds, in order, one at a
+// time, giving each patch its global (environment-major) id from p.idBase
+// on, and prepares them into `envs`.
 Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
                    std::vector<std::unique_ptr<Environment>>* envs) {
-  uint32_t nextId = 0;
-  for (uint32_t e = 0; e < end; ++e) {
+  CHECK(p.first <= first && end <= p.end);
+  uint32_t nextId = p.idBase;
+  for (uint32_t e = p.first; e < first; ++e) nextId += static_cast<uint32_t>(p.envPatches[e]);
+  for (uint32_t e = first; e < end; ++e) {
     Mesh mesh;
     Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
     if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
@@ -75,17 +251,23 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
                            std::to_string(mesh.patches.size()) +
                            " patches with both sides, more than the limit of " +
                            std::to_string(kMaxPatches));
+    CHECK_EQ(static_cast<double>(mesh.patches.size()), p.envPatches[e]);
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
-    if (e < first) continue;
     TextureMesh(p.part.scene, p.textures, &mesh);
-    if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh);
+    if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh, &p.sourceIds);
     std::vector<uint32_t> ids(mesh.patches.size());
     for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
     envs->push_back(std::make_unique<Environment>());
     envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
   }
   return Status::Ok();
+}
+
+uint64_t OwnPatches(const Prepared& p) {
+  double n = 0.0;
+  for (uint32_t e = p.first; e < p.end; ++e) n += p.envPatches[e];
+  return static_cast<uint64_t>(n);
 }
 
 // Which scene textures environments [first, first + count) show: those of
@@ -113,6 +295,26 @@ int Init(Render* r) {
   PfmImage ref;
   PgmImage mask;  // --exclude: checked here too, before any output exists
   Prepared p;
+  // The budget: --mem-budget, or else the host's available memory shared by
+  // the ranks on it (a run the machine cannot hold is refused here, not
+  // killed by the kernel later). It covers init's own peak.
+  uint64_t budget = o.memBudget;
+  int onHost = std::max(1, r->transport->ranksOnHost());
+  if (budget == 0) budget = os::MemAvailableBytes() / static_cast<uint64_t>(onHost);
+  char whose[200];
+  if (o.memBudget > 0)
+    std::snprintf(whose, sizeof whose, "the budget of %llu bytes",
+                  static_cast<unsigned long long>(budget));
+  else
+    std::snprintf(whose, sizeof whose,
+                  "the memory available to it, %llu bytes (MemAvailable over %d rank%s on this "
+                  "host; --mem-budget sets another budget)",
+                  static_cast<unsigned long long>(budget), onHost, onHost > 1 ? "s" : "");
+  // Rank 0 holds the reference image and the mask all through init.
+  const uint64_t referenceBytes =
+      r->isRoot() ? (o.reference.empty() ? 0 : uint64_t(o.width) * o.height * 12) +
+                        (o.exclude.empty() ? 0 : uint64_t(o.width) * o.height)
+                  : 0;
   auto load = [&]() -> int {
     // The reference image, read (heap, init) first: a bad one is refused
     // before the scene is loaded and built.
@@ -134,15 +336,43 @@ int Init(Render* r) {
                                          ", the image is " + std::to_string(o.width) + "x" +
                                          std::to_string(o.height)));
     }
-    Status s = PrepareScene(o, &p);
+    // Pass 0: the statements counted, so that the parser's arrays are
+    // judged against the budget before they exist.
+    Status s = CountScene(o, &p);
+    if (!s.ok()) return FailInit(r, s);
+    const uint64_t held = referenceBytes;
+    if (budget > 0 && p.info.ParserBytes() + held + kInitBaseBytes > budget) {
+      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init to read the scene "
+                   "(%llu vertices, %llu texture coordinates and %llu normals), more than %s\n",
+                   r->transport->rank(),
+                   static_cast<unsigned long long>(p.info.ParserBytes() + held + kInitBaseBytes),
+                   static_cast<unsigned long long>(p.info.vertices),
+                   static_cast<unsigned long long>(p.info.uvs),
+                   static_cast<unsigned long long>(p.info.normals), whose);
+      return kExitUsage;
+    }
+    r->layout = EnvsOfRank(static_cast<uint32_t>(o.envs[0] * o.envs[1] * o.envs[2]),
+                           r->transport->size(), r->transport->rank());
+    s = PrepareScene(o, &p, r->layout.first, r->layout.first + r->layout.count, r->isRoot());
     if (!s.ok()) return FailInit(r, s);
     // Emitters that light nothing (a face wound the wrong way): one line each.
     if (r->isRoot())
-      for (const std::string& w : EmitterWarnings(p.scene)) os::PrintErr("%s\n", w.c_str());
+      for (const std::string& w : p.emitterWarnings) os::PrintErr("%s\n", w.c_str());
     if (r->isRoot()) PrintWarnings(p.textures);
-    r->numPolygons = p.scene.polygons.size();
+    r->numPolygons = p.info.numPolygons;
     r->patchSize = p.patchSize;
-    r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
+    // Before meshing: the pieces and a bound on the meshes and staged
+    // copies (the arenas are not known yet).
+    const uint64_t early = p.InitPeak(r->layout.first, r->layout.first + r->layout.count,
+                                      r->isRoot(), 0, 0, held);
+    if (budget > 0 && early > budget) {
+      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init (its pieces of the "
+                   "scene and a bound on meshing its %llu patches; the arenas come on top), more "
+                   "than %s\n",
+                   r->transport->rank(), static_cast<unsigned long long>(early),
+                   static_cast<unsigned long long>(OwnPatches(p)), whose);
+      return kExitUsage;
+    }
     s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
     if (!s.ok()) return FailInit(r, s);
     return kExitOk;
@@ -183,30 +413,24 @@ int Init(Render* r) {
   for (auto& e : r->envs) envBytes += e->footprint().total;
   uint64_t need = envBytes + ArenaRoundUp(measure.used());
   r->predictedBytes = need;
-  // The budget: --mem-budget, or else the host's available memory shared by
-  // the ranks on it (a run the machine cannot hold is refused here, not
-  // killed by the kernel later).
-  uint64_t budget = o.memBudget;
-  int onHost = std::max(1, r->transport->ranksOnHost());
-  if (budget == 0) budget = os::MemAvailableBytes() / static_cast<uint64_t>(onHost);
-  if (budget > 0 && need > budget) {
+  // Init at its peak: the staged copies of the environments with their
+  // arenas (or, earlier, the passes or the meshing), whichever is larger.
+  r->initPeakBytes = p.InitPeak(r->layout.first, r->layout.first + r->layout.count, r->isRoot(),
+                                envBytes, ArenaRoundUp(measure.used()), referenceBytes);
+  if (budget > 0 && std::max(need, r->initPeakBytes) > budget) {
     // Every rank checks its own need; each that is over says so.
-    char whose[200];
-    if (o.memBudget > 0)
-      std::snprintf(whose, sizeof whose, "the budget of %llu bytes",
-                    static_cast<unsigned long long>(budget));
-    else
-      std::snprintf(whose, sizeof whose,
-                    "the memory available to it, %llu bytes (MemAvailable over %d rank%s on this "
-                    "host; --mem-budget sets another budget)",
-                    static_cast<unsigned long long>(budget), onHost, onHost > 1 ? "s" : "");
     os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes (environment arenas %llu + rank "
-                 "buffers %llu), more than %s\n",
-                 r->transport->rank(), static_cast<unsigned long long>(need),
+                 "buffers %llu; %llu at the peak of init), more than %s\n",
+                 r->transport->rank(), static_cast<unsigned long long>(std::max(need, r->initPeakBytes)),
                  static_cast<unsigned long long>(envBytes),
-                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())), whose);
+                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())),
+                 static_cast<unsigned long long>(r->initPeakBytes), whose);
     return kExitUsage;
   }
+  // What init no longer needs goes before the arenas are made.
+  p.part = Partition();
+  p.scene.polygons = std::vector<Polygon>();
+  p.pieces = std::vector<std::vector<uint32_t>>();
   // The system may refuse what the budget allowed (no --mem-budget, ulimit
   // -v, overcommit off): a user error naming the bytes, not a CHECK.
   auto refused = [&](const char* what, uint64_t bytes) {
@@ -226,7 +450,7 @@ int Init(Render* r) {
   } else {
     r->hasSide = true;
     r->sideChosen = !o.hasView;
-    r->side = o.hasView ? o.view : ChooseViewSide(p.scene);
+    r->side = o.hasView ? o.view : p.side;
     r->camera = SideCamera(p.scene.bounds, r->side);
   }
   if (!MakeView(r->camera, o.width, o.height, &r->view))
