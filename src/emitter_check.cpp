@@ -134,7 +134,17 @@ void EmitterCheck::Flush() {
     const uint32_t base = here ? firstPatch[src.polygon - chunkFirst_] : 0;
     for (uint32_t r = 0; r < 2 * kEmitterCheckRays; ++r) {
       RayState& s = rays_[src.firstRay + r];
-      Ray ray{s.o, s.d, 0.0f, std::numeric_limits<float>::infinity()};
+      float tMax = std::numeric_limits<float>::infinity();
+      if (s.t != kNoHit) {
+        // A ray that hit already: a back ray's answer is in (it hit), a
+        // front ray's can change only by a hit nearer than both its hit
+        // and the near distance (with a margin over rounding: the near
+        // test itself is made in Finish, as on one grid).
+        if (r % 2 == 1) continue;
+        const float nearT = static_cast<float>(nearDistance_ / glm::length(s.d)) * (1.0f + 1e-5f);
+        tMax = std::min(s.t, nearT);
+      }
+      Ray ray{s.o, s.d, 0.0f, tMax};
       Hit hit;
       if (grid.Intersect(ray, Skip(here ? base + s.patch : kNoPatch), &hit) && hit.t < s.t) s.t = hit.t;
     }

@@ -27,31 +27,43 @@ bool Emits(const Material& m) { return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z 
 
 }  // namespace
 
+uint64_t Prepared::StagedBound(uint32_t e) const {
+  // Environment::Prepare's copies until Build: per patch the patch, its
+  // geometry, texture, twin id and smooth edges; per lattice vertex its
+  // position, a smooth-vertex record, a cut flag and normal.
+  constexpr uint64_t kPerPatch = sizeof(Patch) + sizeof(PatchGeom) + sizeof(PatchTexture) + 8;
+  constexpr uint64_t kPerVertex = sizeof(glm::vec3) + sizeof(SmoothVertex) + 20;
+  return static_cast<uint64_t>(envPatches[e]) * kPerPatch +
+         static_cast<uint64_t>(envVertices[e]) * kPerVertex;
+}
+
 uint64_t Prepared::MeshBound(uint32_t e) const {
-  // Per patch: the mesh's patch (up to 3 copies while AddTwins grows the
-  // vector past its reserve), the staged patch, geometry and texture, twin
-  // ids, the grid plan's scratch; per lattice vertex: the mesh's and the
-  // staged copy (3 while growing), smooth-vertex records (mesh, found,
-  // staged), a seen flag.
-  constexpr uint64_t kPerPatch = 4 * sizeof(Patch) + sizeof(PatchGeom) + 3 * sizeof(PatchTexture) +
-                                 4 * sizeof(uint32_t) + 64;
-  constexpr uint64_t kPerVertex = 4 * sizeof(glm::vec3) + 3 * sizeof(SmoothVertex) + 8;
+  // The Mesh an environment is made from (freed once it is staged): its
+  // patches and positions (1.5 times, AddTwins growing them past their
+  // reserve), twin ids, textures, patch ids, the grid plan's scratch; its
+  // smooth-vertex records twice (found, kept) and a seen flag.
+  constexpr uint64_t kPerPatch = 3 * sizeof(Patch) / 2 + 6 + sizeof(PatchTexture) + 4 + 64;
+  constexpr uint64_t kPerVertex = 3 * sizeof(glm::vec3) / 2 + 2 * sizeof(SmoothVertex) + 1;
   return static_cast<uint64_t>(envPatches[e]) * kPerPatch +
          static_cast<uint64_t>(envVertices[e]) * kPerVertex;
 }
 
 uint64_t Prepared::InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
                             uint64_t rankArena, uint64_t held) const {
-  uint64_t pieceBytes = 0, meshBytes = 0;
+  uint64_t pieceBytes = 0, stagedBytes = 0, meshBytes = 0;
   for (uint32_t e = first; e < end; ++e) {
     pieceBytes += envPieceBytes[e];
-    meshBytes += MeshBound(e);
+    stagedBytes += StagedBound(e);
+    meshBytes = std::max(meshBytes, MeshBound(e));  // one mesh at a time
   }
   // Per environment of the whole grid: its counts.
   held += kInitBaseBytes + textureBytes + 4 * sizeof(double) * envPatches.size();
   const uint64_t parse = info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes() + (root ? checkBytes : 0);
-  const uint64_t mesh = pieceBytes + meshBytes;
-  const uint64_t build = meshBytes + envArenas + rankArena;
+  const uint64_t mesh = pieceBytes + stagedBytes + meshBytes;
+  // The pieces are freed before the arenas are made, but their small blocks
+  // may stay in the process's heap: counted, so that the bound holds for
+  // the resident set too.
+  const uint64_t build = pieceBytes + stagedBytes + envArenas + rankArena;
   return held + std::max(parse, std::max(mesh, build));
 }
 
@@ -142,6 +154,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
         return;
       }
       p->envPatches[e] += patches;
+      if (e < first) ++p->pieceBase;
       if (p->twins.all || (p->twins.emitters && Emits(mat))) p->envTwins[e] += patches;
       if (Emits(mat))
         emitted.emplace_back(e, (static_cast<double>(mat.ke.x) + mat.ke.y + mat.ke.z) * piece.area);
@@ -256,6 +269,10 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     nextId += static_cast<uint32_t>(mesh.patches.size());
     TextureMesh(p.part.scene, p.textures, &mesh);
     if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh, &p.sourceIds);
+    // Patch::surface is the piece's index in the whole partition (the
+    // raster's fragment id, compared across ranks): the rank's pieces are
+    // those of its environments, after the pieces of all before them.
+    for (Patch& patch : mesh.patches) patch.surface += p.pieceBase;
     std::vector<uint32_t> ids(mesh.patches.size());
     for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
     envs->push_back(std::make_unique<Environment>());

@@ -226,7 +226,8 @@ struct Prepared {
   // Every environment: patches (twins included) and lattice vertices, counted.
   std::vector<double> envPatches, envTwins, envVertices;
   std::vector<uint64_t> envPieceBytes;  // held environments: their pieces' heap
-  uint32_t idBase = 0;  // the global id of this rank's first patch
+  uint32_t idBase = 0;     // the global id of this rank's first patch
+  uint32_t pieceBase = 0;  // the index of its first piece in the whole partition
   ViewSide side = ViewSide::kFront;  // chosen (without --camera or --view)
   std::vector<std::string> emitterWarnings;  // rank 0
   float patchSize = 0.0f;
@@ -239,15 +240,17 @@ struct Prepared {
   uint64_t textureBytes = 0;  // the decoded textures' heap
   uint64_t checkBytes = 0;    // rank 0: the emitter check's heap (a bound)
 
-  // A bound on the heap that meshing and staging environment e takes
-  // (the mesh and the environment's staged copy, from its counts).
+  // Bounds, from environment e's counted patches and vertices, on the heap
+  // its staged copy (Environment::Prepare, until Build) and its mesh (until
+  // staged) take.
+  uint64_t StagedBound(uint32_t e) const;
   uint64_t MeshBound(uint32_t e) const;
   // A bound on the heap init holds at its peak on a rank holding
   // environments [first, end), whose arenas take envArenas and rankArena
   // bytes; `held`: what init keeps all along besides (the reference image).
   // The stages: pass 1 and 2 (the parser's arrays, the pieces, the camera's
-  // probe, the emitter check), meshing (the pieces, each environment's
-  // mesh and staged copy), building (the staged copies and the arenas).
+  // probe, the emitter check), meshing (the pieces, the staged copies, one
+  // mesh), building (the pieces' heap, the staged copies and the arenas).
   uint64_t InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
                     uint64_t rankArena, uint64_t held) const;
 };
