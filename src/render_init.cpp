@@ -109,6 +109,15 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->twins.all = o.twoSided;
   p->twins.emitters = o.twoSidedEmitters;
 
+  // Before pass 2 allocates: the parser's arrays, the camera's probe and
+  // the emitter check against the budget; then the pieces as they come.
+  const uint64_t passBytes = p->held + kInitBaseBytes + info.ParserBytes() + ViewProbe::HeapBytes() +
+                             (root ? p->checkBytes : 0);
+  if (p->budget > 0 && passBytes > p->budget) {
+    if (p->overBudget) p->overBudget(passBytes, "to read the scene (the vertex arrays, the camera probe, the emitter check)");
+    return Status::Error("");
+  }
+  uint64_t pieceTotal = 0;
   // Pass 2: every polygon clipped into the environments; this rank keeps
   // the pieces of its own and counts the patches of every environment (ids
   // are global, environment-major). The camera's side and the emitter
@@ -167,6 +176,12 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       }
       // The piece twice: in the list made here and in the partition.
       p->envPieceBytes[e] += 2 * (PolygonBytes(piece) + 3 * sizeof(uint32_t));
+      pieceTotal += 2 * (PolygonBytes(piece) + 3 * sizeof(uint32_t)) + PolygonBytes(poly);
+      if (p->budget > 0 && passBytes + pieceTotal > p->budget) {
+        if (p->overBudget) p->overBudget(passBytes + pieceTotal, "to hold its pieces of the scene (and more to come)");
+        failed = Status::Error("");
+        return;
+      }
       own.push_back({e, source, piece});
     }
   });
@@ -370,8 +385,15 @@ int Init(Render* r) {
     }
     r->layout = EnvsOfRank(static_cast<uint32_t>(o.envs[0] * o.envs[1] * o.envs[2]),
                            r->transport->size(), r->transport->rank());
+    p.budget = budget;
+    p.held = held;
+    p.overBudget = [&](uint64_t need, const char* what) {
+      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init %s, more than %s\n",
+                   r->transport->rank(), static_cast<unsigned long long>(need), what, whose);
+    };
     s = PrepareScene(o, &p, r->layout.first, r->layout.first + r->layout.count, r->isRoot());
-    if (!s.ok()) return FailInit(r, s);
+    // (An error with no text: over the budget, which this rank has said.)
+    if (!s.ok()) return s.message().empty() ? kExitUsage : FailInit(r, s);
     // Emitters that light nothing (a face wound the wrong way): one line each.
     if (r->isRoot())
       for (const std::string& w : p.emitterWarnings) os::PrintErr("%s\n", w.c_str());

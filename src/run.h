@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <functional>
 #include <memory>
 #include <new>
 #include <string>
@@ -237,6 +238,13 @@ struct Prepared {
   TwinOptions twins;  // --two-sided, --two-sided-emitters
   EnvOptions envOptions;
   uint32_t packetBytes = 0;
+  // The budget the passes are held to (0: none), what init holds besides
+  // (the reference image), and how a rank says it is over: the passes
+  // judge their own arrays, probe and check after pass 1, and their pieces
+  // as pass 2 takes them, before holding more than the budget.
+  uint64_t budget = 0;
+  uint64_t held = 0;
+  std::function<void(uint64_t need, const char* what)> overBudget;
   uint64_t textureBytes = 0;  // the decoded textures' heap
   uint64_t checkBytes = 0;    // rank 0: the emitter check's heap (a bound)
 
