@@ -74,6 +74,9 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // emitter check (rank 0), nothing else of the polygons.
   std::vector<std::pair<uint32_t, Polygon>> emitters;
   size_t numEmitters = 0;
+  // Each polygon, as mended, with its corners, area and material: where a
+  // work-balanced split (an accumulator fed one polygon at a time) takes
+  // them, its planes then set p->grid before pass 2 clips with it.
   Status s = ScanObj(o.scene, o.load, [&](uint32_t i, const Polygon& poly) {
     if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
     ++numEmitters;
