@@ -280,6 +280,8 @@ Status CountScene(const Options& o, Prepared* p);
 Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end, bool root);
 Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
                    std::vector<std::unique_ptr<Environment>>* envs);
+// The patches (twins included) of the environments p holds.
+uint64_t OwnPatches(const Prepared& p);
 std::vector<uint8_t> TexturesUsed(const Prepared& p, uint32_t first, uint32_t count);
 int Init(Render* r);
 void PrintWarnings(const SceneTextures& t);
