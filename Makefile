@@ -122,7 +122,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test viewer view viewer-screenshot install uninstall headers clean test-cross experiments cluster-experiments bench fuzz fuzz-deps fuzz-report stability
+.PHONY: all deps demo test viewer view viewer-screenshot install uninstall headers clean test-cross experiments cluster-experiments cluster-million bench fuzz fuzz-deps fuzz-report stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -359,6 +359,13 @@ cluster-experiments:
 	tools/install-deps --cluster
 	$(MAKE) all $(BUILD)/mpi-wait.so
 	tools/cluster-experiments
+
+# The million-patch case alone (issue 20; part of cluster-experiments too):
+# rewrites only its section of docs/CLUSTER.md.
+cluster-million:
+	tools/install-deps --cluster
+	$(MAKE) all $(BUILD)/mpi-wait.so
+	tools/cluster-experiments --million-only
 
 # libFuzzer with ASan + UBSan (clang: tools/install-deps --fuzz; tests/fuzz/):
 # build/fuzz/scene_fuzz, the OBJ/MTL loader (seeds tests/fuzz/corpus), and

@@ -88,8 +88,9 @@ int Main(int argc, const char* const* argv) {
   try {
     rc = Init(r.get());
   } catch (const std::bad_alloc&) {
-    // Init's heap (the scene, the mesh) is not in the budget: a scene too
-    // big to load is refused here, with what this process had reached.
+    // Init's peak is in the budget, but the system may still refuse it
+    // (ulimit -v, overcommit off): refused here, with what this process
+    // had reached.
     os::PrintErr("vismask: rank %d: out of memory at init, loading and meshing the scene (peak "
                  "resident %llu bytes); a larger --patch-size, fewer ranks on this host or more "
                  "memory\n",

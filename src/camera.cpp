@@ -77,100 +77,111 @@ Camera SideCamera(const Bounds& b, ViewSide side) {
 
 Camera DefaultCamera(const Bounds& bounds) { return SideCamera(bounds, ViewSide::kFront); }
 
-void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {
+ViewProbe::ViewProbe(const Bounds& bounds) {
   constexpr int n = kViewProbeRays;
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  std::vector<glm::dvec3> dir(n * n);
-  std::vector<double> depth(n * n);
-  std::vector<uint8_t> front(n * n);
-  std::vector<glm::dvec2> poly;
-  std::vector<double> nearest;
-  std::vector<uint32_t> order;
   for (int s = 0; s < kNumViewSides; ++s) {
-    rays[s] = 0;
-    View view;
-    if (!MakeView(SideCamera(scene.bounds, static_cast<ViewSide>(s)), n, n, &view)) continue;
-    const glm::dvec3 eye(view.eye), right(view.right), up(view.up), forward(view.forward);
+    Probe& probe = probes_[s];
+    probe.ok = MakeView(SideCamera(bounds, static_cast<ViewSide>(s)), n, n, &probe.view);
+    if (!probe.ok) continue;
+    const View& view = probe.view;
+    const glm::dvec3 right(view.right), up(view.up), forward(view.forward);
     const double focal = view.focal, halfN = 0.5 * n;
+    probe.dir.resize(n * n);
     // One ray through each pixel centre of an n x n image, row 0 at the top.
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x)
-        dir[y * n + x] = focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
-    std::fill(depth.begin(), depth.end(), kInf);
-    std::fill(front.begin(), front.end(), uint8_t{0});
-    // Near to far by the nearest corner (file order on ties), so that a
-    // polygon behind what a pixel already sees is passed over at once.
-    nearest.resize(scene.polygons.size());
-    order.resize(scene.polygons.size());
-    for (uint32_t k = 0; k < scene.polygons.size(); ++k) {
-      double z = kInf;
-      for (const glm::vec3& corner : scene.polygons[k].corners)
-        z = std::min(z, glm::dot(glm::dvec3(corner) - eye, forward));
-      nearest[k] = z / focal;  // in units of t: a pixel's ray has dot(dir, forward) = focal
-      order[k] = k;
-    }
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-      return nearest[a] < nearest[b] || (nearest[a] == nearest[b] && a < b);
-    });
-    for (uint32_t k : order) {
-      const Polygon& p = scene.polygons[k];
-      const double tMin = nearest[k];
-      // The pixels whose centres the polygon's projected corners bound. The
-      // eye is outside the box, so every corner is in front of it; were one
-      // not, the whole image is tested.
-      double minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf;
-      bool behind = false;
-      for (const glm::vec3& corner : p.corners) {
-        glm::dvec3 d = glm::dvec3(corner) - eye;
-        double z = glm::dot(d, forward);
-        if (!(z > 0.0)) {
-          behind = true;
-          break;
-        }
-        double sx = halfN + focal * glm::dot(d, right) / z, sy = halfN - focal * glm::dot(d, up) / z;
-        minX = std::min(minX, sx), maxX = std::max(maxX, sx);
-        minY = std::min(minY, sy), maxY = std::max(maxY, sy);
-      }
-      int x0 = 0, x1 = n - 1, y0 = 0, y1 = n - 1;
-      if (!behind) {
-        x0 = std::max(0, static_cast<int>(std::floor(minX - 0.5)));
-        x1 = std::min(n - 1, static_cast<int>(std::ceil(maxX - 0.5)));
-        y0 = std::max(0, static_cast<int>(std::floor(minY - 0.5)));
-        y1 = std::min(n - 1, static_cast<int>(std::ceil(maxY - 0.5)));
-        if (x0 > x1 || y0 > y1) continue;
-      }
-      // The inside test in the plane's projection that distorts it least.
-      const glm::dvec3 normal(p.normal);
-      int drop = 0;
-      for (int a = 1; a < 3; ++a)
-        if (std::fabs(normal[a]) > std::fabs(normal[drop])) drop = a;
-      const int pu = drop == 0 ? 1 : 0, pv = drop == 2 ? 1 : 2;
-      poly.clear();
-      for (const glm::vec3& corner : p.corners) poly.emplace_back(corner[pu], corner[pv]);
-      const double reach = glm::dot(normal, glm::dvec3(p.corners[0]) - eye);
-      for (int y = y0; y <= y1; ++y) {
-        for (int x = x0; x <= x1; ++x) {
-          const int i = y * n + x;
-          if (tMin * (1.0 - 1e-6) >= depth[i]) continue;  // (dot(dir, forward) is focal to rounding)
-          double facing = glm::dot(normal, dir[i]);
-          if (facing == 0.0) continue;  // edge-on
-          double t = reach / facing;
-          // Strictly nearer: of coincident polygons the first in the file is seen.
-          if (!(t > 0.0) || !(t < depth[i])) continue;
-          glm::dvec3 hit = eye + t * dir[i];
-          if (!Inside(poly, glm::dvec2(hit[pu], hit[pv]))) continue;
-          depth[i] = t;
-          front[i] = facing < 0.0;
-        }
-      }
-    }
-    for (uint8_t f : front) rays[s] += f;
+        probe.dir[y * n + x] = focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
+    probe.depth.assign(n * n, kInf);
+    probe.nearest.assign(n * n, kInf);
+    probe.index.assign(n * n, 0);
+    probe.front.assign(n * n, 0);
   }
 }
 
-ViewSide ChooseViewSide(const Scene& scene) {
+void ViewProbe::Add(uint32_t index, const Polygon& p) {
+  constexpr int n = kViewProbeRays;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  for (Probe& probe : probes_) {
+    if (!probe.ok) continue;
+    const View& view = probe.view;
+    const glm::dvec3 eye(view.eye), right(view.right), up(view.up), forward(view.forward);
+    const double focal = view.focal, halfN = 0.5 * n;
+    // The polygon's nearest corner along the view, in units of t (a pixel's
+    // ray has dot(dir, forward) = focal): of polygons a ray meets at the
+    // same t, the one with the nearer corner, then the first in the file,
+    // is seen (the order ChooseViewSide's near-to-far sweep gave).
+    double tMin = kInf;
+    for (const glm::vec3& corner : p.corners)
+      tMin = std::min(tMin, glm::dot(glm::dvec3(corner) - eye, forward));
+    tMin /= focal;
+    // The pixels whose centres the polygon's projected corners bound. The
+    // eye is outside the box, so every corner is in front of it; were one
+    // not, the whole image is tested.
+    double minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf;
+    bool behind = false;
+    for (const glm::vec3& corner : p.corners) {
+      glm::dvec3 d = glm::dvec3(corner) - eye;
+      double z = glm::dot(d, forward);
+      if (!(z > 0.0)) {
+        behind = true;
+        break;
+      }
+      double sx = halfN + focal * glm::dot(d, right) / z, sy = halfN - focal * glm::dot(d, up) / z;
+      minX = std::min(minX, sx), maxX = std::max(maxX, sx);
+      minY = std::min(minY, sy), maxY = std::max(maxY, sy);
+    }
+    int x0 = 0, x1 = n - 1, y0 = 0, y1 = n - 1;
+    if (!behind) {
+      x0 = std::max(0, static_cast<int>(std::floor(minX - 0.5)));
+      x1 = std::min(n - 1, static_cast<int>(std::ceil(maxX - 0.5)));
+      y0 = std::max(0, static_cast<int>(std::floor(minY - 0.5)));
+      y1 = std::min(n - 1, static_cast<int>(std::ceil(maxY - 0.5)));
+      if (x0 > x1 || y0 > y1) continue;
+    }
+    // The inside test in the plane's projection that distorts it least.
+    const glm::dvec3 normal(p.normal);
+    int drop = 0;
+    for (int a = 1; a < 3; ++a)
+      if (std::fabs(normal[a]) > std::fabs(normal[drop])) drop = a;
+    const int pu = drop == 0 ? 1 : 0, pv = drop == 2 ? 1 : 2;
+    poly_.clear();
+    for (const glm::vec3& corner : p.corners) poly_.emplace_back(corner[pu], corner[pv]);
+    const double reach = glm::dot(normal, glm::dvec3(p.corners[0]) - eye);
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const int i = y * n + x;
+        if (tMin * (1.0 - 1e-6) >= probe.depth[i]) continue;  // (dot(dir, forward) is focal to rounding)
+        double facing = glm::dot(normal, probe.dir[i]);
+        if (facing == 0.0) continue;  // edge-on
+        double t = reach / facing;
+        if (!(t > 0.0)) continue;
+        const bool nearer = t < probe.depth[i] ||
+                            (t == probe.depth[i] &&
+                             (tMin < probe.nearest[i] ||
+                              (tMin == probe.nearest[i] && index < probe.index[i])));
+        if (!nearer) continue;
+        glm::dvec3 hit = eye + t * probe.dir[i];
+        if (!Inside(poly_, glm::dvec2(hit[pu], hit[pv]))) continue;
+        probe.depth[i] = t;
+        probe.nearest[i] = tMin;
+        probe.index[i] = index;
+        probe.front[i] = facing < 0.0;
+      }
+    }
+  }
+}
+
+void ViewProbe::Rays(uint32_t rays[kNumViewSides]) const {
+  for (int s = 0; s < kNumViewSides; ++s) {
+    rays[s] = 0;
+    for (uint8_t f : probes_[s].front) rays[s] += f;
+  }
+}
+
+ViewSide ViewProbe::Side() const {
   uint32_t rays[kNumViewSides];
-  VisibleFrontRays(scene, rays);
+  Rays(rays);
   uint32_t best = *std::max_element(rays, rays + kNumViewSides);
   // Near ties (counts within 1% of the best, the probe's own resolution
   // noise for a symmetric scene) go to the earlier side: front first.
@@ -179,6 +190,22 @@ ViewSide ChooseViewSide(const Scene& scene) {
   return ViewSide::kFront;
 }
 
+uint64_t ViewProbe::HeapBytes() {
+  constexpr uint64_t n2 = uint64_t{kViewProbeRays} * kViewProbeRays;
+  return kNumViewSides * n2 * (sizeof(glm::dvec3) + 2 * sizeof(double) + sizeof(uint32_t) + 1);
+}
+
+void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {
+  ViewProbe probe(scene.bounds);
+  for (uint32_t k = 0; k < scene.polygons.size(); ++k) probe.Add(k, scene.polygons[k]);
+  probe.Rays(rays);
+}
+
+ViewSide ChooseViewSide(const Scene& scene) {
+  ViewProbe probe(scene.bounds);
+  for (uint32_t k = 0; k < scene.polygons.size(); ++k) probe.Add(k, scene.polygons[k]);
+  return probe.Side();
+}
 bool MakeView(const Camera& c, int width, int height, View* v) {
   if (!(c.fovyDeg > 0.0f && c.fovyDeg < 180.0f) || width <= 0 || height <= 0) return false;
   glm::vec3 f = c.target - c.eye;

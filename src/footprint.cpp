@@ -10,7 +10,7 @@ namespace vismask::run {
 struct FootprintFigures {
   std::vector<std::unique_ptr<Environment>> envs;
   std::vector<Render> probes;  // per rank: its own buffers' layout
-  std::vector<uint64_t> rankTotal, rankEnvBytes, rankOwn;
+  std::vector<uint64_t> rankTotal, rankEnvBytes, rankOwn, rankInitPeak;
   uint64_t patches = 0, twins = 0, envBytes = 0, total = 0;
   GlbMesh exportMesh;  // counts only: what --export would write
 };
@@ -23,6 +23,7 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
   f->rankTotal.assign(ranks, 0);
   f->rankEnvBytes.assign(ranks, 0);
   f->rankOwn.assign(ranks, 0);
+  f->rankInitPeak.assign(ranks, 0);
   f->probes = std::vector<Render>(ranks);
   auto& envs = f->envs;
   for (int k = 0; k < ranks; ++k) {
@@ -45,6 +46,11 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
     for (uint32_t e = r.layout.first; e < r.layout.first + r.layout.count; ++e)
       f->rankEnvBytes[k] += envs[e]->footprint().total;
     f->rankTotal[k] = f->rankEnvBytes[k] + f->rankOwn[k];
+    const uint64_t held = k == 0 ? (o.reference.empty() ? 0 : uint64_t(o.width) * o.height * 12) +
+                                       (o.exclude.empty() ? 0 : uint64_t(o.width) * o.height)
+                                 : 0;
+    f->rankInitPeak[k] = p.InitPeak(r.layout.first, r.layout.first + r.layout.count, k == 0,
+                                    f->rankEnvBytes[k], f->rankOwn[k], held);
     f->total += f->rankTotal[k];
   }
   for (const auto& e : envs) {
@@ -59,7 +65,9 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
 
 int Footprint(const Options& o) {
   Prepared p;
-  Status s = PrepareScene(o, &p);
+  Status s = CountScene(o, &p);
+  if (!s.ok()) return Fail(s);
+  s = PrepareScene(o, &p, 0, static_cast<uint32_t>(o.envs[0] * o.envs[1] * o.envs[2]), false);
   if (!s.ok()) return Fail(s);
   PrintWarnings(p.textures);
   uint32_t total = static_cast<uint32_t>(p.grid.count());
@@ -71,6 +79,10 @@ int Footprint(const Options& o) {
   if (p.twins.any()) {
     Prepared q = p;
     q.twins = TwinOptions{};
+    for (size_t e = 0; e < q.envPatches.size(); ++e) {
+      q.envPatches[e] -= q.envTwins[e];
+      q.envTwins[e] = 0.0;
+    }
     s = MeasureFootprint(o, q, &one);
     if (!s.ok()) return Fail(s);
   }
@@ -122,10 +134,10 @@ int Footprint(const Options& o) {
       add("    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
           "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
           "\"texture_bytes\": %llu, \"export_bytes\": %llu, \"rank_arena_bytes\": %llu, "
-          "\"total_bytes\": %llu}%s\n",
+          "\"total_bytes\": %llu, \"init_peak_bytes\": %llu, \"budget_bytes\": %llu}%s\n",
           k, r.layout.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
           (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)r.rankExportBytes, (ull)rankOwn[k],
-          (ull)rankTotal[k],
+          (ull)rankTotal[k], (ull)fig.rankInitPeak[k], (ull)std::max(rankTotal[k], fig.rankInitPeak[k]),
           k + 1 < ranks ? "," : "");
     }
     out += "  ]\n}\n";
@@ -167,8 +179,14 @@ int Footprint(const Options& o) {
           o.twoSided ? "--two-sided" : "--two-sided-emitters", (ull)fig.patches, (ull)fig.twins,
           (ull)base.patches, (ull)fig.total, (long long)fig.total - (long long)base.total,
           100.0 * (static_cast<double>(fig.total) / static_cast<double>(base.total) - 1.0));
+    add("\n%4s %14s %14s\n", "rank", "init_peak_B", "budget_B");
+    for (int k = 0; k < ranks; ++k)
+      add("%4d %14llu %14llu\n", k, (ull)fig.rankInitPeak[k],
+          (ull)std::max(rankTotal[k], fig.rankInitPeak[k]));
     add("\nbytes are arena reservations (the whole of a solve's memory after init); a rank's\n"
-        "process also holds its binary and libraries (see run.json's memory section)\n");
+        "process also holds its binary and libraries (see run.json's memory section).\n"
+        "init_peak_B bounds init's own peak (the scene read in passes, the meshes and\n"
+        "staged copies beside the arenas); budget_B, the larger, is what --mem-budget must allow\n");
   }
   os::WriteOut(out.data(), out.size());
   return kExitOk;

@@ -112,6 +112,51 @@ void MeshTriangle(const Scene& scene, const Piece& t, Mesh* mesh) {
 
 }  // namespace
 
+namespace {
+
+// Plans the pieces of one polygon (appended to *pieces unless null) and
+// counts their patches and lattice vertices.
+Status PlanPolygon(const std::string& objPath, const Polygon& poly, uint32_t index, double s,
+                   std::vector<Piece>* pieces, double* numPatches, double* numVertices) {
+  std::vector<glm::dvec3> c;
+  for (const glm::vec3& v : poly.corners) c.emplace_back(v);
+  if (IsConvexQuad(c, glm::dvec3(poly.normal))) {
+    Piece q{index, 4, {c[0], c[1], c[2], c[3]}, 0.0, 0.0};
+    q.m = Divisions(std::max(glm::length(c[1] - c[0]), glm::length(c[2] - c[3])), s);
+    q.n = Divisions(std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1])), s);
+    *numPatches += q.m * q.n;
+    *numVertices += (q.m + 1) * (q.n + 1);
+    if (pieces) pieces->push_back(q);
+    return Status::Ok();
+  }
+  std::vector<std::array<size_t, 3>> tris;
+  if (!Triangulate(c, glm::dvec3(poly.normal), &tris))
+    return Status::At(objPath, poly.line, "cannot triangulate face");
+  for (const auto& tri : tris) {
+    Piece t{index, 3, {c[tri[0]], c[tri[1]], c[tri[2]], c[tri[2]]}, 0.0, 0.0};
+    double longest = std::max({glm::length(t.c[1] - t.c[0]), glm::length(t.c[2] - t.c[1]),
+                               glm::length(t.c[0] - t.c[2])});
+    t.n = t.m = Divisions(longest, s);
+    *numPatches += t.n * t.n;
+    *numVertices += (t.n + 1) * (t.n + 2) / 2;
+    if (pieces) pieces->push_back(t);
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status CountPolygonPatches(const std::string& objPath, const Polygon& polygon, float patchSize,
+                           double* patches, double* vertices) {
+  return PlanPolygon(objPath, polygon, 0, patchSize, nullptr, patches, vertices);
+}
+
+Status MeshSizeError(double numPatches, float patchSize, uint64_t maxPatches) {
+  return Status::Error("the mesh needs " + Num(numPatches) + " patches at patch size " +
+                       Num(patchSize) + ", more than the limit of " +
+                       Num(static_cast<double>(maxPatches)));
+}
+
 Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, float patchSize,
                  uint64_t maxPatches, Mesh* mesh) {
   if (!(std::isfinite(patchSize) && patchSize > 0.0f))
@@ -123,34 +168,11 @@ Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, floa
   double numPatches = 0.0, numVertices = 0.0;
   for (uint32_t index : polygons) {
     CHECK(index < scene.polygons.size());
-    const Polygon& poly = scene.polygons[index];
-    std::vector<glm::dvec3> c;
-    for (const glm::vec3& v : poly.corners) c.emplace_back(v);
-    if (IsConvexQuad(c, glm::dvec3(poly.normal))) {
-      Piece q{index, 4, {c[0], c[1], c[2], c[3]}, 0.0, 0.0};
-      q.m = Divisions(std::max(glm::length(c[1] - c[0]), glm::length(c[2] - c[3])), s);
-      q.n = Divisions(std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1])), s);
-      numPatches += q.m * q.n;
-      numVertices += (q.m + 1) * (q.n + 1);
-      pieces.push_back(q);
-      continue;
-    }
-    std::vector<std::array<size_t, 3>> tris;
-    if (!Triangulate(c, glm::dvec3(poly.normal), &tris))
-      return Status::At(scene.objPath, poly.line, "cannot triangulate face");
-    for (const auto& tri : tris) {
-      Piece t{index, 3, {c[tri[0]], c[tri[1]], c[tri[2]], c[tri[2]]}, 0.0, 0.0};
-      double longest = std::max({glm::length(t.c[1] - t.c[0]), glm::length(t.c[2] - t.c[1]),
-                                 glm::length(t.c[0] - t.c[2])});
-      t.n = t.m = Divisions(longest, s);
-      numPatches += t.n * t.n;
-      numVertices += (t.n + 1) * (t.n + 2) / 2;
-      pieces.push_back(t);
-    }
+    Status st = PlanPolygon(scene.objPath, scene.polygons[index], index, s, &pieces, &numPatches,
+                            &numVertices);
+    if (!st.ok()) return st;
   }
-  if (numPatches > static_cast<double>(maxPatches))
-    return Status::Error("the mesh needs " + Num(numPatches) + " patches at patch size " + Num(s) +
-                         ", more than the limit of " + Num(static_cast<double>(maxPatches)));
+  if (numPatches > static_cast<double>(maxPatches)) return MeshSizeError(numPatches, patchSize, maxPatches);
   // Patch and vertex ids are 32-bit (kNoPatch is reserved).
   const double kMaxId = static_cast<double>(kNoPatch);
   if (static_cast<double>(mesh->patches.size()) + numPatches >= kMaxId ||

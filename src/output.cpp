@@ -191,6 +191,10 @@ int WriteOutputs(Render* r, const SolveResult& res) {
     }
   }
   GatherByEnv(r, r->summaryMine, r->summaryAll, r->summary);
+  // Every rank's memory for run.json: predicted and measured.
+  Render::RankMemory mine{r->predictedBytes, r->initPeakBytes, os::PeakRssBytes(), os::FileRssBytes(), 0};
+  for (Environment* e : r->envPtrs) mine.bytesSent += e->stats().packetsSent * r->exchange.packetBytes;
+  r->transport->AllGather(&mine, sizeof mine, r->rankMemory);
   if (!r->isRoot()) return kExitOk;
 
   WarnIfEmpty(r->fb, r->options.hasCamera);

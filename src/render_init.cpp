@@ -1,93 +1,8 @@
-// Init: the scene loaded, cut into environments and meshed, the arenas
-// measured and made, the camera chosen, the outputs opened (run.h).
+// Init: the scene prepared (src/prepare.cpp), the memory budget checked,
+// the arenas measured and made, the camera set, the outputs opened (run.h).
 #include "run.h"
 
 namespace vismask::run {
-
-Status PrepareScene(const Options& o, Prepared* p) {
-  Status s = LoadScene(o.scene, &p->scene, o.load);
-  if (!s.ok()) return s;
-  s = LoadSceneTextures(p->scene, &p->textures);
-  if (!s.ok()) return s;
-  glm::vec3 extent = p->scene.bounds.hi - p->scene.bounds.lo;
-  float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
-  p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
-  p->tolerance = 1e-5f * maxExtent;
-  p->smooth = o.smooth;
-  for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
-  p->grid.box = p->scene.bounds;
-  s = PartitionScene(p->scene, p->grid, &p->part);
-  if (!s.ok()) return s;
-  p->pieces.assign(p->grid.count(), {});
-  for (uint32_t i = 0; i < p->part.scene.polygons.size(); ++i)
-    p->pieces[p->part.env[i]].push_back(i);
-  EnvOptions& e = p->envOptions;
-  // 1e-6 of the scene's size, and at least 8 float steps of its largest
-  // coordinate, so that the lift survives rounding far from the origin.
-  glm::vec3 mag = glm::max(glm::abs(p->scene.bounds.lo), glm::abs(p->scene.bounds.hi));
-  float largest = std::fmax(mag.x, std::fmax(mag.y, mag.z));
-  e.rayEpsilon = std::fmax(1e-6f * glm::length(extent),
-                           8.0f * std::numeric_limits<float>::epsilon() * largest);
-  e.rays = RayCap(o);
-  e.sobol = o.sobol;
-  if (o.rayAlloc == Options::RayAlloc::kPower) {
-    // The power a ray carries: the emitted power (channels summed, summed in
-    // polygon order, the same on every rank) over --emitted-rays.
-    double emitted = 0.0;
-    for (const Polygon& poly : p->part.scene.polygons) {
-      const glm::vec3& ke = p->part.scene.materials[poly.material].ke;
-      emitted += (static_cast<double>(ke.x) + ke.y + ke.z) * poly.area;
-    }
-    if (o.twoSidedEmitters) emitted *= 2.0;  // every emitter's twin emits as much
-    e.rayQuantum = emitted / static_cast<double>(o.emittedRays);
-    e.minRays = o.minRays;
-  }
-  p->twins.all = o.twoSided;
-  p->twins.emitters = o.twoSidedEmitters;
-  e.seed = o.seed;
-  e.maskMethod = o.maskMethod;
-  e.maskRes = o.maskRes;
-  e.roundShots = o.roundShots;
-  e.queueCapacity = o.queue;
-  e.maskCacheBytes = uint64_t{o.maskCacheKiB} << 10;
-  e.elements.perPatch = o.elementsPerPatch;
-  e.elements.maxDepth = o.elementDepth;
-  e.elements.threshold = o.elementSpread;
-  e.elements.chi2 = o.elementChi2;
-  p->packetBytes =
-      p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
-  return Status::Ok();
-}
-
-// Meshes environments 0..end-1 in order, one at a time, giving each patch
-// its global (environment-major) id, and prepares those from `first` on
-// into `envs` (the earlier ones are meshed only to count their patches).
-Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
-                   std::vector<std::unique_ptr<Environment>>* envs) {
-  uint32_t nextId = 0;
-  for (uint32_t e = 0; e < end; ++e) {
-    Mesh mesh;
-    Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
-    if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
-    // Twins in the environment of their originals, after all of its patches.
-    AddTwins(p.twins, &mesh);
-    if (mesh.patches.size() > kMaxPatches)
-      return Status::Error("vismask: --patch-size: the mesh needs " +
-                           std::to_string(mesh.patches.size()) +
-                           " patches with both sides, more than the limit of " +
-                           std::to_string(kMaxPatches));
-    for (Patch& patch : mesh.patches) patch.globalId += nextId;
-    nextId += static_cast<uint32_t>(mesh.patches.size());
-    if (e < first) continue;
-    TextureMesh(p.part.scene, p.textures, &mesh);
-    if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh);
-    std::vector<uint32_t> ids(mesh.patches.size());
-    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
-    envs->push_back(std::make_unique<Environment>());
-    envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
-  }
-  return Status::Ok();
-}
 
 // Which scene textures environments [first, first + count) show: those of
 // the textured materials of their polygon pieces that have uv.
@@ -114,6 +29,26 @@ int Init(Render* r) {
   PfmImage ref;
   PgmImage mask;  // --exclude: checked here too, before any output exists
   Prepared p;
+  // The budget: --mem-budget, or else the host's available memory shared by
+  // the ranks on it (a run the machine cannot hold is refused here, not
+  // killed by the kernel later). It covers init's own peak.
+  uint64_t budget = o.memBudget;
+  int onHost = std::max(1, r->transport->ranksOnHost());
+  if (budget == 0) budget = os::MemAvailableBytes() / static_cast<uint64_t>(onHost);
+  char whose[200];
+  if (o.memBudget > 0)
+    std::snprintf(whose, sizeof whose, "the budget of %llu bytes",
+                  static_cast<unsigned long long>(budget));
+  else
+    std::snprintf(whose, sizeof whose,
+                  "the memory available to it, %llu bytes (MemAvailable over %d rank%s on this "
+                  "host; --mem-budget sets another budget)",
+                  static_cast<unsigned long long>(budget), onHost, onHost > 1 ? "s" : "");
+  // Rank 0 holds the reference image and the mask all through init.
+  const uint64_t referenceBytes =
+      r->isRoot() ? (o.reference.empty() ? 0 : uint64_t(o.width) * o.height * 12) +
+                        (o.exclude.empty() ? 0 : uint64_t(o.width) * o.height)
+                  : 0;
   auto load = [&]() -> int {
     // The reference image, read (heap, init) first: a bad one is refused
     // before the scene is loaded and built.
@@ -135,15 +70,50 @@ int Init(Render* r) {
                                          ", the image is " + std::to_string(o.width) + "x" +
                                          std::to_string(o.height)));
     }
-    Status s = PrepareScene(o, &p);
+    // Pass 0: the statements counted, so that the parser's arrays are
+    // judged against the budget before they exist.
+    Status s = CountScene(o, &p);
     if (!s.ok()) return FailInit(r, s);
+    const uint64_t held = referenceBytes;
+    if (budget > 0 && p.info.ParserBytes() + held + kInitBaseBytes > budget) {
+      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init to read the scene "
+                   "(%llu vertices, %llu texture coordinates and %llu normals), more than %s\n",
+                   r->transport->rank(),
+                   static_cast<unsigned long long>(p.info.ParserBytes() + held + kInitBaseBytes),
+                   static_cast<unsigned long long>(p.info.vertices),
+                   static_cast<unsigned long long>(p.info.uvs),
+                   static_cast<unsigned long long>(p.info.normals), whose);
+      return kExitUsage;
+    }
+    r->layout = EnvsOfRank(static_cast<uint32_t>(o.envs[0] * o.envs[1] * o.envs[2]),
+                           r->transport->size(), r->transport->rank());
+    p.budget = budget;
+    p.held = held;
+    p.overBudget = [&](uint64_t need, const char* what) {
+      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init %s, more than %s\n",
+                   r->transport->rank(), static_cast<unsigned long long>(need), what, whose);
+    };
+    s = PrepareScene(o, &p, r->layout.first, r->layout.first + r->layout.count, r->isRoot());
+    // (An error with no text: over the budget, which this rank has said.)
+    if (!s.ok()) return s.message().empty() ? kExitUsage : FailInit(r, s);
     // Emitters that light nothing (a face wound the wrong way): one line each.
     if (r->isRoot())
-      for (const std::string& w : EmitterWarnings(p.scene)) os::PrintErr("%s\n", w.c_str());
+      for (const std::string& w : p.emitterWarnings) os::PrintErr("%s\n", w.c_str());
     if (r->isRoot()) PrintWarnings(p.textures);
-    r->numPolygons = p.scene.polygons.size();
+    r->numPolygons = p.info.numPolygons;
     r->patchSize = p.patchSize;
-    r->layout = EnvsOfRank(static_cast<uint32_t>(p.grid.count()), r->transport->size(), r->transport->rank());
+    // Before meshing: the pieces and a bound on the meshes and staged
+    // copies (the arenas are not known yet).
+    const uint64_t early = p.InitPeak(r->layout.first, r->layout.first + r->layout.count,
+                                      r->isRoot(), 0, 0, held);
+    if (budget > 0 && early > budget) {
+      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init (its pieces of the "
+                   "scene and a bound on meshing its %llu patches; the arenas come on top), more "
+                   "than %s\n",
+                   r->transport->rank(), static_cast<unsigned long long>(early),
+                   static_cast<unsigned long long>(OwnPatches(p)), whose);
+      return kExitUsage;
+    }
     s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
     if (!s.ok()) return FailInit(r, s);
     return kExitOk;
@@ -204,30 +174,24 @@ int Init(Render* r) {
   for (auto& e : r->envs) envBytes += e->footprint().total;
   uint64_t need = envBytes + ArenaRoundUp(measure.used());
   r->predictedBytes = need;
-  // The budget: --mem-budget, or else the host's available memory shared by
-  // the ranks on it (a run the machine cannot hold is refused here, not
-  // killed by the kernel later).
-  uint64_t budget = o.memBudget;
-  int onHost = std::max(1, r->transport->ranksOnHost());
-  if (budget == 0) budget = os::MemAvailableBytes() / static_cast<uint64_t>(onHost);
-  if (budget > 0 && need > budget) {
+  // Init at its peak: the staged copies of the environments with their
+  // arenas (or, earlier, the passes or the meshing), whichever is larger.
+  r->initPeakBytes = p.InitPeak(r->layout.first, r->layout.first + r->layout.count, r->isRoot(),
+                                envBytes, ArenaRoundUp(measure.used()), referenceBytes);
+  if (budget > 0 && std::max(need, r->initPeakBytes) > budget) {
     // Every rank checks its own need; each that is over says so.
-    char whose[200];
-    if (o.memBudget > 0)
-      std::snprintf(whose, sizeof whose, "the budget of %llu bytes",
-                    static_cast<unsigned long long>(budget));
-    else
-      std::snprintf(whose, sizeof whose,
-                    "the memory available to it, %llu bytes (MemAvailable over %d rank%s on this "
-                    "host; --mem-budget sets another budget)",
-                    static_cast<unsigned long long>(budget), onHost, onHost > 1 ? "s" : "");
     os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes (environment arenas %llu + rank "
-                 "buffers %llu), more than %s\n",
-                 r->transport->rank(), static_cast<unsigned long long>(need),
+                 "buffers %llu; %llu at the peak of init), more than %s\n",
+                 r->transport->rank(), static_cast<unsigned long long>(std::max(need, r->initPeakBytes)),
                  static_cast<unsigned long long>(envBytes),
-                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())), whose);
+                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())),
+                 static_cast<unsigned long long>(r->initPeakBytes), whose);
     return kExitUsage;
   }
+  // What init no longer needs goes before the arenas are made.
+  p.part = Partition();
+  p.scene.polygons = std::vector<Polygon>();
+  p.pieces = std::vector<std::vector<uint32_t>>();
   // The system may refuse what the budget allowed (no --mem-budget, ulimit
   // -v, overcommit off): a user error naming the bytes, not a CHECK.
   auto refused = [&](const char* what, uint64_t bytes) {
@@ -247,7 +211,7 @@ int Init(Render* r) {
   } else {
     r->hasSide = true;
     r->sideChosen = !o.hasView;
-    r->side = o.hasView ? o.view : ChooseViewSide(p.scene);
+    r->side = o.hasView ? o.view : p.side;
     r->camera = SideCamera(p.scene.bounds, r->side);
   }
   if (!MakeView(r->camera, o.width, o.height, &r->view))

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <functional>
 #include <memory>
 #include <new>
 #include <string>
@@ -26,6 +27,7 @@
 #include "vismask/phase.h"
 #include "vismask/raster.h"
 #include "vismask/scene.h"
+#include "vismask/scene_stream.h"
 #include "vismask/smoothing.h"
 #include "vismask/solver.h"
 #include "vismask/text_writer.h"
@@ -139,6 +141,12 @@ struct Render {
   };
   std::vector<TextureInfo> textureInfo;
   uint64_t predictedBytes = 0;  // this rank's arenas, as measured before they were made
+  uint64_t initPeakBytes = 0;   // this rank's init at its peak, predicted (heap and arenas)
+  // Every rank's memory, gathered at output for run.json.
+  struct RankMemory {
+    uint64_t predicted, initPeak, peakRss, fileRss, bytesSent;
+  };
+  RankMemory rankMemory[kMaxRanks] = {};
 
   bool isRoot() const { return transport->rank() == 0; }
 
@@ -224,13 +232,27 @@ inline int FailInit(const Render* r, const Status& s) {
   return kExitUsage;
 }
 
-// The init work `render` and `footprint` share: the scene loaded, checked
-// and cut into environments. Heap; dropped at the end of init.
+// The init work `render` and `footprint` share: the scene read in passes
+// (scene_stream.h) and cut into environments, of which this rank keeps its
+// own pieces and counts every environment's patches. Heap; dropped at the
+// end of init.
 struct Prepared {
+  SceneInfo info;   // materials, bounds, statement counts, the loader's warnings
+  // objPath, materials and bounds; polygons: the source polygons of this
+  // rank's pieces only (for smoothing), sourceIds their indices in the file.
   Scene scene;
+  std::vector<uint32_t> sourceIds;
   SceneTextures textures;  // decoded map_Kd images
   EnvGrid grid;
-  Partition part;
+  Partition part;          // this rank's pieces (part.source indexes scene.polygons)
+  uint32_t first = 0, end = 0;  // the environments this rank holds
+  // Every environment: patches (twins included) and lattice vertices, counted.
+  std::vector<double> envPatches, envTwins, envVertices;
+  std::vector<uint64_t> envPieceBytes;  // held environments: their pieces' heap
+  uint32_t idBase = 0;     // the global id of this rank's first patch
+  uint32_t pieceBase = 0;  // the index of its first piece in the whole partition
+  ViewSide side = ViewSide::kFront;  // chosen (without --camera or --view)
+  std::vector<std::string> emitterWarnings;  // rank 0
   float patchSize = 0.0f;
   float tolerance = 0.0f;  // points this close are one: cut and smooth vertices
   bool smooth = true;      // --smooth
@@ -238,16 +260,50 @@ struct Prepared {
   TwinOptions twins;  // --two-sided, --two-sided-emitters
   EnvOptions envOptions;
   uint32_t packetBytes = 0;
+  // The budget the passes are held to (0: none), what init holds besides
+  // (the reference image), and how a rank says it is over: the passes
+  // judge their own arrays, probe and check after pass 1, and their pieces
+  // as pass 2 takes them, before holding more than the budget.
+  uint64_t budget = 0;
+  uint64_t held = 0;
+  std::function<void(uint64_t need, const char* what)> overBudget;
+  uint64_t textureBytes = 0;  // the decoded textures' heap
+  uint64_t checkBytes = 0;    // rank 0: the emitter check's heap (a bound)
+
+  // Bounds, from environment e's counted patches and vertices, on the heap
+  // its staged copy (Environment::Prepare, until Build) and its mesh (until
+  // staged) take.
+  uint64_t StagedBound(uint32_t e) const;
+  uint64_t MeshBound(uint32_t e) const;
+  // A bound on the heap init holds at its peak on a rank holding
+  // environments [first, end), whose arenas take envArenas and rankArena
+  // bytes; `held`: what init keeps all along besides (the reference image).
+  // The stages: pass 1 and 2 (the parser's arrays, the pieces, the camera's
+  // probe, the emitter check), meshing (the pieces, the staged copies, one
+  // mesh), building (the pieces' heap, the staged copies and the arenas).
+  uint64_t InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
+                    uint64_t rankArena, uint64_t held) const;
 };
+
+// What init holds besides the scene and the arenas (the process's strings,
+// tables, the transport's and iostream's buffers), a bound.
+constexpr uint64_t kInitBaseBytes = uint64_t{4} << 20;
 
 // The most rays one shot traces: Method R's packet bits.
 inline uint32_t RayCap(const Options& o) {
   return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
 }
 
-Status PrepareScene(const Options& o, Prepared* p);
+// Pass 0 (scene_stream.h): the statements counted, nothing parsed.
+Status CountScene(const Options& o, Prepared* p);
+// Passes 1 and 2: the scene parsed and checked, then cut into environments;
+// `p` keeps the pieces of environments [first, end). `root`: also the
+// emitter check (its warnings in p->emitterWarnings).
+Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end, bool root);
 Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
                    std::vector<std::unique_ptr<Environment>>* envs);
+// The patches (twins included) of the environments p holds.
+uint64_t OwnPatches(const Prepared& p);
 std::vector<uint8_t> TexturesUsed(const Prepared& p, uint32_t first, uint32_t count);
 int Init(Render* r);
 void PrintWarnings(const SceneTextures& t);

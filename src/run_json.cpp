@@ -240,7 +240,21 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("],\n");
   w.Printf("    \"predicted_bytes\": %llu,\n    \"arena_high_water_bytes\": %llu,\n",
            static_cast<unsigned long long>(r->predictedBytes), static_cast<unsigned long long>(highWater));
+  w.Printf("    \"init_peak_predicted_bytes\": %llu,\n", static_cast<unsigned long long>(r->initPeakBytes));
   w.Printf("    \"file_rss_bytes\": %llu,\n", static_cast<unsigned long long>(files));
+  // Every rank: its arenas and init's peak as predicted, its peak resident
+  // set and file-backed pages as measured when the outputs were gathered,
+  // the visibility-mask bytes its environments sent.
+  w.Printf("    \"ranks\": [");
+  for (int k = 0; k < r->transport->size(); ++k) {
+    const Render::RankMemory& m = r->rankMemory[k];
+    w.Printf("%s\n      {\"rank\": %d, \"predicted_bytes\": %llu, \"init_peak_predicted_bytes\": %llu, "
+             "\"peak_rss_bytes\": %llu, \"file_rss_bytes\": %llu, \"bytes_sent\": %llu}",
+             k ? "," : "", k, static_cast<unsigned long long>(m.predicted),
+             static_cast<unsigned long long>(m.initPeak), static_cast<unsigned long long>(m.peakRss),
+             static_cast<unsigned long long>(m.fileRss), static_cast<unsigned long long>(m.bytesSent));
+  }
+  w.Printf("],\n");
   w.Printf("    \"peak_rss_explained\": %.4f,\n",
            peak > 0 ? static_cast<double>(arenas + files) / static_cast<double>(peak) : 0.0);
   w.Printf("    \"peak_rss_bytes\": %llu\n  }\n}\n", static_cast<unsigned long long>(peak));

@@ -13,7 +13,8 @@ namespace vismask {
 // far below 2^31).
 constexpr uint32_t kTwinPolygon = 0x80000000u;
 
-void MarkSmoothVertices(const Scene& source, const Partition& part, float tolerance, Mesh* mesh) {
+void MarkSmoothVertices(const Scene& source, const Partition& part, float tolerance, Mesh* mesh,
+                        const std::vector<uint32_t>* sourceIds) {
   const double tol = tolerance;
   std::vector<char> seen(mesh->vertices.size(), 0);
   std::vector<SmoothVertex> found;
@@ -27,7 +28,8 @@ void MarkSmoothVertices(const Scene& source, const Partition& part, float tolera
     // original, only with the twins of its neighbours.
     const float side = glm::dot(p.normal, poly.normal) < 0.0f ? -1.0f : 1.0f;
     // ... and it is another polygon: the same id would join the two sides.
-    const uint32_t id = side < 0.0f ? src | kTwinPolygon : src;
+    const uint32_t global = sourceIds ? (*sourceIds)[src] : src;
+    const uint32_t id = side < 0.0f ? global | kTwinPolygon : global;
     const size_t m = poly.corners.size();
     for (uint32_t k = 0; k < p.numCorners; ++k) {
       const uint32_t v = p.vertex[k];

@@ -227,19 +227,30 @@ glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::v
 }
 
 Status LoadSceneTextures(const Scene& scene, SceneTextures* out) {
-  SceneTextures r;
   const size_t nm = scene.materials.size();
+  std::vector<uint8_t> used(nm, 0);
+  std::vector<int> noUv(nm, 0);
+  for (const Polygon& p : scene.polygons) {
+    used[p.material] = 1;
+    if (p.uv.empty() && noUv[p.material] == 0) noUv[p.material] = p.line;
+  }
+  return LoadMaterialTextures(scene.objPath, scene.materials, used, noUv, out);
+}
+
+Status LoadMaterialTextures(const std::string& objPath, const std::vector<Material>& materials,
+                            const std::vector<uint8_t>& used, const std::vector<int>& noUvLineOf,
+                            SceneTextures* out) {
+  SceneTextures r;
+  const size_t nm = materials.size();
   r.ofMaterial.assign(nm, kNoTexture);
   r.kdOfMaterial.resize(nm);
-  std::vector<uint8_t> used(nm, 0);
   int noUvLine = 0;  // the first face of a textured material without uv
-  for (size_t m = 0; m < nm; ++m) r.kdOfMaterial[m] = scene.materials[m].kd;
-  for (const Polygon& p : scene.polygons) used[p.material] = 1;
+  for (size_t m = 0; m < nm; ++m) r.kdOfMaterial[m] = materials[m].kd;
   std::map<std::string, uint32_t> byPath;
   std::string zeroKd;  // materials whose map stands alone
   std::string zeroKdWhere;
   for (size_t m = 0; m < nm; ++m) {
-    const Material& mat = scene.materials[m];
+    const Material& mat = materials[m];
     if (!used[m] || mat.mapKd.empty()) continue;
     auto it = byPath.find(mat.mapKd);
     if (it == byPath.end()) {
@@ -259,14 +270,15 @@ Status LoadSceneTextures(const Scene& scene, SceneTextures* out) {
       if (zeroKdWhere.empty()) zeroKdWhere = mat.mapKdWhere;
     }
   }
-  for (const Polygon& p : scene.polygons)
-    if (r.ofMaterial[p.material] != kNoTexture && p.uv.empty() && noUvLine == 0) noUvLine = p.line;
+  for (size_t m = 0; m < nm; ++m)
+    if (r.ofMaterial[m] != kNoTexture && noUvLineOf[m] != 0 && (noUvLine == 0 || noUvLineOf[m] < noUvLine))
+      noUvLine = noUvLineOf[m];
   if (!zeroKd.empty())
     r.warnings.push_back(zeroKdWhere + ": warning: Kd 0 0 0 with map_Kd: the map alone is the "
                          "reflectance (Kd taken as 1) for material" +
                          (zeroKd.find(',') == std::string::npos ? " " : "s ") + zeroKd);
   if (noUvLine != 0)
-    r.warnings.push_back(scene.objPath + ":" + std::to_string(noUvLine) +
+    r.warnings.push_back(objPath + ":" + std::to_string(noUvLine) +
                          ": warning: faces with a map_Kd material but no texture coordinates "
                          "('vt'): they take the texture's mean reflectance, untextured");
   *out = std::move(r);

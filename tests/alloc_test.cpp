@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdio>
 #include <cstdlib>
 
 #include <gtest/gtest.h>
@@ -22,6 +23,25 @@ namespace {
 std::atomic<long> gAfterInit{0};
 std::atomic<bool> gArmed{false};
 pid_t gTestPid = 0;  // the gtest process; forked pipe ranks have other pids
+
+// Live heap bytes (malloc_usable_size) while armed, and their peak while the
+// phase is kInit: the init-peak test's measure.
+std::atomic<long long> gLive{0};
+std::atomic<long long> gInitPeak{0};
+inline void Grow(void* p) {
+  if (!p || !gArmed.load(std::memory_order_relaxed)) return;
+  long long live = gLive.fetch_add(static_cast<long long>(malloc_usable_size(p))) +
+                   static_cast<long long>(malloc_usable_size(p));
+  if (vismask::CurrentPhase() == vismask::Phase::kInit) {
+    long long peak = gInitPeak.load();
+    while (live > peak && !gInitPeak.compare_exchange_weak(peak, live)) {
+    }
+  }
+}
+inline void Shrink(void* p) {
+  if (!p || !gArmed.load(std::memory_order_relaxed)) return;
+  gLive.fetch_sub(static_cast<long long>(malloc_usable_size(p)));
+}
 
 inline void Count() {
   if (!gArmed.load(std::memory_order_relaxed)) return;
@@ -50,32 +70,47 @@ void __libc_free(void*);
 
 void* malloc(size_t n) {
   Count();
-  return __libc_malloc(n);
+  void* q = __libc_malloc(n);
+  Grow(q);
+  return q;
 }
 void* calloc(size_t a, size_t b) {
   Count();
-  return __libc_calloc(a, b);
+  void* q = __libc_calloc(a, b);
+  Grow(q);
+  return q;
 }
 void* realloc(void* p, size_t n) {
   Count();
-  return __libc_realloc(p, n);
+  Shrink(p);
+  void* q = __libc_realloc(p, n);
+  Grow(q ? q : (n == 0 ? nullptr : p));
+  return q;
 }
 void* aligned_alloc(size_t align, size_t n) {
   Count();
-  return __libc_memalign(align, n);
+  void* q = __libc_memalign(align, n);
+  Grow(q);
+  return q;
 }
 void* memalign(size_t align, size_t n) {
   Count();
-  return __libc_memalign(align, n);
+  void* q = __libc_memalign(align, n);
+  Grow(q);
+  return q;
 }
 int posix_memalign(void** out, size_t align, size_t n) {
   Count();
   void* p = __libc_memalign(align, n);
   if (!p) return 12;  // ENOMEM
+  Grow(p);
   *out = p;
   return 0;
 }
-void free(void* p) { __libc_free(p); }
+void free(void* p) {
+  Shrink(p);
+  __libc_free(p);
+}
 }
 #endif
 
@@ -344,6 +379,59 @@ TEST(AllocTest, ChosenViewAndBlackImageWarningAllocateNothing) {
     ASSERT_EQ(code, 0) << err;
     EXPECT_EQ(n, 0) << "heap allocations after init (--view '" << view << "')";
     EXPECT_EQ(err.find("warning: the image is black:") != std::string::npos, *view != 0) << err;
+  }
+}
+
+// Issue 20 / issue 17 item 10: init's own peak is bounded and in the
+// prediction. The live heap (arenas included: they are heap blocks) is
+// tracked through the same hooks, and its peak while the phase is init must
+// stay within run.json's init_peak_predicted_bytes, on scenes with cuts,
+// twins, textures, smoothing and many polygons. The prediction must not be
+// vacuous either: the peak is at least the arenas (predicted_bytes).
+long long InitPeakOf(const std::vector<std::string>& args, std::string* json) {
+  test::TempDir dir;
+  std::vector<std::string> a = args;
+  a.insert(a.end(), {"--out", dir.path(), "--quiet", "--width", "64", "--height", "48", "--max-shots", "50"});
+  gTestPid = getpid();
+  gLive = 0;
+  gInitPeak = 0;
+  gArmed = true;
+  test::RunResult r = test::RunMain(a);
+  gArmed = false;
+  EXPECT_EQ(r.code, 0) << r.err;
+  *json = test::ReadFile(dir.File("run.json"));
+  return gInitPeak.load();
+}
+
+unsigned long long JsonField(const std::string& json, const std::string& key) {
+  size_t at = json.find("\"" + key + "\": ");
+  EXPECT_NE(at, std::string::npos) << key;
+  return at == std::string::npos ? 0 : std::strtoull(json.c_str() + at + key.size() + 4, nullptr, 10);
+}
+
+TEST(AllocTest, InitPeakHeapIsWithinThePrediction) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  test::TempDir gen;
+  const std::string building = gen.File("b.obj");
+  ASSERT_EQ(std::system(("tools/gen-building --rooms 2x2 --floors 1 --tile 0.3 --out " + building).c_str()), 0);
+  const std::vector<std::vector<std::string>> runs = {
+      {"render", "scenes/cornell.obj", "--envs", "2x1x2"},
+      {"render", "scenes/miswound.obj", "--two-sided", "--envs", "2"},
+      {"render", "scenes/textured/room.obj", "--envs", "2"},
+      {"render", "scenes/smooth/sphere-s.obj", "--envs", "2x2"},
+      {"render", building, "--patch-size", "0.5", "--envs", "2x1x2"},
+  };
+  for (const auto& args : runs) {
+    std::string json;
+    long long peak = InitPeakOf(args, &json);
+    unsigned long long predicted = JsonField(json, "init_peak_predicted_bytes");
+    unsigned long long arenas = JsonField(json, "predicted_bytes");
+    EXPECT_LE(static_cast<unsigned long long>(peak), predicted) << args[1];
+    EXPECT_GE(static_cast<unsigned long long>(peak), arenas) << args[1];
+    std::printf("[ init peak ] %s: measured %lld bytes, predicted %llu (arenas %llu)\n",
+                args[1].c_str(), peak, predicted, arenas);
   }
 }
 

@@ -4,6 +4,9 @@
 #pragma once
 #include <cstdint>
 
+#include <vector>
+
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include "vismask/scene.h"
@@ -69,5 +72,32 @@ struct View {
 // False if the camera is degenerate (eye == target, up parallel to the view
 // direction, fov outside (0, 180)).
 bool MakeView(const Camera& camera, int width, int height, View* view);
+
+// ChooseViewSide fed one polygon at a time, in file order, once the scene's
+// bounds are known (the streaming loader's later pass, scene_stream.h): it
+// holds per probe ray the nearest hit so far, never the polygons, and gives
+// the same counts and side as the near-to-far sweep over the whole scene
+// (of polygons a ray meets at one depth, the one with the nearer corner,
+// then the earlier in the file, is seen). Init-time (heap: HeapBytes()).
+class ViewProbe {
+ public:
+  explicit ViewProbe(const Bounds& bounds);
+  void Add(uint32_t index, const Polygon& polygon);
+  void Rays(uint32_t rays[kNumViewSides]) const;  // as VisibleFrontRays
+  ViewSide Side() const;                          // as ChooseViewSide
+  static uint64_t HeapBytes();
+
+ private:
+  struct Probe {
+    bool ok = false;
+    View view;
+    std::vector<glm::dvec3> dir;
+    std::vector<double> depth, nearest;
+    std::vector<uint32_t> index;
+    std::vector<uint8_t> front;
+  };
+  Probe probes_[kNumViewSides];
+  std::vector<glm::dvec2> poly_;
+};
 
 }  // namespace vismask

@@ -2,12 +2,14 @@
 // display lattice of shared vertices used for Gouraud shading.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "vismask/patch.h"
 #include "vismask/scene.h"
+#include "vismask/status.h"
 
 namespace vismask {
 
@@ -52,6 +54,15 @@ struct TwinOptions {
 // or the mesh would exceed `maxPatches`.
 Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, float patchSize,
                  uint64_t maxPatches, Mesh* mesh);
+
+// The patches and lattice vertices MeshScene makes of `polygon` at
+// `patchSize` (added to *patches and *vertices), without making them: what
+// the streaming init counts for the environments a rank does not hold. The
+// error MeshScene gives for a polygon it cannot triangulate.
+Status CountPolygonPatches(const std::string& objPath, const Polygon& polygon, float patchSize,
+                           double* patches, double* vertices);
+// MeshScene's error for a mesh of more than `maxPatches` patches.
+Status MeshSizeError(double numPatches, float patchSize, uint64_t maxPatches);
 
 // Appends a twin of each patch `options` selects, after all the patches:
 // the same corners (bit for bit) in reverse order from corner[0], so its

@@ -11,6 +11,7 @@
 // alike; elsewhere on the edge each side interpolates its own shared ends.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -26,7 +27,11 @@ namespace vismask {
 // from `part.scene` (Patch::surface indexes its pieces) and `source` is the
 // scene as loaded; a piece's vertices on the environment planes that cut it
 // are not on its source's outline unless they are on an original edge too.
-void MarkSmoothVertices(const Scene& source, const Partition& part, float tolerance, Mesh* mesh);
+// `sourceIds`, when given, is each source polygon's index in the whole scene
+// (the streaming init keeps only the polygons its environments cut from):
+// the id a vertex is never shared with itself by.
+void MarkSmoothVertices(const Scene& source, const Partition& part, float tolerance, Mesh* mesh,
+                        const std::vector<uint32_t>* sourceIds = nullptr);
 
 // Whether two polygon corners at one point share their display value, given
 // each polygon's geometric normal n, its vertex normal vn there (0: none),

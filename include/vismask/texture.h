@@ -98,6 +98,12 @@ struct SceneTextures {
 // all; faces of a textured material without texture coordinates, another
 // (they take the texture's mean, untextured).
 Status LoadSceneTextures(const Scene& scene, SceneTextures* out);
+// The same from what the streaming loader keeps of the polygons
+// (scene_stream.h): per material, whether a polygon uses it and the line of
+// its first polygon without texture coordinates (0: none).
+Status LoadMaterialTextures(const std::string& objPath, const std::vector<Material>& materials,
+                            const std::vector<uint8_t>& used, const std::vector<int>& noUvLine,
+                            SceneTextures* out);
 
 // Sets the reflectance of `mesh`'s textured patches (Kd times the texture's
 // mean over the patch) and fills mesh->textures (one per patch, or empty

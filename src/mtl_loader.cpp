@@ -1,0 +1,163 @@
+// The MTL statements, --emit and the loader's warnings (scene_parse.h).
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "scene_parse.h"
+
+namespace vismask::objload {
+
+Status Loader::ApplyEmit() {
+  std::vector<Material>& materials = *materials_;
+  for (const EmitOverride& e : options_.emit) {
+    auto it = materialIndex_.find(e.material);
+    if (it == materialIndex_.end()) {
+      std::string names;
+      for (const Material& m : materials) names += (names.empty() ? "" : ", ") + m.name;
+      return Status::Error("vismask: --emit: no material '" + e.material + "' in " + path_ +
+                           (names.empty() ? " (it defines none)" : " (its materials: " + names + ")"));
+    }
+    Material& m = materials[it->second.first];
+    if (m.ke != glm::vec3(0.0f)) {
+      if (replacedKe_.empty()) replacedWhere_ = m.where;
+      replacedKe_.push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) + ")");
+    }
+    m.ke = e.fromKa ? m.ka : e.ke;
+  }
+  return Status::Ok();
+}
+
+std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) const {
+  std::vector<std::string> w = warnings_;
+  auto at = [&](int line) { return path_ + ":" + std::to_string(line) + ": warning: "; };
+  if (!ignoredKeys_.empty()) {
+    std::string keys;
+    for (const std::string& k : ignoredKeys_) keys += (keys.empty() ? "'" : ", '") + k + "'";
+    w.push_back(ignoredWhere_ + ": warning: ignoring MTL key" + (ignoredKeys_.size() > 1 ? "s " : " ") +
+                keys + (ignoredKeys_.size() > 1 ? " (first here)" : ""));
+  }
+  if (notMtlLines_ > 0)
+    w.push_back(notMtlWhere_ + ": warning: " + std::to_string(notMtlLines_) +
+                (notMtlLines_ > 1 ? " lines are" : " line is") +
+                " not MTL statements: ignored (first here; is it an MTL file?)");
+  // Specular or transparent materials that faces use, in material order.
+  const std::vector<Material>& materials = *materials_;
+  std::string named, where;
+  for (size_t i = 0; i < materials.size(); ++i) {
+    std::string why = used[i] ? NotDiffuse(finishes_[i]) : "";
+    if (why.empty()) continue;
+    if (named.empty()) where = materials[i].where;
+    named += (named.empty() ? "" : ", ") + materials[i].name + " (" + why + ")";
+  }
+  if (!named.empty())
+    w.push_back(where + ": warning: specular materials rendered as diffuse with their Kd: " + named);
+  if (!replacedKe_.empty()) {
+    std::string list;
+    for (const std::string& r : replacedKe_) list += (list.empty() ? "" : ", ") + r;
+    w.push_back(replacedWhere_ + ": warning: --emit replaces the MTL's Ke of " + list);
+  }
+  const FaceTally& t = triangulated_;
+  if (t.faces)
+    w.push_back(at(t.line) + Count(t.faces, "non-planar face", "non-planar faces") +
+                " triangulated (first here; up to " + Num(t.off) + " off " +
+                (t.faces == 1 ? "its" : "their") + " plane)");
+  if (cornersRemoved_.faces)
+    w.push_back(at(cornersRemoved_.line) +
+                Count(cornersRemoved_.corners, "repeated or collinear corner", "repeated or collinear corners") +
+                " removed from " + Count(cornersRemoved_.faces, "face", "faces") + " (first here)");
+  if (degenerate_.faces)
+    w.push_back(at(degenerate_.line) + Count(degenerate_.faces, "degenerate face", "degenerate faces") +
+                " dropped (zero area: repeated or collinear vertices; first here)");
+  if (selfIntersecting_.faces)
+    w.push_back(at(selfIntersecting_.line) +
+                Count(selfIntersecting_.faces, "self-intersecting face", "self-intersecting faces") +
+                " dropped (first here)");
+  return w;
+}
+
+Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int objLine) {
+  if (!loadedMtls_.insert(path).second) return Status::Ok();
+  std::string text;
+  std::string err = readMtl_(path, &text);
+  if (!err.empty()) return Status::At(objPath, objLine, err + " MTL file '" + path + "'");
+  TextLines lines(text);
+  std::vector<Material>& materials = *materials_;
+  bool haveMaterial = false;
+  std::string lineText;
+  int line = 0;
+  while (lines.Next(&lineText)) {
+    ++line;
+    const Tokens t = Tokenize(lineText);
+    if (t.empty()) continue;
+    const std::string& key = t[0];
+    const size_t args = t.size() - 1;
+    if (key == "newmtl") {
+      if (args != 1) return Status::At(path, line, "'newmtl' needs 1 name, got " + Str(args));
+      std::string where = path + ":" + std::to_string(line);
+      auto [it, added] =
+          materialIndex_.emplace(t[1], std::make_pair(static_cast<uint32_t>(materials.size()), where));
+      if (!added)
+        return Status::At(path, line,
+                          "duplicate material " + Quote(t[1]) + " (first at " + it->second.second + ")");
+      Material m;
+      m.name = t[1];
+      m.where = where;
+      materials.push_back(std::move(m));
+      finishes_.emplace_back();
+      haveMaterial = true;
+    } else if (key == "Ka") {
+      if (!haveMaterial) return Status::At(path, line, "'Ka' before any 'newmtl'");
+      if (args != 3) return Status::At(path, line, "'Ka' needs 3 numbers, got " + Str(args));
+      float rgb[3];
+      err = ParseFloats(t, 1, 3, rgb);
+      if (!err.empty()) return Status::At(path, line, err);
+      for (float x : rgb)
+        if (x < 0.0f) return Status::At(path, line, "Ka must be >= 0, got " + Num(x));
+      materials.back().ka = glm::vec3(rgb[0], rgb[1], rgb[2]);
+    } else if (key == "map_Kd") {
+      if (!haveMaterial) return Status::At(path, line, "'map_Kd' before any 'newmtl'");
+      if (args == 0) return Status::At(path, line, "'map_Kd' needs a file name");
+      // Options (-bm 1, -s 1 1 1, ...) come before the name, which is the
+      // last token; they are not applied, and said so once.
+      if (args > 1) Warn(path, line, "ignoring map_Kd options");
+      materials.back().mapKd = Beside(path, t.back());
+      materials.back().mapKdWhere = path + ":" + std::to_string(line);
+    } else if (key == "Kd" || key == "Ke") {
+      if (!haveMaterial) return Status::At(path, line, Quote(key) + " before any 'newmtl'");
+      if (args != 3)
+        return Status::At(path, line, Quote(key) + " needs 3 numbers, got " + Str(args));
+      float rgb[3];
+      err = ParseFloats(t, 1, 3, rgb);
+      if (!err.empty()) return Status::At(path, line, err);
+      for (float x : rgb) {
+        if (key == "Kd" && !(x >= 0.0f && x <= 1.0f))
+          return Status::At(path, line, "Kd must be in [0, 1], got " + Num(x));
+        if (key == "Ke" && x < 0.0f)
+          return Status::At(path, line, "Ke must be >= 0, got " + Num(x));
+      }
+      (key == "Kd" ? materials.back().kd : materials.back().ke) = glm::vec3(rgb[0], rgb[1], rgb[2]);
+    } else if (IsSilentMtlKey(key)) {
+      // Read only to name specular or transparent materials after loading.
+      if (!haveMaterial) continue;
+      Finish& f = finishes_.back();
+      double v[3];
+      // Models are 0 to 10: a number beyond them is none (as if not given),
+      // never converted to int (outside its range that is undefined).
+      if (key == "illum" && LenientFloats(t, 1, v)) f.illum = v[0] >= 0.0 && v[0] < 11.0 ? static_cast<int>(v[0]) : -1;
+      if (key == "Ks" && LenientFloats(t, 3, v)) f.ks = v[0] > 0.0 || v[1] > 0.0 || v[2] > 0.0;
+      if (key == "Tf" && LenientFloats(t, 3, v)) f.tf = v[0] < 1.0 || v[1] < 1.0 || v[2] < 1.0;
+      if (key == "d" && LenientFloats(t, 1, v)) f.d = v[0];
+      if (key == "Tr" && LenientFloats(t, 1, v)) f.d = 1.0 - v[0];
+    } else if (!LooksLikeKey(key)) {
+      if (notMtlLines_++ == 0) notMtlWhere_ = path + ":" + std::to_string(line);
+    } else {
+      if (ignoredKeys_.empty()) ignoredWhere_ = path + ":" + std::to_string(line);
+      if (std::find(ignoredKeys_.begin(), ignoredKeys_.end(), key) == ignoredKeys_.end())
+        ignoredKeys_.push_back(key);
+    }
+  }
+  return Status::Ok();
+}
+
+
+}  // namespace vismask::objload

@@ -1,0 +1,310 @@
+// Init's scene work (run.h): the OBJ read in passes (scene_stream.h), cut
+// into environments of which this rank keeps its own, the environments
+// meshed and staged, and the bounds on what init holds at its peak.
+#include "run.h"
+
+namespace vismask::run {
+
+Status CountScene(const Options& o, Prepared* p) { return CountObj(o.scene, &p->info); }
+
+namespace {
+
+// The heap a polygon holds (its vectors, with malloc's 16 bytes each).
+uint64_t PolygonBytes(const Polygon& poly) {
+  return sizeof(Polygon) + 16 * 3 + poly.corners.capacity() * sizeof(glm::vec3) +
+         poly.uv.capacity() * sizeof(glm::vec2) + poly.vn.capacity() * sizeof(glm::vec3);
+}
+
+// Whether material m emits once --emit has been applied (pass 1 sees the
+// MTL's Ke; ScanObj applies --emit at its end).
+bool EmitsAfterOverrides(const Material& m, const LoadOptions& load) {
+  glm::vec3 ke = m.ke;
+  for (const EmitOverride& e : load.emit)
+    if (e.material == m.name) ke = e.fromKa ? m.ka : e.ke;
+  return ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
+}
+
+bool Emits(const Material& m) { return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z > 0.0f; }
+
+}  // namespace
+
+uint64_t Prepared::StagedBound(uint32_t e) const {
+  // Environment::Prepare's copies until Build: per patch the patch, its
+  // geometry, texture, twin id and smooth edges; per lattice vertex its
+  // position, a smooth-vertex record, a cut flag and normal.
+  constexpr uint64_t kPerPatch = sizeof(Patch) + sizeof(PatchGeom) + sizeof(PatchTexture) + 8;
+  constexpr uint64_t kPerVertex = sizeof(glm::vec3) + sizeof(SmoothVertex) + 20;
+  return static_cast<uint64_t>(envPatches[e]) * kPerPatch +
+         static_cast<uint64_t>(envVertices[e]) * kPerVertex;
+}
+
+uint64_t Prepared::MeshBound(uint32_t e) const {
+  // The Mesh an environment is made from (freed once it is staged): its
+  // patches and positions (1.5 times, AddTwins growing them past their
+  // reserve), twin ids, textures, patch ids, the grid plan's scratch; its
+  // smooth-vertex records twice (found, kept) and a seen flag.
+  constexpr uint64_t kPerPatch = 3 * sizeof(Patch) / 2 + 6 + sizeof(PatchTexture) + 4 + 64;
+  constexpr uint64_t kPerVertex = 3 * sizeof(glm::vec3) / 2 + 2 * sizeof(SmoothVertex) + 1;
+  return static_cast<uint64_t>(envPatches[e]) * kPerPatch +
+         static_cast<uint64_t>(envVertices[e]) * kPerVertex;
+}
+
+uint64_t Prepared::InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
+                            uint64_t rankArena, uint64_t held) const {
+  uint64_t pieceBytes = 0, stagedBytes = 0, meshBytes = 0;
+  for (uint32_t e = first; e < end; ++e) {
+    pieceBytes += envPieceBytes[e];
+    stagedBytes += StagedBound(e);
+    meshBytes = std::max(meshBytes, MeshBound(e));  // one mesh at a time
+  }
+  // Per environment of the whole grid: its counts.
+  held += kInitBaseBytes + textureBytes + 4 * sizeof(double) * envPatches.size();
+  const uint64_t parse = info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes() + (root ? checkBytes : 0);
+  const uint64_t mesh = pieceBytes + stagedBytes + meshBytes;
+  // The pieces are freed before the arenas are made, but their small blocks
+  // may stay in the process's heap: counted, so that the bound holds for
+  // the resident set too.
+  const uint64_t build = pieceBytes + stagedBytes + envArenas + rankArena;
+  return held + std::max(parse, std::max(mesh, build));
+}
+
+Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end, bool root) {
+  SceneInfo& info = p->info;
+  const bool chooseSide = !o.hasCamera && !o.hasView;
+  // Pass 1: parse, mend and check; keep the emitting polygons for the
+  // emitter check (rank 0), nothing else of the polygons.
+  std::vector<std::pair<uint32_t, Polygon>> emitters;
+  size_t numEmitters = 0;
+  // Each polygon, as mended, with its corners, area and material: where a
+  // work-balanced split (an accumulator fed one polygon at a time) takes
+  // them, its planes then set p->grid before pass 2 clips with it.
+  Status s = ScanObj(o.scene, o.load, [&](uint32_t i, const Polygon& poly) {
+    if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
+    ++numEmitters;
+    if (root) emitters.emplace_back(i, poly);
+  }, &info);
+  if (!s.ok()) return s;
+  // Rank 0's emitter check (the same figure on every rank, for footprint).
+  p->checkBytes =
+      EmitterCheck::HeapBytes(numEmitters, std::min<size_t>(kEmitterCheckChunk, info.numPolygons)) +
+      numEmitters * 256;
+  // Every rank prints the loader's warnings, as LoadScene did.
+  for (const std::string& w : info.warnings) std::fprintf(stderr, "%s\n", w.c_str());
+  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine, &p->textures);
+  if (!s.ok()) return s;
+  for (const TextureImage& t : p->textures.images) p->textureBytes += uint64_t{t.width} * t.height * 4;
+  p->scene.objPath = o.scene;
+  p->scene.materials = info.materials;
+  p->scene.bounds = info.bounds;
+  glm::vec3 extent = info.bounds.hi - info.bounds.lo;
+  float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
+  p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
+  p->tolerance = 1e-5f * maxExtent;
+  p->smooth = o.smooth;
+  for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
+  p->grid.box = info.bounds;
+  p->first = first;
+  p->end = end;
+  const uint32_t total = static_cast<uint32_t>(p->grid.count());
+  p->envPatches.assign(total, 0.0);
+  p->envTwins.assign(total, 0.0);
+  p->envVertices.assign(total, 0.0);
+  p->envPieceBytes.assign(total, 0);
+  p->twins.all = o.twoSided;
+  p->twins.emitters = o.twoSidedEmitters;
+
+  // Before pass 2 allocates: the parser's arrays, the camera's probe and
+  // the emitter check against the budget; then the pieces as they come.
+  const uint64_t passBytes = p->held + kInitBaseBytes + info.ParserBytes() + ViewProbe::HeapBytes() +
+                             (root ? p->checkBytes : 0);
+  if (p->budget > 0 && passBytes > p->budget) {
+    if (p->overBudget) p->overBudget(passBytes, "to read the scene (the vertex arrays, the camera probe, the emitter check)");
+    return Status::Error("");
+  }
+  uint64_t pieceTotal = 0;
+  // Pass 2: every polygon clipped into the environments; this rank keeps
+  // the pieces of its own and counts the patches of every environment (ids
+  // are global, environment-major). The camera's side and the emitter
+  // check take their polygons here too.
+  std::unique_ptr<ViewProbe> probe;
+  if (chooseSide) probe = std::make_unique<ViewProbe>(info.bounds);
+  std::unique_ptr<EmitterCheck> check;
+  if (root) {
+    check = std::make_unique<EmitterCheck>(info.bounds, info.materials, emitters, kEmitterCheckChunk);
+  }
+  emitters.clear();
+  emitters.shrink_to_fit();
+  struct OwnPiece {
+    uint32_t env, source;  // source: in p->scene.polygons
+    Polygon polygon;
+  };
+  std::vector<OwnPiece> own;
+  std::vector<std::pair<uint32_t, double>> emitted;  // (environment, emitted power) per emitting piece
+  Status failed;
+  Scene one;
+  one.objPath = o.scene;
+  one.bounds = info.bounds;
+  Partition cut;
+  s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
+    if (probe) probe->Add(i, poly);
+    if (check) check->Add(i, poly);
+    if (!failed.ok()) return;
+    one.polygons.assign(1, poly);
+    Status st = PartitionScene(one, p->grid, &cut);
+    if (!st.ok()) {
+      failed = st;
+      return;
+    }
+    const Material& mat = info.materials[poly.material];
+    uint32_t source = kNoPatch;
+    for (size_t k = 0; k < cut.scene.polygons.size(); ++k) {
+      const uint32_t e = cut.env[k];
+      const Polygon& piece = cut.scene.polygons[k];
+      double patches = 0.0;
+      st = CountPolygonPatches(o.scene, piece, p->patchSize, &patches, &p->envVertices[e]);
+      if (!st.ok()) {
+        failed = Status::Error("vismask: --patch-size: " + st.ToString());
+        return;
+      }
+      p->envPatches[e] += patches;
+      if (e < first) ++p->pieceBase;
+      if (p->twins.all || (p->twins.emitters && Emits(mat))) p->envTwins[e] += patches;
+      if (Emits(mat))
+        emitted.emplace_back(e, (static_cast<double>(mat.ke.x) + mat.ke.y + mat.ke.z) * piece.area);
+      if (e < first || e >= end) continue;
+      if (source == kNoPatch) {
+        source = static_cast<uint32_t>(p->scene.polygons.size());
+        p->scene.polygons.push_back(poly);
+        p->sourceIds.push_back(i);
+        p->envPieceBytes[e] += PolygonBytes(poly) + sizeof(uint32_t);
+      }
+      // The piece twice: in the list made here and in the partition.
+      p->envPieceBytes[e] += 2 * (PolygonBytes(piece) + 3 * sizeof(uint32_t));
+      pieceTotal += 2 * (PolygonBytes(piece) + 3 * sizeof(uint32_t)) + PolygonBytes(poly);
+      if (p->budget > 0 && passBytes + pieceTotal > p->budget) {
+        if (p->overBudget) p->overBudget(passBytes + pieceTotal, "to hold its pieces of the scene (and more to come)");
+        failed = Status::Error("");
+        return;
+      }
+      own.push_back({e, source, piece});
+    }
+  });
+  if (!s.ok()) return s;
+  if (!failed.ok()) return failed;
+  if (probe) p->side = probe->Side();
+  if (check)
+    p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
+  probe.reset();
+  check.reset();
+  // Environment by environment, as meshing each would refuse it.
+  for (uint32_t e = 0; e < total; ++e) {
+    if (p->envPatches[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: " +
+                           MeshSizeError(p->envPatches[e], p->patchSize, kMaxPatches).message());
+    if (p->envPatches[e] + p->envTwins[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: the mesh needs " +
+                           std::to_string(static_cast<uint64_t>(p->envPatches[e] + p->envTwins[e])) +
+                           " patches with both sides, more than the limit of " +
+                           std::to_string(kMaxPatches));
+  }
+  for (uint32_t e = 0; e < total; ++e) {
+    p->envPatches[e] += p->envTwins[e];
+    // A twin's lattice is a copy of its original's (at most all of them).
+    if (p->envTwins[e] > 0.0) p->envVertices[e] *= 2.0;
+    if (e < first) p->idBase += static_cast<uint32_t>(p->envPatches[e]);
+  }
+  // The power a ray carries: the emitted power (channels summed, in piece
+  // order by environment, the same on every rank) over --emitted-rays.
+  std::stable_sort(emitted.begin(), emitted.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  double power = 0.0;
+  for (const auto& [e, w] : emitted) power += w;
+  if (o.twoSidedEmitters) power *= 2.0;  // every emitter's twin emits as much
+
+  // This rank's pieces, by environment (within one, in source order).
+  std::stable_sort(own.begin(), own.end(), [](const OwnPiece& a, const OwnPiece& b) { return a.env < b.env; });
+  p->part.grid = p->grid;
+  p->part.scene.objPath = o.scene;
+  p->part.scene.materials = info.materials;
+  p->part.scene.bounds = info.bounds;
+  p->pieces.assign(total, {});
+  for (OwnPiece& piece : own) {
+    p->pieces[piece.env].push_back(static_cast<uint32_t>(p->part.scene.polygons.size()));
+    p->part.scene.polygons.push_back(std::move(piece.polygon));
+    p->part.env.push_back(piece.env);
+    p->part.source.push_back(piece.source);
+  }
+  own.clear();
+  own.shrink_to_fit();
+
+  EnvOptions& e = p->envOptions;
+  // 1e-6 of the scene's size, and at least 8 float steps of its largest
+  // coordinate, so that the lift survives rounding far from the origin.
+  glm::vec3 mag = glm::max(glm::abs(info.bounds.lo), glm::abs(info.bounds.hi));
+  float largest = std::fmax(mag.x, std::fmax(mag.y, mag.z));
+  e.rayEpsilon = std::fmax(1e-6f * glm::length(extent),
+                           8.0f * std::numeric_limits<float>::epsilon() * largest);
+  e.rays = RayCap(o);
+  e.sobol = o.sobol;
+  if (o.rayAlloc == Options::RayAlloc::kPower) {
+    e.rayQuantum = power / static_cast<double>(o.emittedRays);
+    e.minRays = o.minRays;
+  }
+  e.seed = o.seed;
+  e.maskMethod = o.maskMethod;
+  e.maskRes = o.maskRes;
+  e.roundShots = o.roundShots;
+  e.queueCapacity = o.queue;
+  e.maskCacheBytes = uint64_t{o.maskCacheKiB} << 10;
+  e.elements.perPatch = o.elementsPerPatch;
+  e.elements.maxDepth = o.elementDepth;
+  e.elements.threshold = o.elementSpread;
+  e.elements.chi2 = o.elementChi2;
+  p->packetBytes =
+      p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
+  return Status::Ok();
+}
+
+// Meshes environments [first, end), which `p` holds, in order, one at a
+// time, giving each patch its global (environment-major) id from p.idBase
+// on, and prepares them into `envs`.
+Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
+                   std::vector<std::unique_ptr<Environment>>* envs) {
+  CHECK(p.first <= first && end <= p.end);
+  uint32_t nextId = p.idBase;
+  for (uint32_t e = p.first; e < first; ++e) nextId += static_cast<uint32_t>(p.envPatches[e]);
+  for (uint32_t e = first; e < end; ++e) {
+    Mesh mesh;
+    Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
+    if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
+    // Twins in the environment of their originals, after all of its patches.
+    AddTwins(p.twins, &mesh);
+    if (mesh.patches.size() > kMaxPatches)
+      return Status::Error("vismask: --patch-size: the mesh needs " +
+                           std::to_string(mesh.patches.size()) +
+                           " patches with both sides, more than the limit of " +
+                           std::to_string(kMaxPatches));
+    CHECK_EQ(static_cast<double>(mesh.patches.size()), p.envPatches[e]);
+    for (Patch& patch : mesh.patches) patch.globalId += nextId;
+    nextId += static_cast<uint32_t>(mesh.patches.size());
+    TextureMesh(p.part.scene, p.textures, &mesh);
+    if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh, &p.sourceIds);
+    // Patch::surface is the piece's index in the whole partition (the
+    // raster's fragment id, compared across ranks): the rank's pieces are
+    // those of its environments, after the pieces of all before them.
+    for (Patch& patch : mesh.patches) patch.surface += p.pieceBase;
+    std::vector<uint32_t> ids(mesh.patches.size());
+    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
+    envs->push_back(std::make_unique<Environment>());
+    envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
+  }
+  return Status::Ok();
+}
+
+uint64_t OwnPatches(const Prepared& p) {
+  double n = 0.0;
+  for (uint32_t e = p.first; e < p.end; ++e) n += p.envPatches[e];
+  return static_cast<uint64_t>(n);
+}
+
+}  // namespace vismask::run
