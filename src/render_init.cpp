@@ -16,6 +16,30 @@ Status PrepareScene(const Options& o, Prepared* p) {
   p->smooth = o.smooth;
   for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
   p->grid.box = p->scene.bounds;
+  // The scene's patches as the mesher will make them, about: the weight
+  // --envs auto balances and the size of an automatic --round-work.
+  double estimated = 0.0;
+  for (const Polygon& poly : p->scene.polygons)
+    estimated += EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()),
+                                  p->patchSize);
+  if (o.roundWorkAuto)
+    p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2],
+                                 EnvOptions().gridDensity);
+  if (o.envsAuto) {
+    // --envs auto:N: the shape with the least cut area, planes where the
+    // estimated patches divide evenly (fed polygon by polygon, file order).
+    if (!ChooseEnvShape(o.envsAutoCount, extent, p->grid.n))
+      return Status::Error("vismask: --envs: auto:" + std::to_string(o.envsAutoCount) +
+                           ": no grid of that many environments fits the scene (each axis "
+                           "1..64, none split where the scene is flat)");
+    WorkSplitter splitter;
+    for (const Polygon& poly : p->scene.polygons) {
+      const int n = static_cast<int>(poly.corners.size());
+      splitter.Add(poly.corners.data(), n, poly.area,
+                   EstimatedPatches(poly.corners.data(), n, p->patchSize));
+    }
+    splitter.Planes(&p->grid);
+  }
   s = PartitionScene(p->scene, p->grid, &p->part);
   if (!s.ok()) return s;
   p->pieces.assign(p->grid.count(), {});
@@ -136,6 +160,9 @@ int Init(Render* r) {
     }
     Status s = PrepareScene(o, &p);
     if (!s.ok()) return FailInit(r, s);
+    for (int a = 0; a < 3; ++a) r->options.envs[a] = p.grid.n[a];  // --envs auto's shape
+    if (o.roundWorkAuto) r->options.roundWork = p.roundWork;
+    r->envGrid = p.grid;
     // Emitters that light nothing (a face wound the wrong way): one line each.
     if (r->isRoot())
       for (const std::string& w : EmitterWarnings(p.scene)) os::PrintErr("%s\n", w.c_str());

@@ -84,6 +84,7 @@ struct Render {
   std::unique_ptr<Transport> transport;
   RankEnvs layout;
   size_t numPolygons = 0;
+  EnvGrid envGrid;  // the environments' grid and its planes (run.json)
   uint64_t numTwins = 0;  // twin patches, all ranks (--two-sided, --two-sided-emitters)
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
@@ -216,6 +217,7 @@ struct Prepared {
   TwinOptions twins;  // --two-sided, --two-sided-emitters
   EnvOptions envOptions;
   uint32_t packetBytes = 0;
+  uint64_t roundWork = 0;  // the automatic --round-work (Options::roundWorkAuto)
 };
 
 // The most rays one shot traces: Method R's packet bits.

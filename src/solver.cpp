@@ -124,15 +124,22 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   };
 
   bool done = ShouldStop(totals, options, &result);
-  uint32_t idle = 0;  // rounds in a row without a shot
+  uint32_t idle = 0;
+  Span<double> envCpu = buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
+  CHECK(envCpu.size() >= envs.size());  // rounds in a row without a shot
   while (!done) {
     double cpu0 = os::CpuSeconds();
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
       if (i < layout.first || i >= layout.first + layout.count) continue;
+      double envCpu0 = os::CpuSeconds();
+      uint64_t steps0 = envs[i - layout.first]->stats().gridSteps;
       envs[i - layout.first]->RunRound(
           ShotBudget(i, options.roundShots, result.shots, options.maxShots),
-          AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
+          AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding),
+          options.roundWork);
+      envCpu[i - layout.first] = os::CpuSeconds() - envCpu0;
+      buffers->envSteps[i - layout.first] = envs[i - layout.first]->stats().gridSteps - steps0;
     }
     double roundCpu = os::CpuSeconds() - cpu0;
     result.computeSeconds += roundCpu;
@@ -143,6 +150,10 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     totals = GatherTotals(envs, layout, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
     result.waitSecondsMax = totals.waitedMax;
     result.criticalSeconds += totals.roundCpuMax;
+    result.criticalEnvSeconds += totals.envCpuMax;
+    result.criticalEnvSteps += totals.envStepsMax;
+    result.criticalRankSteps += totals.rankStepsMax;
+    result.gridSteps = totals.steps;
     result.shots = totals.shots;
     result.rays = totals.rays;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;

@@ -36,7 +36,8 @@ struct SolveOptions {
   uint64_t maxShots = 0;     // 0: no limit
   uint64_t rayBudget = 0;    // stop once this many form-factor rays are traced; 0: no limit
   double maxSeconds = 0.0;   // 0: no limit
-  uint32_t roundShots = 1;   // shots per environment per round
+  uint32_t roundShots = 1;   // shots per environment per round (at most)
+  uint64_t roundWork = 0;    // a round ends for an environment after this many grid steps; 0: no limit
   uint32_t queueCapacity = 64;  // foreign shooters an environment can hold
   bool quiet = false;        // no progress line on stderr
   Span<const uint32_t> order;  // the order environments run in a round (empty: 0..n-1)
@@ -75,6 +76,18 @@ struct SolveResult {
   // solve would take with a core per rank and free communication.
   double computeSeconds = 0.0;
   double criticalSeconds = 0.0;
+  // The same with one environment per rank: over rounds, the sum of the
+  // most CPU any one environment's shots used (measured per environment,
+  // so a one-process run gives the critical path of a rank per environment).
+  double criticalEnvSeconds = 0.0;
+  // The same in grid steps (Grid::steps, a count: the same on every run):
+  // all of them, and over rounds the sum of the most any environment, and
+  // any rank, did in that round. gridSteps / criticalRankSteps is the
+  // speedup the rounds allow this many ranks with a core each and free
+  // communication, measured in work rather than time.
+  uint64_t gridSteps = 0;
+  uint64_t criticalEnvSteps = 0;
+  uint64_t criticalRankSteps = 0;
   double biasEstimate = 0.0;  // BiasEstimate of the final totals
   double lossEstimate = 0.0;  // LossEstimate of the final totals
 };
