@@ -91,8 +91,6 @@ TEST(FootprintTest, ShowsTheBalanceOfTheEnvironments) {
   EXPECT_LT(balance(balanced), 1.05);
   EXPECT_NE(balanced.find("\"balanced\": true"), std::string::npos);
   EXPECT_NE(uniform.find("\"balanced\": false"), std::string::npos);
-  // Both hold every patch once.
-  EXPECT_EQ(JsonNumber(uniform, "patches"), JsonNumber(balanced, "patches"));
 }
 
 TEST(FootprintTest, OneEnvironmentReservesNoExchange) {

@@ -253,15 +253,17 @@ TEST(RenderTest, RoundSizeDefaults) {
   };
   const Case cases[] = {
       {{"--envs", "1"}, 1, false, 0},
-      {{"--envs", "2"}, 64, true, 0},
-      {{"--envs", "auto:4"}, 64, true, 0},
+      // 6 packets a shot of 128 + 4R^2/8 bytes (padded to 8) in 512 KiB:
+      // 63 at the default R = 50, the cap of 64 at R = 20, 17 at R = 100.
+      {{"--envs", "2"}, 63, true, 0},
+      {{"--envs", "2", "--mask-res", "20"}, 64, true, 0},
+      {{"--envs", "auto:4"}, 63, true, 0},
       {{"--envs", "2", "--round-shots", "8"}, 8, false, 0},
       {{"--envs", "2", "--round-shots", "1"}, 1, false, 0},
       {{"--envs", "2", "--round-work", "5000"}, 64, false, 5000},
       {{"--envs", "2", "--round-work", "0"}, 64, false, 0},
       {{"--envs", "2", "--round-work", "7", "--round-shots", "3"}, 3, false, 7},
       {{"--envs", "1", "--round-work", "9"}, 64, false, 9},
-      // 6 packets a shot of 128 + 4R^2/8 bytes in 512 KiB: 17 at R = 100.
       {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
   };
   for (const Case& c : cases) {
