@@ -192,9 +192,11 @@ TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
   GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
 #endif
   test::TempDir dir;
+  // One shot an environment a round, so that every 50 shots is a round's
+  // end and the measurements number 12 (rounds by work hold many shots).
   std::vector<std::string> args = {"render", "scenes/cornell.obj", "--envs", "2", "--rays", "256",
                                    "--max-shots", "600", "--width", "64", "--height", "64",
-                                   "--patch-size", "60", "--quiet"};
+                                   "--patch-size", "60", "--quiet", "--round-shots", "1"};
   auto ref = args;
   ref.insert(ref.end(), {"--out", dir.File("ref")});
   ASSERT_EQ(test::RunMain(ref).code, 0);
