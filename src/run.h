@@ -145,7 +145,11 @@ struct Render {
       mark = arena.used();
     };
     rankExchangeBytes = rankImageBytes = rankOutputBytes = rankTextureBytes = 0;
-    exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
+    // A shot sends at most one packet to each neighbour: an environment
+    // sends another rank at most --round-shots packets a round for each of
+    // that rank's environments it neighbours (at most 6 and perRank).
+    exchange.Layout(arena, layout, ranks, packetBytes,
+                    ranks > 1 ? std::min<uint32_t>(6, layout.perRank) * options.roundShots : 0);
     part(&rankExchangeBytes);
     fb.Layout(arena, options.width, options.height, options.aa);
     part(&rankImageBytes);

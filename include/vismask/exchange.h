@@ -63,7 +63,8 @@ struct RoundTotals {
 
 // A rank's exchange buffers, carved from its arena at init: one send and one
 // receive block per rank, each large enough for every packet a rank's
-// environments can send in a round, and the gathered reports.
+// environments can send another rank in a round (`packetsPerEnvRound` per
+// environment), and the gathered reports.
 struct ExchangeBuffers {
   void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
               uint32_t packetsPerEnvRound);
