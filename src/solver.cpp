@@ -31,13 +31,13 @@ uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_
   return mine > 0xffffffffu ? 0xffffffffu : static_cast<uint32_t>(mine);
 }
 
-uint32_t ShotBudget(uint32_t env, uint32_t roundShots, uint64_t shotsSoFar, uint64_t maxShots) {
+uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
+                    uint64_t maxShots) {
   if (maxShots == 0) return roundShots;
   uint64_t remaining = maxShots > shotsSoFar ? maxShots - shotsSoFar : 0;
-  uint64_t before = uint64_t(env) * roundShots;  // environments earlier in order go first
-  if (remaining <= before) return 0;
-  uint64_t left = remaining - before;
-  return static_cast<uint32_t>(left < roundShots ? left : roundShots);
+  uint64_t n = numEnvs > 0 ? numEnvs : 1;
+  uint64_t mine = remaining / n + (env < remaining % n ? 1 : 0);
+  return static_cast<uint32_t>(mine < roundShots ? mine : roundShots);
 }
 
 namespace {
@@ -135,7 +135,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
       double envCpu0 = os::CpuSeconds();
       uint64_t steps0 = envs[i - layout.first]->stats().gridSteps;
       envs[i - layout.first]->RunRound(
-          ShotBudget(i, options.roundShots, result.shots, options.maxShots),
+          ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
           AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding),
           options.roundWork);
       envCpu[i - layout.first] = os::CpuSeconds() - envCpu0;
@@ -168,8 +168,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
       result.reason = StopReason::kConverged;
       break;
     }
-    if (idleRound && options.maxShots > 0 &&
-        options.maxShots - result.shots < uint64_t(n) * options.roundShots) {
+    if (idleRound && options.maxShots > 0 && options.maxShots - result.shots < uint64_t(n)) {
       result.reason = StopReason::kMaxShots;  // the budget left went to environments with none
       break;
     }

@@ -127,8 +127,12 @@ double EffectiveReflectance(double rhoKd, double emitted, double unshot, double 
 uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
                          uint64_t maxOutstanding);
 
-// The shot budget of environment `env` this round under --max-shots.
-uint32_t ShotBudget(uint32_t env, uint32_t roundShots, uint64_t shotsSoFar, uint64_t maxShots);
+// The shot budget of environment `env` of `numEnvs` this round under
+// --max-shots: the shots left spread evenly (the first environments one
+// more), at most `roundShots` each, so that a budget smaller than a whole
+// round still reaches every environment while it can.
+uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
+                    uint64_t maxShots);
 
 // Solves this rank's environments `envs` (those of `layout`) in place,
 // exchanging with the other ranks through `transport`. `convergence` (may be
