@@ -108,6 +108,7 @@ int Main(int argc, const char* const* argv) {
   SetPhase(Phase::kSolve);
   SolveOptions so;
   so.roundShots = r->options.roundShots;
+  so.roundWork = r->options.roundWork;
   so.queueCapacity = r->options.queue;
   so.order = Span<const uint32_t>(r->options.envOrder.data(), r->options.envOrder.size());
   so.stopUnshot = r->options.stopUnshot;

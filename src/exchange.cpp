@@ -20,6 +20,8 @@ void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint
   received = arena.Alloc<size_t>(n);
   mine = arena.Alloc<EnvReport>(envs.perRank);
   all = arena.Alloc<EnvReport>(n * envs.perRank);
+  envCpu = arena.Alloc<double>(envs.perRank);
+  envSteps = arena.Alloc<uint64_t>(envs.perRank);
 }
 
 namespace {
@@ -58,6 +60,9 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
     r.radiosity = Sum3(e->ledger().radiosity);
     r.area = e->totalArea();
     r.kdArea = e->kdArea();
+    r.envCpu = i < x->envCpu.size() ? x->envCpu[i] : 0.0;
+    r.roundSteps = i < x->envSteps.size() ? x->envSteps[i] : 0;
+    r.steps = e->stats().gridSteps;
   }
   x->mine[0].elapsed = elapsed;
   x->mine[0].waited = *waited;
@@ -71,6 +76,10 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
     const EnvReport& first = x->all[size_t(r) * layout.perRank];
     if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
     if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
+    RankEnvs re = EnvsOfRank(layout.total, ranks, r);
+    uint64_t rankSteps = 0;
+    for (uint32_t k = 0; k < re.count; ++k) rankSteps += x->all[size_t(r) * layout.perRank + k].roundSteps;
+    if (rankSteps > tot.rankStepsMax) tot.rankStepsMax = rankSteps;
   }
   auto report = [&](uint32_t env) -> const EnvReport& {
     int r = RankOfEnv(env, layout.total, ranks);
@@ -90,6 +99,9 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
     tot.radiosity += r.radiosity;
     tot.kdArea += r.kdArea;
     tot.area += r.area;
+    if (r.envCpu > tot.envCpuMax) tot.envCpuMax = r.envCpu;
+    if (r.roundSteps > tot.envStepsMax) tot.envStepsMax = r.roundSteps;
+    tot.steps += r.steps;
   }
   for (uint32_t env = 0; env < layout.total; ++env) {
     const EnvReport& r = report(env);

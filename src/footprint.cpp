@@ -101,6 +101,20 @@ int Footprint(const Options& o) {
   using ull = unsigned long long;
   // One-sided figures: the same as these when nothing is two-sided.
   const FootprintFigures& base = p.twins.any() ? one : fig;
+  // The balance of the environments: the most patches one holds over the
+  // mean (1: even), and the split planes (--envs auto: at work quantiles).
+  uint64_t mostPatches = 0;
+  for (const auto& e : envs) mostPatches = std::max<uint64_t>(mostPatches, e->footprint().numPatches);
+  const double balance = fig.patches > 0 ? static_cast<double>(mostPatches) * total / fig.patches : 1.0;
+  auto planes = [&](int a) {
+    std::string s;
+    for (int k = 0; k <= p.grid.n[a]; ++k) {
+      char num[32];
+      std::snprintf(num, sizeof num, "%s%.9g", k ? ", " : "", p.grid.Plane(a, k));
+      s += num;
+    }
+    return s;
+  };
   if (o.json) {
     out += "{\n  \"scene\": " + JsonQuoted(o.scene) + ",\n";
     add("  \"mask_method\": \"%s\",\n  \"packet_size_bytes\": %u,\n", MaskMethodName(o.maskMethod),
@@ -118,6 +132,10 @@ int Footprint(const Options& o) {
         o.twoSided ? "true" : "false", o.twoSidedEmitters ? "true" : "false", (ull)fig.patches,
         (ull)fig.twins, (ull)base.patches, (ull)fig.envBytes, (ull)base.envBytes, (ull)fig.total,
         (ull)base.total, (long long)fig.total - (long long)base.total);
+    add("  \"split\": {\"balanced\": %s, \"grid\": [%d, %d, %d], \"most_patches\": %llu, "
+        "\"patch_balance\": %.6f, \"planes\": [[%s], [%s], [%s]]},\n",
+        p.grid.balanced ? "true" : "false", p.grid.n[0], p.grid.n[1], p.grid.n[2],
+        (ull)mostPatches, balance, planes(0).c_str(), planes(1).c_str(), planes(2).c_str());
     out += "  \"environments\": [\n";
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
@@ -157,6 +175,11 @@ int Footprint(const Options& o) {
           (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
           (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total);
     }
+    add("\nsplit %dx%dx%d (%s): the most patches in one environment %llu, %.3f x the mean\n",
+        p.grid.n[0], p.grid.n[1], p.grid.n[2],
+        p.grid.balanced ? "balanced, --envs auto" : "uniform", (ull)mostPatches, balance);
+    for (int a = 0; a < 3; ++a)
+      if (p.grid.n[a] > 1) add("  %c planes: %s\n", "xyz"[a], planes(a).c_str());
     add("\n%4s %4s %14s %12s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B", "exchange_B",
         "image_B", "output_B", "texture_B", "total_B");
     for (int k = 0; k < ranks; ++k) {

@@ -302,6 +302,7 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   float bestT = r.tMax;  // every hit is nearer than the ray's end
   bool bestFront = false;
   const uint64_t* occupied = occupied_.data();
+  uint64_t tests = 0;
   for (;;) {
     // Most cells a ray crosses are empty: one bit in a small bitmap says so,
     // where their offsets (32 times larger, strided by rows and slices) cost
@@ -311,9 +312,11 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
       uint32_t p = refs[k];
       float t;
       bool front;
+      ++tests;
       if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
       if (kAnyHit) {
         if (hit) hit->patch = p;
+        steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
         return true;
       }
       // t <= bestT here. On a tie a front side, then the lower index, so
@@ -345,6 +348,7 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
       tz = fz + kz * dz;
     }
   }
+  steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
   if (bestPatch == kNoPatch) return false;
   hit->patch = bestPatch;
   hit->t = bestT;

@@ -4,9 +4,12 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <algorithm>
 #include <cstring>
+#include <string>
 #include <vector>
 
+#include "vismask/packet.h"
 #include "vismask/partition.h"
 
 namespace vismask {
@@ -144,6 +147,11 @@ render options:
 local environments and visibility masks:
   --envs NX[xNY[xNZ]]  split the scene's box into a grid of environments
                        (default 1); each owns only its own patches and grid
+  --envs auto[:N]      N environments (default: --ranks; give N under
+                       mpirun), the grid's shape and its split planes chosen
+                       from the scene: each axis cut where the patches
+                       (estimated from the polygons' areas) divide evenly,
+                       so every slab holds about as many; still a grid
   --mask-method M      none | A | B | C | R (default B): how a shooter's
                        visibility mask is filled. A: from the form-factor rays
                        that hit (cheap, leaks light where no ray hit); B: one
@@ -155,7 +163,20 @@ local environments and visibility masks:
                        passes occluders)
   --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
                        1 <= R <= 4096 (default 50; not used by R)
-  --round-shots K      shots per environment per round (default 1)
+  --round-shots K      at most K shots per environment per round (default
+                       with several environments: 64, fewer when 6 packets
+                       a shot would fill more than 512 KiB; with one: 1).
+                       Given alone (no --round-work), the rounds of before:
+                       K shots, no work limit
+  --round-work N       a round ends for an environment once its rays (and
+                       B's and C's centre rays) have done N steps of grid
+                       walking, cells entered plus patches tested: a count
+                       that tracks CPU time but never depends on it, so
+                       rounds are the same whatever the machine, ranks or
+                       transport. Default with several environments: about
+                       16 full shots' worth (16 x (--max-rays, or --rays,
+                       + 4R^2 for B and C) x the cube root of an
+                       environment's grid cells); 0: no limit
   --mask-cache K       KiB per environment for Methods B and C's centre masks
                        of local shooters, kept for their later shots (the
                        mask depends only on the shooter); same output,
@@ -245,6 +266,38 @@ bool ParseU64(const std::string& s, uint64_t* out) {
 }
 
 }  // namespace
+
+namespace {
+
+uint32_t MostRaysAShot(const Options& o) {
+  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
+}
+
+}  // namespace
+
+void ResolveRounds(int numEnvs, Options* o) {
+  o->roundWorkAuto = false;
+  if (o->hasRoundWork || o->hasRoundShots || numEnvs <= 1) {
+    if (!o->hasRoundShots) o->roundShots = o->hasRoundWork ? kAutoRoundShots : 1;
+    if (!o->hasRoundWork) o->roundWork = 0;
+    return;
+  }
+  // The outbox holds 6 packets a shot: fewer shots a round with big packets.
+  uint64_t packet = PacketBytes(MaskShapeOf(o->maskMethod, o->maskRes, MostRaysAShot(*o)));
+  uint64_t shots = kAutoRoundOutboxBytes / (6 * packet);
+  o->roundShots = static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
+  o->roundWorkAuto = true;
+}
+
+uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs, float gridDensity) {
+  // B's and C's centre rays (one per mask pixel at most) walk like rays.
+  double rays = MostRaysAShot(o);
+  if (o.maskMethod == MaskMethod::kB || o.maskMethod == MaskMethod::kC)
+    rays += 4.0 * o.maskRes * o.maskRes;
+  double cells = gridDensity * patches / std::max(1, numEnvs);
+  double steps = std::max(1.0, std::cbrt(std::max(cells, 1.0)));
+  return static_cast<uint64_t>(kAutoRoundWorkShots * rays * steps);
+}
 
 Status ParseArgs(int argc, const char* const* argv, Options* o) {
   *o = Options();
@@ -434,7 +487,17 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (!ParseViewSide(v.c_str(), &o->view)) return Bad(a, v, "front, back, left, right, top or bottom");
       o->hasView = true;
     } else if (a == "--envs") {
-      if (!ParseEnvGrid(v.c_str(), o->envs)) return Bad(a, v, "NX[xNY[xNZ]], each 1..64");
+      o->envsAuto = false;
+      if (v == "auto" || v.rfind("auto:", 0) == 0) {
+        o->envsAuto = true;
+        o->envsAutoCount = 0;  // --ranks, once all options are read
+        if (v.size() > 4 && (!ParseU64(v.substr(5), &u) || u < 1 || u > kMaxAutoEnvs))
+          return Bad(a, v, "NX[xNY[xNZ]] (each 1..64), auto or auto:N (N in 1.." +
+                               std::to_string(kMaxAutoEnvs) + ")");
+        if (v.size() > 4) o->envsAutoCount = static_cast<int>(u);
+      } else if (!ParseEnvGrid(v.c_str(), o->envs)) {
+        return Bad(a, v, "NX[xNY[xNZ]] (each 1..64), auto or auto:N");
+      }
     } else if (a == "--mask-method") {
       if (v == "none") o->maskMethod = MaskMethod::kNone;
       else if (v == "A") o->maskMethod = MaskMethod::kA;
@@ -448,6 +511,11 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--round-shots") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->roundShots = static_cast<uint32_t>(u);
+      o->hasRoundShots = true;
+    } else if (a == "--round-work") {
+      if (!ParseU64(v, &u) || u > 1000000000000000ull) return Bad(a, v, "an integer in [0, 1e15] (0: no limit)");
+      o->roundWork = u;
+      o->hasRoundWork = true;
     } else if (a == "--env-order") {
       o->envOrder.clear();
       std::string part;
@@ -552,7 +620,16 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
                          std::to_string(o->maxRays));
   if (!o->exclude.empty() && o->reference.empty())
     return Status::Error("vismask: --exclude: needs --reference REF.pfm (the mask applies to its error)");
+  if (o->envsAuto) {
+    // auto: as many environments as ranks (pipe; under mpirun, give auto:N).
+    if (o->envsAutoCount == 0) o->envsAutoCount = std::max(o->ranks, 1);
+    // A placeholder shape of the right count; init picks it from the scene.
+    if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs))
+      return Status::Error("vismask: --envs: auto:" + std::to_string(o->envsAutoCount) +
+                           ": no grid of that many environments with at most 64 a side");
+  }
   int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
+  ResolveRounds(numEnvs, o);
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
                          std::to_string(numEnvs) + " environments (each rank needs one; see --envs)");

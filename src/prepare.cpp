@@ -103,6 +103,23 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->smooth = o.smooth;
   for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
   p->grid.box = info.bounds;
+  if (o.envsAuto) {
+    // --envs auto:N: the shape with the least cut area, planes where the
+    // estimated patches divide evenly. Pass 1b feeds the splitter polygon
+    // by polygon in file order (the weights need the patch size, known
+    // only once pass 1 has the bounds); it holds kBins weights an axis.
+    if (!ChooseEnvShape(o.envsAutoCount, extent, p->grid.n))
+      return Status::Error("vismask: --envs: auto:" + std::to_string(o.envsAutoCount) +
+                           ": no grid of that many environments fits the scene (each axis "
+                           "1..64, none split where the scene is flat)");
+    WorkSplitter splitter;
+    s = StreamObj(info, o.load, [&](uint32_t, const Polygon& poly) {
+      const int n = static_cast<int>(poly.corners.size());
+      splitter.Add(poly.corners.data(), n, poly.area, EstimatedPatches(poly.corners.data(), n, p->patchSize));
+    });
+    if (!s.ok()) return s;
+    splitter.Planes(&p->grid);
+  }
   p->first = first;
   p->end = end;
   const uint32_t total = static_cast<uint32_t>(p->grid.count());
@@ -145,7 +162,12 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   one.objPath = o.scene;
   one.bounds = info.bounds;
   Partition cut;
+  // The scene's patches as the mesher will make them, about (summed over
+  // whole polygons in file order, the same on every rank): the size of an
+  // automatic --round-work.
+  double estimated = 0.0;
   s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
+    estimated += EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()), p->patchSize);
     if (probe) probe->Add(i, poly);
     if (check) check->Add(i, poly);
     if (!failed.ok()) return;
@@ -191,6 +213,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   });
   if (!s.ok()) return s;
   if (!failed.ok()) return failed;
+  if (o.roundWorkAuto)
+    p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2], EnvOptions().gridDensity);
   if (probe) p->side = probe->Side();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);

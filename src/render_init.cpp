@@ -96,6 +96,9 @@ int Init(Render* r) {
     s = PrepareScene(o, &p, r->layout.first, r->layout.first + r->layout.count, r->isRoot());
     // (An error with no text: over the budget, which this rank has said.)
     if (!s.ok()) return s.message().empty() ? kExitUsage : FailInit(r, s);
+    for (int a = 0; a < 3; ++a) r->options.envs[a] = p.grid.n[a];  // --envs auto's shape
+    if (o.roundWorkAuto) r->options.roundWork = p.roundWork;
+    r->envGrid = p.grid;
     // Emitters that light nothing (a face wound the wrong way): one line each.
     if (r->isRoot())
       for (const std::string& w : p.emitterWarnings) os::PrintErr("%s\n", w.c_str());

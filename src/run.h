@@ -91,6 +91,7 @@ struct Render {
   std::unique_ptr<Transport> transport;
   RankEnvs layout;
   size_t numPolygons = 0;
+  EnvGrid envGrid;  // the environments' grid and its planes (run.json)
   uint64_t numTwins = 0;  // twin patches, all ranks (--two-sided, --two-sided-emitters)
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
@@ -166,7 +167,11 @@ struct Render {
       mark = arena.used();
     };
     rankExchangeBytes = rankImageBytes = rankOutputBytes = rankTextureBytes = rankExportBytes = 0;
-    exchange.Layout(arena, layout, ranks, packetBytes, ranks > 1 ? 6 * options.roundShots : 0);
+    // A shot sends at most one packet to each neighbour: an environment
+    // sends another rank at most --round-shots packets a round for each of
+    // that rank's environments it neighbours (at most 6 and perRank).
+    exchange.Layout(arena, layout, ranks, packetBytes,
+                    ranks > 1 ? std::min<uint32_t>(6, layout.perRank) * options.roundShots : 0);
     part(&rankExchangeBytes);
     fb.Layout(arena, options.width, options.height, options.aa);
     part(&rankImageBytes);
@@ -283,6 +288,7 @@ struct Prepared {
   // mesh), building (the pieces' heap, the staged copies and the arenas).
   uint64_t InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
                     uint64_t rankArena, uint64_t held) const;
+  uint64_t roundWork = 0;  // the automatic --round-work (Options::roundWorkAuto)
 };
 
 // What init holds besides the scene and the arenas (the process's strings,

@@ -66,8 +66,20 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
-  w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"queue\": %u,\n",
-           o.maskRes, o.roundShots, o.queue);
+  w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"round_work\": %llu,\n    \"queue\": %u,\n",
+           o.maskRes, o.roundShots, static_cast<unsigned long long>(o.roundWork), o.queue);
+  // --envs auto:N (null: --envs NXxNYxNZ) and the planes the grid was cut
+  // at, per axis from the scene box's low to its high side.
+  if (o.envsAuto) w.Printf("    \"envs_auto\": %d,\n", o.envsAutoCount);
+  else w.Printf("    \"envs_auto\": null,\n");
+  w.Printf("    \"env_planes\": [");
+  for (int a = 0; a < 3; ++a) {
+    w.Printf("%s[", a ? ", " : "");
+    for (int k = 0; k <= r->envGrid.n[a]; ++k)
+      w.Printf("%s%.9g", k ? ", " : "", r->envGrid.Plane(a, k));
+    w.Printf("]");
+  }
+  w.Printf("],\n");
   w.Printf("    \"rank_timeout\": %.17g,\n", o.rankTimeout);
   w.Printf("    \"reference\": ");
   if (o.reference.empty()) w.Printf("null");
@@ -135,6 +147,11 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"wait_seconds\": %.6f,\n    \"wait_seconds_max_rank\": %.6f,\n"
            "    \"compute_cpu_seconds\": %.6f,\n    \"critical_cpu_seconds\": %.6f,\n",
            res.waitSeconds, res.waitSecondsMax, res.computeSeconds, res.criticalSeconds);
+  w.Printf("    \"critical_env_cpu_seconds\": %.6f,\n", res.criticalEnvSeconds);
+  w.Printf("    \"grid_steps\": %llu,\n    \"critical_env_steps\": %llu,\n    \"critical_rank_steps\": %llu,\n",
+           static_cast<unsigned long long>(res.gridSteps),
+           static_cast<unsigned long long>(res.criticalEnvSteps),
+           static_cast<unsigned long long>(res.criticalRankSteps));
   w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
   // Sub-patch elements: the pool (roots included), what was used, the
   // leaves drawn, and whether refinement stopped for want of elements.

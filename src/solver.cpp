@@ -31,13 +31,13 @@ uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_
   return mine > 0xffffffffu ? 0xffffffffu : static_cast<uint32_t>(mine);
 }
 
-uint32_t ShotBudget(uint32_t env, uint32_t roundShots, uint64_t shotsSoFar, uint64_t maxShots) {
+uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
+                    uint64_t maxShots) {
   if (maxShots == 0) return roundShots;
   uint64_t remaining = maxShots > shotsSoFar ? maxShots - shotsSoFar : 0;
-  uint64_t before = uint64_t(env) * roundShots;  // environments earlier in order go first
-  if (remaining <= before) return 0;
-  uint64_t left = remaining - before;
-  return static_cast<uint32_t>(left < roundShots ? left : roundShots);
+  uint64_t n = numEnvs > 0 ? numEnvs : 1;
+  uint64_t mine = remaining / n + (env < remaining % n ? 1 : 0);
+  return static_cast<uint32_t>(mine < roundShots ? mine : roundShots);
 }
 
 namespace {
@@ -124,15 +124,22 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   };
 
   bool done = ShouldStop(totals, options, &result);
-  uint32_t idle = 0;  // rounds in a row without a shot
+  uint32_t idle = 0;
+  Span<double> envCpu = buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
+  CHECK(envCpu.size() >= envs.size());  // rounds in a row without a shot
   while (!done) {
     double cpu0 = os::CpuSeconds();
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
       if (i < layout.first || i >= layout.first + layout.count) continue;
+      double envCpu0 = os::CpuSeconds();
+      uint64_t steps0 = envs[i - layout.first]->stats().gridSteps;
       envs[i - layout.first]->RunRound(
-          ShotBudget(i, options.roundShots, result.shots, options.maxShots),
-          AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding));
+          ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
+          AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding),
+          options.roundWork);
+      envCpu[i - layout.first] = os::CpuSeconds() - envCpu0;
+      buffers->envSteps[i - layout.first] = envs[i - layout.first]->stats().gridSteps - steps0;
     }
     double roundCpu = os::CpuSeconds() - cpu0;
     result.computeSeconds += roundCpu;
@@ -143,6 +150,10 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     totals = GatherTotals(envs, layout, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
     result.waitSecondsMax = totals.waitedMax;
     result.criticalSeconds += totals.roundCpuMax;
+    result.criticalEnvSeconds += totals.envCpuMax;
+    result.criticalEnvSteps += totals.envStepsMax;
+    result.criticalRankSteps += totals.rankStepsMax;
+    result.gridSteps = totals.steps;
     result.shots = totals.shots;
     result.rays = totals.rays;
     result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
@@ -157,8 +168,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
       result.reason = StopReason::kConverged;
       break;
     }
-    if (idleRound && options.maxShots > 0 &&
-        options.maxShots - result.shots < uint64_t(n) * options.roundShots) {
+    if (idleRound && options.maxShots > 0 && options.maxShots - result.shots < uint64_t(n)) {
       result.reason = StopReason::kMaxShots;  // the budget left went to environments with none
       break;
     }

@@ -199,14 +199,39 @@ TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
   EXPECT_EQ(n, 0) << "heap allocations after init";
 }
 
+// Issue 20: balanced environments (--envs auto) and the default rounds
+// sized by grid steps, whose per-environment CPU and step accounting runs
+// every round, on one process and on two.
+TEST(AllocTest, BalancedEnvironmentsAndWorkRoundsAllocateNothing) {
+#if !VISMASK_ALLOC_HOOKS
+  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
+#endif
+  for (const char* ranks : {"1", "2"}) {
+    test::TempDir dir;
+    int code = -1;
+    long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
+                                   "auto:4", "--ranks", ranks, "--emitted-rays", "200000",
+                                   "--stop-unshot", "0.05", "--width", "64", "--height", "64",
+                                   "--patch-size", "50"},
+                                  &code);
+    ASSERT_EQ(code, 0) << ranks;
+    EXPECT_EQ(n, 0) << "heap allocations after init, ranks " << ranks;
+    std::string json = test::ReadFile(dir.File("run.json"));
+    EXPECT_NE(json.find("\"envs_auto\": 4"), std::string::npos) << json;
+    EXPECT_EQ(json.find("\"round_work\": 0,"), std::string::npos) << json;
+  }
+}
+
 TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
 #if !VISMASK_ALLOC_HOOKS
   GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
 #endif
   test::TempDir dir;
+  // One shot an environment a round, so that every 50 shots is a round's
+  // end and the measurements number 12 (rounds by work hold many shots).
   std::vector<std::string> args = {"render", "scenes/cornell.obj", "--envs", "2", "--rays", "256",
                                    "--max-shots", "600", "--width", "64", "--height", "64",
-                                   "--patch-size", "60", "--quiet"};
+                                   "--patch-size", "60", "--quiet", "--round-shots", "1"};
   auto ref = args;
   ref.insert(ref.end(), {"--out", dir.File("ref")});
   ASSERT_EQ(test::RunMain(ref).code, 0);

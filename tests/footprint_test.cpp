@@ -74,6 +74,25 @@ TEST(FootprintTest, PredictionsMatchTheRendersHighWaterMark) {
   }
 }
 
+// Issue 20: footprint shows the balance. The Cornell box's uniform split
+// at x = 278 is lopsided; --envs auto:2 cuts where the patches halve, and
+// footprint's patch counts (the mesher's, not the estimate's) show it.
+TEST(FootprintTest, ShowsTheBalanceOfTheEnvironments) {
+  auto balance = [](const std::string& json) {
+    size_t at = json.find("\"patch_balance\": ");
+    EXPECT_NE(at, std::string::npos) << json;
+    return at == std::string::npos ? 0.0 : std::atof(json.c_str() + at + 17);
+  };
+  std::string uniform = FootprintJson({"--envs", "2"});
+  std::string balanced = FootprintJson({"--envs", "auto:2"});
+  std::printf("most patches / mean: --envs 2 %.3f, --envs auto:2 %.3f\n", balance(uniform),
+              balance(balanced));
+  EXPECT_GT(balance(uniform), 1.25);
+  EXPECT_LT(balance(balanced), 1.05);
+  EXPECT_NE(balanced.find("\"balanced\": true"), std::string::npos);
+  EXPECT_NE(uniform.find("\"balanced\": false"), std::string::npos);
+}
+
 TEST(FootprintTest, OneEnvironmentReservesNoExchange) {
   std::string fp = FootprintJson({"--envs", "1", "--mask-res", "250"});
   EXPECT_EQ(JsonNumber(fp, "queue_bytes"), 0u);

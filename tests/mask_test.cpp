@@ -213,13 +213,21 @@ TEST(SolverTest, AdmissionNeverOverfillsAQueue) {
 }
 
 TEST(SolverTest, ShotBudgetHonoursMaxShots) {
-  EXPECT_EQ(ShotBudget(3, 5, 0, 0), 5u);
+  EXPECT_EQ(ShotBudget(3, 4, 5, 0, 0), 5u);
+  // 7 shots left over 4 environments: spread, never more than the round's 5.
   uint64_t sum = 0;
-  for (uint32_t e = 0; e < 4; ++e) sum += ShotBudget(e, 5, 93, 100);
+  for (uint32_t e = 0; e < 4; ++e) sum += ShotBudget(e, 4, 5, 93, 100);
   EXPECT_EQ(sum, 7u);
-  EXPECT_EQ(ShotBudget(0, 5, 93, 100), 5u);
-  EXPECT_EQ(ShotBudget(1, 5, 93, 100), 2u);
-  EXPECT_EQ(ShotBudget(2, 5, 93, 100), 0u);
+  EXPECT_EQ(ShotBudget(0, 4, 5, 93, 100), 2u);
+  EXPECT_EQ(ShotBudget(2, 4, 5, 93, 100), 2u);
+  EXPECT_EQ(ShotBudget(3, 4, 5, 93, 100), 1u);
+  // Fewer left than environments: the first ones, one each (as one shot a
+  // round always gave); a whole round's worth: every environment its round.
+  EXPECT_EQ(ShotBudget(1, 4, 5, 98, 100), 1u);
+  EXPECT_EQ(ShotBudget(2, 4, 5, 98, 100), 0u);
+  EXPECT_EQ(ShotBudget(3, 4, 5, 0, 100), 5u);
+  // Issue 20: 125 environments, 63-shot rounds, 500 shots: all get 4.
+  EXPECT_EQ(ShotBudget(124, 125, 63, 0, 500), 4u);
 }
 
 // Methods B and C take their centre rays from the tables (issue 19: the

@@ -93,6 +93,32 @@ TEST(RanksTest, SmoothingGivesTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("R", {"2", "3", "4"}, {"2"}, smooth);
 }
 
+// Issue 20: the default rounds, sized by grid steps (--round-work, chosen
+// at init from the scene), on balanced environments (--envs auto:4): the
+// rounds end at the same shot everywhere, so the bytes are the same on
+// one process, pipes 1/2/4 and mpirun 1/2/4. The rounds hold many shots
+// (else this would test nothing new).
+TEST(RanksTest, DefaultWorkRoundsOnBalancedEnvironmentsGiveTheSameBytesEverywhere) {
+  const std::vector<std::string> base = {
+      "render", "scenes/cornell.obj", "--envs", "auto:4", "--emitted-rays", "400000",
+      "--max-rays", "2048", "--stop-unshot", "2e-2", "--width", "96", "--height", "96",
+      "--mask-res", "24", "--patch-size", "50", "--quiet"};
+  ExpectSameBytesEverywhere("B", {"1", "2", "4"}, {"1", "2", "4"}, base);
+  TempDir dir;
+  auto args = base;
+  args.insert(args.end(), {"--out", dir.path()});
+  ASSERT_EQ(RunMain(args).code, 0);
+  std::string json = ReadFile(dir.File("run.json"));
+  auto number = [&](const std::string& key) {
+    size_t at = json.find("\"" + key + "\": ");
+    EXPECT_NE(at, std::string::npos) << key;
+    return at == std::string::npos ? 0.0 : std::atof(json.c_str() + at + key.size() + 4);
+  };
+  EXPECT_GT(number("round_work"), 0.0);
+  EXPECT_GT(number("shots"), 4 * 4 * number("rounds")) << "rounds of a few shots: " << json;
+  EXPECT_NE(json.find("\"envs_auto\": 4"), std::string::npos);
+}
+
 void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,
                                std::vector<const char*> mpiRanks,
                                const std::vector<std::string>& kindOf) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "test_util.h"
+#include "vismask/options.h"
 
 namespace vismask {
 namespace {
@@ -166,6 +167,13 @@ TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
       {{"render", "scenes/cornell.obj", "--stop-error", "1"}, "--stop-error"},
       {{"render", "scenes/cornell.obj", "--stop-error", "nan"}, "--stop-error"},
       {{"render", "scenes/cornell.obj", "--stop-error"}, "missing value"},
+      {{"render", "scenes/cornell.obj", "--round-work", "-1"}, "--round-work"},
+      {{"render", "scenes/cornell.obj", "--round-work", "1e6"}, "--round-work"},
+      {{"render", "scenes/cornell.obj", "--envs", "auto:0"}, "--envs"},
+      {{"render", "scenes/cornell.obj", "--envs", "auto:"}, "--envs"},
+      {{"render", "scenes/cornell.obj", "--envs", "auto:67"}, "no grid"},
+      {{"render", "scenes/cornell.obj", "--envs", "autox"}, "--envs"},
+      {{"render", "scenes/cornell.obj", "--envs", "auto:2", "--ranks", "3"}, "--ranks"},
       {{"render"}, "no scene"},
       {{"frobnicate"}, "unknown command"},
       {{"render", dir.File("missing.obj")}, "missing.obj"},
@@ -229,8 +237,54 @@ TEST(RenderTest, HelpListsEveryOption) {
   for (const char* flag : {"--out", "--patch-size", "--rays", "--seed", "--stop-unshot",
                            "--max-shots", "--max-seconds", "--width", "--height", "--camera",
                            "--exposure", "--quiet", "--correct-unshot", "--stop-error", "--aa",
-                           "--strict", "--emit"})
+                           "--strict", "--emit", "--round-shots", "--round-work", "--envs auto"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag;
+}
+
+// Issue 20: how big a round is. With several environments and neither
+// --round-shots nor --round-work, rounds by work (its size chosen at init);
+// --round-shots alone keeps the rounds of before; one environment, one shot.
+TEST(RenderTest, RoundSizeDefaults) {
+  struct Case {
+    std::vector<const char*> args;
+    uint32_t shots;
+    bool autoWork;
+    uint64_t work;
+  };
+  const Case cases[] = {
+      {{"--envs", "1"}, 1, false, 0},
+      // 6 packets a shot of 128 + 4R^2/8 bytes (padded to 8) in 512 KiB:
+      // 63 at the default R = 50, the cap of 64 at R = 20, 17 at R = 100.
+      {{"--envs", "2"}, 63, true, 0},
+      {{"--envs", "2", "--mask-res", "20"}, 64, true, 0},
+      {{"--envs", "auto:4"}, 63, true, 0},
+      {{"--envs", "2", "--round-shots", "8"}, 8, false, 0},
+      {{"--envs", "2", "--round-shots", "1"}, 1, false, 0},
+      {{"--envs", "2", "--round-work", "5000"}, 64, false, 5000},
+      {{"--envs", "2", "--round-work", "0"}, 64, false, 0},
+      {{"--envs", "2", "--round-work", "7", "--round-shots", "3"}, 3, false, 7},
+      {{"--envs", "1", "--round-work", "9"}, 64, false, 9},
+      {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
+  };
+  for (const Case& c : cases) {
+    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    Options o;
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    ASSERT_TRUE(s.ok()) << s.ToString();
+    EXPECT_EQ(o.roundShots, c.shots) << c.args.size();
+    EXPECT_EQ(o.roundWorkAuto, c.autoWork) << c.args.size();
+    EXPECT_EQ(o.roundWork, c.work) << c.args.size();
+  }
+  // The automatic size: 16 full shots of rays and centre rays, times the
+  // cube root of an environment's grid cells.
+  Options o;
+  o.maxRays = 1000;
+  o.maskRes = 10;  // + 400 centre rays (B)
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1400 * 20));
+  EXPECT_EQ(AutoRoundWork(o, 16000.0, 8, 4.0f), uint64_t(16 * 1400 * 20));
+  o.maskMethod = MaskMethod::kR;  // no centre rays
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1000 * 20));
 }
 
 // --- Real scenes as users bring them (issue 16) -------------------------------

@@ -299,8 +299,10 @@ std::vector<double> Triple(const std::string& json, const std::string& key) {
 TEST(TwoSidedTest, LedgerClosesTwoSided) {
   TempDir dir;
   for (std::vector<std::string> extra :
+       // --round-shots 1: draining to exactly 0 with rounds by work runs for
+       // minutes (over a million shots; open issue, see the issue 20 report).
        {std::vector<std::string>{}, std::vector<std::string>{"--envs", "2", "--mask-method", "R",
-                                                             "--stop-unshot", "0"}}) {
+                                                             "--stop-unshot", "0", "--round-shots", "1"}}) {
     std::vector<std::string> args = {"render", "scenes/miswound.obj", "--out", dir.File("out"),
                                      "--width", "32", "--height", "32", "--emitted-rays",
                                      "200000", "--stop-unshot", "1e-2", "--quiet", "--two-sided",

@@ -49,6 +49,7 @@ struct EnvStats {
   uint64_t foreignShots = 0;  // queued foreign shooters distributed here
   uint64_t rays = 0;          // form-factor rays traced
   uint64_t maskRays = 0;      // Method B's and C's centre rays
+  uint64_t gridSteps = 0;     // their walks' cells entered and patches tested (Grid::steps)
   uint64_t hits = 0;
   uint64_t packetsSent = 0;
   uint64_t recordsCreated = 0;  // local shots that went on to neighbours
@@ -128,9 +129,10 @@ class Environment {
 
   // One round: up to `shotBudget` shots, each the larger of the local patch
   // with most unshot power (allowed while `newRecords` remains, when there
-  // are neighbours) and the queued foreign shooter with most power. Packets
-  // for neighbours go to the outbox.
-  void RunRound(uint32_t shotBudget, uint32_t newRecords);
+  // are neighbours) and the queued foreign shooter with most power, ending
+  // early once the round's rays have done `roundWork` grid steps
+  // (Grid::steps; 0: no limit). Packets for neighbours go to the outbox.
+  void RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t roundWork = 0);
 
   // The packets this round produced, `packetBytes()` each, in send order.
   uint32_t outboxCount() const { return outCount_; }

@@ -26,6 +26,9 @@ struct EnvReport {
   double elapsed;    // seconds since the solve began, on this rank's clock
   double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
   double roundCpu;   // CPU seconds of this rank's shots in the last round (first entry)
+  double envCpu;     // CPU seconds of this environment's shots in the last round
+  uint64_t roundSteps;  // grid steps of this environment's shots in the last round
+  uint64_t steps;       // grid steps so far (EnvStats::gridSteps)
   uint64_t shots;    // local and foreign
   uint64_t rays;     // form-factor rays traced
   uint64_t recordsCreated;
@@ -45,6 +48,10 @@ struct RoundTotals {
   double elapsed = 0.0;  // rank 0's clock
   double waitedMax = 0.0;  // the most any rank has waited
   double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
+  double envCpuMax = 0.0;    // the most CPU any environment used for them
+  uint64_t steps = 0;        // grid steps, all environments, so far
+  uint64_t envStepsMax = 0;  // the most grid steps any environment did in the last round
+  uint64_t rankStepsMax = 0; // the most any rank's environments did in it, together
   uint64_t shots = 0;
   uint64_t rays = 0;
   uint64_t recordsCreated = 0;
@@ -56,7 +63,8 @@ struct RoundTotals {
 
 // A rank's exchange buffers, carved from its arena at init: one send and one
 // receive block per rank, each large enough for every packet a rank's
-// environments can send in a round, and the gathered reports.
+// environments can send another rank in a round (`packetsPerEnvRound` per
+// environment), and the gathered reports.
 struct ExchangeBuffers {
   void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
               uint32_t packetsPerEnvRound);
@@ -67,6 +75,8 @@ struct ExchangeBuffers {
   Span<size_t> received;
   Span<EnvReport> mine;      // perRank entries
   Span<EnvReport> all;       // ranks * perRank entries
+  Span<double> envCpu;       // perRank: the solver's CPU seconds of each environment's round
+  Span<uint64_t> envSteps;   // perRank: the grid steps of each environment's round
   size_t blockBytes = 0;
   uint32_t packetBytes = 0;
 };

@@ -84,6 +84,12 @@ class Grid {
   Span<uint32_t> cellStart_;
   Span<uint32_t> refs_;
   Span<uint64_t> occupied_;  // bit c: cell c holds a patch
+ public:
+  // Work done by the walks so far: cells entered plus patches tested (a
+  // deterministic count, the same on every machine).
+  uint64_t steps() const { return steps_; }
+ private:
+  mutable uint64_t steps_ = 0;
   Span<const PatchGeom> geom_;
   float farLimit_ = 0.0f;  // origins with a coordinate beyond this skip the grid
 };

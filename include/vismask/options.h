@@ -52,10 +52,25 @@ struct Options {
   bool hasExposure = false;
   float exposure = 1.0f;
   bool quiet = false;
-  int envs[3] = {1, 1, 1};  // --envs NX[xNY[xNZ]]
+  int envs[3] = {1, 1, 1};  // --envs NX[xNY[xNZ]] (or the grid --envs auto:N chose, at init)
+  // --envs auto[:N]: N environments (default: --ranks), the grid's shape and
+  // its split planes chosen at init from the scene (partition.h, WorkSplitter).
+  bool envsAuto = false;
+  int envsAutoCount = 0;
   MaskMethod maskMethod = MaskMethod::kB;
   uint32_t maskRes = 50;
+  // Round size (ResolveRounds). --round-shots K: at most K shots per
+  // environment per round; --round-work N: a round ends for an environment
+  // once its rays' grid walks have done N steps (cells entered plus patches
+  // tested: Grid::steps, a count, never a time), 0: never. With several
+  // environments and neither given, both are automatic: roundWorkAuto, and
+  // init sets roundWork from the scene (AutoRoundWork); with one
+  // environment and neither given, one shot a round (nothing to exchange).
   uint32_t roundShots = 1;
+  bool hasRoundShots = false;
+  uint64_t roundWork = 0;
+  bool hasRoundWork = false;
+  bool roundWorkAuto = false;
   uint32_t queue = 64;
   uint32_t maskCacheKiB = 8192;  // --mask-cache: B/C centre masks kept per environment
   std::vector<uint32_t> envOrder;
@@ -86,11 +101,30 @@ struct Options {
   int viewPort = 0;     // 0: any free port
 };
 
+// Rounds by work (ResolveRounds, AutoRoundWork): the full shots' worth of
+// work an automatic round holds, the most shots it holds, and the outbox
+// bytes an automatic round may fill (fewer shots with large packets).
+constexpr uint32_t kAutoRoundWorkShots = 16;
+constexpr uint32_t kAutoRoundShots = 64;
+constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
+
 constexpr float kAutoPatchDivisions = 28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.
 Status ParseArgs(int argc, const char* const* argv, Options* options);
+
+// The round size the options give for `numEnvs` environments: fills
+// roundShots and roundWork (or roundWorkAuto) when they were not given
+// (see Options). Called once the environment count is known.
+void ResolveRounds(int numEnvs, Options* options);
+
+// The automatic --round-work: kAutoRoundWorkShots full shots (the most
+// rays a shot traces, plus B's and C's centre rays) times the grid steps a
+// ray takes in an environment of the scene's estimated `patches` / `numEnvs`
+// patches (about the cube root of its grid cells). From the scene and the
+// options alone, so every rank computes the same.
+uint64_t AutoRoundWork(const Options& options, double patches, int numEnvs, float gridDensity);
 
 // The --help text.
 const char* HelpText();

@@ -36,7 +36,8 @@ struct SolveOptions {
   uint64_t maxShots = 0;     // 0: no limit
   uint64_t rayBudget = 0;    // stop once this many form-factor rays are traced; 0: no limit
   double maxSeconds = 0.0;   // 0: no limit
-  uint32_t roundShots = 1;   // shots per environment per round
+  uint32_t roundShots = 1;   // shots per environment per round (at most)
+  uint64_t roundWork = 0;    // a round ends for an environment after this many grid steps; 0: no limit
   uint32_t queueCapacity = 64;  // foreign shooters an environment can hold
   bool quiet = false;        // no progress line on stderr
   Span<const uint32_t> order;  // the order environments run in a round (empty: 0..n-1)
@@ -75,6 +76,18 @@ struct SolveResult {
   // solve would take with a core per rank and free communication.
   double computeSeconds = 0.0;
   double criticalSeconds = 0.0;
+  // The same with one environment per rank: over rounds, the sum of the
+  // most CPU any one environment's shots used (measured per environment,
+  // so a one-process run gives the critical path of a rank per environment).
+  double criticalEnvSeconds = 0.0;
+  // The same in grid steps (Grid::steps, a count: the same on every run):
+  // all of them, and over rounds the sum of the most any environment, and
+  // any rank, did in that round. gridSteps / criticalRankSteps is the
+  // speedup the rounds allow this many ranks with a core each and free
+  // communication, measured in work rather than time.
+  uint64_t gridSteps = 0;
+  uint64_t criticalEnvSteps = 0;
+  uint64_t criticalRankSteps = 0;
   double biasEstimate = 0.0;  // BiasEstimate of the final totals
   double lossEstimate = 0.0;  // LossEstimate of the final totals
 };
@@ -114,8 +127,12 @@ double EffectiveReflectance(double rhoKd, double emitted, double unshot, double 
 uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
                          uint64_t maxOutstanding);
 
-// The shot budget of environment `env` this round under --max-shots.
-uint32_t ShotBudget(uint32_t env, uint32_t roundShots, uint64_t shotsSoFar, uint64_t maxShots);
+// The shot budget of environment `env` of `numEnvs` this round under
+// --max-shots: the shots left spread evenly (the first environments one
+// more), at most `roundShots` each, so that a budget smaller than a whole
+// round still reaches every environment while it can.
+uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_t shotsSoFar,
+                    uint64_t maxShots);
 
 // Solves this rank's environments `envs` (those of `layout`) in place,
 // exchanging with the other ranks through `transport`. `convergence` (may be
