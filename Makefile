@@ -272,12 +272,17 @@ BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildc
 # installs it), for the viewer's tests; VISMASK_MAKE_ARGS tells the install
 # test which build make install should take.
 VIEWER_IF_NPM := $(if $(shell command -v npm 2>/dev/null),viewer)
+# The build uses every core (-j), and so does the suite: tools/run-tests
+# runs it in TEST_JOBS GoogleTest shards at once (default: the cores; 1:
+# the plain binary), then prints the shards' logs and the summed
+# "N passed, N failed" line.
+TEST_JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 test: deps
-	$(MAKE) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT) $(VIEWER_IF_NPM)
+	$(MAKE) -j$(TEST_JOBS) headers all $(BUILD)/vismask_tests $(BENCH_IF_PRESENT) $(VIEWER_IF_NPM)
 	@if command -v blender >/dev/null; then VISMASK_BIN=$(BUILD)/vismask tools/reference --selftest; \
 	 else echo "make: blender not found: tools/reference --selftest skipped (tools/install-deps --reference)"; fi
 	VISMASK_BIN=$(BUILD)/vismask VISMASK_MAKE_ARGS="BUILD=$(BUILD) SAN=$(SAN) DEBUG=$(DEBUG) MPI=$(MPI)" \
-	  $(BUILD)/vismask_tests
+	  tools/run-tests $(BUILD)/vismask_tests $(TEST_JOBS)
 
 # docs/RESULTS.md and docs/results/ from one run of every step in
 # tools/experiments (runs under build/experiments/full; about 25 minutes on
