@@ -84,6 +84,8 @@ int Main(int argc, const char* const* argv) {
       TransportRequest{r->options.transport, r->options.ranks, r->options.rankTimeout}, &s);
   // An error with no text: another rank (rank 0) reports it.
   if (!r->transport) return s.message().empty() ? kExitUsage : Fail(s);
+  // Under mpirun without --envs: one balanced environment a rank.
+  SetWorldSize(r->transport->size(), &r->options);
   int rc = kExitUsage;
   try {
     rc = Init(r.get());

@@ -147,11 +147,13 @@ render options:
 local environments and visibility masks:
   --envs NX[xNY[xNZ]]  split the scene's box into a grid of environments
                        (default 1); each owns only its own patches and grid
-  --envs auto[:N]      N environments (default: --ranks; give N under
-                       mpirun), the grid's shape and its split planes chosen
-                       from the scene: each axis cut where the patches
-                       (estimated from the polygons' areas) divide evenly,
-                       so every slab holds about as many; still a grid
+  --envs auto[:N]      N environments (default: --ranks, or under mpirun the
+                       world size), the grid's shape and its split planes
+                       chosen from the scene: each axis cut where the
+                       patches (estimated from the polygons' areas) divide
+                       evenly, so every slab holds about as many; still a
+                       grid. The default when --envs is not given and the
+                       run has more than one rank
   --mask-method M      none | A | B | C | R (default B): how a shooter's
                        visibility mask is filled. A: from the form-factor rays
                        that hit (cheap, leaks light where no ray hit); B: one
@@ -287,6 +289,15 @@ void ResolveRounds(int numEnvs, Options* o) {
   uint64_t shots = kAutoRoundOutboxBytes / (6 * packet);
   o->roundShots = static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
   o->roundWorkAuto = true;
+}
+
+bool SetWorldSize(int ranks, Options* o) {
+  if (o->hasEnvs || ranks <= 1 || o->envsAuto) return false;
+  o->envsAuto = true;
+  o->envsAutoCount = std::min(ranks, kMaxAutoEnvs);
+  if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs)) return false;
+  ResolveRounds(o->envsAutoCount, o);
+  return true;
 }
 
 uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs, float gridDensity) {
@@ -487,6 +498,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (!ParseViewSide(v.c_str(), &o->view)) return Bad(a, v, "front, back, left, right, top or bottom");
       o->hasView = true;
     } else if (a == "--envs") {
+      o->hasEnvs = true;
       o->envsAuto = false;
       if (v == "auto" || v.rfind("auto:", 0) == 0) {
         o->envsAuto = true;
@@ -620,8 +632,11 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
                          std::to_string(o->maxRays));
   if (!o->exclude.empty() && o->reference.empty())
     return Status::Error("vismask: --exclude: needs --reference REF.pfm (the mask applies to its error)");
+  // --ranks N > 1 without --envs: --envs auto, one balanced environment a
+  // rank (under mpirun, SetWorldSize does the same with the world's size).
+  if (!o->hasEnvs && o->ranks > 1) o->envsAuto = true;
   if (o->envsAuto) {
-    // auto: as many environments as ranks (pipe; under mpirun, give auto:N).
+    // auto: as many environments as ranks (pipe; under mpirun, the world).
     if (o->envsAutoCount == 0) o->envsAutoCount = std::max(o->ranks, 1);
     // A placeholder shape of the right count; init picks it from the scene.
     if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs))

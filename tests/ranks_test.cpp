@@ -34,6 +34,7 @@ const std::vector<std::string> kBase = {
 void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,
                                std::vector<const char*> mpiRanks,
                                const std::vector<std::string>& base = kBase);
+bool HaveMpi();
 
 // The default allocation (rays in proportion to power, partial shots, the
 // rounding drawn from each shot's stream), Sobol' samples, sub-patch
@@ -117,6 +118,42 @@ TEST(RanksTest, DefaultWorkRoundsOnBalancedEnvironmentsGiveTheSameBytesEverywher
   EXPECT_GT(number("round_work"), 0.0);
   EXPECT_GT(number("shots"), 4 * 4 * number("rounds")) << "rounds of a few shots: " << json;
   EXPECT_NE(json.find("\"envs_auto\": 4"), std::string::npos);
+}
+
+// Issue 20, parallel by default: `--ranks 2` and `mpirun -np 2` with no
+// --envs run --envs auto:2, the same bytes as one process given auto:2.
+TEST(RanksTest, RanksWithoutEnvsGiveTheBytesOfEnvsAuto) {
+  const std::vector<std::string> base = {"render", "scenes/cornell.obj", "--patch-size", "50",
+                                         "--stop-unshot", "5e-2", "--width", "48", "--height",
+                                         "48", "--quiet"};
+  TempDir dir;
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    auto args = base;
+    args.insert(args.end(), {"--out", dir.File(out)});
+    args.insert(args.end(), extra.begin(), extra.end());
+    auto r = RunMain(args);
+    ASSERT_EQ(r.code, 0) << out << ": " << r.err;
+  };
+  run("loop", {"--envs", "auto:2"});
+  run("pipe", {"--ranks", "2"});
+  std::vector<std::string> outs = {"pipe"};
+  if (HaveMpi()) {
+    std::string cmd = "ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                      "mpirun -np 2 --oversubscribe " + VismaskBin() + "-mpi";
+    for (const auto& a : base) cmd += " " + a;
+    cmd += " --out " + dir.File("mpi") + " >" + dir.File("mpi.log") + " 2>&1";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << ReadFile(dir.File("mpi.log"));
+    outs.push_back("mpi");
+  }
+  for (const char* f : {"image.pfm", "patches.csv"}) {
+    std::string ref = ReadFile(dir.File(std::string("loop/") + f));
+    ASSERT_GT(ref.size(), 100u);
+    for (const auto& o : outs) EXPECT_EQ(ref, ReadFile(dir.File(o + "/" + f))) << o << "/" << f;
+  }
+  for (const auto& o : outs) {
+    std::string json = ReadFile(dir.File(o + "/run.json"));
+    EXPECT_NE(json.find("\"envs_auto\": 2"), std::string::npos) << o << ": " << json;
+  }
 }
 
 void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipeRanks,

@@ -287,6 +287,41 @@ TEST(RenderTest, RoundSizeDefaults) {
   EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1000 * 20));
 }
 
+// Issue 20, parallel by default: more than one rank and no --envs means
+// --envs auto, one balanced environment a rank (--ranks at parse; the MPI
+// world's size through SetWorldSize), with the rounds of several
+// environments; --envs given is kept as given.
+TEST(RenderTest, RanksWithoutEnvsMeanOneBalancedEnvironmentARank) {
+  auto parse = [](std::vector<const char*> args, Options* o) {
+    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), o);
+    EXPECT_TRUE(s.ok()) << s.ToString();
+  };
+  Options three;
+  parse({"--ranks", "3"}, &three);
+  EXPECT_TRUE(three.envsAuto);
+  EXPECT_EQ(three.envsAutoCount, 3);
+  EXPECT_EQ(three.envs[0] * three.envs[1] * three.envs[2], 3);
+  EXPECT_TRUE(three.roundWorkAuto);
+  EXPECT_FALSE(SetWorldSize(3, &three));  // already auto
+  Options given;
+  parse({"--ranks", "2", "--envs", "2"}, &given);
+  EXPECT_FALSE(given.envsAuto);
+  EXPECT_FALSE(SetWorldSize(2, &given));
+  Options one;
+  parse({}, &one);
+  EXPECT_FALSE(one.envsAuto);
+  EXPECT_EQ(one.roundShots, 1u);
+  EXPECT_FALSE(SetWorldSize(1, &one));
+  EXPECT_TRUE(SetWorldSize(4, &one));  // mpirun -np 4, no --envs
+  EXPECT_TRUE(one.envsAuto);
+  EXPECT_EQ(one.envsAutoCount, 4);
+  EXPECT_EQ(one.envs[0] * one.envs[1] * one.envs[2], 4);
+  EXPECT_TRUE(one.roundWorkAuto);
+  EXPECT_GT(one.roundShots, 1u);
+}
+
 // --- Real scenes as users bring them (issue 16) -------------------------------
 
 // run.json's energy triple `key`.

@@ -55,6 +55,7 @@ struct Options {
   int envs[3] = {1, 1, 1};  // --envs NX[xNY[xNZ]] (or the grid --envs auto:N chose, at init)
   // --envs auto[:N]: N environments (default: --ranks), the grid's shape and
   // its split planes chosen at init from the scene (partition.h, WorkSplitter).
+  bool hasEnvs = false;   // --envs given (else --ranks N > 1 or an MPI world > 1 means auto:N)
   bool envsAuto = false;
   int envsAutoCount = 0;
   MaskMethod maskMethod = MaskMethod::kB;
@@ -118,6 +119,11 @@ Status ParseArgs(int argc, const char* const* argv, Options* options);
 // roundShots and roundWork (or roundWorkAuto) when they were not given
 // (see Options). Called once the environment count is known.
 void ResolveRounds(int numEnvs, Options* options);
+
+// A run of `ranks` ranks (the MPI world) without --envs: --envs auto with
+// one environment a rank, its rounds resolved again. True when it changed
+// the options (no --envs, more than one rank, not already auto).
+bool SetWorldSize(int ranks, Options* options);
 
 // The automatic --round-work: kAutoRoundWorkShots full shots (the most
 // rays a shot traces, plus B's and C's centre rays) times the grid steps a
