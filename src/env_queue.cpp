@@ -203,9 +203,9 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t ro
   newRecords_ = newRecords;
   // The round's work: grid steps counted, never timed, so the round ends
   // at the same shot whatever the machine, the ranks or the transport.
-  const uint64_t work0 = grid_.steps();
+  const uint64_t work0 = workSteps();
   for (uint32_t k = 0; k < shotBudget; ++k) {
-    if (roundWork > 0 && grid_.steps() - work0 >= roundWork) break;
+    if (roundWork > 0 && workSteps() - work0 >= roundWork) break;
     uint32_t local = tree_.Top();
     double localKey = local == kNoPatch ? 0.0 : tree_.Key(local);
     bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newRecords_ > 0);

@@ -259,6 +259,9 @@ bool Environment::Build() {
     }
   }
   grid_.Build(patches_, geom_);
+  centreStepsPerRay_ = 1;
+  while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <= grid_.cellCount())
+    ++centreStepsPerRay_;
   maskDirections_.Fill();
   for (uint32_t& tag : cacheTag_) tag = kNoPatch;
   std::vector<Patch>().swap(staged_);

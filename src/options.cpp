@@ -183,8 +183,11 @@ local environments and visibility masks:
                        of local shooters, kept for their later shots (the
                        mask depends only on the shooter); same output,
                        fewer centre rays; 0: none (default 8192)
-  --queue Q            foreign shooters an environment holds at once
-                       (default 64); a full queue holds back new ones
+  --queue Q            foreign shooters an environment holds at once; a
+                       full queue holds back new ones (default: the
+                       environments x the round's shots, so that every
+                       environment can make a whole round, within 1 MiB of
+                       slots an environment, and at least 64)
   --ranks N            run on N processes on this host, connected by POSIX
                        pipes (default 1); environments are dealt to ranks in
                        contiguous blocks; N <= the number of environments
@@ -279,16 +282,25 @@ uint32_t MostRaysAShot(const Options& o) {
 
 void ResolveRounds(int numEnvs, Options* o) {
   o->roundWorkAuto = false;
+  const uint64_t packet = PacketBytes(MaskShapeOf(o->maskMethod, o->maskRes, MostRaysAShot(*o)));
   if (o->hasRoundWork || o->hasRoundShots || numEnvs <= 1) {
     if (!o->hasRoundShots) o->roundShots = o->hasRoundWork ? kAutoRoundShots : 1;
     if (!o->hasRoundWork) o->roundWork = 0;
-    return;
+  } else {
+    // The outbox holds 6 packets a shot: fewer shots a round with big packets.
+    uint64_t shots = kAutoRoundOutboxBytes / (6 * packet);
+    o->roundShots = static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
+    o->roundWorkAuto = true;
   }
-  // The outbox holds 6 packets a shot: fewer shots a round with big packets.
-  uint64_t packet = PacketBytes(MaskShapeOf(o->maskMethod, o->maskRes, MostRaysAShot(*o)));
-  uint64_t shots = kAutoRoundOutboxBytes / (6 * packet);
-  o->roundShots = static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
-  o->roundWorkAuto = true;
+  if (!o->hasQueue) o->queue = AutoQueue(numEnvs, o->roundShots, packet);
+}
+
+uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes) {
+  // Admission shares the free slots among the environments, so a round of
+  // `roundShots` local shots in each needs numEnvs x roundShots of them.
+  const uint64_t want = uint64_t(std::max(numEnvs, 1)) * roundShots;
+  const uint64_t fit = kAutoQueueBytes / std::max<uint64_t>(packetBytes, 1);
+  return static_cast<uint32_t>(std::max<uint64_t>(kMinAutoQueue, std::min(want, fit)));
 }
 
 bool SetWorldSize(int ranks, Options* o) {
@@ -611,6 +623,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->queue = static_cast<uint32_t>(u);
+      o->hasQueue = true;
     } else {
       return Status::Error("vismask: unknown option '" + a + "' (try 'vismask --help')");
     }

@@ -191,6 +191,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // Method C: a pixel whose rays all hit closes, one whose rays all passed
   // stays open; only pixels with both, or with no ray, take the centre ray.
   if (masks && out && options_.maskMethod == MaskMethod::kB) {
+    // The round's work counts the centre rays an uncached cast makes.
+    centreWork_ += uint64_t{out->CountOpen()} * centreStepsPerRay_;
     if (centreMask) out->And(*centreMask);
     else CastCentres(shooter, skip, out);
   } else if (methodC) {
@@ -210,6 +212,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
       if (left) hitPixels.Open(p);
       else hitPixels.Close(p);
     }
+    centreWork_ += uint64_t{hitPixels.CountOpen()} * centreStepsPerRay_;
     if (centreMask) {
       // Cast only the pixels left whose centre ray is not known yet, into the cache.
       passedPixels.CopyFrom(hitPixels);
@@ -237,6 +240,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   const glm::vec3 origin = centre + options_.rayEpsilon * sampler.frame.n;
   uint32_t pixels = shape_.pixels(), cast = 0;
   uint32_t hint = kNoPatch;  // the last pixel's occluder: neighbours' rays often hit it too
+  const uint64_t steps0 = grid_.steps();
   for (uint32_t p = 0; p < pixels; ++p) {
     if (!mask->IsOpen(p)) continue;
     Ray ray{origin, sampler.frame.ToWorld(maskDirections_.Centre(p)), 0.0f,
@@ -245,6 +249,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
     if (grid_.Occluded(ray, skip, &hint)) mask->Close(p);
   }
   stats_.maskRays += cast;
+  centreSteps_ += grid_.steps() - steps0;
 }
 
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {

@@ -67,14 +67,16 @@ TEST(EnvTest, PermutedEnvironmentOrderGivesIdenticalBytes) {
 
 // The centre-mask cache (--mask-cache) only saves centre rays: B and C give
 // the same bytes with it, with it too small for every patch (slots shared),
-// and without it, and it casts fewer rays.
+// and without it, and it casts fewer rays. Rounds end by work (a small
+// --round-work, so every round is cut by it): the work counts the centre
+// rays an uncached cast makes, so the cache moves no round's end.
 TEST(EnvTest, MaskCacheKeepsOutputsAndSavesCentreRays) {
   TempDir dir;
   for (const char* method : {"B", "C"}) {
     std::vector<std::string> base = {"scenes/cornell.obj", "--envs", "2x1x2", "--emitted-rays", "100000",
                                      "--max-shots", "300", "--width", "32", "--height", "32",
                                      "--mask-res", "24", "--patch-size", "90",
-                                     "--mask-method", method};
+                                     "--mask-method", method, "--round-work", "150000"};
     auto run = [&](const std::string& out, const char* cache) {
       auto args = base;
       args.insert(args.end(), {"--out", dir.File(out), "--mask-cache", cache});
@@ -97,6 +99,10 @@ TEST(EnvTest, MaskCacheKeepsOutputsAndSavesCentreRays) {
     EXPECT_GT(maskRays(none), 0.0) << method;
     EXPECT_LT(maskRays(all), maskRays(none)) << method;
     EXPECT_LE(maskRays(all), maskRays(some)) << method;
+    // Many rounds, each cut by work well before 64 shots an environment.
+    size_t at = none.find("\"rounds\": ");
+    ASSERT_NE(at, std::string::npos);
+    EXPECT_GE(std::atof(none.c_str() + at + 10), 8.0) << method << ": " << none;
   }
 }
 

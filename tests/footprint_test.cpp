@@ -105,9 +105,9 @@ TEST(FootprintTest, OneEnvironmentReservesNoExchange) {
 }
 
 TEST(FootprintTest, MethodRSlotsHoldOneBitPerRay) {
-  // --envs 2: each environment has one neighbour, so 64 slots of N bits.
-  std::string small = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800"});
-  std::string large = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "80000"});
+  // --envs 2 --queue 64: each environment has one neighbour, so 64 slots of N bits.
+  std::string small = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--queue", "64"});
+  std::string large = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "80000", "--queue", "64"});
   EXPECT_EQ(JsonNumber(small, "packet_size_bytes"), 128u + 104u);  // 100 bytes padded to 8
   EXPECT_EQ(JsonNumber(large, "packet_size_bytes"), 128u + 10000u);
   // 64 slots, 13 words each against 1250: 64 * (1250 - 13) * 8 bytes more,
@@ -116,7 +116,7 @@ TEST(FootprintTest, MethodRSlotsHoldOneBitPerRay) {
   EXPECT_GE(grow, 64ull * (1250 - 13) * 8);
   EXPECT_LE(grow, 64ull * (1250 - 13) * 8 + 128);
   // The mask's resolution plays no part.
-  EXPECT_EQ(FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--mask-res", "250"}),
+  EXPECT_EQ(FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--queue", "64", "--mask-res", "250"}),
             small);
 }
 

@@ -9,6 +9,7 @@
 
 #include "test_util.h"
 #include "vismask/options.h"
+#include "vismask/packet.h"
 
 namespace vismask {
 namespace {
@@ -285,6 +286,35 @@ TEST(RenderTest, RoundSizeDefaults) {
   EXPECT_EQ(AutoRoundWork(o, 16000.0, 8, 4.0f), uint64_t(16 * 1400 * 20));
   o.maskMethod = MaskMethod::kR;  // no centre rays
   EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1000 * 20));
+}
+
+// Issue 20: the default queue lets every environment make a whole round
+// (admission shares the free slots among them): environments x round
+// shots, within 1 MiB of slots an environment, at least the 64 of before.
+TEST(RenderTest, QueueDefaults) {
+  struct Case {
+    std::vector<const char*> args;
+    uint32_t queue;
+  };
+  const uint64_t packet50 = PacketBytes(MaskShapeOf(MaskMethod::kB, 50, Options().maxRays));
+  const Case cases[] = {
+      {{"--envs", "1"}, 64},
+      {{"--envs", "2"}, 2 * 63},
+      {{"--envs", "2", "--round-shots", "1"}, 64},
+      {{"--envs", "4x1x4", "--mask-res", "20"}, 16 * 64},
+      {{"--envs", "5x5x5"}, static_cast<uint32_t>(kAutoQueueBytes / packet50)},
+      {{"--envs", "5x5x5", "--queue", "7"}, 7},
+      {{"--envs", "2", "--queue", "64"}, 64},
+  };
+  for (const Case& c : cases) {
+    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    Options o;
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    ASSERT_TRUE(s.ok()) << s.ToString();
+    EXPECT_EQ(o.queue, c.queue) << c.args[1];
+  }
+  EXPECT_LT(kAutoQueueBytes / packet50, 125u * 63u);  // the byte cap is what binds at 5x5x5
 }
 
 // Issue 20, parallel by default: more than one rank and no --envs means

@@ -224,13 +224,14 @@ TEST(StabilityTest, SplitStiffBoxMethodRWithinStatedError) {
   EXPECT_LT(stated, 0.01);
 }
 
-// With more environments than queue slots, some rounds admit no new record
+// With more environments than queue slots (--queue 64: the default would
+// give each a round's worth), some rounds admit no new record
 // in the environment that holds the light (issue 17): such a round shoots
 // nothing, and that is not convergence while power is left.
 TEST(StabilityTest, IdleRoundsAreNotConvergence) {
   TempDir dir;
   auto r = RunMain(Args({"render", "scenes/cornell.obj", "--out", dir.File("c"), "--envs", "5x5x5",
-                         "--rays", "64", "--max-shots", "500"},
+                         "--rays", "64", "--max-shots", "500", "--queue", "64"},
                         Small()));
   ASSERT_EQ(r.code, 0) << r.err;
   std::string json = ReadFile(dir.File("c") + "/run.json");

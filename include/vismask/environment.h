@@ -130,9 +130,19 @@ class Environment {
   // One round: up to `shotBudget` shots, each the larger of the local patch
   // with most unshot power (allowed while `newRecords` remains, when there
   // are neighbours) and the queued foreign shooter with most power, ending
-  // early once the round's rays have done `roundWork` grid steps
-  // (Grid::steps; 0: no limit). Packets for neighbours go to the outbox.
+  // early once the round's work has reached `roundWork` grid steps (0: no
+  // limit; workSteps below). Packets for neighbours go to the outbox.
   void RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t roundWork = 0);
+  // The work rounds are measured in: the grid steps of the form-factor
+  // rays, plus for Methods B and C centreStepsPerRay() for each centre ray
+  // the method would cast without the centre-mask cache. Counted, never timed, and the same with any
+  // --mask-cache: the cache saves real centre rays (and their steps), and
+  // the last-occluder hint makes a cast's steps depend on which pixels it
+  // casts, so a cached shot's real steps differ from an uncached one's.
+  uint64_t workSteps() const { return grid_.steps() - centreSteps_ + centreWork_; }
+  // A centre ray's work: the integer cube root of the grid's cells (the
+  // cells a ray crosses, about), at least 1.
+  uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
   // The packets this round produced, `packetBytes()` each, in send order.
   uint32_t outboxCount() const { return outCount_; }
@@ -348,6 +358,9 @@ class Environment {
   uint32_t newRecords_ = 0;
   EnergyLedger ledger_;
   EnvStats stats_;
+  uint64_t centreSteps_ = 0;  // grid steps of the centre rays really cast
+  uint64_t centreWork_ = 0;   // centre rays an uncached cast would make x centreStepsPerRay_
+  uint64_t centreStepsPerRay_ = 1;
   double totalArea_ = 0.0;
   double kdArea_ = 0.0;
   EnvFootprint footprint_;

@@ -72,7 +72,8 @@ struct Options {
   uint64_t roundWork = 0;
   bool hasRoundWork = false;
   bool roundWorkAuto = false;
-  uint32_t queue = 64;
+  uint32_t queue = 64;     // --queue Q; without it, AutoQueue (ResolveRounds)
+  bool hasQueue = false;
   uint32_t maskCacheKiB = 8192;  // --mask-cache: B/C centre masks kept per environment
   std::vector<uint32_t> envOrder;
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
@@ -119,6 +120,15 @@ Status ParseArgs(int argc, const char* const* argv, Options* options);
 // roundShots and roundWork (or roundWorkAuto) when they were not given
 // (see Options). Called once the environment count is known.
 void ResolveRounds(int numEnvs, Options* options);
+
+// The default --queue: numEnvs x roundShots slots (admission shares the
+// free slots among the environments, so that is what lets each make a
+// whole round), at most kAutoQueueBytes of `packetBytes` slots, at least
+// kMinAutoQueue. The fixed 64 of before held the building's solve in 16
+// environments to 123 rounds; 1024 slots take 19 (issue 20).
+constexpr uint64_t kAutoQueueBytes = 1u << 20;
+constexpr uint32_t kMinAutoQueue = 64;
+uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes);
 
 // A run of `ranks` ranks (the MPI world) without --envs: --envs auto with
 // one environment a rank, its rounds resolved again. True when it changed
