@@ -122,7 +122,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test viewer view viewer-screenshot install uninstall headers clean test-cross experiments cluster-experiments cluster-million bench fuzz fuzz-deps fuzz-report stability
+.PHONY: all deps demo test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments cluster-experiments cluster-million bench fuzz fuzz-deps fuzz-report stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -272,6 +272,15 @@ BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildc
 # installs it), for the viewer's tests; VISMASK_MAKE_ARGS tells the install
 # test which build make install should take.
 VIEWER_IF_NPM := $(if $(shell command -v npm 2>/dev/null),viewer)
+# make format-check: every C++ file is as .clang-format lays it out
+# (clang-format --dry-run -Werror; .ci/run runs it before the suite);
+# make format rewrites them so.
+FORMAT_FILES = $(shell git ls-files '*.cpp' '*.h' 2>/dev/null || find src include platform tests bench -name '*.cpp' -o -name '*.h')
+format-check: deps
+	@clang-format --dry-run -Werror $(FORMAT_FILES) && echo "format-check: $(words $(FORMAT_FILES)) C++ files as .clang-format lays them out"
+format:
+	clang-format -i $(FORMAT_FILES)
+
 # The build uses every core (-j), and so does the suite: tools/run-tests
 # runs it in TEST_JOBS GoogleTest shards at once (default: the cores; 1:
 # the plain binary), then prints the shards' logs and the summed

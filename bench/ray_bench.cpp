@@ -18,21 +18,21 @@
 //
 // Usage: vismask_bench [--md FILE] [--sizes L1,L2,...] [--rays N]
 //                      [--shooters N] [--reps N] [--density D] [google-benchmark flags]
+#include <benchmark/benchmark.h>
+#include <embree3/rtcore.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <glm/geometric.hpp>
 #include <limits>
 #include <map>
 #include <memory>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <benchmark/benchmark.h>
-#include <embree3/rtcore.h>
-#include <glm/geometric.hpp>
 
 #include "vismask/arena.h"
 #include "vismask/environment.h"
@@ -76,10 +76,10 @@ bool MemoryMonitor(void* user, ssize_t bytes, bool /*post*/) {
 
 struct EmbreeScene {
   RTCScene scene = nullptr;
-  std::vector<float> vertices;       // shared with Embree (x, y, z per vertex, one float pad)
+  std::vector<float> vertices;  // shared with Embree (x, y, z per vertex, one float pad)
   std::vector<uint32_t> indices;
-  std::vector<uint32_t> primPatch;   // primitive -> patch
-  long long bvhBytes = 0;            // what the memory monitor saw the commit keep
+  std::vector<uint32_t> primPatch;  // primitive -> patch
+  long long bvhBytes = 0;           // what the memory monitor saw the commit keep
   long long buildPeakBytes = 0;
   double buildSeconds = 0.0;
 };
@@ -117,12 +117,13 @@ void BuildEmbree(EmbreeDevice* dev, const std::vector<Patch>& patches, bool quad
   dev->peak = dev->bytes;
   double t0 = Now();
   out->scene = rtcNewScene(dev->device);
-  RTCGeometry g = rtcNewGeometry(dev->device, quads ? RTC_GEOMETRY_TYPE_QUAD : RTC_GEOMETRY_TYPE_TRIANGLE);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, out->vertices.data(), 0,
-                             3 * sizeof(float), numVerts);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, quads ? RTC_FORMAT_UINT4 : RTC_FORMAT_UINT3,
-                             out->indices.data(), 0, (quads ? 4 : 3) * sizeof(uint32_t),
-                             out->primPatch.size());
+  RTCGeometry g =
+      rtcNewGeometry(dev->device, quads ? RTC_GEOMETRY_TYPE_QUAD : RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, out->vertices.data(),
+                             0, 3 * sizeof(float), numVerts);
+  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0,
+                             quads ? RTC_FORMAT_UINT4 : RTC_FORMAT_UINT3, out->indices.data(), 0,
+                             (quads ? 4 : 3) * sizeof(uint32_t), out->primPatch.size());
   rtcCommitGeometry(g);
   rtcAttachGeometry(out->scene, g);
   rtcReleaseGeometry(g);
@@ -262,11 +263,11 @@ void CosineRays(const VisScene& v, int n, int shooters, RaySet* set) {
 
 struct Agreement {
   size_t rays = 0;
-  size_t same = 0;         // same patch (or both miss)
-  size_t tie = 0;          // different patches at the same t: a shared edge or corner
-  size_t onlyVis = 0;      // the grid hits, Embree misses
-  size_t onlyEmbree = 0;   // Embree hits, the grid misses
-  size_t other = 0;        // different patches at different t
+  size_t same = 0;        // same patch (or both miss)
+  size_t tie = 0;         // different patches at the same t: a shared edge or corner
+  size_t onlyVis = 0;     // the grid hits, Embree misses
+  size_t onlyEmbree = 0;  // Embree hits, the grid misses
+  size_t other = 0;       // different patches at different t
   size_t occludedDiffer = 0;
   size_t hits = 0;
 };
@@ -299,9 +300,11 @@ Agreement Compare(const VisScene& v, const EmbreeScene& e, const RaySet& set) {
     } else {
       ++a.other;
     }
-    if (std::getenv("VISMASK_BENCH_DEBUG") && !(hv == he && (!hv || e.primPatch[prim] == hit.patch)))
-      std::fprintf(stderr, "ray %zu skip %u: grid %d patch %u t %.9g front %d | embree %d patch %u t %.9g\n", i,
-                   set.skip[i], hv, hit.patch, hit.t, hit.front, he, he ? e.primPatch[prim] : 0u, te);
+    if (std::getenv("VISMASK_BENCH_DEBUG") &&
+        !(hv == he && (!hv || e.primPatch[prim] == hit.patch)))
+      std::fprintf(
+          stderr, "ray %zu skip %u: grid %d patch %u t %.9g front %d | embree %d patch %u t %.9g\n",
+          i, set.skip[i], hv, hit.patch, hit.t, hit.front, he, he ? e.primPatch[prim] : 0u, te);
   }
   return a;
 }
@@ -511,14 +514,18 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "vismask_bench: cannot write %s\n", args.md.c_str());
     return 1;
   }
-  std::fprintf(md, "Embree %s (Debian's libembree-dev), device `threads=1`; build quality default. "
-               "%d rays per set, %d repetitions; figures are Mrays/s of CPU time, median (min–max).\n\n",
-               RTC_VERSION_STRING, args.rays, args.reps);
+  std::fprintf(
+      md,
+      "Embree %s (Debian's libembree-dev), device `threads=1`; build quality default. "
+      "%d rays per set, %d repetitions; figures are Mrays/s of CPU time, median (min–max).\n\n",
+      RTC_VERSION_STRING, args.rays, args.reps);
   std::fprintf(md, "### Scenes and memory\n\n");
-  std::fprintf(md, "| --patch-size | patches (quads + triangles) | Embree triangles | grid cells | "
-               "grid refs | grid bytes | + PatchGeom (80 B/patch) | **vismask B/patch** | "
-               "Embree tri BVH bytes | **B/patch** (B/triangle) | Embree quad BVH bytes | **B/patch** | "
-               "vismask ÷ Embree tri | build s (grid / tri / quad) |\n");
+  std::fprintf(
+      md,
+      "| --patch-size | patches (quads + triangles) | Embree triangles | grid cells | "
+      "grid refs | grid bytes | + PatchGeom (80 B/patch) | **vismask B/patch** | "
+      "Embree tri BVH bytes | **B/patch** (B/triangle) | Embree quad BVH bytes | **B/patch** | "
+      "vismask ÷ Embree tri | build s (grid / tri / quad) |\n");
   std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& cp : cases) {
     const Case& c = *cp;
@@ -527,18 +534,23 @@ int main(int argc, char** argv) {
     double gridBytes = static_cast<double>(c.vis.grid.bytes());
     double visBytes = gridBytes + 80.0 * n;
     std::fprintf(md,
-                 "| %g | %zu (%zu + %zu) | %zu | %zu | %llu | %.0f | %.0f | **%.1f** | %lld | **%.1f** (%.1f) | "
+                 "| %g | %zu (%zu + %zu) | %zu | %zu | %llu | %.0f | %.0f | **%.1f** | %lld | "
+                 "**%.1f** (%.1f) | "
                  "%lld | **%.1f** | %.2f | %.3f / %.3f / %.3f |\n",
                  c.vis.patchSize, n, c.vis.quads, c.vis.triangles, tris, c.vis.grid.cellCount(),
-                 static_cast<unsigned long long>(c.vis.plan.refs), gridBytes, visBytes, visBytes / n,
-                 c.tri.bvhBytes, double(c.tri.bvhBytes) / n, double(c.tri.bvhBytes) / tris,
-                 c.quad.bvhBytes, double(c.quad.bvhBytes) / n, visBytes / c.tri.bvhBytes,
-                 c.vis.buildSeconds, c.tri.buildSeconds, c.quad.buildSeconds);
+                 static_cast<unsigned long long>(c.vis.plan.refs), gridBytes, visBytes,
+                 visBytes / n, c.tri.bvhBytes, double(c.tri.bvhBytes) / n,
+                 double(c.tri.bvhBytes) / tris, c.quad.bvhBytes, double(c.quad.bvhBytes) / n,
+                 visBytes / c.tri.bvhBytes, c.vis.buildSeconds, c.tri.buildSeconds,
+                 c.quad.buildSeconds);
   }
-  std::fprintf(md, "\n### Same hits\n\nEvery ray of every set, closest hit, grid against Embree "
-               "(\"tie\": another patch at the same t, within 1e-4 relative: a ray through a shared "
-               "edge or corner, where the grid takes the lower patch index and Embree either one).\n\n");
-  std::fprintf(md, "| patches | rays | Embree geometry | rays | same patch | tie at shared edge | "
+  std::fprintf(
+      md,
+      "\n### Same hits\n\nEvery ray of every set, closest hit, grid against Embree "
+      "(\"tie\": another patch at the same t, within 1e-4 relative: a ray through a shared "
+      "edge or corner, where the grid takes the lower patch index and Embree either one).\n\n");
+  std::fprintf(md,
+               "| patches | rays | Embree geometry | rays | same patch | tie at shared edge | "
                "only grid hits | only Embree hits | different | any-hit ≠ closest-hit |\n");
   std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& cp : cases) {
@@ -552,7 +564,8 @@ int main(int argc, char** argv) {
     }
   }
   std::fprintf(md, "\n### Rays per second (single thread)\n\n");
-  std::fprintf(md, "| patches | rays | query | vismask grid | Embree triangles | Embree quads | "
+  std::fprintf(md,
+               "| patches | rays | query | vismask grid | Embree triangles | Embree quads | "
                "**grid ÷ Embree tri** | grid ÷ Embree quad |\n");
   std::fprintf(md, "|---|---|---|---|---|---|---|---|\n");
   for (size_t ci = 0; ci < cases.size(); ++ci) {
@@ -594,11 +607,13 @@ int main(int argc, char** argv) {
     gridLo = std::min(gridLo, grid);
     gridHi = std::max(gridHi, grid);
   }
-  std::fprintf(md, "\n**Targets.** Rays/s ≥ 1.0× Embree (triangles): %s, the grid runs at %.2f× to %.2f× "
-               "of Embree's rate. Memory ≤ 1/4 of Embree's BVH: %s, grid + PatchGeom is %.2f× to %.2f× "
-               "of it (the grid's own arrays alone %.2f× to %.2f×).\n",
-               lo >= 1.0 ? "**met**" : "**not met**", lo, hi,
-               memHi <= 0.25 ? "**met**" : "**not met**", memLo, memHi, gridLo, gridHi);
+  std::fprintf(
+      md,
+      "\n**Targets.** Rays/s ≥ 1.0× Embree (triangles): %s, the grid runs at %.2f× to %.2f× "
+      "of Embree's rate. Memory ≤ 1/4 of Embree's BVH: %s, grid + PatchGeom is %.2f× to %.2f× "
+      "of it (the grid's own arrays alone %.2f× to %.2f×).\n",
+      lo >= 1.0 ? "**met**" : "**not met**", lo, hi, memHi <= 0.25 ? "**met**" : "**not met**",
+      memLo, memHi, gridLo, gridHi);
   if (md != stdout) std::fclose(md);
   for (auto& c : cases) {
     rtcReleaseScene(c->tri.scene);

@@ -87,10 +87,14 @@ void Append(char* buf, size_t cap, size_t* n, long v) {
 
 const char* SignalName(int sig) {
   switch (sig) {
-    case SIGINT: return "SIGINT";
-    case SIGTERM: return "SIGTERM";
-    case SIGHUP: return "SIGHUP";
-    default: return "a signal";
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
+    default:
+      return "a signal";
   }
 }
 
@@ -173,8 +177,12 @@ double CpuSeconds() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-void WriteErr(const char* s, size_t n) { WriteAll(2, s, n); }
-void WriteOut(const char* s, size_t n) { WriteAll(1, s, n); }
+void WriteErr(const char* s, size_t n) {
+  WriteAll(2, s, n);
+}
+void WriteOut(const char* s, size_t n) {
+  WriteAll(1, s, n);
+}
 
 void PrintErr(const char* fmt, ...) {
   char buf[1024];
@@ -195,7 +203,9 @@ void GuardStandardDescriptors() {
   }
 }
 
-bool StderrIsTerminal() { return ::isatty(2) == 1; }
+bool StderrIsTerminal() {
+  return ::isatty(2) == 1;
+}
 
 bool MakeDirs(const char* path, char* why) {
   char buf[kMaxPath];
@@ -273,7 +283,9 @@ uint64_t FileRssBytes() {
   return rss > anon ? rss - anon : 0;
 }
 
-OutFile::~OutFile() { Discard(); }
+OutFile::~OutFile() {
+  Discard();
+}
 
 bool OutFile::Open(const char* path, char* why) {
   Discard();
@@ -326,14 +338,17 @@ bool OutFile::Close(char* why) {
   // CommitAll (the only caller) renames or removes it before a signal is handled.
   ReleaseTempSlot(&tempSlot_);
   if (failed != 0) {
-    if (why) std::snprintf(why, kWhyBytes, "cannot write '%s': %s", tmpPath_, std::strerror(failed));
+    if (why)
+      std::snprintf(why, kWhyBytes, "cannot write '%s': %s", tmpPath_, std::strerror(failed));
     ::unlink(tmpPath_);
     return false;
   }
   return true;
 }
 
-bool OutFile::Commit(char* why) { return CommitAll(this, 1, why); }
+bool OutFile::Commit(char* why) {
+  return CommitAll(this, 1, why);
+}
 
 void OutFile::Discard() {
   if (fd_ >= 0) {
@@ -369,7 +384,8 @@ bool CommitAll(OutFile* const* files, int n, char* why) {
   bool kept[kMax] = {};
   int renamed = 0;
   for (int i = 0; i < n && ok; ++i) {
-    std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i]->path_, static_cast<long>(::getpid()));
+    std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i]->path_,
+                  static_cast<long>(::getpid()));
     ::unlink(old[i]);
     if (::link(files[i]->path_, old[i]) == 0) {
       kept[i] = true;
@@ -389,8 +405,10 @@ bool CommitAll(OutFile* const* files, int n, char* why) {
   for (int i = 0; i < n; ++i) {
     if (!ok && i < renamed) {
       // Put back what was there: the previous file, or nothing.
-      if (kept[i]) ::rename(old[i], files[i]->path_);
-      else ::unlink(files[i]->path_);
+      if (kept[i])
+        ::rename(old[i], files[i]->path_);
+      else
+        ::unlink(files[i]->path_);
     }
     if (!ok && i >= renamed) ::unlink(files[i]->tmpPath_);
     if (kept[i]) ::unlink(old[i]);  // a no-op after the rename back

@@ -24,8 +24,9 @@ inline double RankWaitLimit(double timeout, double longestWait) {
 inline void PrintSilentRank(int rank, int peer, bool reading, double limit, double timeout) {
   char scaled[96] = "";
   if (limit > timeout)
-    std::snprintf(scaled, sizeof scaled, ", %g times this run's longest wait; --rank-timeout is %g s",
-                  kRankTimeoutScale, timeout);
+    std::snprintf(scaled, sizeof scaled,
+                  ", %g times this run's longest wait; --rank-timeout is %g s", kRankTimeoutScale,
+                  timeout);
   os::PrintErr("vismask: rank %d: rank %d %s for %.3g s (--rank-timeout%s); ending the run\n", rank,
                peer, reading ? "sent nothing" : "took none of this rank's bytes", limit, scaled);
 }

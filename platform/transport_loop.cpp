@@ -2,9 +2,9 @@
 #include <cstring>
 #include <memory>
 
+#include "transport_local.h"
 #include "vismask/check.h"
 #include "vismask/transport.h"
-#include "transport_local.h"
 
 namespace vismask {
 namespace {
@@ -33,6 +33,8 @@ class LoopTransport final : public Transport {
 
 }  // namespace
 
-std::unique_ptr<Transport> MakeLoopTransport() { return std::make_unique<LoopTransport>(); }
+std::unique_ptr<Transport> MakeLoopTransport() {
+  return std::make_unique<LoopTransport>();
+}
 
 }  // namespace vismask

@@ -8,7 +8,8 @@
 // MPI_Testsome over request arrays made in Start. The loop knows which peers
 // it still waits for, so a silent one can be named; it spins for
 // kSpinSeconds after the last completion, then sleeps between tests, so
-// that a rank waiting for a slow or stopped peer does not burn a core. The bytes moved are the same as with blocking collectives.
+// that a rank waiting for a slow or stopped peer does not burn a core. The bytes moved are the same
+// as with blocking collectives.
 //
 // Faults. A peer silent for the wait limit (transport.h, --rank-timeout)
 // makes the waiting rank print "vismask: rank R: rank K sent nothing for S
@@ -28,7 +29,6 @@
 // rank that exits on its own with status 3 makes mpirun kill the rest and
 // exit 3. If mpirun itself is killed, the ranks end within 3 s.
 #include <mpi.h>
-
 #include <sched.h>
 #include <time.h>
 
@@ -40,10 +40,10 @@
 #include <memory>
 #include <string>
 
+#include "rank_wait.h"
 #include "vismask/check.h"
 #include "vismask/os.h"
 #include "vismask/transport.h"
-#include "rank_wait.h"
 
 namespace vismask {
 namespace {
@@ -103,12 +103,12 @@ class MpiTransport final : public Transport {
   std::unique_ptr<MPI_Request[]> requests_;
   std::unique_ptr<MPI_Status[]> statuses_;
   std::unique_ptr<int[]> indices_;
-  std::unique_ptr<int[]> peerOf_;     // of each request
+  std::unique_ptr<int[]> peerOf_;      // of each request
   std::unique_ptr<uint8_t[]> isRecv_;  // of each request
-  std::unique_ptr<int[]> received_;   // bytes each completed receive took
-  std::unique_ptr<double[]> heard_;   // per peer: when a request with it last completed
-  std::unique_ptr<int[]> codes_;      // rank 0's Finish: every rank's code
-  uint8_t dummy_ = 0;  // a valid address for a call that moves no bytes
+  std::unique_ptr<int[]> received_;    // bytes each completed receive took
+  std::unique_ptr<double[]> heard_;    // per peer: when a request with it last completed
+  std::unique_ptr<int[]> codes_;       // rank 0's Finish: every rank's code
+  uint8_t dummy_ = 0;                  // a valid address for a call that moves no bytes
 };
 
 MpiTransport::~MpiTransport() {
@@ -199,7 +199,9 @@ void MpiTransport::Post(int rc, int peer, bool recv, const char* call) {
   ++posted_;
 }
 
-double MpiTransport::WaitLimit() const { return RankWaitLimit(timeout_, longestWait_); }
+double MpiTransport::WaitLimit() const {
+  return RankWaitLimit(timeout_, longestWait_);
+}
 
 void MpiTransport::Silent(int peer, bool reading, double limit) {
   PrintSilentRank(rank_, peer, reading, limit, timeout_);
@@ -357,8 +359,8 @@ int MpiTransport::Finish(int exitCode) {
   int worst = exitCode;
   if (rank_ == 0) {
     for (int p = 1; p < size_; ++p)
-      Post(MPI_Irecv(&codes_[p], 1, MPI_INT, p, kTagFinish, MPI_COMM_WORLD, &requests_[posted_]),
-           p, true, "MPI_Irecv");
+      Post(MPI_Irecv(&codes_[p], 1, MPI_INT, p, kTagFinish, MPI_COMM_WORLD, &requests_[posted_]), p,
+           true, "MPI_Irecv");
     Wait("Finish");
     for (int p = 1; p < size_; ++p)
       if (codes_[p] > worst) worst = codes_[p];

@@ -39,11 +39,11 @@
 #include <string>
 #include <vector>
 
+#include "rank_wait.h"
+#include "transport_local.h"
 #include "vismask/check.h"
 #include "vismask/os.h"
 #include "vismask/transport.h"
-#include "rank_wait.h"
-#include "transport_local.h"
 
 namespace vismask {
 namespace {
@@ -367,7 +367,9 @@ void PipeTransport::Silent(int peer, bool reading, double limit) {
   ::_exit(kExitLostRank);
 }
 
-double PipeTransport::WaitLimit() const { return RankWaitLimit(timeout_, longestWait_); }
+double PipeTransport::WaitLimit() const {
+  return RankWaitLimit(timeout_, longestWait_);
+}
 
 void PipeTransport::ContinueChildren() {
   for (int p = 1; p < size_; ++p) {
@@ -445,7 +447,8 @@ void PipeTransport::WriteSome(int peer) {
     iovec iov[2];
     int count = 0;
     if (f.done < kWordBytes) {
-      iov[count++] = {reinterpret_cast<uint8_t*>(&f.word) + f.done, static_cast<size_t>(kWordBytes - f.done)};
+      iov[count++] = {reinterpret_cast<uint8_t*>(&f.word) + f.done,
+                      static_cast<size_t>(kWordBytes - f.done)};
       if (f.bytes > 0) iov[count++] = {const_cast<uint8_t*>(f.data), static_cast<size_t>(f.bytes)};
     } else {
       uint64_t sent = f.done - kWordBytes;

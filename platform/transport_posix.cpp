@@ -4,8 +4,8 @@
 #include <memory>
 #include <string>
 
-#include "vismask/transport.h"
 #include "transport_local.h"
+#include "vismask/transport.h"
 
 namespace vismask {
 

@@ -53,10 +53,11 @@ int Compare(const Options& o) {
                                Span<const float>(b.pixels.data(), b.pixels.size()),
                                Span<const uint8_t>(mask.pixels.data(), mask.pixels.size()));
   char line[256];
-  int n = std::snprintf(line, sizeof line, "relative_rmse %.9g\nmax_abs_error %.9g\n", e.relativeRmse,
-                        e.maxAbs);
+  int n = std::snprintf(line, sizeof line, "relative_rmse %.9g\nmax_abs_error %.9g\n",
+                        e.relativeRmse, e.maxAbs);
   if (!o.exclude.empty())
-    n += std::snprintf(line + n, sizeof line - size_t(n), "excluded_pixels %zu\n", e.excludedPixels);
+    n +=
+        std::snprintf(line + n, sizeof line - size_t(n), "excluded_pixels %zu\n", e.excludedPixels);
   os::WriteOut(line, static_cast<size_t>(n));
   return kExitOk;
 }
@@ -93,10 +94,11 @@ int Main(int argc, const char* const* argv) {
     // Init's peak is in the budget, but the system may still refuse it
     // (ulimit -v, overcommit off): refused here, with what this process
     // had reached.
-    os::PrintErr("vismask: rank %d: out of memory at init, loading and meshing the scene (peak "
-                 "resident %llu bytes); a larger --patch-size, fewer ranks on this host or more "
-                 "memory\n",
-                 r->transport->rank(), static_cast<unsigned long long>(os::PeakRssBytes()));
+    os::PrintErr(
+        "vismask: rank %d: out of memory at init, loading and meshing the scene (peak "
+        "resident %llu bytes); a larger --patch-size, fewer ranks on this host or more "
+        "memory\n",
+        r->transport->rank(), static_cast<unsigned long long>(os::PeakRssBytes()));
   }
   // Every rank learns whether every rank's init succeeded (rank 0 alone
   // opens the outputs) before anyone starts the solve's collectives.
@@ -123,17 +125,18 @@ int Main(int argc, const char* const* argv) {
   ReferenceProbe probe(r.get());
   if (!r->options.reference.empty()) so.probe = &probe;
   so.errorEvery = r->options.errorEvery;
-  SolveResult res = Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()),
-                          r->layout, r->transport.get(), &r->exchange, so,
-                          r->isRoot() ? &r->convergence : nullptr);
+  SolveResult res =
+      Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->layout,
+            r->transport.get(), &r->exchange, so, r->isRoot() ? &r->convergence : nullptr);
   if (res.reason == StopReason::kStalled) {  // no outputs: the solve did not finish
     if (r->isRoot()) {
       for (auto& f : r->files) f.Discard();
-      os::PrintErr("vismask: the solve stalled after %llu shots: %llu rounds without a shot "
-                   "while %.3g of the emitted power was unshot or in flight (the admission of "
-                   "new records let no environment shoot; try a larger --queue)\n",
-                   static_cast<unsigned long long>(res.shots),
-                   static_cast<unsigned long long>(r->layout.total), res.unshotFraction);
+      os::PrintErr(
+          "vismask: the solve stalled after %llu shots: %llu rounds without a shot "
+          "while %.3g of the emitted power was unshot or in flight (the admission of "
+          "new records let no environment shoot; try a larger --queue)\n",
+          static_cast<unsigned long long>(res.shots),
+          static_cast<unsigned long long>(r->layout.total), res.unshotFraction);
     }
     return r->transport->Finish(kExitStalled);
   }
@@ -145,9 +148,11 @@ int Main(int argc, const char* const* argv) {
   if (rc == kExitOk && !r->options.quiet && r->isRoot()) {
     char view[64] = "--camera";
     if (r->hasSide)
-      std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side), r->sideChosen ? " (chosen)" : "");
+      std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side),
+                    r->sideChosen ? " (chosen)" : "");
     os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
-                 static_cast<unsigned long long>(res.shots), res.seconds, view, r->options.outDir.c_str());
+                 static_cast<unsigned long long>(res.shots), res.seconds, view,
+                 r->options.outDir.c_str());
   }
   return rc;
 }

@@ -26,7 +26,9 @@ bool Arena::Reserve(size_t capacity, Arena* out) {
   return true;
 }
 
-Arena::~Arena() { std::free(base_); }
+Arena::~Arena() {
+  std::free(base_);
+}
 
 Arena::Arena(Arena&& o) noexcept : base_(o.base_), capacity_(o.capacity_), used_(o.used_) {
   o.base_ = nullptr;

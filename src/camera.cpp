@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
-#include <vector>
-
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
+#include <limits>
+#include <vector>
 
 namespace vismask {
 
@@ -15,8 +14,8 @@ namespace {
 
 struct SideSpec {
   const char* name;
-  int axis;       // the view axis: 0 x, 1 y, 2 z
-  bool eyeOnHi;   // the eye is beyond bounds.hi[axis] (else below bounds.lo[axis])
+  int axis;      // the view axis: 0 x, 1 y, 2 z
+  bool eyeOnHi;  // the eye is beyond bounds.hi[axis] (else below bounds.lo[axis])
   glm::vec3 up;
 };
 
@@ -41,7 +40,9 @@ bool Inside(const std::vector<glm::dvec2>& poly, glm::dvec2 q) {
 
 }  // namespace
 
-const char* ViewSideName(ViewSide side) { return kSides[static_cast<int>(side)].name; }
+const char* ViewSideName(ViewSide side) {
+  return kSides[static_cast<int>(side)].name;
+}
 
 bool ParseViewSide(const char* name, ViewSide* side) {
   for (int s = 0; s < kNumViewSides; ++s) {
@@ -75,7 +76,9 @@ Camera SideCamera(const Bounds& b, ViewSide side) {
   return c;
 }
 
-Camera DefaultCamera(const Bounds& bounds) { return SideCamera(bounds, ViewSide::kFront); }
+Camera DefaultCamera(const Bounds& bounds) {
+  return SideCamera(bounds, ViewSide::kFront);
+}
 
 ViewProbe::ViewProbe(const Bounds& bounds) {
   constexpr int n = kViewProbeRays;
@@ -91,7 +94,8 @@ ViewProbe::ViewProbe(const Bounds& bounds) {
     // One ray through each pixel centre of an n x n image, row 0 at the top.
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x)
-        probe.dir[y * n + x] = focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
+        probe.dir[y * n + x] =
+            focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
     probe.depth.assign(n * n, kInf);
     probe.nearest.assign(n * n, kInf);
     probe.index.assign(n * n, 0);
@@ -151,15 +155,16 @@ void ViewProbe::Add(uint32_t index, const Polygon& p) {
     for (int y = y0; y <= y1; ++y) {
       for (int x = x0; x <= x1; ++x) {
         const int i = y * n + x;
-        if (tMin * (1.0 - 1e-6) >= probe.depth[i]) continue;  // (dot(dir, forward) is focal to rounding)
+        if (tMin * (1.0 - 1e-6) >= probe.depth[i])
+          continue;  // (dot(dir, forward) is focal to rounding)
         double facing = glm::dot(normal, probe.dir[i]);
         if (facing == 0.0) continue;  // edge-on
         double t = reach / facing;
         if (!(t > 0.0)) continue;
-        const bool nearer = t < probe.depth[i] ||
-                            (t == probe.depth[i] &&
-                             (tMin < probe.nearest[i] ||
-                              (tMin == probe.nearest[i] && index < probe.index[i])));
+        const bool nearer =
+            t < probe.depth[i] ||
+            (t == probe.depth[i] &&
+             (tMin < probe.nearest[i] || (tMin == probe.nearest[i] && index < probe.index[i])));
         if (!nearer) continue;
         glm::dvec3 hit = eye + t * probe.dir[i];
         if (!Inside(poly_, glm::dvec2(hit[pu], hit[pv]))) continue;
@@ -221,7 +226,8 @@ bool MakeView(const Camera& c, int width, int height, View* v) {
   v->up = glm::cross(r, f);
   v->width = width;
   v->height = height;
-  v->focal = 0.5f * static_cast<float>(height) / std::tan(0.5f * c.fovyDeg * 3.14159265358979f / 180.0f);
+  v->focal =
+      0.5f * static_cast<float>(height) / std::tan(0.5f * c.fovyDeg * 3.14159265358979f / 180.0f);
   return true;
 }
 

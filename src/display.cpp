@@ -1,13 +1,12 @@
 #include "vismask/display.h"
 
-#include "vismask/check.h"
-#include "vismask/smoothing.h"
-
 #include <algorithm>
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <limits>
 
-#include <glm/geometric.hpp>
+#include "vismask/check.h"
+#include "vismask/smoothing.h"
 
 namespace vismask {
 
@@ -108,7 +107,8 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       piece.id = p.surface;
       for (int k = 0; k < n; ++k) {
         piece.p[k] = PatchPoint(p, node.c[k]);
-        piece.c[k] = facing ? DisplayRadiance(CornerValue(env, i, node.c[k], ambient)) : glm::vec3(0.0f);
+        piece.c[k] =
+            facing ? DisplayRadiance(CornerValue(env, i, node.c[k], ambient)) : glm::vec3(0.0f);
       }
       if (n == 3) {
         piece.p[3] = piece.p[2];
@@ -282,10 +282,11 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
         for (uint32_t ky = lo[1]; ky <= hi[1]; ++ky)
           for (uint32_t kz = lo[2]; kz <= hi[2]; ++kz) {
             const uint64_t key = CellKey(kx, ky, kz);
-            const uint32_t* first = std::lower_bound(
-                smooth, smooth + numSmooth, key,
-                [&](uint32_t i, uint64_t k) { return keyOf(all[i]) < k; });
-            for (const uint32_t* it = first; it < smooth + numSmooth && keyOf(all[*it]) == key; ++it) {
+            const uint32_t* first =
+                std::lower_bound(smooth, smooth + numSmooth, key,
+                                 [&](uint32_t i, uint64_t k) { return keyOf(all[i]) < k; });
+            for (const uint32_t* it = first; it < smooth + numSmooth && keyOf(all[*it]) == key;
+                 ++it) {
               const VertexRecord& r = all[*it];
               if (r.env == env->index() && r.vertex == v) continue;
               if (glm::length(glm::vec3(r.pos[0], r.pos[1], r.pos[2]) - x) > tolerance) continue;
@@ -341,11 +342,13 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
     Span<const SmoothVertex> sv = env->smoothVertices();
     for (size_t k = 0; k < cut.size(); ++k) {
       int64_t s = env->FindSmooth(cut[k]);
-      bool matched = share(env, cut[k], true, env->cutNormals()[k], s < 0 ? nullptr : &sv[size_t(s)]);
+      bool matched =
+          share(env, cut[k], true, env->cutNormals()[k], s < 0 ? nullptr : &sv[size_t(s)]);
       if (s >= 0) env->SetSmoothMatched(size_t(s), matched);
     }
     for (size_t k = 0; k < sv.size(); ++k)
-      if (!env->IsCutVertex(sv[k].vertex)) env->SetSmoothMatched(k, share(env, sv[k].vertex, false, sv[k].normal, &sv[k]));
+      if (!env->IsCutVertex(sv[k].vertex))
+        env->SetSmoothMatched(k, share(env, sv[k].vertex, false, sv[k].normal, &sv[k]));
     // A smooth vertex inside an outline edge that met no other polygon's
     // there (the polygons along the edge are subdivided differently): the
     // line between the nearest vertices of its edge on either side that
@@ -374,8 +377,9 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
       for (size_t j = k + 1; j < sv.size() && sv[j].polygon == s.polygon; ++j) consider(j);
       if (below < 0 || above < 0) continue;
       float f = -tBelow / (tAbove - tBelow);
-      env->SetVertexRadiosity(s.vertex, (1.0f - f) * env->vertexRadiosity()[sv[size_t(below)].vertex] +
-                                            f * env->vertexRadiosity()[sv[size_t(above)].vertex]);
+      env->SetVertexRadiosity(s.vertex,
+                              (1.0f - f) * env->vertexRadiosity()[sv[size_t(below)].vertex] +
+                                  f * env->vertexRadiosity()[sv[size_t(above)].vertex]);
     }
   }
 }

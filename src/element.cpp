@@ -1,15 +1,18 @@
 #include "vismask/element.h"
 
 #include <cmath>
-
 #include <glm/geometric.hpp>
 
 namespace vismask {
 
 namespace {
 
-float Cross2(glm::vec2 a, glm::vec2 b) { return a.x * b.y - a.y * b.x; }
-float Clamp01(float v) { return std::fmin(std::fmax(v, 0.0f), 1.0f); }
+float Cross2(glm::vec2 a, glm::vec2 b) {
+  return a.x * b.y - a.y * b.x;
+}
+float Clamp01(float v) {
+  return std::fmin(std::fmax(v, 0.0f), 1.0f);
+}
 
 }  // namespace
 
@@ -85,7 +88,8 @@ uint32_t ChildOf(bool triangle, glm::vec2* st) {
 
 void ChildCorners(bool triangle, const glm::vec2* in, uint32_t child, glm::vec2* out) {
   if (triangle) {
-    glm::vec2 m01 = 0.5f * (in[0] + in[1]), m12 = 0.5f * (in[1] + in[2]), m20 = 0.5f * (in[2] + in[0]);
+    glm::vec2 m01 = 0.5f * (in[0] + in[1]), m12 = 0.5f * (in[1] + in[2]),
+              m20 = 0.5f * (in[2] + in[0]);
     const glm::vec2 tri[4][3] = {
         {in[0], m01, m20}, {m01, in[1], m12}, {m20, m12, in[2]}, {m12, m20, m01}};
     for (int k = 0; k < 3; ++k) out[k] = tri[child][k];

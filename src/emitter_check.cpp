@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
-
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <limits>
 
 #include "vismask/arena.h"
 #include "vismask/grid.h"
@@ -18,17 +17,22 @@ namespace vismask {
 
 namespace {
 
-bool Emits(const Material& m) { return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z > 0.0f; }
+bool Emits(const Material& m) {
+  return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z > 0.0f;
+}
 
 // Percent, rounded down so that "100%" means every ray.
-int Percent(double share) { return static_cast<int>(std::floor(100.0 * share + 1e-9)); }
+int Percent(double share) {
+  return static_cast<int>(std::floor(100.0 * share + 1e-9));
+}
 
 }  // namespace
 
 uint32_t EmitterCheckRays(uint64_t emitters) {
   if (emitters == 0) return kEmitterCheckRays;
   const uint64_t share = kEmitterCheckRayBudget / emitters;
-  return static_cast<uint32_t>(std::max<uint64_t>(kEmitterCheckMinRays, std::min<uint64_t>(kEmitterCheckRays, share)));
+  return static_cast<uint32_t>(
+      std::max<uint64_t>(kEmitterCheckMinRays, std::min<uint64_t>(kEmitterCheckRays, share)));
 }
 
 EmitterCheck::EmitterCheck(const Bounds& bounds, const std::vector<Material>& materials,
@@ -47,7 +51,7 @@ EmitterCheck::EmitterCheck(const Bounds& bounds, const std::vector<Material>& ma
   // Ray origins lifted off the plane as the solver's are (render_init.cpp).
   const glm::vec3 mag = glm::max(glm::abs(bounds.lo), glm::abs(bounds.hi));
   const float eps = std::fmax(1e-6f * diagonal, 8.0f * std::numeric_limits<float>::epsilon() *
-                                                     std::fmax(mag.x, std::fmax(mag.y, mag.z)));
+                                                    std::fmax(mag.x, std::fmax(mag.y, mag.z)));
   nearDistance_ = kEmitterNearShare * largest;
   Scene one;
   one.materials = materials;
@@ -155,7 +159,8 @@ void EmitterCheck::Flush() {
       }
       Ray ray{s.o, s.d, 0.0f, tMax};
       Hit hit;
-      if (grid.Intersect(ray, Skip(here ? base + s.patch : kNoPatch), &hit) && hit.t < s.t) s.t = hit.t;
+      if (grid.Intersect(ray, Skip(here ? base + s.patch : kNoPatch), &hit) && hit.t < s.t)
+        s.t = hit.t;
     }
   }
 }
@@ -197,8 +202,10 @@ std::vector<EmitterEstimate> EmitterCheck::Finish() {
 std::vector<EmitterEstimate> EstimateEmitters(const Scene& scene, size_t chunk) {
   std::vector<std::pair<uint32_t, Polygon>> emitters;
   for (uint32_t i = 0; i < scene.polygons.size(); ++i)
-    if (Emits(scene.materials[scene.polygons[i].material])) emitters.emplace_back(i, scene.polygons[i]);
-  EmitterCheck check(scene.bounds, scene.materials, emitters, chunk == 0 ? scene.polygons.size() : chunk);
+    if (Emits(scene.materials[scene.polygons[i].material]))
+      emitters.emplace_back(i, scene.polygons[i]);
+  EmitterCheck check(scene.bounds, scene.materials, emitters,
+                     chunk == 0 ? scene.polygons.size() : chunk);
   for (uint32_t i = 0; i < scene.polygons.size(); ++i) check.Add(i, scene.polygons[i]);
   return check.Finish();
 }

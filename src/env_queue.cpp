@@ -2,15 +2,13 @@
 // queued from other environments (slots, admission, delivery), forwarding
 // records downstream with their masks, a round's work, and the power still
 // in flight. The rest of Environment is in environment.cpp and trace.cpp.
-#include "vismask/environment.h"
-
 #include <algorithm>
 #include <cmath>
-#include <limits>
-
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <limits>
 
+#include "vismask/environment.h"
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
 
@@ -193,10 +191,12 @@ void Environment::Deliver(const uint8_t* packet) {
   }
   double power = h.power[0] + h.power[1] + h.power[2];
   // Method R's open share is of the shot's own rays (bits past them are closed).
-  if (shape_.empty()) slot.key = power;
+  if (shape_.empty())
+    slot.key = power;
   else if (options_.maskMethod == MaskMethod::kR)
     slot.key = power * mask.CountOpen() / (h.rays > 0 ? h.rays : 1);
-  else slot.key = power * mask.OpenFraction();
+  else
+    slot.key = power * mask.OpenFraction();
 }
 
 void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t roundWork) {

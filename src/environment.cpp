@@ -2,11 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <unordered_map>
-
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <limits>
+#include <unordered_map>
 
 #include "vismask/rng.h"
 
@@ -95,7 +94,7 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   numNeighbours_ = 0;
   for (int a = 0; a < 3; ++a) numNeighbours_ += (cell_[a] > 0) + (cell_[a] + 1 < grid.n[a]);
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
-                             : MaskShape{};
+                              : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
 
@@ -260,7 +259,8 @@ bool Environment::Build() {
   }
   grid_.Build(patches_, geom_);
   centreStepsPerRay_ = 1;
-  while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <= grid_.cellCount())
+  while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
+         grid_.cellCount())
     ++centreStepsPerRay_;
   maskDirections_.Fill();
   for (uint32_t& tag : cacheTag_) tag = kNoPatch;
@@ -272,7 +272,8 @@ bool Environment::Build() {
   std::vector<uint32_t>().swap(stagedCut_);
   std::vector<glm::vec3>().swap(stagedCutNormal_);
   for (size_t k = 0; k < stagedSmooth_.size(); ++k) smooth_[k] = stagedSmooth_[k];
-  for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i) patchSmoothEdges_[i] = stagedSmoothEdges_[i];
+  for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i)
+    patchSmoothEdges_[i] = stagedSmoothEdges_[i];
   std::vector<SmoothVertex>().swap(stagedSmooth_);
   std::vector<uint8_t>().swap(stagedSmoothEdges_);
   Reset();
@@ -357,7 +358,8 @@ void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32
     ChildCorners(triangle, corners, q, next);
     glm::vec3 w[4];
     for (int k = 0; k < n; ++k) w[k] = PatchPoint(p, next[k]);
-    glm::vec3 cr = n == 3 ? glm::cross(w[1] - w[0], w[2] - w[0]) : glm::cross(w[2] - w[0], w[3] - w[1]);
+    glm::vec3 cr =
+        n == 3 ? glm::cross(w[1] - w[0], w[2] - w[0]) : glm::cross(w[2] - w[0], w[3] - w[1]);
     quarterArea[q] = 0.5 * glm::length(glm::dvec3(cr));
   }
   double areaSum = quarterArea[0] + quarterArea[1] + quarterArea[2] + quarterArea[3];
@@ -391,16 +393,15 @@ void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32
     ch.child = kNoElement;
     ch.depth = el.depth + 1;
     for (int c = 0; c < 3; ++c) {
-      double older = el.received[c] - (el.quarter[0][c] + el.quarter[1][c] + el.quarter[2][c] +
-                                       el.quarter[3][c]);
+      double older = el.received[c] -
+                     (el.quarter[0][c] + el.quarter[1][c] + el.quarter[2][c] + el.quarter[3][c]);
       ch.received[c] = older * (quarterArea[q] / areaSum) + el.quarter[q][c];
     }
   }
   el.child = first;
 }
 
-uint32_t Environment::Descend(uint32_t patch, glm::vec2* st, uint8_t* path,
-                              uint32_t* depth) const {
+uint32_t Environment::Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const {
   const bool triangle = patches_[patch].numCorners == 3;
   uint32_t e = patch;
   while (elements_[e].child != kNoElement) {
@@ -435,8 +436,9 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
 }
 
 int64_t Environment::FindSmooth(uint32_t v) const {
-  const SmoothVertex* it = std::lower_bound(
-      smooth_.begin(), smooth_.end(), v, [](const SmoothVertex& s, uint32_t x) { return s.vertex < x; });
+  const SmoothVertex* it =
+      std::lower_bound(smooth_.begin(), smooth_.end(), v,
+                       [](const SmoothVertex& s, uint32_t x) { return s.vertex < x; });
   return it != smooth_.end() && it->vertex == v ? it - smooth_.begin() : -1;
 }
 
@@ -476,7 +478,8 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
     const Patch& p = patches_[i];
     if (p.numCorners != 4) continue;
     for (uint32_t k = 0; k < 4; ++k)
-      if (vertexOutline_[p.vertex[k]]) vertexInward_[p.vertex[k]] += vertexB_[p.vertex[(k + 2) % 4]];
+      if (vertexOutline_[p.vertex[k]])
+        vertexInward_[p.vertex[k]] += vertexB_[p.vertex[(k + 2) % 4]];
   }
   for (size_t v = 0; v < vertexB_.size(); ++v) {
     uint8_t q = vertexOutline_[v];

@@ -26,7 +26,9 @@ void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint
 
 namespace {
 
-double Sum3(const double v[3]) { return v[0] + v[1] + v[2]; }
+double Sum3(const double v[3]) {
+  return v[0] + v[1] + v[2];
+}
 
 // Runs a transport collective, adding the time it takes to *waited.
 template <class Call>
@@ -78,7 +80,8 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
     if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
     RankEnvs re = EnvsOfRank(layout.total, ranks, r);
     uint64_t rankSteps = 0;
-    for (uint32_t k = 0; k < re.count; ++k) rankSteps += x->all[size_t(r) * layout.perRank + k].roundSteps;
+    for (uint32_t k = 0; k < re.count; ++k)
+      rankSteps += x->all[size_t(r) * layout.perRank + k].roundSteps;
     if (rankSteps > tot.rankStepsMax) tot.rankStepsMax = rankSteps;
   }
   auto report = [&](uint32_t env) -> const EnvReport& {

@@ -4,14 +4,13 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <string>
-#include <utility>
-#include <vector>
-
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "geometry_util.h"
 
@@ -28,7 +27,9 @@ constexpr double kRepeatTol = 1e-6;     // min distance between two corners
 constexpr double kAreaTol = 1e-6;       // min area, times size^2
 constexpr double kCollinearTol = 1e-5;  // min |sin| of the angle at a corner
 
-std::string Str(size_t n) { return std::to_string(n); }
+std::string Str(size_t n) {
+  return std::to_string(n);
+}
 
 std::string Num(double x) {
   char buf[32];
@@ -187,7 +188,8 @@ bool SplitNonPlanar(const Polygon& face, glm::dvec3 normal,
     double best = -2.0;
     for (size_t d = 0; d < 2; ++d) {
       size_t a = d, b = d + 1, e = d + 2, f = (d + 3) % 4;
-      glm::dvec3 n1 = glm::cross(c[b] - c[a], c[e] - c[a]), n2 = glm::cross(c[e] - c[a], c[f] - c[a]);
+      glm::dvec3 n1 = glm::cross(c[b] - c[a], c[e] - c[a]),
+                 n2 = glm::cross(c[e] - c[a], c[f] - c[a]);
       if (!(glm::dot(n1, normal) > 0.0 && glm::dot(n2, normal) > 0.0)) continue;
       double flat = glm::dot(glm::normalize(n1), glm::normalize(n2));
       if (flat > best) {

@@ -104,8 +104,10 @@ int Footprint(const Options& o) {
   // The balance of the environments: the most patches one holds over the
   // mean (1: even), and the split planes (--envs auto: at work quantiles).
   uint64_t mostPatches = 0;
-  for (const auto& e : envs) mostPatches = std::max<uint64_t>(mostPatches, e->footprint().numPatches);
-  const double balance = fig.patches > 0 ? static_cast<double>(mostPatches) * total / fig.patches : 1.0;
+  for (const auto& e : envs)
+    mostPatches = std::max<uint64_t>(mostPatches, e->footprint().numPatches);
+  const double balance =
+      fig.patches > 0 ? static_cast<double>(mostPatches) * total / fig.patches : 1.0;
   auto planes = [&](int a) {
     std::string s;
     for (int k = 0; k <= p.grid.n[a]; ++k) {
@@ -134,17 +136,20 @@ int Footprint(const Options& o) {
         (ull)base.total, (long long)fig.total - (long long)base.total);
     add("  \"split\": {\"balanced\": %s, \"grid\": [%d, %d, %d], \"most_patches\": %llu, "
         "\"patch_balance\": %.6f, \"planes\": [[%s], [%s], [%s]]},\n",
-        p.grid.balanced ? "true" : "false", p.grid.n[0], p.grid.n[1], p.grid.n[2],
-        (ull)mostPatches, balance, planes(0).c_str(), planes(1).c_str(), planes(2).c_str());
+        p.grid.balanced ? "true" : "false", p.grid.n[0], p.grid.n[1], p.grid.n[2], (ull)mostPatches,
+        balance, planes(0).c_str(), planes(1).c_str(), planes(2).c_str());
     out += "  \"environments\": [\n";
     for (uint32_t e = 0; e < total; ++e) {
       const EnvFootprint& f = envs[e]->footprint();
-      add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"twin_patches\": %llu, \"grid_cells\": %llu, "
-          "\"patch_bytes\": %llu, \"element_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": %llu, "
-          "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"texcoord_bytes\": %llu, \"arena_bytes\": %llu}%s\n",
-          e, RankOfEnv(e, total, ranks),
-          (ull)f.numPatches, (ull)envs[e]->numTwins(), (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
-          (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total, e + 1 < total ? "," : "");
+      add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"twin_patches\": %llu, "
+          "\"grid_cells\": %llu, "
+          "\"patch_bytes\": %llu, \"element_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": "
+          "%llu, "
+          "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"texcoord_bytes\": %llu, "
+          "\"arena_bytes\": %llu}%s\n",
+          e, RankOfEnv(e, total, ranks), (ull)f.numPatches, (ull)envs[e]->numTwins(),
+          (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices, (ull)f.grid,
+          (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total, e + 1 < total ? "," : "");
     }
     out += "  ],\n  \"ranks\": [\n";
     for (int k = 0; k < ranks; ++k) {
@@ -155,8 +160,8 @@ int Footprint(const Options& o) {
           "\"total_bytes\": %llu, \"init_peak_bytes\": %llu, \"budget_bytes\": %llu}%s\n",
           k, r.layout.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
           (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)r.rankExportBytes, (ull)rankOwn[k],
-          (ull)rankTotal[k], (ull)fig.rankInitPeak[k], (ull)std::max(rankTotal[k], fig.rankInitPeak[k]),
-          k + 1 < ranks ? "," : "");
+          (ull)rankTotal[k], (ull)fig.rankInitPeak[k],
+          (ull)std::max(rankTotal[k], fig.rankInitPeak[k]), k + 1 < ranks ? "," : "");
     }
     out += "  ]\n}\n";
   } else {
@@ -184,9 +189,9 @@ int Footprint(const Options& o) {
         "image_B", "output_B", "texture_B", "total_B");
     for (int k = 0; k < ranks; ++k) {
       const Render& r = probes[k];
-      add("%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.layout.count, (ull)rankEnvBytes[k],
-          (ull)r.rankExchangeBytes, (ull)r.rankImageBytes, (ull)r.rankOutputBytes,
-          (ull)r.rankTextureBytes, (ull)rankTotal[k]);
+      add("%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.layout.count,
+          (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
+          (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)rankTotal[k]);
     }
     if (!o.exportPath.empty())
       add("\n--export: %llu vertices, %llu triangles, a .glb of at most %llu bytes; %llu bytes of\n"
@@ -194,7 +199,9 @@ int Footprint(const Options& o) {
           "and rank 0's %llu-byte head of the .glb\n",
           (ull)fig.exportMesh.vertices, (ull)fig.exportMesh.triangles,
           (ull)GlbMaxFileBytes(fig.exportMesh), (ull)probes[0].rankExportBytes,
-          ranks > 1 ? (", " + std::to_string(probes[1].rankExportBytes) + " on each other rank").c_str() : "",
+          ranks > 1
+              ? (", " + std::to_string(probes[1].rankExportBytes) + " on each other rank").c_str()
+              : "",
           (ull)kExportChunkBytes, (ull)kGlbHeadBytes);
     if (p.twins.any())
       add("\n%s: %llu patches, %llu of them twins (one-sided: %llu); %llu bytes in all ranks' "
@@ -209,7 +216,8 @@ int Footprint(const Options& o) {
     add("\nbytes are arena reservations (the whole of a solve's memory after init); a rank's\n"
         "process also holds its binary and libraries (see run.json's memory section).\n"
         "init_peak_B bounds init's own peak (the scene read in passes, the meshes and\n"
-        "staged copies beside the arenas); budget_B, the larger, is what --mem-budget must allow\n");
+        "staged copies beside the arenas); budget_B, the larger, is what --mem-budget must "
+        "allow\n");
   }
   os::WriteOut(out.data(), out.size());
   return kExitOk;

@@ -3,13 +3,12 @@
 #pragma once
 #include <array>
 #include <cstddef>
-#include <numeric>
-#include <vector>
-
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <numeric>
+#include <vector>
 
 namespace vismask {
 
@@ -21,7 +20,9 @@ inline glm::dvec3 NewellSum(const std::vector<glm::dvec3>& c) {
   return sum;
 }
 
-inline double Cross2(glm::dvec2 a, glm::dvec2 b) { return a.x * b.y - a.y * b.x; }
+inline double Cross2(glm::dvec2 a, glm::dvec2 b) {
+  return a.x * b.y - a.y * b.x;
+}
 
 // Whether every corner turns strictly left about `normal` (no flat corners).
 inline bool IsConvex(const std::vector<glm::dvec3>& c, glm::dvec3 normal) {

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <limits>
 #include <vector>
-
-#include <glm/geometric.hpp>
 
 #include "grid_cells.h"
 
@@ -27,7 +26,6 @@ constexpr double kWallReach = 0.25;  // a wall lies within this many cells of it
 constexpr double kWallCos = 0.9;     // and faces along the axis (within ~25 degrees)
 constexpr size_t kWallShare = 64;    // a face is a wall's when 1/64 of the patches are on it
 constexpr double kWallPast = 8.0;    // pads between a wall and the next cell plane
-
 
 // Of two hits at the same t, whether patch p (side `front`) beats `best`:
 // a front side beats a back side, then the lower index wins. A total order
@@ -308,27 +306,27 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
     // where their offsets (32 times larger, strided by rows and slices) cost
     // a cache miss each in a large grid.
     if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0)
-    for (uint32_t k = start[index], end = start[index + 1]; k < end; ++k) {
-      uint32_t p = refs[k];
-      float t;
-      bool front;
-      ++tests;
-      if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
-      if (kAnyHit) {
-        if (hit) hit->patch = p;
-        steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
-        return true;
+      for (uint32_t k = start[index], end = start[index + 1]; k < end; ++k) {
+        uint32_t p = refs[k];
+        float t;
+        bool front;
+        ++tests;
+        if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
+        if (kAnyHit) {
+          if (hit) hit->patch = p;
+          steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
+          return true;
+        }
+        // t <= bestT here. On a tie a front side, then the lower index, so
+        // that of two coplanar twins the ray lands on the one it faces.
+        if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
+          bestPatch = p;
+          bestT = t;
+          bestFront = front;
+          r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+          limit = std::min(t1, t);
+        }
       }
-      // t <= bestT here. On a tie a front side, then the lower index, so
-      // that of two coplanar twins the ray lands on the one it faces.
-      if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
-        bestPatch = p;
-        bestT = t;
-        bestFront = front;
-        r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
-        limit = std::min(t1, t);
-      }
-    }
     // Step across the plane that comes first (ties: y before x, z before
     // both), unless the ray ends, or its best hit is, before that plane.
     if (tx < ty && tx < tz) {
@@ -368,7 +366,8 @@ bool Grid::Occluded(const Ray& ray, Skip skip, uint32_t* hint) const {
   uint32_t h = *hint;
   float t;
   bool front;
-  if (h != kNoPatch && h != skip.patch && h != skip.twin && IntersectPatch(geom_[h], ray, &t, &front))
+  if (h != kNoPatch && h != skip.patch && h != skip.twin &&
+      IntersectPatch(geom_[h], ray, &t, &front))
     return true;
   Hit hit;
   if (!Walk<true>(ray, skip, &hit)) return false;

@@ -18,7 +18,7 @@ namespace {
 constexpr float kEdgeRel = 8.0f * std::numeric_limits<float>::epsilon();
 constexpr float kPadRel = 4e-5f;
 constexpr float kFarRel = 8.0f;
-constexpr double kClipRel = 1e4;     // half-size of the clip square, in patch sizes
+constexpr double kClipRel = 1e4;  // half-size of the clip square, in patch sizes
 
 // Conservative fallback for a patch whose plane or edges are not usable.
 void CornerShape(const Patch& p, double pad, Shape* s) {

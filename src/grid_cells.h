@@ -6,7 +6,6 @@
 #pragma once
 #include <cmath>
 #include <cstddef>
-
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
@@ -16,7 +15,7 @@
 
 namespace vismask::gridcells {
 
-constexpr int kMaxPolyVerts = 8;     // a square clipped by four half-planes
+constexpr int kMaxPolyVerts = 8;  // a square clipped by four half-planes
 constexpr int kMaxAxes = 1 + 4 * kMaxPolyVerts + 3;
 
 // Padding and far limit, from the corners' extent and distance from the origin.

@@ -54,7 +54,9 @@ class BumpHeap {
 
  private:
   static size_t Align(size_t x) { return (x + 15) & ~size_t(15); }
-  size_t Offset(void* p) const { return static_cast<size_t>(static_cast<uint8_t*>(p) - region_.data()); }
+  size_t Offset(void* p) const {
+    return static_cast<size_t>(static_cast<uint8_t*>(p) - region_.data());
+  }
   Span<uint8_t> region_;
   size_t used_ = 0;
   size_t last_ = 0;
@@ -67,10 +69,15 @@ BumpHeap* gHeap = nullptr;  // the heap of the WritePng call in progress
 // which is a few KiB; 32 KiB covers it and the allocation headers.
 constexpr int kWindowBits = 15;
 constexpr int kMemLevel = 8;
-constexpr size_t kZlibBytes = (size_t(1) << (kWindowBits + 2)) + (size_t(1) << (kMemLevel + 9)) + 32768;
+constexpr size_t kZlibBytes =
+    (size_t(1) << (kWindowBits + 2)) + (size_t(1) << (kMemLevel + 9)) + 32768;
 
-voidpf ZAlloc(voidpf, uInt items, uInt size) { return gHeap->Malloc(size_t(items) * size); }
-void ZFree(voidpf, voidpf p) { gHeap->Free(p); }
+voidpf ZAlloc(voidpf, uInt items, uInt size) {
+  return gHeap->Malloc(size_t(items) * size);
+}
+void ZFree(voidpf, voidpf p) {
+  gHeap->Free(p);
+}
 
 unsigned char* Compress(unsigned char* data, int len, int* outLen, int quality) {
   z_stream zs;
@@ -137,7 +144,8 @@ bool WritePng(os::OutFile* file, int width, int height, Span<const uint8_t> rgb,
   gHeap = &heap;
   int ok = stbi_write_png_to_func(StbWrite, file, width, height, 3, rgb.data(), width * 3);
   gHeap = nullptr;
-  if (!ok) std::snprintf(why, os::kWhyBytes, "PNG encoder failed (scratch %zu bytes)", scratch.size());
+  if (!ok)
+    std::snprintf(why, os::kWhyBytes, "PNG encoder failed (scratch %zu bytes)", scratch.size());
   return ok != 0;
 }
 
@@ -187,7 +195,8 @@ std::string ReadBytes(const std::string& path, std::string* bytes) {
     return "cannot read: " + std::to_string(size) + " bytes";
   std::string all(static_cast<size_t>(size), '\0');
   in.read(&all[0], static_cast<std::streamsize>(size));
-  if (static_cast<uintmax_t>(in.gcount()) != size) return "cannot read (the file changed while read)";
+  if (static_cast<uintmax_t>(in.gcount()) != size)
+    return "cannot read (the file changed while read)";
   *bytes = std::move(all);
   return "";
 }
@@ -212,8 +221,8 @@ std::string CheckPixelBytes(size_t left, int w, int h, int bytesPerPixel, const 
     return std::string("truncated ") + kind + ": the header says " + std::to_string(w) + " x " +
            std::to_string(h) + " pixels (" +
            std::to_string(static_cast<unsigned long long>(w) * static_cast<unsigned long long>(h)) +
-           " x " + std::to_string(bytesPerPixel) + " bytes), the file holds " + std::to_string(left) +
-           " bytes after it";
+           " x " + std::to_string(bytesPerPixel) + " bytes), the file holds " +
+           std::to_string(left) + " bytes after it";
   return "";
 }
 
@@ -255,7 +264,8 @@ Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmIm
       // A NaN would compare as a perfect match and an Inf write -nan into JSON.
       if (!std::isfinite(row[i]))
         return Status::At(name, 0,
-                          "pixel (" + std::to_string(i / 3) + ", " + std::to_string(size_t(h) - 1 - y) +
+                          "pixel (" + std::to_string(i / 3) + ", " +
+                              std::to_string(size_t(h) - 1 - y) +
                               ") (x, y from the top left) is not finite: " +
                               (std::isnan(row[i]) ? "NaN" : "Inf"));
     }
@@ -280,7 +290,8 @@ Status ReadPgmFromBytes(const std::string& name, const std::string& bytes, PgmIm
   int w = 0, h = 0, maxval = 0;
   in >> magic >> w >> h >> maxval;
   if (!in || magic != "P5" || w <= 0 || h <= 0 || maxval <= 0 || maxval > 255)
-    return Status::At(name, 0, "not an 8-bit binary PGM (expected 'P5', width, height, maxval <= 255)");
+    return Status::At(name, 0,
+                      "not an 8-bit binary PGM (expected 'P5', width, height, maxval <= 255)");
   in.get();  // the single whitespace byte after maxval
   const size_t start = buf.Offset();
   std::string err = CheckPixelBytes(bytes.size() - start, w, h, 1, "PGM");
@@ -293,7 +304,9 @@ Status ReadPgmFromBytes(const std::string& name, const std::string& bytes, PgmIm
 }
 
 namespace {
-float Luminance(const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+float Luminance(const glm::vec3& c) {
+  return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
+}
 }  // namespace
 
 float AutoExposure(Span<const glm::vec3> color, Span<const uint32_t> coverage, uint32_t emptyId) {

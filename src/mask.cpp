@@ -1,7 +1,7 @@
 #include "vismask/mask.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace vismask {
@@ -13,20 +13,28 @@ constexpr double kTwoPi = 6.283185307179586;
 
 const char* MaskMethodName(MaskMethod m) {
   switch (m) {
-    case MaskMethod::kNone: return "none";
-    case MaskMethod::kA: return "A";
-    case MaskMethod::kB: return "B";
-    case MaskMethod::kC: return "C";
-    case MaskMethod::kR: return "R";
+    case MaskMethod::kNone:
+      return "none";
+    case MaskMethod::kA:
+      return "A";
+    case MaskMethod::kB:
+      return "B";
+    case MaskMethod::kC:
+      return "C";
+    case MaskMethod::kR:
+      return "R";
   }
   return "?";
 }
 
 MaskShape MaskShapeOf(MaskMethod m, uint32_t maskRes, uint32_t rays) {
   switch (m) {
-    case MaskMethod::kNone: return MaskShape{};
-    case MaskMethod::kR: return MaskShape{0, rays};
-    default: return MaskShape{maskRes, 0};
+    case MaskMethod::kNone:
+      return MaskShape{};
+    case MaskMethod::kR:
+      return MaskShape{0, rays};
+    default:
+      return MaskShape{maskRes, 0};
   }
 }
 
@@ -137,7 +145,8 @@ uint32_t MaskBits::CountOpen() const {
 
 void MaskBits::Pack(uint8_t* out) const {
   uint32_t bytes = (bits_ + 7) / 8;
-  for (uint32_t b = 0; b < bytes; ++b) out[b] = static_cast<uint8_t>(words_[b >> 3] >> (8 * (b & 7)));
+  for (uint32_t b = 0; b < bytes; ++b)
+    out[b] = static_cast<uint8_t>(words_[b >> 3] >> (8 * (b & 7)));
 }
 
 void MaskBits::Unpack(const uint8_t* in) {

@@ -4,12 +4,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
 #include <limits>
 #include <string>
 #include <vector>
-
-#include <glm/common.hpp>
-#include <glm/geometric.hpp>
 
 #include "geometry_util.h"
 #include "vismask/check.h"
@@ -33,7 +32,9 @@ std::string Num(double x) {
 }
 
 // How many parts an edge of length `len` needs (double: it may be huge).
-double Divisions(double len, double patchSize) { return std::max(1.0, std::ceil(len / patchSize)); }
+double Divisions(double len, double patchSize) {
+  return std::max(1.0, std::ceil(len / patchSize));
+}
 
 bool IsConvexQuad(const std::vector<glm::dvec3>& c, glm::dvec3 normal) {
   return c.size() == 4 && IsConvex(c, normal);
@@ -134,8 +135,8 @@ Status PlanPolygon(const std::string& objPath, const Polygon& poly, uint32_t ind
     return Status::At(objPath, poly.line, "cannot triangulate face");
   for (const auto& tri : tris) {
     Piece t{index, 3, {c[tri[0]], c[tri[1]], c[tri[2]], c[tri[2]]}, 0.0, 0.0};
-    double longest = std::max({glm::length(t.c[1] - t.c[0]), glm::length(t.c[2] - t.c[1]),
-                               glm::length(t.c[0] - t.c[2])});
+    double longest = std::max(
+        {glm::length(t.c[1] - t.c[0]), glm::length(t.c[2] - t.c[1]), glm::length(t.c[0] - t.c[2])});
     t.n = t.m = Divisions(longest, s);
     *numPatches += t.n * t.n;
     *numVertices += (t.n + 1) * (t.n + 2) / 2;
@@ -172,7 +173,8 @@ Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, floa
                             &numVertices);
     if (!st.ok()) return st;
   }
-  if (numPatches > static_cast<double>(maxPatches)) return MeshSizeError(numPatches, patchSize, maxPatches);
+  if (numPatches > static_cast<double>(maxPatches))
+    return MeshSizeError(numPatches, patchSize, maxPatches);
   // Patch and vertex ids are 32-bit (kNoPatch is reserved).
   const double kMaxId = static_cast<double>(kNoPatch);
   if (static_cast<double>(mesh->patches.size()) + numPatches >= kMaxId ||

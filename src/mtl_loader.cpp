@@ -14,13 +14,15 @@ Status Loader::ApplyEmit() {
     if (it == materialIndex_.end()) {
       std::string names;
       for (const Material& m : materials) names += (names.empty() ? "" : ", ") + m.name;
-      return Status::Error("vismask: --emit: no material '" + e.material + "' in " + path_ +
-                           (names.empty() ? " (it defines none)" : " (its materials: " + names + ")"));
+      return Status::Error(
+          "vismask: --emit: no material '" + e.material + "' in " + path_ +
+          (names.empty() ? " (it defines none)" : " (its materials: " + names + ")"));
     }
     Material& m = materials[it->second.first];
     if (m.ke != glm::vec3(0.0f)) {
       if (replacedKe_.empty()) replacedWhere_ = m.where;
-      replacedKe_.push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) + ")");
+      replacedKe_.push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) +
+                            ")");
     }
     m.ke = e.fromKa ? m.ka : e.ke;
   }
@@ -33,8 +35,9 @@ std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) cons
   if (!ignoredKeys_.empty()) {
     std::string keys;
     for (const std::string& k : ignoredKeys_) keys += (keys.empty() ? "'" : ", '") + k + "'";
-    w.push_back(ignoredWhere_ + ": warning: ignoring MTL key" + (ignoredKeys_.size() > 1 ? "s " : " ") +
-                keys + (ignoredKeys_.size() > 1 ? " (first here)" : ""));
+    w.push_back(ignoredWhere_ + ": warning: ignoring MTL key" +
+                (ignoredKeys_.size() > 1 ? "s " : " ") + keys +
+                (ignoredKeys_.size() > 1 ? " (first here)" : ""));
   }
   if (notMtlLines_ > 0)
     w.push_back(notMtlWhere_ + ": warning: " + std::to_string(notMtlLines_) +
@@ -50,7 +53,8 @@ std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) cons
     named += (named.empty() ? "" : ", ") + materials[i].name + " (" + why + ")";
   }
   if (!named.empty())
-    w.push_back(where + ": warning: specular materials rendered as diffuse with their Kd: " + named);
+    w.push_back(where +
+                ": warning: specular materials rendered as diffuse with their Kd: " + named);
   if (!replacedKe_.empty()) {
     std::string list;
     for (const std::string& r : replacedKe_) list += (list.empty() ? "" : ", ") + r;
@@ -63,15 +67,18 @@ std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) cons
                 (t.faces == 1 ? "its" : "their") + " plane)");
   if (cornersRemoved_.faces)
     w.push_back(at(cornersRemoved_.line) +
-                Count(cornersRemoved_.corners, "repeated or collinear corner", "repeated or collinear corners") +
+                Count(cornersRemoved_.corners, "repeated or collinear corner",
+                      "repeated or collinear corners") +
                 " removed from " + Count(cornersRemoved_.faces, "face", "faces") + " (first here)");
   if (degenerate_.faces)
-    w.push_back(at(degenerate_.line) + Count(degenerate_.faces, "degenerate face", "degenerate faces") +
+    w.push_back(at(degenerate_.line) +
+                Count(degenerate_.faces, "degenerate face", "degenerate faces") +
                 " dropped (zero area: repeated or collinear vertices; first here)");
   if (selfIntersecting_.faces)
-    w.push_back(at(selfIntersecting_.line) +
-                Count(selfIntersecting_.faces, "self-intersecting face", "self-intersecting faces") +
-                " dropped (first here)");
+    w.push_back(
+        at(selfIntersecting_.line) +
+        Count(selfIntersecting_.faces, "self-intersecting face", "self-intersecting faces") +
+        " dropped (first here)");
   return w;
 }
 
@@ -94,11 +101,12 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
     if (key == "newmtl") {
       if (args != 1) return Status::At(path, line, "'newmtl' needs 1 name, got " + Str(args));
       std::string where = path + ":" + std::to_string(line);
-      auto [it, added] =
-          materialIndex_.emplace(t[1], std::make_pair(static_cast<uint32_t>(materials.size()), where));
+      auto [it, added] = materialIndex_.emplace(
+          t[1], std::make_pair(static_cast<uint32_t>(materials.size()), where));
       if (!added)
-        return Status::At(path, line,
-                          "duplicate material " + Quote(t[1]) + " (first at " + it->second.second + ")");
+        return Status::At(
+            path, line,
+            "duplicate material " + Quote(t[1]) + " (first at " + it->second.second + ")");
       Material m;
       m.name = t[1];
       m.where = where;
@@ -143,7 +151,8 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
       double v[3];
       // Models are 0 to 10: a number beyond them is none (as if not given),
       // never converted to int (outside its range that is undefined).
-      if (key == "illum" && LenientFloats(t, 1, v)) f.illum = v[0] >= 0.0 && v[0] < 11.0 ? static_cast<int>(v[0]) : -1;
+      if (key == "illum" && LenientFloats(t, 1, v))
+        f.illum = v[0] >= 0.0 && v[0] < 11.0 ? static_cast<int>(v[0]) : -1;
       if (key == "Ks" && LenientFloats(t, 3, v)) f.ks = v[0] > 0.0 || v[1] > 0.0 || v[2] > 0.0;
       if (key == "Tf" && LenientFloats(t, 3, v)) f.tf = v[0] < 1.0 || v[1] < 1.0 || v[2] < 1.0;
       if (key == "d" && LenientFloats(t, 1, v)) f.d = v[0];
@@ -158,6 +167,5 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
   }
   return Status::Ok();
 }
-
 
 }  // namespace vismask::objload

@@ -66,7 +66,8 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
       // Per-corner data is all or nothing: a face that gives it for some
       // corners only keeps none (said once per kind).
       if (withUv != args) {
-        if (withUv != 0) Warn(path, line, "texture coordinates on some corners of a face only: ignored");
+        if (withUv != 0)
+          Warn(path, line, "texture coordinates on some corners of a face only: ignored");
         p.uv.clear();
       }
       if (withNormal != args) {
@@ -77,7 +78,8 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
       FaceResult r = ShapeFace(p, options_.strict, &pieces);
       if (r.fate == FaceResult::kRefused) return Status::At(path, line, r.error);
       for (const Polygon& piece : pieces) visit(piece);
-      if (r.removedCorners > 0 && (r.fate == FaceResult::kKept || r.fate == FaceResult::kTriangulated)) {
+      if (r.removedCorners > 0 &&
+          (r.fate == FaceResult::kKept || r.fate == FaceResult::kTriangulated)) {
         cornersRemoved_.Add(line);
         cornersRemoved_.corners += r.removedCorners;
       }
@@ -125,7 +127,8 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
         if (!IsInteger(t[1]) || t[1][0] == '-')
           return Status::At(path, line, "bad smoothing group " + Quote(t[1]));
         unsigned long long g = std::strtoull(t[1].c_str(), nullptr, 10);
-        if (g > 0xffffffffull) return Status::At(path, line, "smoothing group " + Quote(t[1]) + " is too large");
+        if (g > 0xffffffffull)
+          return Status::At(path, line, "smoothing group " + Quote(t[1]) + " is too large");
         smoothing = static_cast<uint32_t>(g);
       }
     } else if (key != "o" && key != "g") {
@@ -134,6 +137,5 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
   }
   return Status::Ok();
 }
-
 
 }  // namespace vismask::objload

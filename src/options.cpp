@@ -1,10 +1,10 @@
 #include "vismask/options.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
-#include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -289,7 +289,8 @@ void ResolveRounds(int numEnvs, Options* o) {
   } else {
     // The outbox holds 6 packets a shot: fewer shots a round with big packets.
     uint64_t shots = kAutoRoundOutboxBytes / (6 * packet);
-    o->roundShots = static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
+    o->roundShots =
+        static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
     o->roundWorkAuto = true;
   }
   if (!o->hasQueue) o->queue = AutoQueue(numEnvs, o->roundShots, packet);
@@ -334,7 +335,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   if (args[0] == "compare") {
     const bool mask = args.size() == 5 && args[3] == "--exclude" && !args[4].empty();
     if (args.size() != 3 && !mask)
-      return Status::Error("vismask: compare: usage: vismask compare A.pfm B.pfm [--exclude MASK.pgm]");
+      return Status::Error(
+          "vismask: compare: usage: vismask compare A.pfm B.pfm [--exclude MASK.pgm]");
     o->command = "compare";
     o->compareA = args[1];
     o->compareB = args[2];
@@ -363,14 +365,16 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         continue;
       }
       if (a.rfind("--", 0) == 0)
-        return Status::Error("vismask: view: unknown option '" + a + "' (try 'vismask view --help')");
+        return Status::Error("vismask: view: unknown option '" + a +
+                             "' (try 'vismask view --help')");
       if (!o->viewDir.empty())
         return Status::Error("vismask: view: unexpected argument '" + a + "' (one OUT_DIR)");
       if (a.empty()) return Status::Error("vismask: view: OUT_DIR is empty");
       o->viewDir = a;
     }
     if (o->viewDir.empty())
-      return Status::Error("vismask: view: usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]");
+      return Status::Error(
+          "vismask: view: usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]");
     return Status::Ok();
   }
   if (args[0] != "render" && args[0] != "footprint")
@@ -439,20 +443,27 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       o->rays = static_cast<uint32_t>(u);
       o->hasRays = true;
     } else if (a == "--ray-alloc") {
-      if (v == "power") o->rayAlloc = Options::RayAlloc::kPower;
-      else if (v == "fixed") o->rayAlloc = Options::RayAlloc::kFixed;
-      else return Bad(a, v, "power or fixed");
+      if (v == "power")
+        o->rayAlloc = Options::RayAlloc::kPower;
+      else if (v == "fixed")
+        o->rayAlloc = Options::RayAlloc::kFixed;
+      else
+        return Bad(a, v, "power or fixed");
       o->hasRayAlloc = true;
     } else if (a == "--emitted-rays") {
-      if (!ParseU64(v, &u) || u < 1 || u > 1000000000000ull) return Bad(a, v, "an integer in [1, 1e12]");
+      if (!ParseU64(v, &u) || u < 1 || u > 1000000000000ull)
+        return Bad(a, v, "an integer in [1, 1e12]");
       o->emittedRays = u;
     } else if (a == "--min-rays" || a == "--max-rays") {
       if (!ParseU64(v, &u) || u < 1 || u > 100000000) return Bad(a, v, "an integer in [1, 1e8]");
       (a == "--min-rays" ? o->minRays : o->maxRays) = static_cast<uint32_t>(u);
     } else if (a == "--sampler") {
-      if (v == "sobol") o->sobol = true;
-      else if (v == "random") o->sobol = false;
-      else return Bad(a, v, "sobol or random");
+      if (v == "sobol")
+        o->sobol = true;
+      else if (v == "random")
+        o->sobol = false;
+      else
+        return Bad(a, v, "sobol or random");
     } else if (a == "--elements") {
       if (!ParseU64(v, &u) || u > 1024) return Bad(a, v, "an integer in [0, 1024]");
       o->elementsPerPatch = static_cast<uint32_t>(u);
@@ -491,8 +502,10 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--camera") {
       std::vector<std::string> parts(1);
       for (char ch : v) {
-        if (ch == ',') parts.emplace_back();
-        else parts.back() += ch;
+        if (ch == ',')
+          parts.emplace_back();
+        else
+          parts.back() += ch;
       }
       double c[10];
       bool good = parts.size() == 10;
@@ -507,7 +520,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (!MakeView(o->camera, 1, 1, &view))
         return Bad(a, v, "eye != target, up not parallel to the view direction, 0 < fovy < 180");
     } else if (a == "--view") {
-      if (!ParseViewSide(v.c_str(), &o->view)) return Bad(a, v, "front, back, left, right, top or bottom");
+      if (!ParseViewSide(v.c_str(), &o->view))
+        return Bad(a, v, "front, back, left, right, top or bottom");
       o->hasView = true;
     } else if (a == "--envs") {
       o->hasEnvs = true;
@@ -516,19 +530,26 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         o->envsAuto = true;
         o->envsAutoCount = 0;  // --ranks, once all options are read
         if (v.size() > 4 && (!ParseU64(v.substr(5), &u) || u < 1 || u > kMaxAutoEnvs))
-          return Bad(a, v, "NX[xNY[xNZ]] (each 1..64), auto or auto:N (N in 1.." +
-                               std::to_string(kMaxAutoEnvs) + ")");
+          return Bad(a, v,
+                     "NX[xNY[xNZ]] (each 1..64), auto or auto:N (N in 1.." +
+                         std::to_string(kMaxAutoEnvs) + ")");
         if (v.size() > 4) o->envsAutoCount = static_cast<int>(u);
       } else if (!ParseEnvGrid(v.c_str(), o->envs)) {
         return Bad(a, v, "NX[xNY[xNZ]] (each 1..64), auto or auto:N");
       }
     } else if (a == "--mask-method") {
-      if (v == "none") o->maskMethod = MaskMethod::kNone;
-      else if (v == "A") o->maskMethod = MaskMethod::kA;
-      else if (v == "B") o->maskMethod = MaskMethod::kB;
-      else if (v == "C") o->maskMethod = MaskMethod::kC;
-      else if (v == "R") o->maskMethod = MaskMethod::kR;
-      else return Bad(a, v, "none, A, B, C or R");
+      if (v == "none")
+        o->maskMethod = MaskMethod::kNone;
+      else if (v == "A")
+        o->maskMethod = MaskMethod::kA;
+      else if (v == "B")
+        o->maskMethod = MaskMethod::kB;
+      else if (v == "C")
+        o->maskMethod = MaskMethod::kC;
+      else if (v == "R")
+        o->maskMethod = MaskMethod::kR;
+      else
+        return Bad(a, v, "none, A, B, C or R");
     } else if (a == "--mask-res") {
       if (!ParseU64(v, &u) || u < 1 || u > 4096) return Bad(a, v, "an integer in [1, 4096]");
       o->maskRes = static_cast<uint32_t>(u);
@@ -537,7 +558,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       o->roundShots = static_cast<uint32_t>(u);
       o->hasRoundShots = true;
     } else if (a == "--round-work") {
-      if (!ParseU64(v, &u) || u > 1000000000000000ull) return Bad(a, v, "an integer in [0, 1e15] (0: no limit)");
+      if (!ParseU64(v, &u) || u > 1000000000000000ull)
+        return Bad(a, v, "an integer in [0, 1e15] (0: no limit)");
       o->roundWork = u;
       o->hasRoundWork = true;
     } else if (a == "--env-order") {
@@ -556,7 +578,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (!ParseU64(v, &u) || u < 1 || u > 256) return Bad(a, v, "an integer in [1, 256]");
       o->ranks = static_cast<int>(u);
     } else if (a == "--rank-timeout") {
-      if (!ParseDouble(v, &d) || d < 0.0 || d > 1e9) return Bad(a, v, "seconds in [0, 1e9] (0: none)");
+      if (!ParseDouble(v, &d) || d < 0.0 || d > 1e9)
+        return Bad(a, v, "seconds in [0, 1e9] (0: none)");
       o->rankTimeout = d;
     } else if (a == "--transport") {
       if (v != "loop" && v != "pipe" && v != "mpi") return Bad(a, v, "loop, pipe or mpi");
@@ -564,8 +587,11 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--mem-budget") {
       std::string digits = v;
       uint64_t scale = 1;
-      if (!digits.empty() && (digits.back() == 'K' || digits.back() == 'M' || digits.back() == 'G')) {
-        scale = digits.back() == 'K' ? 1024ull : digits.back() == 'M' ? 1024ull * 1024 : 1024ull * 1024 * 1024;
+      if (!digits.empty() &&
+          (digits.back() == 'K' || digits.back() == 'M' || digits.back() == 'G')) {
+        scale = digits.back() == 'K'   ? 1024ull
+                : digits.back() == 'M' ? 1024ull * 1024
+                                       : 1024ull * 1024 * 1024;
         digits.pop_back();
       }
       if (!ParseU64(digits, &u) || u < 1 || u > ~0ull / scale)
@@ -590,7 +616,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->smooth = v == "on";
     } else if (a == "--crease") {
-      if (!ParseDouble(v, &d) || !(d >= 0.0) || d > 180.0) return Bad(a, v, "an angle in [0, 180] degrees");
+      if (!ParseDouble(v, &d) || !(d >= 0.0) || d > 180.0)
+        return Bad(a, v, "an angle in [0, 180] degrees");
       o->creaseDeg = static_cast<float>(d);
     } else if (a == "--correct-unshot") {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
@@ -607,18 +634,22 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       } else {
         std::vector<std::string> parts(1);
         for (char ch : value) {
-          if (ch == ',') parts.emplace_back();
-          else parts.back() += ch;
+          if (ch == ',')
+            parts.emplace_back();
+          else
+            parts.back() += ch;
         }
         double c[3];
         bool good = parts.size() == 3;
-        for (size_t k = 0; good && k < 3; ++k) good = ParseDouble(parts[k], &c[k]) && c[k] >= 0.0 && c[k] <= 3.4e38;
+        for (size_t k = 0; good && k < 3; ++k)
+          good = ParseDouble(parts[k], &c[k]) && c[k] >= 0.0 && c[k] <= 3.4e38;
         if (!good) return Bad(a, v, expected);
         e.ke = glm::vec3(c[0], c[1], c[2]);
       }
       o->load.emit.push_back(e);
     } else if (a == "--mask-cache") {
-      if (!ParseU64(v, &u) || u > (uint64_t{1} << 26)) return Bad(a, v, "an integer in [0, 2^26] (KiB)");
+      if (!ParseU64(v, &u) || u > (uint64_t{1} << 26))
+        return Bad(a, v, "an integer in [0, 2^26] (KiB)");
       o->maskCacheKiB = static_cast<uint32_t>(u);
     } else if (a == "--queue") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
@@ -629,22 +660,26 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     }
   }
   if (o->scene.empty())
-    return Status::Error("vismask: " + o->command + ": no scene given (vismask " + o->command + " SCENE.obj)");
+    return Status::Error("vismask: " + o->command + ": no scene given (vismask " + o->command +
+                         " SCENE.obj)");
   if (o->hasView && o->hasCamera)
-    return Status::Error("vismask: --view and --camera: give one or the other (--view frames the "
-                         "bounding box from a side, --camera places the camera itself)");
+    return Status::Error(
+        "vismask: --view and --camera: give one or the other (--view frames the "
+        "bounding box from a side, --camera places the camera itself)");
   if (o->errorEvery > 0 && o->reference.empty())
     return Status::Error("vismask: --error-every: needs --reference REF.pfm to measure against");
   // --rays N alone keeps its meaning: N rays every shot.
   if (!o->hasRayAlloc && o->hasRays) o->rayAlloc = Options::RayAlloc::kFixed;
   if (o->rayAlloc == Options::RayAlloc::kPower && o->hasRays)
-    return Status::Error("vismask: --rays: sets every shot's rays under --ray-alloc fixed; with "
-                         "--ray-alloc power use --emitted-rays, --min-rays and --max-rays");
+    return Status::Error(
+        "vismask: --rays: sets every shot's rays under --ray-alloc fixed; with "
+        "--ray-alloc power use --emitted-rays, --min-rays and --max-rays");
   if (o->minRays > o->maxRays)
-    return Status::Error("vismask: --min-rays " + std::to_string(o->minRays) + " is above --max-rays " +
-                         std::to_string(o->maxRays));
+    return Status::Error("vismask: --min-rays " + std::to_string(o->minRays) +
+                         " is above --max-rays " + std::to_string(o->maxRays));
   if (!o->exclude.empty() && o->reference.empty())
-    return Status::Error("vismask: --exclude: needs --reference REF.pfm (the mask applies to its error)");
+    return Status::Error(
+        "vismask: --exclude: needs --reference REF.pfm (the mask applies to its error)");
   // --ranks N > 1 without --envs: --envs auto, one balanced environment a
   // rank (under mpirun, SetWorldSize does the same with the world's size).
   if (!o->hasEnvs && o->ranks > 1) o->envsAuto = true;
@@ -660,18 +695,24 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   ResolveRounds(numEnvs, o);
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
-                         std::to_string(numEnvs) + " environments (each rank needs one; see --envs)");
+                         std::to_string(numEnvs) +
+                         " environments (each rank needs one; see --envs)");
   if (o->transport == "loop" && o->ranks > 1)
-    return Status::Error("vismask: --transport loop runs one process; use --transport pipe with --ranks");
+    return Status::Error(
+        "vismask: --transport loop runs one process; use --transport pipe with --ranks");
   if (!o->envOrder.empty()) {
     size_t n = size_t(o->envs[0]) * o->envs[1] * o->envs[2];
     std::vector<bool> seen(n, false);
     bool ok = o->envOrder.size() == n;
     for (uint32_t e : o->envOrder) {
-      if (e >= n || seen[e]) ok = false;
-      else seen[e] = true;
+      if (e >= n || seen[e])
+        ok = false;
+      else
+        seen[e] = true;
     }
-    if (!ok) return Status::Error("vismask: --env-order: expected a permutation of 0.." + std::to_string(n - 1));
+    if (!ok)
+      return Status::Error("vismask: --env-order: expected a permutation of 0.." +
+                           std::to_string(n - 1));
   }
   return Status::Ok();
 }

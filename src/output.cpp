@@ -50,9 +50,10 @@ PatchRecord RecordOf(const Render& r, const Environment& env, size_t i) {
 }
 
 void WriteRecord(TextWriter* w, const PatchRecord& p) {
-  w->Printf("%u,%u,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.17g,%.17g,%.17g\n",
-            p.id, p.env, p.c[0], p.c[1], p.c[2], p.n[0], p.n[1], p.n[2], p.area, p.kd[0], p.kd[1],
-            p.kd[2], p.ke[0], p.ke[1], p.ke[2], p.b[0], p.b[1], p.b[2]);
+  w->Printf(
+      "%u,%u,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.17g,%.17g,%.17g\n",
+      p.id, p.env, p.c[0], p.c[1], p.c[2], p.n[0], p.n[1], p.n[2], p.area, p.kd[0], p.kd[1],
+      p.kd[2], p.ke[0], p.ke[1], p.ke[2], p.b[0], p.b[1], p.b[2]);
 }
 
 // patches.csv in id order: rank 0's environments, then every other rank's,
@@ -110,7 +111,8 @@ void RenderImage(Render* r) {
     t->AllGather(r->sharedMine.data(), r->sharedMine.bytes(), r->sharedAll.data());
     ShareVertices(envs, r->sharedAll, r->sharedScratch, r->shareRule);
   }
-  for (Environment* env : r->envPtrs) DrawEnvironment(r->view, *env, ambient, &r->fb, r->textures.textures);
+  for (Environment* env : r->envPtrs)
+    DrawEnvironment(r->view, *env, ambient, &r->fb, r->textures.textures);
   // The other ranks' framebuffers, a band of rows at a time (rank 0 holds
   // one band), composited in rank order; then the fragments are resolved.
   const Framebuffer& mine = r->fb;
@@ -159,10 +161,13 @@ void WarnIfEmpty(const Framebuffer& fb, bool hasCamera) {
   const char* fix = hasCamera ? "try another --camera, or --view front|back|left|right|top|bottom"
                               : "try --view front|back|left|right|top|bottom, or --camera";
   if (!content.surface)
-    os::PrintErr("vismask: warning: the image is all background: the camera sees no surface (%s)\n", fix);
+    os::PrintErr("vismask: warning: the image is all background: the camera sees no surface (%s)\n",
+                 fix);
   else
-    os::PrintErr("vismask: warning: the image is black: the camera sees no lit front-facing "
-                 "surface, only background and the backs of one-sided polygons (%s)\n", fix);
+    os::PrintErr(
+        "vismask: warning: the image is black: the camera sees no lit front-facing "
+        "surface, only background and the backs of one-sided polygons (%s)\n",
+        fix);
 }
 
 int WriteOutputs(Render* r, const SolveResult& res) {
@@ -192,19 +197,22 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   }
   GatherByEnv(r, r->summaryMine, r->summaryAll, r->summary);
   // Every rank's memory for run.json: predicted and measured.
-  Render::RankMemory mine{r->predictedBytes, r->initPeakBytes, os::PeakRssBytes(), os::FileRssBytes(), 0};
-  for (Environment* e : r->envPtrs) mine.bytesSent += e->stats().packetsSent * r->exchange.packetBytes;
+  Render::RankMemory mine{r->predictedBytes, r->initPeakBytes, os::PeakRssBytes(),
+                          os::FileRssBytes(), 0};
+  for (Environment* e : r->envPtrs)
+    mine.bytesSent += e->stats().packetsSent * r->exchange.packetBytes;
   r->transport->AllGather(&mine, sizeof mine, r->rankMemory);
   if (!r->isRoot()) return kExitOk;
 
   WarnIfEmpty(r->fb, r->options.hasCamera);
-  float exposure = r->options.hasExposure ? r->options.exposure
-                                          : AutoExposure(r->fb.color, r->fb.id, kNoPatch);
+  float exposure =
+      r->options.hasExposure ? r->options.exposure : AutoExposure(r->fb.color, r->fb.id, kNoPatch);
   ToneMap(r->fb.color, exposure, r->rgb8);
   char why[os::kWhyBytes] = "";
   // A failed write is remembered by its file and reported by CommitAll with
   // the file's name and the reason; only the PNG encoder fails on its own.
-  bool ok = WritePng(&r->files[kPng], r->options.width, r->options.height, r->rgb8, r->pngScratch, why);
+  bool ok =
+      WritePng(&r->files[kPng], r->options.width, r->options.height, r->rgb8, r->pngScratch, why);
   WritePfm(&r->files[kPfm], r->options.width, r->options.height, r->fb.color);
   r->convergence.Flush();
   WriteRunJson(r, res, exposure, os::Seconds() - start);

@@ -21,7 +21,8 @@ PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey,
 
 Patch PatchFromHeader(const PacketHeader& h) {
   Patch p{};
-  for (int k = 0; k < 4; ++k) p.corner[k] = glm::vec3(h.corner[k][0], h.corner[k][1], h.corner[k][2]);
+  for (int k = 0; k < 4; ++k)
+    p.corner[k] = glm::vec3(h.corner[k][0], h.corner[k][1], h.corner[k][2]);
   p.normal = glm::vec3(h.normal[0], h.normal[1], h.normal[2]);
   p.area = h.area;
   p.numCorners = h.numCorners;

@@ -4,14 +4,13 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
 #include <numeric>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <glm/common.hpp>
-#include <glm/geometric.hpp>
-#include <glm/vec3.hpp>
 
 #include "geometry_util.h"
 #include "vismask/check.h"
@@ -257,7 +256,8 @@ void WorkSplitter::Add(const glm::vec3* corners, int n, double area, double weig
     Axis& a = axis_[k];
     Cover(&a, lo[k], hi[k], scale);
     double x0 = (lo[k] - a.lo) / a.width, x1 = (hi[k] - a.lo) / a.width;
-    int b0 = std::min(kBins - 1, static_cast<int>(x0)), b1 = std::min(kBins - 1, static_cast<int>(x1));
+    int b0 = std::min(kBins - 1, static_cast<int>(x0)),
+        b1 = std::min(kBins - 1, static_cast<int>(x1));
     if (b0 == b1) {
       a.bins[b0] += weight;
       continue;
@@ -265,7 +265,8 @@ void WorkSplitter::Add(const glm::vec3* corners, int n, double area, double weig
     // Evenly over [x0, x1]: each bin its share of the length.
     const double density = weight / (x1 - x0);
     for (int b = b0; b <= b1; ++b) {
-      double from = std::max(x0, static_cast<double>(b)), to = std::min(x1, static_cast<double>(b + 1));
+      double from = std::max(x0, static_cast<double>(b)),
+             to = std::min(x1, static_cast<double>(b + 1));
       if (to > from) a.bins[b] += density * (to - from);
     }
   }

@@ -1,9 +1,8 @@
 #include "vismask/patch.h"
 
 #include <cmath>
-#include <limits>
-
 #include <glm/geometric.hpp>
+#include <limits>
 
 namespace vismask {
 

@@ -5,7 +5,9 @@
 
 namespace vismask::run {
 
-Status CountScene(const Options& o, Prepared* p) { return CountObj(o.scene, &p->info); }
+Status CountScene(const Options& o, Prepared* p) {
+  return CountObj(o.scene, &p->info);
+}
 
 namespace {
 
@@ -24,7 +26,9 @@ bool EmitsAfterOverrides(const Material& m, const LoadOptions& load) {
   return ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
 }
 
-bool Emits(const Material& m) { return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z > 0.0f; }
+bool Emits(const Material& m) {
+  return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z > 0.0f;
+}
 
 }  // namespace
 
@@ -59,7 +63,8 @@ uint64_t Prepared::InitPeak(uint32_t first, uint32_t end, bool root, uint64_t en
   }
   // Per environment of the whole grid: its counts.
   held += kInitBaseBytes + textureBytes + 4 * sizeof(double) * envPatches.size();
-  const uint64_t parse = info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes() + (root ? checkBytes : 0);
+  const uint64_t parse =
+      info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes() + (root ? checkBytes : 0);
   const uint64_t mesh = pieceBytes + stagedBytes + meshBytes;
   // The pieces are freed before the arenas are made, but their small blocks
   // may stay in the process's heap: counted, so that the bound holds for
@@ -78,11 +83,14 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // Each polygon, as mended, with its corners, area and material: where a
   // work-balanced split (an accumulator fed one polygon at a time) takes
   // them, its planes then set p->grid before pass 2 clips with it.
-  Status s = ScanObj(o.scene, o.load, [&](uint32_t i, const Polygon& poly) {
-    if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
-    ++numEmitters;
-    if (root) emitters.emplace_back(i, poly);
-  }, &info);
+  Status s = ScanObj(
+      o.scene, o.load,
+      [&](uint32_t i, const Polygon& poly) {
+        if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
+        ++numEmitters;
+        if (root) emitters.emplace_back(i, poly);
+      },
+      &info);
   if (!s.ok()) return s;
   // Rank 0's emitter check (the same figure on every rank, for footprint).
   p->checkBytes =
@@ -90,9 +98,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       numEmitters * 256;
   // Every rank prints the loader's warnings, as LoadScene did.
   for (const std::string& w : info.warnings) std::fprintf(stderr, "%s\n", w.c_str());
-  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine, &p->textures);
+  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine,
+                           &p->textures);
   if (!s.ok()) return s;
-  for (const TextureImage& t : p->textures.images) p->textureBytes += uint64_t{t.width} * t.height * 4;
+  for (const TextureImage& t : p->textures.images)
+    p->textureBytes += uint64_t{t.width} * t.height * 4;
   p->scene.objPath = o.scene;
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
@@ -115,7 +125,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
     WorkSplitter splitter;
     s = StreamObj(info, o.load, [&](uint32_t, const Polygon& poly) {
       const int n = static_cast<int>(poly.corners.size());
-      splitter.Add(poly.corners.data(), n, poly.area, EstimatedPatches(poly.corners.data(), n, p->patchSize));
+      splitter.Add(poly.corners.data(), n, poly.area,
+                   EstimatedPatches(poly.corners.data(), n, p->patchSize));
     });
     if (!s.ok()) return s;
     splitter.Planes(&p->grid);
@@ -132,10 +143,12 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
 
   // Before pass 2 allocates: the parser's arrays, the camera's probe and
   // the emitter check against the budget; then the pieces as they come.
-  const uint64_t passBytes = p->held + kInitBaseBytes + info.ParserBytes() + ViewProbe::HeapBytes() +
-                             (root ? p->checkBytes : 0);
+  const uint64_t passBytes = p->held + kInitBaseBytes + info.ParserBytes() +
+                             ViewProbe::HeapBytes() + (root ? p->checkBytes : 0);
   if (p->budget > 0 && passBytes > p->budget) {
-    if (p->overBudget) p->overBudget(passBytes, "to read the scene (the vertex arrays, the camera probe, the emitter check)");
+    if (p->overBudget)
+      p->overBudget(passBytes,
+                    "to read the scene (the vertex arrays, the camera probe, the emitter check)");
     return Status::Error("");
   }
   uint64_t pieceTotal = 0;
@@ -147,7 +160,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (chooseSide) probe = std::make_unique<ViewProbe>(info.bounds);
   std::unique_ptr<EmitterCheck> check;
   if (root) {
-    check = std::make_unique<EmitterCheck>(info.bounds, info.materials, emitters, kEmitterCheckChunk);
+    check =
+        std::make_unique<EmitterCheck>(info.bounds, info.materials, emitters, kEmitterCheckChunk);
   }
   emitters.clear();
   emitters.shrink_to_fit();
@@ -156,7 +170,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
     Polygon polygon;
   };
   std::vector<OwnPiece> own;
-  std::vector<std::pair<uint32_t, double>> emitted;  // (environment, emitted power) per emitting piece
+  std::vector<std::pair<uint32_t, double>>
+      emitted;  // (environment, emitted power) per emitting piece
   Status failed;
   Scene one;
   one.objPath = o.scene;
@@ -167,7 +182,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // automatic --round-work.
   double estimated = 0.0;
   s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
-    estimated += EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()), p->patchSize);
+    estimated +=
+        EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()), p->patchSize);
     if (probe) probe->Add(i, poly);
     if (check) check->Add(i, poly);
     if (!failed.ok()) return;
@@ -204,7 +220,9 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       p->envPieceBytes[e] += 2 * (PolygonBytes(piece) + 3 * sizeof(uint32_t));
       pieceTotal += 2 * (PolygonBytes(piece) + 3 * sizeof(uint32_t)) + PolygonBytes(poly);
       if (p->budget > 0 && passBytes + pieceTotal > p->budget) {
-        if (p->overBudget) p->overBudget(passBytes + pieceTotal, "to hold its pieces of the scene (and more to come)");
+        if (p->overBudget)
+          p->overBudget(passBytes + pieceTotal,
+                        "to hold its pieces of the scene (and more to come)");
         failed = Status::Error("");
         return;
       }
@@ -214,7 +232,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (!s.ok()) return s;
   if (!failed.ok()) return failed;
   if (o.roundWorkAuto)
-    p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2], EnvOptions().gridDensity);
+    p->roundWork =
+        AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2], EnvOptions().gridDensity);
   if (probe) p->side = probe->Side();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
@@ -226,10 +245,10 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       return Status::Error("vismask: --patch-size: " +
                            MeshSizeError(p->envPatches[e], p->patchSize, kMaxPatches).message());
     if (p->envPatches[e] + p->envTwins[e] > static_cast<double>(kMaxPatches))
-      return Status::Error("vismask: --patch-size: the mesh needs " +
-                           std::to_string(static_cast<uint64_t>(p->envPatches[e] + p->envTwins[e])) +
-                           " patches with both sides, more than the limit of " +
-                           std::to_string(kMaxPatches));
+      return Status::Error(
+          "vismask: --patch-size: the mesh needs " +
+          std::to_string(static_cast<uint64_t>(p->envPatches[e] + p->envTwins[e])) +
+          " patches with both sides, more than the limit of " + std::to_string(kMaxPatches));
   }
   for (uint32_t e = 0; e < total; ++e) {
     p->envPatches[e] += p->envTwins[e];
@@ -246,7 +265,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (o.twoSidedEmitters) power *= 2.0;  // every emitter's twin emits as much
 
   // This rank's pieces, by environment (within one, in source order).
-  std::stable_sort(own.begin(), own.end(), [](const OwnPiece& a, const OwnPiece& b) { return a.env < b.env; });
+  std::stable_sort(own.begin(), own.end(),
+                   [](const OwnPiece& a, const OwnPiece& b) { return a.env < b.env; });
   p->part.grid = p->grid;
   p->part.scene.objPath = o.scene;
   p->part.scene.materials = info.materials;
@@ -304,10 +324,9 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     // Twins in the environment of their originals, after all of its patches.
     AddTwins(p.twins, &mesh);
     if (mesh.patches.size() > kMaxPatches)
-      return Status::Error("vismask: --patch-size: the mesh needs " +
-                           std::to_string(mesh.patches.size()) +
-                           " patches with both sides, more than the limit of " +
-                           std::to_string(kMaxPatches));
+      return Status::Error(
+          "vismask: --patch-size: the mesh needs " + std::to_string(mesh.patches.size()) +
+          " patches with both sides, more than the limit of " + std::to_string(kMaxPatches));
     CHECK_EQ(static_cast<double>(mesh.patches.size()), p.envPatches[e]);
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());

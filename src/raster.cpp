@@ -2,9 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-
 #include <glm/geometric.hpp>
+#include <limits>
 
 #include "vismask/texture.h"
 
@@ -70,7 +69,8 @@ void DrawTriangle(const View& view, const CamVert<kTextured>* v, const DisplayPi
                   Framebuffer* fb) {
   const uint32_t id = piece.id;
   float sx[3], sy[3], invZ[3];
-  float halfW = 0.5f * static_cast<float>(view.width), halfH = 0.5f * static_cast<float>(view.height);
+  float halfW = 0.5f * static_cast<float>(view.width),
+        halfH = 0.5f * static_cast<float>(view.height);
   for (int k = 0; k < 3; ++k) {
     invZ[k] = 1.0f / v[k].p.z;
     sx[k] = halfW + view.focal * v[k].p.x * invZ[k];
@@ -98,11 +98,13 @@ void DrawTriangle(const View& view, const CamVert<kTextured>* v, const DisplayPi
       if (b0 < 0.0f || b1 < 0.0f || b2 < 0.0f) continue;
       float iz = b0 * invZ[0] + b1 * invZ[1] + b2 * invZ[2];
       float z = 1.0f / iz;
-      size_t idx = static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
+      size_t idx =
+          static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
       if (!Nearer(z, id, fb->depth[idx], fb->id[idx])) continue;
       glm::vec3 c = (b0 * invZ[0]) * v[0].c + (b1 * invZ[1]) * v[1].c + (b2 * invZ[2]) * v[2].c;
       if constexpr (kTextured) {
-        glm::vec2 uv = (b0 * invZ[0]) * v[0].uv + (b1 * invZ[1]) * v[1].uv + (b2 * invZ[2]) * v[2].uv;
+        glm::vec2 uv =
+            (b0 * invZ[0]) * v[0].uv + (b1 * invZ[1]) * v[1].uv + (b2 * invZ[2]) * v[2].uv;
         fb->color[idx] = piece.ke + piece.texture->Modulation(uv * z) * (c * z - piece.ke);
       } else {
         fb->color[idx] = c * z;
@@ -178,7 +180,8 @@ inline void AddFragment(Fragment* f, uint8_t* dropped, const Fragment& in) {
     if (in.depth < f[k].depth) {
       Fragment moved = f[k];
       moved.depth = in.depth;
-      for (; k > 0 && Nearer(moved.depth, moved.id, f[k - 1].depth, f[k - 1].id); --k) f[k] = f[k - 1];
+      for (; k > 0 && Nearer(moved.depth, moved.id, f[k - 1].depth, f[k - 1].id); --k)
+        f[k] = f[k - 1];
       f[k] = moved;
     }
     return;
@@ -230,7 +233,9 @@ struct Vec2 {
   float x, y;
 };
 
-inline float Cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
+inline float Cross(Vec2 a, Vec2 b) {
+  return a.x * b.y - a.y * b.x;
+}
 
 // Area and centroid of the part of convex polygon `poly` (n corners, pixel
 // coordinates relative to the pixel's corner) inside the unit square, and
@@ -238,8 +243,9 @@ inline float Cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
 // base + grad.x * x + grad.y * y. Returns the area (0 if none). Inlined into
 // both instances of DrawPieceAa, as it was into the one before textures
 // (called from two places, GCC no longer inlines it: +4% raster cost).
-[[gnu::always_inline]] inline float CoverInUnitSquare(const Vec2* poly, int n, Vec2 grad, float base, Vec2* centroid, float* lo,
-                        float* hi) {
+[[gnu::always_inline]] inline float CoverInUnitSquare(const Vec2* poly, int n, Vec2 grad,
+                                                      float base, Vec2* centroid, float* lo,
+                                                      float* hi) {
   Vec2 a[kMaxPoly + 4], b[kMaxPoly + 4];
   // Four axis-aligned clips: x >= 0, x <= 1, y >= 0, y <= 1.
   auto clip = [](const Vec2* in, int m, Vec2* out, int axis, float bound, float sign) {
@@ -253,7 +259,10 @@ inline float Cross(Vec2 a, Vec2 b) { return a.x * b.y - a.y * b.x; }
       if (pIn != qIn) {
         float t = fp / (fp - fq);
         Vec2 x{p.x + t * (q.x - p.x), p.y + t * (q.y - p.y)};
-        if (axis == 0) x.x = bound; else x.y = bound;
+        if (axis == 0)
+          x.x = bound;
+        else
+          x.y = bound;
         out[r++] = x;
       }
     }
@@ -310,7 +319,8 @@ glm::vec3 RadianceAt(const PieceSetup& s, const DisplayPiece& piece, Vec2 h) {
     b2 = std::fmin(std::fmax(b2, 0.0f), 1.0f - b1);
     glm::vec3 c = (1.0f - b1 - b2) * piece.c[0] + b1 * piece.c[1] + b2 * piece.c[2];
     if constexpr (kTextured)
-      return Textured(piece, c, (1.0f - b1 - b2) * piece.uv[0] + b1 * piece.uv[1] + b2 * piece.uv[2]);
+      return Textured(piece, c,
+                      (1.0f - b1 - b2) * piece.uv[0] + b1 * piece.uv[1] + b2 * piece.uv[2]);
     return c;
   }
   // Inverse bilinear map: p = a + e u + f v + g u v (corner 0 at the origin).
@@ -382,7 +392,8 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
 
   // Clip to the near plane and the sides of the view (one pixel outside it,
   // so the clip's own edges never cross a pixel that is drawn).
-  const float halfW = 0.5f * static_cast<float>(view.width), halfH = 0.5f * static_cast<float>(view.height);
+  const float halfW = 0.5f * static_cast<float>(view.width),
+              halfH = 0.5f * static_cast<float>(view.height);
   const float f = view.focal;
   glm::vec3 bufA[kMaxPoly], bufB[kMaxPoly];
   int m = static_cast<int>(nc);
@@ -475,8 +486,10 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       glm::vec3 pCam = zSample * glm::vec3((sx - halfW) * invF, (halfH - sy) * invF, 1.0f);
       glm::vec3 r = pCam - s.origin;
       glm::vec3 rad = RadianceAt<kTextured>(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)});
-      Fragment in{key, piece.id, back ? -cover : cover, {cover * rad.x, cover * rad.y, cover * rad.z}};
-      size_t idx = static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
+      Fragment in{
+          key, piece.id, back ? -cover : cover, {cover * rad.x, cover * rad.y, cover * rad.z}};
+      size_t idx =
+          static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
       AddFragment(&fb->frags[idx * kFragments], &fb->dropped[idx], in);
     }
   }
@@ -489,11 +502,15 @@ void DrawPiece(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
   // Textured pieces take their own instance of each raster, so an untextured
   // one runs the same code per pixel as before textures existed.
   if (fb->aa) {
-    if (piece.texture) DrawPieceAa<true>(view, piece, fb);
-    else DrawPieceAa<false>(view, piece, fb);
+    if (piece.texture)
+      DrawPieceAa<true>(view, piece, fb);
+    else
+      DrawPieceAa<false>(view, piece, fb);
   } else {
-    if (piece.texture) DrawPiecePoint<true>(view, piece, fb);
-    else DrawPiecePoint<false>(view, piece, fb);
+    if (piece.texture)
+      DrawPiecePoint<true>(view, piece, fb);
+    else
+      DrawPiecePoint<false>(view, piece, fb);
   }
 }
 
@@ -525,7 +542,8 @@ void CompositeRows(const Framebuffer& band, int firstRow, int rows, Framebuffer*
       Fragment* dst = &fb->frags[(base + i) * kFragments];
       uint8_t* dropped = &fb->dropped[base + i];
       *dropped |= band.dropped[i];
-      for (int k = 0; k < kFragments && src[k].id != kNoPatch; ++k) AddFragment(dst, dropped, src[k]);
+      for (int k = 0; k < kFragments && src[k].id != kNoPatch; ++k)
+        AddFragment(dst, dropped, src[k]);
     }
     return;
   }
@@ -548,7 +566,8 @@ namespace {
 
 // One antialiased pixel's fragments composed: its colour, the id with the
 // largest visible share, and the share front faces took.
-void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* id, float* frontShare) {
+void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* id,
+                  float* frontShare) {
   float open = 1.0f, front = 0.0f, best = 0.0f;
   uint32_t bestId = kNoPatch;
   glm::vec3 c(0.0f);
@@ -583,7 +602,8 @@ void Resolve(Framebuffer* fb) {
   size_t n = fb->color.size();
   float front;
   for (size_t i = 0; i < n; ++i)
-    ResolvePixel(&fb->frags[i * kFragments], fb->dropped[i] != 0, &fb->color[i], &fb->id[i], &front);
+    ResolvePixel(&fb->frags[i * kFragments], fb->dropped[i] != 0, &fb->color[i], &fb->id[i],
+                 &front);
 }
 
 ImageContent InspectImage(const Framebuffer& fb) {

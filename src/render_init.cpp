@@ -56,19 +56,20 @@ int Init(Render* r) {
       Status s = ReadPfm(o.reference, &ref);
       if (!s.ok()) return FailInit(r, Status::Error("vismask: --reference: " + s.ToString()));
       if (ref.width != o.width || ref.height != o.height)
-        return FailInit(r, Status::Error("vismask: --reference: " + o.reference + " is " +
-                                         std::to_string(ref.width) + "x" + std::to_string(ref.height) +
-                                         ", the image is " + std::to_string(o.width) + "x" +
-                                         std::to_string(o.height) + " (--width, --height)"));
+        return FailInit(r,
+                        Status::Error("vismask: --reference: " + o.reference + " is " +
+                                      std::to_string(ref.width) + "x" + std::to_string(ref.height) +
+                                      ", the image is " + std::to_string(o.width) + "x" +
+                                      std::to_string(o.height) + " (--width, --height)"));
     }
     if (r->isRoot() && !o.exclude.empty()) {
       Status s = ReadPgm(o.exclude, &mask);
       if (!s.ok()) return FailInit(r, Status::Error("vismask: --exclude: " + s.ToString()));
       if (mask.width != o.width || mask.height != o.height)
         return FailInit(r, Status::Error("vismask: --exclude: " + o.exclude + ": is " +
-                                         std::to_string(mask.width) + "x" + std::to_string(mask.height) +
-                                         ", the image is " + std::to_string(o.width) + "x" +
-                                         std::to_string(o.height)));
+                                         std::to_string(mask.width) + "x" +
+                                         std::to_string(mask.height) + ", the image is " +
+                                         std::to_string(o.width) + "x" + std::to_string(o.height)));
     }
     // Pass 0: the statements counted, so that the parser's arrays are
     // judged against the budget before they exist.
@@ -76,13 +77,14 @@ int Init(Render* r) {
     if (!s.ok()) return FailInit(r, s);
     const uint64_t held = referenceBytes;
     if (budget > 0 && p.info.ParserBytes() + held + kInitBaseBytes > budget) {
-      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init to read the scene "
-                   "(%llu vertices, %llu texture coordinates and %llu normals), more than %s\n",
-                   r->transport->rank(),
-                   static_cast<unsigned long long>(p.info.ParserBytes() + held + kInitBaseBytes),
-                   static_cast<unsigned long long>(p.info.vertices),
-                   static_cast<unsigned long long>(p.info.uvs),
-                   static_cast<unsigned long long>(p.info.normals), whose);
+      os::PrintErr(
+          "vismask: --mem-budget: rank %d needs %llu bytes at init to read the scene "
+          "(%llu vertices, %llu texture coordinates and %llu normals), more than %s\n",
+          r->transport->rank(),
+          static_cast<unsigned long long>(p.info.ParserBytes() + held + kInitBaseBytes),
+          static_cast<unsigned long long>(p.info.vertices),
+          static_cast<unsigned long long>(p.info.uvs),
+          static_cast<unsigned long long>(p.info.normals), whose);
       return kExitUsage;
     }
     r->layout = EnvsOfRank(static_cast<uint32_t>(o.envs[0] * o.envs[1] * o.envs[2]),
@@ -107,14 +109,15 @@ int Init(Render* r) {
     r->patchSize = p.patchSize;
     // Before meshing: the pieces and a bound on the meshes and staged
     // copies (the arenas are not known yet).
-    const uint64_t early = p.InitPeak(r->layout.first, r->layout.first + r->layout.count,
-                                      r->isRoot(), 0, 0, held);
+    const uint64_t early =
+        p.InitPeak(r->layout.first, r->layout.first + r->layout.count, r->isRoot(), 0, 0, held);
     if (budget > 0 && early > budget) {
-      os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init (its pieces of the "
-                   "scene and a bound on meshing its %llu patches; the arenas come on top), more "
-                   "than %s\n",
-                   r->transport->rank(), static_cast<unsigned long long>(early),
-                   static_cast<unsigned long long>(OwnPatches(p)), whose);
+      os::PrintErr(
+          "vismask: --mem-budget: rank %d needs %llu bytes at init (its pieces of the "
+          "scene and a bound on meshing its %llu patches; the arenas come on top), more "
+          "than %s\n",
+          r->transport->rank(), static_cast<unsigned long long>(early),
+          static_cast<unsigned long long>(OwnPatches(p)), whose);
       return kExitUsage;
     }
     s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
@@ -153,9 +156,8 @@ int Init(Render* r) {
   }
   // --export: the file's size follows from the mesh; a .glb holds 4 GiB
   // and 32-bit indices.
-  if (!o.exportPath.empty() &&
-      (exportMesh.triangles == 0 || exportMesh.vertices >= 0xffffffffull ||
-       GlbMaxFileBytes(exportMesh) > kGlbMaxBytes)) {
+  if (!o.exportPath.empty() && (exportMesh.triangles == 0 || exportMesh.vertices >= 0xffffffffull ||
+                                GlbMaxFileBytes(exportMesh) > kGlbMaxBytes)) {
     std::string why = exportMesh.triangles == 0
                           ? "the mesh has no triangles"
                           : "the mesh's " + std::to_string(exportMesh.vertices) + " vertices and " +
@@ -167,12 +169,14 @@ int Init(Render* r) {
   r->shareRule.tolerance = p.tolerance;
   r->shareRule.origin = p.scene.bounds.lo;
   // A hair below the cosine, so that equal normals share at --crease 0.
-  r->shareRule.cosCrease = static_cast<float>(std::cos(o.creaseDeg * 3.14159265358979323846 / 180.0)) - 1e-6f;
+  r->shareRule.cosCrease =
+      static_cast<float>(std::cos(o.creaseDeg * 3.14159265358979323846 / 180.0)) - 1e-6f;
   const std::vector<uint8_t> texturesUsed = TexturesUsed(p, r->layout.first, r->layout.count);
   for (const TextureImage& t : p.textures.images)
     r->textureInfo.push_back({t.path, t.width, t.height});
   Arena measure = Arena::Measure();
-  r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot(), p.textures, texturesUsed);
+  r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot(), p.textures,
+                texturesUsed);
   uint64_t envBytes = 0;
   for (auto& e : r->envs) envBytes += e->footprint().total;
   uint64_t need = envBytes + ArenaRoundUp(measure.used());
@@ -183,12 +187,13 @@ int Init(Render* r) {
                                 envBytes, ArenaRoundUp(measure.used()), referenceBytes);
   if (budget > 0 && std::max(need, r->initPeakBytes) > budget) {
     // Every rank checks its own need; each that is over says so.
-    os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes (environment arenas %llu + rank "
-                 "buffers %llu; %llu at the peak of init), more than %s\n",
-                 r->transport->rank(), static_cast<unsigned long long>(std::max(need, r->initPeakBytes)),
-                 static_cast<unsigned long long>(envBytes),
-                 static_cast<unsigned long long>(ArenaRoundUp(measure.used())),
-                 static_cast<unsigned long long>(r->initPeakBytes), whose);
+    os::PrintErr(
+        "vismask: --mem-budget: rank %d needs %llu bytes (environment arenas %llu + rank "
+        "buffers %llu; %llu at the peak of init), more than %s\n",
+        r->transport->rank(), static_cast<unsigned long long>(std::max(need, r->initPeakBytes)),
+        static_cast<unsigned long long>(envBytes),
+        static_cast<unsigned long long>(ArenaRoundUp(measure.used())),
+        static_cast<unsigned long long>(r->initPeakBytes), whose);
     return kExitUsage;
   }
   // What init no longer needs goes before the arenas are made.
@@ -198,10 +203,11 @@ int Init(Render* r) {
   // The system may refuse what the budget allowed (no --mem-budget, ulimit
   // -v, overcommit off): a user error naming the bytes, not a CHECK.
   auto refused = [&](const char* what, uint64_t bytes) {
-    os::PrintErr("vismask: rank %d: the system refused %llu bytes for %s (this rank needs %llu "
-                 "in all); lower --width/--height, --envs, --round-shots or run on more ranks\n",
-                 r->transport->rank(), static_cast<unsigned long long>(bytes), what,
-                 static_cast<unsigned long long>(need));
+    os::PrintErr(
+        "vismask: rank %d: the system refused %llu bytes for %s (this rank needs %llu "
+        "in all); lower --width/--height, --envs, --round-shots or run on more ranks\n",
+        r->transport->rank(), static_cast<unsigned long long>(bytes), what,
+        static_cast<unsigned long long>(need));
     return kExitUsage;
   };
   for (auto& e : r->envs) {

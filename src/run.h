@@ -8,13 +8,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <limits>
 #include <functional>
+#include <glm/geometric.hpp>
+#include <limits>
 #include <memory>
 #include <new>
 #include <string>
 #include <vector>
-#include <glm/geometric.hpp>
+
 #include "vismask/display.h"
 #include "vismask/emitter_check.h"
 #include "vismask/environment.h"
@@ -22,8 +23,8 @@
 #include "vismask/image_io.h"
 #include "vismask/mesh.h"
 #include "vismask/options.h"
-#include "vismask/partition.h"
 #include "vismask/os.h"
+#include "vismask/partition.h"
 #include "vismask/phase.h"
 #include "vismask/raster.h"
 #include "vismask/scene.h"
@@ -52,19 +53,19 @@ struct EnvSummary {
   EnergyLedger ledger;
   EnvStats stats;
   // The stated error of patches.csv's b (see ErrorSums).
-  double relVarArea;   // sum over patches and channels with b > 0 of area * var / b^2
-  double weight;       // sum of the areas counted there
-  double bArea[3];     // sum of b * area, as written (with the correction when on)
+  double relVarArea;      // sum over patches and channels with b > 0 of area * var / b^2
+  double weight;          // sum of the areas counted there
+  double bArea[3];        // sum of b * area, as written (with the correction when on)
   double ambientArea[3];  // sum of kd * ambient * area
   uint64_t arenaBytes;
   uint64_t patches;
   uint64_t vertices;
   uint64_t gridCells;
   uint64_t gridRefs;
-  uint64_t elementsUsed;     // roots included
+  uint64_t elementsUsed;  // roots included
   uint64_t elementCapacity;
   uint64_t leaves;
-  uint64_t elementDepth;     // the deepest leaf
+  uint64_t elementDepth;  // the deepest leaf
 };
 
 // One row of patches.csv as a rank sends it to rank 0.
@@ -91,20 +92,20 @@ struct Render {
   std::unique_ptr<Transport> transport;
   RankEnvs layout;
   size_t numPolygons = 0;
-  EnvGrid envGrid;  // the environments' grid and its planes (run.json)
+  EnvGrid envGrid;        // the environments' grid and its planes (run.json)
   uint64_t numTwins = 0;  // twin patches, all ranks (--two-sided, --two-sided-emitters)
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
   std::vector<Environment*> envPtrs;
-  Camera camera;  // the one used (--camera or a side's)
-  bool hasSide = false;  // the camera is a side's: --view or chosen (not --camera)
+  Camera camera;            // the one used (--camera or a side's)
+  bool hasSide = false;     // the camera is a side's: --view or chosen (not --camera)
   bool sideChosen = false;  // chosen by ChooseViewSide (not --view)
   ViewSide side = ViewSide::kFront;
   View view;
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
   ExchangeBuffers exchange;
   Framebuffer fb;
-  Framebuffer incoming;  // rank 0 with several ranks: kBandRows rows of another rank's image
+  Framebuffer incoming;   // rank 0 with several ranks: kBandRows rows of another rank's image
   Span<float> reference;  // rank 0 with --reference: the reference image, RGB floats
   Span<uint8_t> exclude;  // rank 0 with --exclude: nonzero where a pixel is left out of the error
   size_t excludedPixels = 0;
@@ -130,11 +131,12 @@ struct Render {
   double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
   // Display values shared across cuts and smoothed polygons (display.h).
   Span<VertexRecord> sharedMine, sharedAll;
-  Span<uint32_t> sharedScratch;   // ShareVertices' sort of the smooth records, and those at one point
-  uint64_t sharedCapacity = 0;    // the most shared vertices any rank's environments hold
-  bool anySmooth = false;         // some rank has smooth vertices
+  Span<uint32_t>
+      sharedScratch;            // ShareVertices' sort of the smooth records, and those at one point
+  uint64_t sharedCapacity = 0;  // the most shared vertices any rank's environments hold
+  bool anySmooth = false;       // some rank has smooth vertices
   ShareRule shareRule;
-  TextureSet textures;              // the textures this rank's patches show (texture.h)
+  TextureSet textures;  // the textures this rank's patches show (texture.h)
   // Every scene texture, for run.json (read-only after init).
   struct TextureInfo {
     std::string path;
@@ -199,7 +201,8 @@ struct Render {
     }
     part(&rankExportBytes);
     if (!root) return;
-    if (ranks > 1) incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
+    if (ranks > 1)
+      incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
     if (!options.reference.empty())
       reference = arena.Alloc<float>(size_t(options.width) * size_t(options.height) * 3);
     if (!options.exclude.empty())
@@ -221,7 +224,8 @@ void GatherByEnv(Render* r, Span<T> mine, Span<T> all, Span<T> byEnv) {
   int ranks = r->transport->size();
   for (int k = 0; k < ranks; ++k) {
     RankEnvs re = EnvsOfRank(r->layout.total, ranks, k);
-    for (uint32_t i = 0; i < re.count; ++i) byEnv[re.first + i] = all[size_t(k) * r->layout.perRank + i];
+    for (uint32_t i = 0; i < re.count; ++i)
+      byEnv[re.first + i] = all[size_t(k) * r->layout.perRank + i];
   }
 }
 
@@ -242,27 +246,27 @@ inline int FailInit(const Render* r, const Status& s) {
 // own pieces and counts every environment's patches. Heap; dropped at the
 // end of init.
 struct Prepared {
-  SceneInfo info;   // materials, bounds, statement counts, the loader's warnings
+  SceneInfo info;  // materials, bounds, statement counts, the loader's warnings
   // objPath, materials and bounds; polygons: the source polygons of this
   // rank's pieces only (for smoothing), sourceIds their indices in the file.
   Scene scene;
   std::vector<uint32_t> sourceIds;
   SceneTextures textures;  // decoded map_Kd images
   EnvGrid grid;
-  Partition part;          // this rank's pieces (part.source indexes scene.polygons)
+  Partition part;               // this rank's pieces (part.source indexes scene.polygons)
   uint32_t first = 0, end = 0;  // the environments this rank holds
   // Every environment: patches (twins included) and lattice vertices, counted.
   std::vector<double> envPatches, envTwins, envVertices;
-  std::vector<uint64_t> envPieceBytes;  // held environments: their pieces' heap
-  uint32_t idBase = 0;     // the global id of this rank's first patch
-  uint32_t pieceBase = 0;  // the index of its first piece in the whole partition
-  ViewSide side = ViewSide::kFront;  // chosen (without --camera or --view)
+  std::vector<uint64_t> envPieceBytes;       // held environments: their pieces' heap
+  uint32_t idBase = 0;                       // the global id of this rank's first patch
+  uint32_t pieceBase = 0;                    // the index of its first piece in the whole partition
+  ViewSide side = ViewSide::kFront;          // chosen (without --camera or --view)
   std::vector<std::string> emitterWarnings;  // rank 0
   float patchSize = 0.0f;
-  float tolerance = 0.0f;  // points this close are one: cut and smooth vertices
-  bool smooth = true;      // --smooth
+  float tolerance = 0.0f;                     // points this close are one: cut and smooth vertices
+  bool smooth = true;                         // --smooth
   std::vector<std::vector<uint32_t>> pieces;  // polygon pieces of each environment
-  TwinOptions twins;  // --two-sided, --two-sided-emitters
+  TwinOptions twins;                          // --two-sided, --two-sided-emitters
   EnvOptions envOptions;
   uint32_t packetBytes = 0;
   // The budget the passes are held to (0: none), what init holds besides
@@ -286,8 +290,8 @@ struct Prepared {
   // The stages: pass 1 and 2 (the parser's arrays, the pieces, the camera's
   // probe, the emitter check), meshing (the pieces, the staged copies, one
   // mesh), building (the pieces' heap, the staged copies and the arenas).
-  uint64_t InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
-                    uint64_t rankArena, uint64_t held) const;
+  uint64_t InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas, uint64_t rankArena,
+                    uint64_t held) const;
   uint64_t roundWork = 0;  // the automatic --round-work (Options::roundWorkAuto)
 };
 

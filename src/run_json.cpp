@@ -47,31 +47,39 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf(",\n  \"options\": {\n");
   w.Printf("    \"patch_size\": %.9g,\n    \"rays\": %u,\n    \"seed\": %llu,\n", r->patchSize,
            RayCap(o), static_cast<unsigned long long>(o.seed));
-  w.Printf("    \"ray_alloc\": \"%s\",\n    \"emitted_rays\": %llu,\n    \"min_rays\": %u,\n"
-           "    \"max_rays\": %u,\n    \"sampler\": \"%s\",\n    \"ray_budget\": %llu,\n",
-           o.rayAlloc == Options::RayAlloc::kPower ? "power" : "fixed",
-           static_cast<unsigned long long>(o.emittedRays), o.minRays, o.maxRays,
-           o.sobol ? "sobol" : "random", static_cast<unsigned long long>(o.rayBudget));
+  w.Printf(
+      "    \"ray_alloc\": \"%s\",\n    \"emitted_rays\": %llu,\n    \"min_rays\": %u,\n"
+      "    \"max_rays\": %u,\n    \"sampler\": \"%s\",\n    \"ray_budget\": %llu,\n",
+      o.rayAlloc == Options::RayAlloc::kPower ? "power" : "fixed",
+      static_cast<unsigned long long>(o.emittedRays), o.minRays, o.maxRays,
+      o.sobol ? "sobol" : "random", static_cast<unsigned long long>(o.rayBudget));
   w.Printf("    \"stop_unshot\": %.17g,\n    \"max_shots\": %llu,\n    \"max_seconds\": %.17g,\n",
            o.stopUnshot, static_cast<unsigned long long>(o.maxShots), o.maxSeconds);
   w.Printf("    \"width\": %d,\n    \"height\": %d,\n    \"exposure\": %.9g,\n", o.width, o.height,
            exposure);
   w.Printf("    \"exposure_auto\": %s,\n", o.hasExposure ? "false" : "true");
   const Camera& c = r->camera;  // as --camera takes it: eye, target, up, fovy
-  w.Printf("    \"camera\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g],\n", c.eye.x,
-           c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z, c.fovyDeg);
+  w.Printf("    \"camera\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g],\n",
+           c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z,
+           c.fovyDeg);
   // The side the camera frames (null with --camera), and whether it was chosen (no --view).
-  if (r->hasSide) w.Printf("    \"view\": \"%s\",\n", ViewSideName(r->side));
-  else w.Printf("    \"view\": null,\n");
+  if (r->hasSide)
+    w.Printf("    \"view\": \"%s\",\n", ViewSideName(r->side));
+  else
+    w.Printf("    \"view\": null,\n");
   w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
-  w.Printf("    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"round_work\": %llu,\n    \"queue\": %u,\n",
-           o.maskRes, o.roundShots, static_cast<unsigned long long>(o.roundWork), o.queue);
+  w.Printf(
+      "    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"round_work\": %llu,\n    \"queue\": "
+      "%u,\n",
+      o.maskRes, o.roundShots, static_cast<unsigned long long>(o.roundWork), o.queue);
   // --envs auto:N (null: --envs NXxNYxNZ) and the planes the grid was cut
   // at, per axis from the scene box's low to its high side.
-  if (o.envsAuto) w.Printf("    \"envs_auto\": %d,\n", o.envsAutoCount);
-  else w.Printf("    \"envs_auto\": null,\n");
+  if (o.envsAuto)
+    w.Printf("    \"envs_auto\": %d,\n", o.envsAutoCount);
+  else
+    w.Printf("    \"envs_auto\": null,\n");
   w.Printf("    \"env_planes\": [");
   for (int a = 0; a < 3; ++a) {
     w.Printf("%s[", a ? ", " : "");
@@ -82,15 +90,20 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("],\n");
   w.Printf("    \"rank_timeout\": %.17g,\n", o.rankTimeout);
   w.Printf("    \"reference\": ");
-  if (o.reference.empty()) w.Printf("null");
-  else JsonString(&w, o.reference.c_str());
+  if (o.reference.empty())
+    w.Printf("null");
+  else
+    JsonString(&w, o.reference.c_str());
   w.Printf(",\n    \"exclude\": ");
-  if (o.exclude.empty()) w.Printf("null");
-  else JsonString(&w, o.exclude.c_str());
+  if (o.exclude.empty())
+    w.Printf("null");
+  else
+    JsonString(&w, o.exclude.c_str());
   w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
   w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
   w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
-  w.Printf("    \"smooth\": %s,\n    \"crease\": %.9g,\n", o.smooth ? "true" : "false", o.creaseDeg);
+  w.Printf("    \"smooth\": %s,\n    \"crease\": %.9g,\n", o.smooth ? "true" : "false",
+           o.creaseDeg);
   // Only when on, so that a one-sided run.json is what it was before them.
   if (o.twoSided || o.twoSidedEmitters)
     w.Printf("    \"two_sided\": %s,\n    \"two_sided_emitters\": %s,\n",
@@ -144,14 +157,17 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"packets\": %llu,\n    \"packet_bytes\": %u,\n    \"bytes_sent\": %llu,\n",
            static_cast<unsigned long long>(st.packetsSent), packetBytes,
            static_cast<unsigned long long>(st.packetsSent * packetBytes));
-  w.Printf("    \"wait_seconds\": %.6f,\n    \"wait_seconds_max_rank\": %.6f,\n"
-           "    \"compute_cpu_seconds\": %.6f,\n    \"critical_cpu_seconds\": %.6f,\n",
-           res.waitSeconds, res.waitSecondsMax, res.computeSeconds, res.criticalSeconds);
+  w.Printf(
+      "    \"wait_seconds\": %.6f,\n    \"wait_seconds_max_rank\": %.6f,\n"
+      "    \"compute_cpu_seconds\": %.6f,\n    \"critical_cpu_seconds\": %.6f,\n",
+      res.waitSeconds, res.waitSecondsMax, res.computeSeconds, res.criticalSeconds);
   w.Printf("    \"critical_env_cpu_seconds\": %.6f,\n", res.criticalEnvSeconds);
-  w.Printf("    \"grid_steps\": %llu,\n    \"critical_env_steps\": %llu,\n    \"critical_rank_steps\": %llu,\n",
-           static_cast<unsigned long long>(res.gridSteps),
-           static_cast<unsigned long long>(res.criticalEnvSteps),
-           static_cast<unsigned long long>(res.criticalRankSteps));
+  w.Printf(
+      "    \"grid_steps\": %llu,\n    \"critical_env_steps\": %llu,\n    \"critical_rank_steps\": "
+      "%llu,\n",
+      static_cast<unsigned long long>(res.gridSteps),
+      static_cast<unsigned long long>(res.criticalEnvSteps),
+      static_cast<unsigned long long>(res.criticalRankSteps));
   w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
   // Sub-patch elements: the pool (roots included), what was used, the
   // leaves drawn, and whether refinement stopped for want of elements.
@@ -164,15 +180,18 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
     splits += e.stats.splits;
     refused += e.stats.refusedSplits;
   }
-  w.Printf("    \"elements\": {\"capacity\": %llu, \"used\": %llu, \"leaves\": %llu, "
-           "\"splits\": %llu, \"deepest\": %llu, \"refused_splits\": %llu, "
-           "\"refinement_stopped\": %s},\n",
-           (unsigned long long)capacity, (unsigned long long)used, (unsigned long long)leaves,
-           (unsigned long long)splits, (unsigned long long)depth, (unsigned long long)refused,
-           refused > 0 ? "true" : "false");
+  w.Printf(
+      "    \"elements\": {\"capacity\": %llu, \"used\": %llu, \"leaves\": %llu, "
+      "\"splits\": %llu, \"deepest\": %llu, \"refused_splits\": %llu, "
+      "\"refinement_stopped\": %s},\n",
+      (unsigned long long)capacity, (unsigned long long)used, (unsigned long long)leaves,
+      (unsigned long long)splits, (unsigned long long)depth, (unsigned long long)refused,
+      refused > 0 ? "true" : "false");
   // Against --reference (null without one): the final image's relative RMSE.
-  if (o.reference.empty()) w.Printf("    \"relative_rmse\": null,\n");
-  else w.Printf("    \"relative_rmse\": %.17g,\n", res.relativeRmse);
+  if (o.reference.empty())
+    w.Printf("    \"relative_rmse\": null,\n");
+  else
+    w.Printf("    \"relative_rmse\": %.17g,\n", res.relativeRmse);
   w.Printf("    \"excluded_pixels\": %zu,\n", r->excludedPixels);  // by --exclude
   w.Printf("    \"error_measurements\": %llu,\n",
            static_cast<unsigned long long>(res.errorMeasurements));
@@ -244,7 +263,8 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   // map_Kd textures: rank 0's texels (part of its arena), and every texture
   // of the scene with the 3 bytes a texel each rank showing it holds.
   if (!r->options.exportPath.empty())  // --export's buffers in rank 0's arena
-    w.Printf("    \"rank0_export_bytes\": %llu,\n", static_cast<unsigned long long>(r->rankExportBytes));
+    w.Printf("    \"rank0_export_bytes\": %llu,\n",
+             static_cast<unsigned long long>(r->rankExportBytes));
   w.Printf("    \"rank0_texture_bytes\": %llu,\n    \"textures\": [",
            static_cast<unsigned long long>(r->rankTextureBytes));
   for (size_t i = 0; i < r->textureInfo.size(); ++i) {
@@ -256,8 +276,10 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   }
   w.Printf("],\n");
   w.Printf("    \"predicted_bytes\": %llu,\n    \"arena_high_water_bytes\": %llu,\n",
-           static_cast<unsigned long long>(r->predictedBytes), static_cast<unsigned long long>(highWater));
-  w.Printf("    \"init_peak_predicted_bytes\": %llu,\n", static_cast<unsigned long long>(r->initPeakBytes));
+           static_cast<unsigned long long>(r->predictedBytes),
+           static_cast<unsigned long long>(highWater));
+  w.Printf("    \"init_peak_predicted_bytes\": %llu,\n",
+           static_cast<unsigned long long>(r->initPeakBytes));
   w.Printf("    \"file_rss_bytes\": %llu,\n", static_cast<unsigned long long>(files));
   // Every rank: its arenas and init's peak as predicted, its peak resident
   // set and file-backed pages as measured when the outputs were gathered,
@@ -265,11 +287,12 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"ranks\": [");
   for (int k = 0; k < r->transport->size(); ++k) {
     const Render::RankMemory& m = r->rankMemory[k];
-    w.Printf("%s\n      {\"rank\": %d, \"predicted_bytes\": %llu, \"init_peak_predicted_bytes\": %llu, "
-             "\"peak_rss_bytes\": %llu, \"file_rss_bytes\": %llu, \"bytes_sent\": %llu}",
-             k ? "," : "", k, static_cast<unsigned long long>(m.predicted),
-             static_cast<unsigned long long>(m.initPeak), static_cast<unsigned long long>(m.peakRss),
-             static_cast<unsigned long long>(m.fileRss), static_cast<unsigned long long>(m.bytesSent));
+    w.Printf(
+        "%s\n      {\"rank\": %d, \"predicted_bytes\": %llu, \"init_peak_predicted_bytes\": %llu, "
+        "\"peak_rss_bytes\": %llu, \"file_rss_bytes\": %llu, \"bytes_sent\": %llu}",
+        k ? "," : "", k, static_cast<unsigned long long>(m.predicted),
+        static_cast<unsigned long long>(m.initPeak), static_cast<unsigned long long>(m.peakRss),
+        static_cast<unsigned long long>(m.fileRss), static_cast<unsigned long long>(m.bytesSent));
   }
   w.Printf("],\n");
   w.Printf("    \"peak_rss_explained\": %.4f,\n",

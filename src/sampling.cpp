@@ -1,7 +1,6 @@
 #include "vismask/sampling.h"
 
 #include <cmath>
-
 #include <glm/geometric.hpp>
 
 namespace vismask {

@@ -8,15 +8,14 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vector_relational.hpp>
 #include <limits>
 #include <map>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <glm/common.hpp>
-#include <glm/geometric.hpp>
-#include <glm/vector_relational.hpp>
 
 #include "geometry_util.h"
 #include "scene_parse.h"
@@ -187,7 +186,8 @@ bool ClosedFacingIn(const std::vector<Polygon>& polys) {
   for (uint32_t f = 0; f < polys.size(); ++f) {
     std::vector<glm::dvec3> c;
     for (const glm::vec3& v : polys[f].corners) c.emplace_back(v);
-    auto [it, added] = parts.try_emplace(root(f), 0.0, Bounds{polys[f].corners[0], polys[f].corners[0]});
+    auto [it, added] =
+        parts.try_emplace(root(f), 0.0, Bounds{polys[f].corners[0], polys[f].corners[0]});
     it->second.first += glm::dot(c[0], NewellSum(c)) / 6.0;
     for (const glm::vec3& v : polys[f].corners) {
       it->second.second.lo = glm::min(it->second.second.lo, v);
@@ -207,11 +207,11 @@ bool ClosedFacingIn(const std::vector<Polygon>& polys) {
   for (const auto& [r, part] : parts) {
     const Bounds& b = part.second;
     if (&b == room) continue;
-    if (glm::any(glm::lessThan(b.lo, room->lo)) || glm::any(glm::greaterThan(b.hi, room->hi))) return false;
+    if (glm::any(glm::lessThan(b.lo, room->lo)) || glm::any(glm::greaterThan(b.hi, room->hi)))
+      return false;
   }
   return true;
 }
-
 
 }  // namespace objload
 
@@ -232,14 +232,16 @@ Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
   SceneTally tally;
   std::vector<std::string> lines_;
   bool perfect[3] = {false, false, false};
-  Status s = ParseObj(objPath, lines, nullptr, readMtl, options,
-                      [&](const Polygon& p) { result.polygons.push_back(p); }, &result.materials,
-                      &tally, &lines_, perfect);
+  Status s = ParseObj(
+      objPath, lines, nullptr, readMtl, options,
+      [&](const Polygon& p) { result.polygons.push_back(p); }, &result.materials, &tally, &lines_,
+      perfect);
   if (!s.ok()) return s;
   result.bounds = tally.bounds;
   for (int c = 0; c < 3; ++c)
     if (perfect[c] && ClosedFacingIn(result.polygons)) return CannotLosePower(objPath, c);
-  if (warnings) warnings->insert(warnings->end(), lines_.begin(), lines_.end());
+  if (warnings)
+    warnings->insert(warnings->end(), lines_.begin(), lines_.end());
   else
     for (const std::string& w : lines_) std::fprintf(stderr, "%s\n", w.c_str());
   *scene = std::move(result);

@@ -8,15 +8,14 @@
 #include <cstdint>
 #include <fstream>
 #include <functional>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
 #include <map>
 #include <memory>
 #include <set>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <glm/vec2.hpp>
-#include <glm/vec3.hpp>
 
 #include "vismask/scene.h"
 #include "vismask/status.h"
@@ -72,8 +71,8 @@ struct CornerIndex {
   size_t v = kNone, vt = kNone, vn = kNone;
 };
 // Resolves a face corner "i", "i/t", "i/t/n" or "i//n".
-std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs,
-                        size_t numNormals, CornerIndex* out);
+std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs, size_t numNormals,
+                        CornerIndex* out);
 
 // A kind of mended face, counted: how many, the first one's line, and the
 // farthest corner off the plane (non-planar faces).

@@ -41,9 +41,9 @@ Status Pass(const std::string& objPath, const LoadOptions& options, const SceneI
   counts.uvs = counted.uvs;
   counts.normals = counted.normals;
   uint32_t index = 0;
-  return ParseObj(objPath, lines, &counts, ReadText, options,
-                  [&](const Polygon& p) { visit(index++, p); }, materials, tally, warnings,
-                  perfect);
+  return ParseObj(
+      objPath, lines, &counts, ReadText, options, [&](const Polygon& p) { visit(index++, p); },
+      materials, tally, warnings, perfect);
 }
 
 }  // namespace
@@ -52,7 +52,8 @@ Status ScanObj(const std::string& objPath, const LoadOptions& options, const Pol
                SceneInfo* info) {
   SceneTally tally;
   bool perfect[3] = {false, false, false};
-  Status s = Pass(objPath, options, *info, visit, &info->materials, &tally, &info->warnings, perfect);
+  Status s =
+      Pass(objPath, options, *info, visit, &info->materials, &tally, &info->warnings, perfect);
   if (!s.ok()) return s;
   info->objPath = objPath;
   info->bounds = tally.bounds;

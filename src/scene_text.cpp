@@ -17,7 +17,9 @@ std::string CoordinateError(double x) {
 }
 
 namespace {
-bool IsSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+bool IsSpace(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
 
 }  // namespace
 
@@ -37,7 +39,9 @@ Tokens Tokenize(const std::string& line) {
   return tokens;
 }
 
-std::string Str(size_t n) { return std::to_string(n); }
+std::string Str(size_t n) {
+  return std::to_string(n);
+}
 
 std::string Num(double x) {
   char buf[32];
@@ -98,7 +102,8 @@ std::string ReadText(const std::string& path, std::string* text) {
   // sets badbit instead of throwing.
   std::string all;
   char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) all.append(buf, static_cast<size_t>(in.gcount()));
+  while (in.read(buf, sizeof buf) || in.gcount() > 0)
+    all.append(buf, static_cast<size_t>(in.gcount()));
   if (in.bad()) return "cannot read";
   *text = std::move(all);
   return "";
@@ -120,9 +125,11 @@ std::string ParseFloats(const Tokens& tokens, size_t first, size_t count, float*
     double d = std::strtod(s.c_str(), &end);
     if (end == s.c_str() || *end != '\0') return "bad number " + Quote(s);
     if (!std::isfinite(d)) return "number " + Quote(s) + " is not finite";
-    if (std::fabs(d) > std::numeric_limits<float>::max()) return "number " + Quote(s) + " is too large";
+    if (std::fabs(d) > std::numeric_limits<float>::max())
+      return "number " + Quote(s) + " is too large";
     if (d != 0.0 && std::fabs(d) < std::numeric_limits<float>::min())
-      return "number " + Quote(s) + " is too small for float (it would be 0 or denormal; least 1.2e-38)";
+      return "number " + Quote(s) +
+             " is too small for float (it would be 0 or denormal; least 1.2e-38)";
     out[i] = static_cast<float>(d);
   }
   return "";
@@ -146,16 +153,16 @@ std::string ResolveIndex(const std::string& s, const std::string& corner, size_t
     return std::string(what) + " index 0 in " + Quote(corner) + " (OBJ indices start at 1)";
   long long resolved = i > 0 ? i - 1 : static_cast<long long>(count) + i;
   if (resolved < 0 || resolved >= static_cast<long long>(count))
-    return std::string(what) + " index " + (s.size() > 20 ? s.substr(0, 20) + "..." : s) + " out of range (" + Str(count) + " " + plural +
-           " so far)";
+    return std::string(what) + " index " + (s.size() > 20 ? s.substr(0, 20) + "..." : s) +
+           " out of range (" + Str(count) + " " + plural + " so far)";
   *index = static_cast<size_t>(resolved);
   return "";
 }
 
 }  // namespace
 
-std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs,
-                        size_t numNormals, CornerIndex* out) {
+std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs, size_t numNormals,
+                        CornerIndex* out) {
   const std::string bad = "bad face vertex " + Quote(s);
   size_t slash = s.find('/');
   std::string pos = s.substr(0, slash), uv, normal;
@@ -172,8 +179,10 @@ std::string ParseCorner(const std::string& s, size_t numVertices, size_t numUvs,
   if (!IsInteger(pos)) return bad;
   CornerIndex c;
   std::string err = ResolveIndex(pos, s, numVertices, "vertex", "vertices", &c.v);
-  if (err.empty() && !uv.empty()) err = ResolveIndex(uv, s, numUvs, "texture coordinate", "texture coordinates", &c.vt);
-  if (err.empty() && !normal.empty()) err = ResolveIndex(normal, s, numNormals, "normal", "normals", &c.vn);
+  if (err.empty() && !uv.empty())
+    err = ResolveIndex(uv, s, numUvs, "texture coordinate", "texture coordinates", &c.vt);
+  if (err.empty() && !normal.empty())
+    err = ResolveIndex(normal, s, numNormals, "normal", "normals", &c.vn);
   *out = c;
   return err;
 }
@@ -198,9 +207,9 @@ bool LenientFloats(const Tokens& t, size_t count, double* out) {
 // that describe a specular or transparent material are looked at for the
 // warning that names such materials).
 bool IsSilentMtlKey(const std::string& key) {
-  static const char* const kKeys[] = {"Ns", "Ni", "d", "Tr", "Tf", "illum", "Ks", "sharpness",
-                                      "map_Ka", "map_Ks", "map_Ns", "map_bump", "map_Bump",
-                                      "bump", "disp", "decal", "refl", "Km"};
+  static const char* const kKeys[] = {
+      "Ns",     "Ni",     "d",        "Tr",       "Tf",   "illum", "Ks",    "sharpness", "map_Ka",
+      "map_Ks", "map_Ns", "map_bump", "map_Bump", "bump", "disp",  "decal", "refl",      "Km"};
   for (const char* k : kKeys)
     if (key == k) return true;
   return false;
@@ -214,7 +223,6 @@ std::string NotDiffuse(const Finish& f) {
   if (f.tf) return "Tf";
   return "";
 }
-
 
 TextLines::TextLines(const std::string& text) : text_(text) {
   // A UTF-8 byte-order mark (some Windows editors write one) is not text.

@@ -1,9 +1,8 @@
 #include "vismask/smoothing.h"
 
 #include <algorithm>
-#include <vector>
-
 #include <glm/geometric.hpp>
+#include <vector>
 
 #include "vismask/check.h"
 
@@ -36,8 +35,13 @@ void MarkSmoothVertices(const Scene& source, const Partition& part, float tolera
       if (seen[v]) continue;
       seen[v] = 1;
       const glm::dvec3 x(mesh->vertices[v]);
-      SmoothVertex s{v,           id,            poly.smoothing, {kNoPatch, kNoPatch},
-                     side * poly.normal, glm::vec3(0.0f), glm::vec3(0.0f)};
+      SmoothVertex s{v,
+                     id,
+                     poly.smoothing,
+                     {kNoPatch, kNoPatch},
+                     side * poly.normal,
+                     glm::vec3(0.0f),
+                     glm::vec3(0.0f)};
       // The outline edges within `tolerance` of x; the vertex normal is
       // interpolated along the first.
       for (size_t e = 0; e < m; ++e) {
@@ -50,7 +54,8 @@ void MarkSmoothVertices(const Scene& source, const Partition& part, float tolera
           s.edge[0] = static_cast<uint32_t>(e);
           s.dir = glm::vec3(glm::normalize(ab));
           if (!poly.vn.empty()) {
-            glm::dvec3 n = (1.0 - t) * glm::dvec3(poly.vn[e]) + t * glm::dvec3(poly.vn[(e + 1) % m]);
+            glm::dvec3 n =
+                (1.0 - t) * glm::dvec3(poly.vn[e]) + t * glm::dvec3(poly.vn[(e + 1) % m]);
             double len = glm::length(n);
             if (len > 0.0) s.vn = side * glm::vec3(n / len);
           }

@@ -55,7 +55,9 @@ constexpr Matrices MakeReversed() {
 
 constexpr Matrices kReversed = MakeReversed();
 
-inline float ToUnit(uint32_t x) { return static_cast<float>(x >> 8) * (1.0f / 16777216.0f); }
+inline float ToUnit(uint32_t x) {
+  return static_cast<float>(x >> 8) * (1.0f / 16777216.0f);
+}
 
 }  // namespace
 
@@ -75,7 +77,8 @@ ShotSampler::ShotSampler(uint64_t shotSeed) {
 }
 
 void ShotSampler::Emit(const uint32_t state[kSobolDims], float out[kSobolDims]) const {
-  for (int d = 0; d < kSobolDims; ++d) out[d] = ToUnit(ReverseBits32(LaineKarras(state[d], seed_[d])));
+  for (int d = 0; d < kSobolDims; ++d)
+    out[d] = ToUnit(ReverseBits32(LaineKarras(state[d], seed_[d])));
 }
 
 void ShotSampler::Point(uint32_t ray, float out[kSobolDims]) const {

@@ -10,11 +10,16 @@ namespace vismask {
 
 const char* StopReasonName(StopReason r) {
   switch (r) {
-    case StopReason::kConverged: return "converged";
-    case StopReason::kMaxShots: return "max-shots";
-    case StopReason::kMaxSeconds: return "max-seconds";
-    case StopReason::kRayBudget: return "ray-budget";
-    case StopReason::kStalled: return "stalled";
+    case StopReason::kConverged:
+      return "converged";
+    case StopReason::kMaxShots:
+      return "max-shots";
+    case StopReason::kMaxSeconds:
+      return "max-seconds";
+    case StopReason::kRayBudget:
+      return "ray-budget";
+    case StopReason::kStalled:
+      return "stalled";
   }
   return "?";
 }
@@ -106,7 +111,8 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     result.errorSeconds += os::Seconds() - t0;
   };
   uint64_t measuredAt = ~0ull;  // the shot count last measured
-  RoundTotals totals = GatherTotals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
+  RoundTotals totals =
+      GatherTotals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
   result.lossEstimate = LossEstimate(totals);
@@ -125,7 +131,8 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
 
   bool done = ShouldStop(totals, options, &result);
   uint32_t idle = 0;
-  Span<double> envCpu = buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
+  Span<double> envCpu =
+      buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
   CHECK(envCpu.size() >= envs.size());  // rounds in a row without a shot
   while (!done) {
     double cpu0 = os::CpuSeconds();

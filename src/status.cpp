@@ -11,7 +11,9 @@ Status Status::At(std::string file, int line, std::string message) {
   return s;
 }
 
-Status Status::Error(std::string message) { return At("", 0, std::move(message)); }
+Status Status::Error(std::string message) {
+  return At("", 0, std::move(message));
+}
 
 std::string Status::ToString() const {
   if (file_.empty()) return message_;

@@ -5,13 +5,12 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <glm/geometric.hpp>
 #include <limits>
 #include <map>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <glm/geometric.hpp>
 
 // stb_image, compiled here only, for init: it allocates with malloc, which
 // is allowed before the solve starts. Memory in, so the file is read (and a
@@ -63,15 +62,20 @@ void ForSamples(const Patch& p, int n, F f) {
     // The centroids of the n x n similar sub-triangles: equal areas.
     for (int j = 0; j < n; ++j)
       for (int i = 0; i + j < n; ++i) {
-        f(glm::vec2(static_cast<float>((i + 1.0 / 3.0) * inv), static_cast<float>((j + 1.0 / 3.0) * inv)), 1.0);
+        f(glm::vec2(static_cast<float>((i + 1.0 / 3.0) * inv),
+                    static_cast<float>((j + 1.0 / 3.0) * inv)),
+          1.0);
         if (i + j + 1 < n)
-          f(glm::vec2(static_cast<float>((i + 2.0 / 3.0) * inv), static_cast<float>((j + 2.0 / 3.0) * inv)), 1.0);
+          f(glm::vec2(static_cast<float>((i + 2.0 / 3.0) * inv),
+                      static_cast<float>((j + 2.0 / 3.0) * inv)),
+            1.0);
       }
     return;
   }
   // Cell midpoints of an n x n grid in (s, t), weighted by the bilinear
   // map's area element there.
-  const glm::dvec3 c0(p.corner[0]), c1(p.corner[1]), c2(p.corner[2]), c3(p.corner[3]), nrm(p.normal);
+  const glm::dvec3 c0(p.corner[0]), c1(p.corner[1]), c2(p.corner[2]), c3(p.corner[3]),
+      nrm(p.normal);
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       double s = (i + 0.5) * inv, t = (j + 0.5) * inv;
@@ -83,20 +87,25 @@ void ForSamples(const Patch& p, int n, F f) {
 
 }  // namespace
 
-float SrgbToLinear(uint8_t code) { return kSrgbTable[code]; }
+float SrgbToLinear(uint8_t code) {
+  return kSrgbTable[code];
+}
 
 glm::vec3 Texture::Sample(glm::vec2 uv) const {
   float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
   if (!(u >= 0.0f && u <= 1.0f)) u = 0.0f;  // NaN or infinite
   if (!(v >= 0.0f && v <= 1.0f)) v = 0.0f;
   // Texel centres at (i + 1/2) / width; row 0 is the image's top, v = 1.
-  float x = u * static_cast<float>(width) - 0.5f, y = (1.0f - v) * static_cast<float>(height) - 0.5f;
+  float x = u * static_cast<float>(width) - 0.5f,
+        y = (1.0f - v) * static_cast<float>(height) - 0.5f;
   float fx = std::floor(x), fy = std::floor(y);
   float ax = x - fx, ay = y - fy;
   int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);  // -1 .. size - 1
   const int w = static_cast<int>(width), h = static_cast<int>(height);
-  uint32_t i0 = static_cast<uint32_t>(x0 < 0 ? w - 1 : x0), i1 = static_cast<uint32_t>(x0 + 1 >= w ? 0 : x0 + 1);
-  uint32_t j0 = static_cast<uint32_t>(y0 < 0 ? h - 1 : y0), j1 = static_cast<uint32_t>(y0 + 1 >= h ? 0 : y0 + 1);
+  uint32_t i0 = static_cast<uint32_t>(x0 < 0 ? w - 1 : x0),
+           i1 = static_cast<uint32_t>(x0 + 1 >= w ? 0 : x0 + 1);
+  uint32_t j0 = static_cast<uint32_t>(y0 < 0 ? h - 1 : y0),
+           j1 = static_cast<uint32_t>(y0 + 1 >= h ? 0 : y0 + 1);
   const uint8_t* r0 = texels + size_t(j0) * width * 3;
   const uint8_t* r1 = texels + size_t(j1) * width * 3;
   glm::vec3 out;
@@ -113,7 +122,8 @@ Texture TextureImage::View() const {
   t.width = width;
   t.height = height;
   t.texels = rgb.data();
-  for (int c = 0; c < 3; ++c) t.invMean[c] = mean[c] > 0.0 ? static_cast<float>(1.0 / mean[c]) : 0.0f;
+  for (int c = 0; c < 3; ++c)
+    t.invMean[c] = mean[c] > 0.0 ? static_cast<float>(1.0 / mean[c]) : 0.0f;
   return t;
 }
 
@@ -125,9 +135,11 @@ Status ReadTexture(const std::string& path, const std::string& where, TextureIma
   if (!in) return fail("cannot open");
   std::string bytes;
   char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) bytes.append(buf, static_cast<size_t>(in.gcount()));
+  while (in.read(buf, sizeof buf) || in.gcount() > 0)
+    bytes.append(buf, static_cast<size_t>(in.gcount()));
   if (in.bad()) return fail("read error");
-  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max())) return fail("file too large");
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
+    return fail("file too large");
   int w = 0, h = 0, comp = 0;
   stbi_uc* data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
                                         static_cast<int>(bytes.size()), &w, &h, &comp, 3);
@@ -210,7 +222,8 @@ glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::v
   for (uint32_t a = 0; a < p.numCorners; ++a)
     for (uint32_t b = a + 1; b < p.numCorners; ++b) {
       glm::vec2 d = uv[a] - uv[b];
-      extent = std::max({extent, std::fabs(double(d.x)) * texture.width, std::fabs(double(d.y)) * texture.height});
+      extent = std::max({extent, std::fabs(double(d.x)) * texture.width,
+                         std::fabs(double(d.y)) * texture.height});
     }
   int n = 2;
   if (extent > 1.0) n = static_cast<int>(std::min(64.0, std::ceil(2.0 * extent)));
@@ -271,10 +284,12 @@ Status LoadMaterialTextures(const std::string& objPath, const std::vector<Materi
     }
   }
   for (size_t m = 0; m < nm; ++m)
-    if (r.ofMaterial[m] != kNoTexture && noUvLineOf[m] != 0 && (noUvLine == 0 || noUvLineOf[m] < noUvLine))
+    if (r.ofMaterial[m] != kNoTexture && noUvLineOf[m] != 0 &&
+        (noUvLine == 0 || noUvLineOf[m] < noUvLine))
       noUvLine = noUvLineOf[m];
   if (!zeroKd.empty())
-    r.warnings.push_back(zeroKdWhere + ": warning: Kd 0 0 0 with map_Kd: the map alone is the "
+    r.warnings.push_back(zeroKdWhere +
+                         ": warning: Kd 0 0 0 with map_Kd: the map alone is the "
                          "reflectance (Kd taken as 1) for material" +
                          (zeroKd.find(',') == std::string::npos ? " " : "s ") + zeroKd);
   if (noUvLine != 0)
@@ -321,7 +336,8 @@ void TextureMesh(const Scene& scene, const SceneTextures& textures, Mesh* mesh) 
   if (any) mesh->textures = std::move(out);
 }
 
-void TextureSet::Layout(Arena& arena, const SceneTextures& scene, const std::vector<uint8_t>& used) {
+void TextureSet::Layout(Arena& arena, const SceneTextures& scene,
+                        const std::vector<uint8_t>& used) {
   const size_t mark = arena.used();
   textures = arena.Alloc<Texture>(scene.images.size());
   for (size_t i = 0; i < scene.images.size(); ++i) {

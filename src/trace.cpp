@@ -3,14 +3,12 @@
 // marked; TraceAlive: Method R's rays in flight), and where a ray leaves the
 // environment's box. The rest of Environment is in environment.cpp (init,
 // receiving, elements, display) and env_queue.cpp (shots and the queue).
-#include "vismask/environment.h"
-
 #include <algorithm>
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <limits>
 
-#include <glm/geometric.hpp>
-
+#include "vismask/environment.h"
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
 #include "vismask/sobol.h"
@@ -54,8 +52,10 @@ class RayPoints {
       return;
     }
     float p[kSobolDims];
-    if (sequential) qmc_.Next(p);
-    else qmc_.Point(r, p);
+    if (sequential)
+      qmc_.Next(p);
+    else
+      qmc_.Point(r, p);
     u[0] = p[4];
     u[1] = p[2];
     u[2] = p[3];
@@ -193,8 +193,10 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   if (masks && out && options_.maskMethod == MaskMethod::kB) {
     // The round's work counts the centre rays an uncached cast makes.
     centreWork_ += uint64_t{out->CountOpen()} * centreStepsPerRay_;
-    if (centreMask) out->And(*centreMask);
-    else CastCentres(shooter, skip, out);
+    if (centreMask)
+      out->And(*centreMask);
+    else
+      CastCentres(shooter, skip, out);
   } else if (methodC) {
     // hitPixels becomes the pixels left to the centre ray: open here, and
     // with both kinds of ray or none.
@@ -209,8 +211,10 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
           left = true;
         }
       }
-      if (left) hitPixels.Open(p);
-      else hitPixels.Close(p);
+      if (left)
+        hitPixels.Open(p);
+      else
+        hitPixels.Close(p);
     }
     centreWork_ += uint64_t{hitPixels.CountOpen()} * centreStepsPerRay_;
     if (centreMask) {
@@ -260,8 +264,10 @@ bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
   if (methodC) *known = MaskBits(cacheWords_.subspan((slot * per + 1) * w, w), shape_);
   if (cacheTag_[slot] != i) {
     centre->SetAllOpen();
-    if (methodC) known->SetAllClosed();
-    else CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
+    if (methodC)
+      known->SetAllClosed();
+    else
+      CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
     cacheTag_[slot] = i;
   }
   return true;

@@ -28,12 +28,14 @@ Status CheckGlbHeader(const std::string& path) {
   const std::streamoff size = in.tellg();
   unsigned char h[12] = {};
   in.seekg(0);
-  if (size < 12 || !in.read(reinterpret_cast<char*>(h), sizeof h) || std::memcmp(h, "glTF", 4) != 0 ||
-      Le32(h + 4) != 2)
-    return Status::Error("vismask: view: " + path + ": not binary glTF 2.0 (vismask render --export FILE.glb writes it)");
+  if (size < 12 || !in.read(reinterpret_cast<char*>(h), sizeof h) ||
+      std::memcmp(h, "glTF", 4) != 0 || Le32(h + 4) != 2)
+    return Status::Error("vismask: view: " + path +
+                         ": not binary glTF 2.0 (vismask render --export FILE.glb writes it)");
   if (Le32(h + 8) != static_cast<uint64_t>(size))
-    return Status::Error("vismask: view: " + path + ": its header says " + std::to_string(Le32(h + 8)) +
-                         " bytes, the file has " + std::to_string(size) + " (cut short?)");
+    return Status::Error("vismask: view: " + path + ": its header says " +
+                         std::to_string(Le32(h + 8)) + " bytes, the file has " +
+                         std::to_string(size) + " (cut short?)");
   return Status::Ok();
 }
 
@@ -47,28 +49,34 @@ Status FindViewerDir(const std::vector<std::string>& candidates, std::string* di
   std::string tried;
   for (const std::string& c : candidates) {
     tried += (tried.empty() ? "" : ", ") + c;
-    if (!os::Exists((c + "/index.html").c_str()) || !os::Exists((c + "/serve.py").c_str())) continue;
+    if (!os::Exists((c + "/index.html").c_str()) || !os::Exists((c + "/serve.py").c_str()))
+      continue;
     if (!os::Exists((c + "/vendor/three.module.js").c_str()))
-      return Status::Error("vismask: view: the viewer in " + c +
-                           " has no three.js files (vendor/three.module.js): run 'make viewer' in the "
-                           "source tree (it needs npm; tools/install-deps)");
+      return Status::Error(
+          "vismask: view: the viewer in " + c +
+          " has no three.js files (vendor/three.module.js): run 'make viewer' in the "
+          "source tree (it needs npm; tools/install-deps)");
     *dir = c;
     return Status::Ok();
   }
-  return Status::Error("vismask: view: cannot find the viewer page (index.html and serve.py); looked in " +
-                       tried);
+  return Status::Error(
+      "vismask: view: cannot find the viewer page (index.html and serve.py); looked in " + tried);
 }
 
 Status ChooseMesh(const std::string& outDir, const std::string& glb, std::string* name) {
-  if (!os::Exists(outDir.c_str())) return Status::Error("vismask: view: " + outDir + ": no such directory");
+  if (!os::Exists(outDir.c_str()))
+    return Status::Error("vismask: view: " + outDir + ": no such directory");
   if (!os::IsDirectory(outDir.c_str()))
-    return Status::Error("vismask: view: " + outDir + ": not a directory (give a render's --out directory)");
+    return Status::Error("vismask: view: " + outDir +
+                         ": not a directory (give a render's --out directory)");
   std::vector<std::string> names;
   std::string why;
-  if (!os::ListDirectory(outDir.c_str(), &names, &why)) return Status::Error("vismask: view: " + why);
+  if (!os::ListDirectory(outDir.c_str(), &names, &why))
+    return Status::Error("vismask: view: " + why);
   if (!glb.empty()) {
     if (glb.find('/') != std::string::npos || glb == "." || glb == "..")
-      return Status::Error("vismask: view: --glb: expected a file name in " + outDir + ", got '" + glb + "'");
+      return Status::Error("vismask: view: --glb: expected a file name in " + outDir + ", got '" +
+                           glb + "'");
     if (!os::Exists((outDir + "/" + glb).c_str()))
       return Status::Error("vismask: view: " + outDir + "/" + glb + ": no such file");
     *name = glb;
@@ -77,8 +85,8 @@ Status ChooseMesh(const std::string& outDir, const std::string& glb, std::string
     for (const std::string& n : names)
       if (EndsWith(n, ".glb")) meshes.push_back(n);
     if (meshes.empty())
-      return Status::Error("vismask: view: " + outDir + " holds no .glb (render with --export " + outDir +
-                           "/NAME.glb)");
+      return Status::Error("vismask: view: " + outDir + " holds no .glb (render with --export " +
+                           outDir + "/NAME.glb)");
     if (meshes.size() > 1) {
       std::string list;
       for (const std::string& m : meshes) list += (list.empty() ? "" : ", ") + m;
@@ -98,22 +106,26 @@ int View(const Options& o) {
     return kExitUsage;
   }
   const std::string exeDir = os::ExecutableDir();
-  s = exeDir.empty() ? Status::Error("vismask: view: cannot tell where this program is (/proc/self/exe)")
-                     : FindViewerDir(ViewerCandidates(exeDir), &viewer);
+  s = exeDir.empty()
+          ? Status::Error("vismask: view: cannot tell where this program is (/proc/self/exe)")
+          : FindViewerDir(ViewerCandidates(exeDir), &viewer);
   if (!s.ok()) {
     os::PrintErr("%s\n", s.message().c_str());
     return kExitNoViewer;
   }
-  std::vector<std::string> argv = {"python3",  viewer + "/serve.py", "--viewer", viewer, "--out",
-                                   o.viewDir,  "--glb",              glb,        "--port",
-                                   std::to_string(o.viewPort)};
+  std::vector<std::string> argv = {
+      "python3", viewer + "/serve.py",      "--viewer", viewer, "--out", o.viewDir, "--glb", glb,
+      "--port",  std::to_string(o.viewPort)};
   // The camera and exposure come from run.json when the directory has one.
-  if (os::Exists((o.viewDir + "/run.json").c_str())) argv.push_back("--run");
-  else os::PrintErr("vismask: view: %s has no run.json: the page frames the mesh from the front\n",
-                    o.viewDir.c_str());
+  if (os::Exists((o.viewDir + "/run.json").c_str()))
+    argv.push_back("--run");
+  else
+    os::PrintErr("vismask: view: %s has no run.json: the page frames the mesh from the front\n",
+                 o.viewDir.c_str());
   std::string why;
   os::Exec(argv, &why);
-  os::PrintErr("vismask: view: %s (python3 serves the page; tools/install-deps installs it)\n", why.c_str());
+  os::PrintErr("vismask: view: %s (python3 serves the page; tools/install-deps installs it)\n",
+               why.c_str());
   return kExitNoViewer;
 }
 

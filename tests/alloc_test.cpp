@@ -1,14 +1,13 @@
 // The no-heap-after-init property: the global allocation functions are
 // replaced by counters, and a whole render (init, solve, output writing) must
 // perform no allocation while the phase is kSolve or kOutput.
+#include <gtest/gtest.h>
 #include <malloc.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/phase.h"
@@ -117,7 +116,8 @@ void free(void* p) {
 namespace vismask {
 namespace {
 
-long AllocationsAfterInit(const std::vector<std::string>& args, int* code, std::string* err = nullptr) {
+long AllocationsAfterInit(const std::vector<std::string>& args, int* code,
+                          std::string* err = nullptr) {
   gTestPid = getpid();
   gAfterInit = 0;
   gArmed = true;
@@ -174,10 +174,11 @@ TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
   // elements, antialiasing) on two environments, so cut vertices are shared.
   test::TempDir dir;
   int code = -1;
-  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2",
-                                 "--mask-method", "R", "--emitted-rays", "500000", "--max-rays",
-                                 "2048", "--width", "96", "--height", "96", "--stop-unshot", "1e-2"},
-                                &code);
+  long n =
+      AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2",
+                            "--mask-method", "R", "--emitted-rays", "500000", "--max-rays", "2048",
+                            "--width", "96", "--height", "96", "--stop-unshot", "1e-2"},
+                           &code);
   ASSERT_EQ(code, 0);
   EXPECT_EQ(n, 0) << "heap allocations after init";
   std::string json = test::ReadFile(dir.File("run.json"));
@@ -190,10 +191,16 @@ TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
 #endif
   test::TempDir dir;
   int code = -1;
-  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
-                                 "2x2x2", "--mask-method", "B", "--mask-res", "30", "--rays", "256",
-                                 "--max-shots", "1500", "--width", "96", "--height", "96",
-                                 "--patch-size", "50"},
+  long n = AllocationsAfterInit({"render",        "scenes/cornell.obj",
+                                 "--out",         dir.path(),
+                                 "--envs",        "2x2x2",
+                                 "--mask-method", "B",
+                                 "--mask-res",    "30",
+                                 "--rays",        "256",
+                                 "--max-shots",   "1500",
+                                 "--width",       "96",
+                                 "--height",      "96",
+                                 "--patch-size",  "50"},
                                 &code);
   ASSERT_EQ(code, 0);
   EXPECT_EQ(n, 0) << "heap allocations after init";
@@ -209,11 +216,11 @@ TEST(AllocTest, BalancedEnvironmentsAndWorkRoundsAllocateNothing) {
   for (const char* ranks : {"1", "2"}) {
     test::TempDir dir;
     int code = -1;
-    long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
-                                   "auto:4", "--ranks", ranks, "--emitted-rays", "200000",
-                                   "--stop-unshot", "0.05", "--width", "64", "--height", "64",
-                                   "--patch-size", "50"},
-                                  &code);
+    long n = AllocationsAfterInit(
+        {"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "auto:4", "--ranks", ranks,
+         "--emitted-rays", "200000", "--stop-unshot", "0.05", "--width", "64", "--height", "64",
+         "--patch-size", "50"},
+        &code);
     ASSERT_EQ(code, 0) << ranks;
     EXPECT_EQ(n, 0) << "heap allocations after init, ranks " << ranks;
     std::string json = test::ReadFile(dir.File("run.json"));
@@ -229,17 +236,32 @@ TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
   test::TempDir dir;
   // One shot an environment a round, so that every 50 shots is a round's
   // end and the measurements number 12 (rounds by work hold many shots).
-  std::vector<std::string> args = {"render", "scenes/cornell.obj", "--envs", "2", "--rays", "256",
-                                   "--max-shots", "600", "--width", "64", "--height", "64",
-                                   "--patch-size", "60", "--quiet", "--round-shots", "1"};
+  std::vector<std::string> args = {"render",
+                                   "scenes/cornell.obj",
+                                   "--envs",
+                                   "2",
+                                   "--rays",
+                                   "256",
+                                   "--max-shots",
+                                   "600",
+                                   "--width",
+                                   "64",
+                                   "--height",
+                                   "64",
+                                   "--patch-size",
+                                   "60",
+                                   "--quiet",
+                                   "--round-shots",
+                                   "1"};
   auto ref = args;
   ref.insert(ref.end(), {"--out", dir.File("ref")});
   ASSERT_EQ(test::RunMain(ref).code, 0);
   // With an --exclude mask too (its pixels left out of every measurement).
   std::string mask = "P5\n64 64\n255\n" + std::string(64 * 32, '\xff') + std::string(64 * 32, '\0');
   test::WriteFile(dir.File("mask.pgm"), mask);
-  args.insert(args.end(), {"--out", dir.File("out"), "--reference", dir.File("ref/image.pfm"),
-                           "--exclude", dir.File("mask.pgm"), "--error-every", "50", "--seed", "2"});
+  args.insert(args.end(),
+              {"--out", dir.File("out"), "--reference", dir.File("ref/image.pfm"), "--exclude",
+               dir.File("mask.pgm"), "--error-every", "50", "--seed", "2"});
   int code = -1;
   long n = AllocationsAfterInit(args, &code);
   ASSERT_EQ(code, 0);
@@ -257,10 +279,16 @@ TEST(AllocTest, MethodsCAndRAllocateNothingAfterInit) {
   for (const char* method : {"C", "R"}) {
     test::TempDir dir;
     int code = -1;
-    long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
-                                   "2x2x2", "--mask-method", method, "--mask-res", "30", "--rays",
-                                   "300", "--max-shots", "1500", "--width", "96", "--height", "96",
-                                   "--patch-size", "50"},
+    long n = AllocationsAfterInit({"render",        "scenes/cornell.obj",
+                                   "--out",         dir.path(),
+                                   "--envs",        "2x2x2",
+                                   "--mask-method", method,
+                                   "--mask-res",    "30",
+                                   "--rays",        "300",
+                                   "--max-shots",   "1500",
+                                   "--width",       "96",
+                                   "--height",      "96",
+                                   "--patch-size",  "50"},
                                   &code);
     ASSERT_EQ(code, 0) << method;
     EXPECT_EQ(n, 0) << method << ": heap allocations after init";
@@ -275,10 +303,17 @@ TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
   // of which dies on its first allocation after init.
   test::TempDir dir;
   int code = -1;
-  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs",
-                                 "2x1x2", "--ranks", "4", "--mask-res", "30", "--rays", "256",
-                                 "--max-shots", "1500", "--width", "96", "--height", "96",
-                                 "--patch-size", "50", "--quiet"},
+  long n = AllocationsAfterInit({"render",       "scenes/cornell.obj",
+                                 "--out",        dir.path(),
+                                 "--envs",       "2x1x2",
+                                 "--ranks",      "4",
+                                 "--mask-res",   "30",
+                                 "--rays",       "256",
+                                 "--max-shots",  "1500",
+                                 "--width",      "96",
+                                 "--height",     "96",
+                                 "--patch-size", "50",
+                                 "--quiet"},
                                 &code);
   EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
   EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
@@ -293,11 +328,18 @@ TEST(AllocTest, TwoSidedRenderAllocatesNothingAfterInit) {
   for (const char* ranks : {"1", "2"}) {
     test::TempDir dir;
     int code = -1;
-    long n = AllocationsAfterInit({"render", "scenes/miswound.obj", "--out", dir.path(), "--envs",
-                                   "2", "--ranks", ranks, "--mask-method", "R", "--two-sided",
-                                   "--two-sided-emitters", "--emitted-rays", "300000",
-                                   "--max-rays", "2048", "--width", "96", "--height", "96",
-                                   "--stop-unshot", "1e-2", "--quiet"},
+    long n = AllocationsAfterInit({"render",         "scenes/miswound.obj",
+                                   "--out",          dir.path(),
+                                   "--envs",         "2",
+                                   "--ranks",        ranks,
+                                   "--mask-method",  "R",
+                                   "--two-sided",    "--two-sided-emitters",
+                                   "--emitted-rays", "300000",
+                                   "--max-rays",     "2048",
+                                   "--width",        "96",
+                                   "--height",       "96",
+                                   "--stop-unshot",  "1e-2",
+                                   "--quiet"},
                                   &code);
     EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
     EXPECT_EQ(n, 0) << ranks << " ranks: heap allocations after init";
@@ -313,10 +355,10 @@ TEST(AllocTest, SmoothingAllocatesNothingAfterInit) {
   for (const char* envs : {"1", "2x2x1"}) {
     test::TempDir dir;
     int code = -1;
-    long n = AllocationsAfterInit({"render", "scenes/smooth/sphere-s.obj", "--out", dir.path(), "--envs",
-                                   envs, "--emitted-rays", "200000", "--width", "64", "--height", "64",
-                                   "--quiet"},
-                                  &code);
+    long n = AllocationsAfterInit(
+        {"render", "scenes/smooth/sphere-s.obj", "--out", dir.path(), "--envs", envs,
+         "--emitted-rays", "200000", "--width", "64", "--height", "64", "--quiet"},
+        &code);
     ASSERT_EQ(code, 0);
     EXPECT_EQ(n, 0) << envs;
   }
@@ -332,12 +374,21 @@ TEST(AllocTest, TexturedRenderAllocatesNothingAfterInit) {
   for (const char* aa : {"on", "off"}) {
     test::TempDir dir;
     int code = -1;
-    long n = AllocationsAfterInit({"render", "scenes/textured/room.obj", "--out", dir.path(),
-                                   "--envs", "2", "--ranks", "2", "--aa", aa, "--mask-method", "R",
-                                   "--emitted-rays", "100000", "--max-rays", "2048", "--stop-unshot",
-                                   "2e-2", "--width", "64", "--height", "64", "--quiet"},
+    long n = AllocationsAfterInit({"render",         "scenes/textured/room.obj",
+                                   "--out",          dir.path(),
+                                   "--envs",         "2",
+                                   "--ranks",        "2",
+                                   "--aa",           aa,
+                                   "--mask-method",  "R",
+                                   "--emitted-rays", "100000",
+                                   "--max-rays",     "2048",
+                                   "--stop-unshot",  "2e-2",
+                                   "--width",        "64",
+                                   "--height",       "64",
+                                   "--quiet"},
                                   &code);
-    EXPECT_EQ(code, 0) << aa << ": a rank failed (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(code, 0) << aa
+                       << ": a rank failed (an allocation after init in a forked rank exits 97)";
     EXPECT_EQ(n, 0) << aa << ": heap allocations after init in rank 0";
     EXPECT_NE(test::ReadFile(dir.File("run.json")).find("checker.png"), std::string::npos);
   }
@@ -351,10 +402,10 @@ TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {
 #endif
   test::TempDir dir;
   int code = -1;
-  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2",
-                                 "--ranks", "2", "--aa", "off", "--rays", "256", "--max-shots", "300",
-                                 "--width", "64", "--height", "40", "--quiet"},
-                                &code);
+  long n = AllocationsAfterInit(
+      {"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2", "--ranks", "2", "--aa",
+       "off", "--rays", "256", "--max-shots", "300", "--width", "64", "--height", "40", "--quiet"},
+      &code);
   EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
   EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
 }
@@ -370,11 +421,13 @@ TEST(AllocTest, ExportAllocatesNothingAfterInit) {
     test::TempDir dir;
     int code = -1;
     std::string err;
-    long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2x2",
-                                   "--ranks", ranks, "--rays", "256", "--max-shots", "400", "--width",
-                                   "48", "--height", "48", "--export", dir.File("scene.glb"), "--quiet"},
-                                  &code, &err);
-    ASSERT_EQ(code, 0) << ranks << " ranks: " << err << " (an allocation after init in a forked rank exits 97)";
+    long n =
+        AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2x2",
+                              "--ranks", ranks, "--rays", "256", "--max-shots", "400", "--width",
+                              "48", "--height", "48", "--export", dir.File("scene.glb"), "--quiet"},
+                             &code, &err);
+    ASSERT_EQ(code, 0) << ranks << " ranks: " << err
+                       << " (an allocation after init in a forked rank exits 97)";
     EXPECT_EQ(n, 0) << ranks << " ranks: heap allocations after init in rank 0";
     EXPECT_GT(test::ReadFile(dir.File("scene.glb")).size(), 10000u);
   }
@@ -393,10 +446,12 @@ TEST(AllocTest, ChosenViewAndBlackImageWarningAllocateNothing) {
                   "v 0 1 1\nv 0.4 0.99 0.4\nv 0.6 0.99 0.4\nv 0.6 0.99 0.6\nv 0.4 0.99 0.6\n"
                   "usemtl wall\nf 1 2 3 4\nf 1 5 6 2\nf 4 3 7 8\nf 1 4 8 5\nf 2 6 7 3\n"
                   "usemtl light\nf 9 10 11 12\n");
-  test::WriteFile(dir.File("box.mtl"), "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n");
+  test::WriteFile(dir.File("box.mtl"),
+                  "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n");
   for (const char* view : {"", "front"}) {
-    std::vector<std::string> args = {"render", dir.File("box.obj"), "--out", dir.File("out"), "--rays",
-                                     "256", "--max-shots", "200", "--width", "48", "--height", "48"};
+    std::vector<std::string> args = {
+        "render", dir.File("box.obj"), "--out", dir.File("out"), "--rays", "256", "--max-shots",
+        "200",    "--width",           "48",    "--height",      "48"};
     if (*view) args.insert(args.end(), {"--view", view});
     int code = -1;
     std::string err;
@@ -416,7 +471,8 @@ TEST(AllocTest, ChosenViewAndBlackImageWarningAllocateNothing) {
 long long InitPeakOf(const std::vector<std::string>& args, std::string* json) {
   test::TempDir dir;
   std::vector<std::string> a = args;
-  a.insert(a.end(), {"--out", dir.path(), "--quiet", "--width", "64", "--height", "48", "--max-shots", "50"});
+  a.insert(a.end(), {"--out", dir.path(), "--quiet", "--width", "64", "--height", "48",
+                     "--max-shots", "50"});
   gTestPid = getpid();
   gLive = 0;
   gInitPeak = 0;
@@ -431,7 +487,8 @@ long long InitPeakOf(const std::vector<std::string>& args, std::string* json) {
 unsigned long long JsonField(const std::string& json, const std::string& key) {
   size_t at = json.find("\"" + key + "\": ");
   EXPECT_NE(at, std::string::npos) << key;
-  return at == std::string::npos ? 0 : std::strtoull(json.c_str() + at + key.size() + 4, nullptr, 10);
+  return at == std::string::npos ? 0
+                                 : std::strtoull(json.c_str() + at + key.size() + 4, nullptr, 10);
 }
 
 TEST(AllocTest, InitPeakHeapIsWithinThePrediction) {
@@ -440,7 +497,9 @@ TEST(AllocTest, InitPeakHeapIsWithinThePrediction) {
 #endif
   test::TempDir gen;
   const std::string building = gen.File("b.obj");
-  ASSERT_EQ(std::system(("tools/gen-building --rooms 2x2 --floors 1 --tile 0.3 --out " + building).c_str()), 0);
+  ASSERT_EQ(std::system(
+                ("tools/gen-building --rooms 2x2 --floors 1 --tile 0.3 --out " + building).c_str()),
+            0);
   const std::vector<std::vector<std::string>> runs = {
       {"render", "scenes/cornell.obj", "--envs", "2x1x2"},
       {"render", "scenes/miswound.obj", "--two-sided", "--envs", "2"},

@@ -1,15 +1,16 @@
 // The default camera's side (occlusion included), the --view presets, and
 // the warning for an image that shows nothing.
-#include <cmath>
-#include <cstdio>
-#include <sstream>
+#include "vismask/camera.h"
 
-#include <glm/common.hpp>
-#include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <sstream>
+
 #include "test_util.h"
-#include "vismask/camera.h"
 #include "vismask/options.h"
 #include "vismask/scene.h"
 
@@ -50,12 +51,13 @@ Scene OpenBox(int open) {
     int a, b, c, d;
   };
   // Counter-clockwise seen from inside.
-  const Face faces[6] = {{ViewSide::kFront, 0, 1, 2, 3}, {ViewSide::kBack, 4, 7, 6, 5},
+  const Face faces[6] = {{ViewSide::kFront, 0, 1, 2, 3},  {ViewSide::kBack, 4, 7, 6, 5},
                          {ViewSide::kBottom, 0, 4, 5, 1}, {ViewSide::kTop, 3, 2, 6, 7},
-                         {ViewSide::kRight, 0, 3, 7, 4}, {ViewSide::kLeft, 1, 5, 6, 2}};
+                         {ViewSide::kRight, 0, 3, 7, 4},  {ViewSide::kLeft, 1, 5, 6, 2}};
   Scene s;
   for (const Face& f : faces)
-    if (static_cast<int>(f.side) != open) s.polygons.push_back(Quad(v[f.a], v[f.b], v[f.c], v[f.d]));
+    if (static_cast<int>(f.side) != open)
+      s.polygons.push_back(Quad(v[f.a], v[f.b], v[f.c], v[f.d]));
   AddBounds(&s);
   return s;
 }
@@ -83,8 +85,8 @@ void WriteOpenBox(const std::string& dir, const std::string& missing) {
 }
 
 std::vector<std::string> TinyRender(const TempDir& dir, const std::string& scene) {
-  return {"render", scene, "--out", dir.File("out"), "--max-shots", "20", "--rays", "64",
-          "--width", "24", "--height", "24", "--quiet"};
+  return {"render", scene,     "--out", dir.File("out"), "--max-shots", "20",     "--rays",
+          "64",     "--width", "24",    "--height",      "24",          "--quiet"};
 }
 
 // run.json's "camera" array: eye, target, up, fovy.
@@ -133,9 +135,12 @@ TEST(CameraTest, EachSideLooksAtItsFaceFromOutside) {
     float reach;  // the face's larger half extent
   };
   const Expect cases[] = {
-      {ViewSide::kFront, "front", 2, -1.0f, {0, 1, 0}, 2.0f}, {ViewSide::kBack, "back", 2, 1.0f, {0, 1, 0}, 2.0f},
-      {ViewSide::kLeft, "left", 0, 1.0f, {0, 1, 0}, 1.0f},    {ViewSide::kRight, "right", 0, -1.0f, {0, 1, 0}, 1.0f},
-      {ViewSide::kTop, "top", 1, 1.0f, {0, 0, 1}, 2.0f},      {ViewSide::kBottom, "bottom", 1, -1.0f, {0, 0, -1}, 2.0f},
+      {ViewSide::kFront, "front", 2, -1.0f, {0, 1, 0}, 2.0f},
+      {ViewSide::kBack, "back", 2, 1.0f, {0, 1, 0}, 2.0f},
+      {ViewSide::kLeft, "left", 0, 1.0f, {0, 1, 0}, 1.0f},
+      {ViewSide::kRight, "right", 0, -1.0f, {0, 1, 0}, 1.0f},
+      {ViewSide::kTop, "top", 1, 1.0f, {0, 0, 1}, 2.0f},
+      {ViewSide::kBottom, "bottom", 1, -1.0f, {0, 0, -1}, 2.0f},
   };
   const float tanHalf = std::tan(0.5f * 39.3f * 3.14159265358979f / 180.0f);
   for (const Expect& e : cases) {
@@ -195,8 +200,10 @@ TEST(CameraTest, ClosedBoxKeepsFront) {
 TEST(CameraTest, OccludedFrontFacesAreNotCounted) {
   // A quad facing -z (towards the front camera) behind a larger one facing
   // +z: facing the eye is not enough, the front camera sees only a back.
-  Polygon facing = Quad({0.65f, 0.35f, 1.0f}, {0.35f, 0.35f, 1.0f}, {0.35f, 0.65f, 1.0f}, {0.65f, 0.65f, 1.0f});
-  Polygon wall = Quad({0.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f});
+  Polygon facing =
+      Quad({0.65f, 0.35f, 1.0f}, {0.35f, 0.35f, 1.0f}, {0.35f, 0.65f, 1.0f}, {0.65f, 0.65f, 1.0f});
+  Polygon wall =
+      Quad({0.0f, 0.0f, 0.0f}, {1.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 0.0f}, {0.0f, 1.0f, 0.0f});
   ASSERT_LT(facing.normal.z, 0.0f);
   ASSERT_GT(wall.normal.z, 0.0f);
   Scene alone;
@@ -248,13 +255,14 @@ TEST(CameraTest, McGuireSphereBoxIsSeenFromBack) {
   if (!test::FileExists(path)) GTEST_SKIP() << path << " is not here";
   Scene s;
   std::vector<std::string> warnings;
-  Status st = LoadSceneFromText(path, ReadFile(path),
-                                [](const std::string& p, std::string* text) {
-                                  if (!test::FileExists(p)) return std::string("cannot open");
-                                  *text = ReadFile(p);
-                                  return std::string();
-                                },
-                                &s, &warnings);
+  Status st = LoadSceneFromText(
+      path, ReadFile(path),
+      [](const std::string& p, std::string* text) {
+        if (!test::FileExists(p)) return std::string("cannot open");
+        *text = ReadFile(p);
+        return std::string();
+      },
+      &s, &warnings);
   if (!st.ok()) GTEST_SKIP() << "vismask does not load it: " << st.ToString();
   EXPECT_EQ(ChooseViewSide(s), ViewSide::kBack);
 }
@@ -271,8 +279,8 @@ TEST(CameraTest, DefaultRenderOfABoxOpenOnPlusZLooksFromPlusZ) {
   EXPECT_NE(json.find("\"view\": \"back\",\n    \"view_auto\": true,"), std::string::npos) << json;
   std::vector<double> c = JsonCamera(json);
   ASSERT_EQ(c.size(), 10u) << json;
-  EXPECT_GT(c[2], 1.0);   // eye beyond the box's +z face
-  EXPECT_EQ(c[5], 1.0);   // looking at that face
+  EXPECT_GT(c[2], 1.0);  // eye beyond the box's +z face
+  EXPECT_EQ(c[5], 1.0);  // looking at that face
 }
 
 TEST(CameraTest, CornellDefaultCameraIsUnchanged) {

@@ -1,14 +1,13 @@
 // tools/cluster-sim's safe paths: --help, option errors (checked before it
 // touches anything), and the refusal to run without root. The namespace run
 // itself is not here: it needs root and takes minutes (make cluster-experiments).
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 
@@ -64,7 +63,8 @@ TEST(ClusterSimTest, BadOptionsExitTwoBeforeAnythingIsMade) {
     Shell r = RunShell(std::string("tools/cluster-sim ") + c.args);
     EXPECT_EQ(r.code, 2) << c.args << "\n" << r.out;
     EXPECT_NE(r.out.find(std::string("tools/cluster-sim: ") + c.message), std::string::npos)
-        << c.args << "\n" << r.out;
+        << c.args << "\n"
+        << r.out;
   }
 }
 

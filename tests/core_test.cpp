@@ -1,14 +1,13 @@
 // Unit tests of the building blocks: arena, checks, MaxTree, RNG, sampling.
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <random>
 #include <vector>
 
-#include <glm/geometric.hpp>
-#include <gtest/gtest.h>
-
-#include "vismask/check.h"
-
 #include "vismask/arena.h"
+#include "vismask/check.h"
 #include "vismask/max_tree.h"
 #include "vismask/patch.h"
 #include "vismask/rng.h"

@@ -1,10 +1,10 @@
 // Local environments with visibility masks, end to end through the command
 // line: determinism under permuted processing, the closed box split into
 // environments, the light leak of Method A, and `vismask compare`.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 
@@ -42,9 +42,23 @@ void Render(const std::vector<std::string>& args) {
 
 TEST(EnvTest, PermutedEnvironmentOrderGivesIdenticalBytes) {
   TempDir dir;
-  std::vector<std::string> base = {"scenes/cornell.obj", "--envs", "4x1x2", "--rays", "256",
-                                   "--max-shots", "800", "--width", "64", "--height", "64",
-                                   "--mask-res", "20", "--patch-size", "60", "--round-shots", "2"};
+  std::vector<std::string> base = {"scenes/cornell.obj",
+                                   "--envs",
+                                   "4x1x2",
+                                   "--rays",
+                                   "256",
+                                   "--max-shots",
+                                   "800",
+                                   "--width",
+                                   "64",
+                                   "--height",
+                                   "64",
+                                   "--mask-res",
+                                   "20",
+                                   "--patch-size",
+                                   "60",
+                                   "--round-shots",
+                                   "2"};
   auto run = [&](const std::string& out, const std::string& order) {
     auto args = base;
     args.insert(args.end(), {"--out", dir.File(out)});
@@ -73,10 +87,25 @@ TEST(EnvTest, PermutedEnvironmentOrderGivesIdenticalBytes) {
 TEST(EnvTest, MaskCacheKeepsOutputsAndSavesCentreRays) {
   TempDir dir;
   for (const char* method : {"B", "C"}) {
-    std::vector<std::string> base = {"scenes/cornell.obj", "--envs", "2x1x2", "--emitted-rays", "100000",
-                                     "--max-shots", "300", "--width", "32", "--height", "32",
-                                     "--mask-res", "24", "--patch-size", "90",
-                                     "--mask-method", method, "--round-work", "150000"};
+    std::vector<std::string> base = {"scenes/cornell.obj",
+                                     "--envs",
+                                     "2x1x2",
+                                     "--emitted-rays",
+                                     "100000",
+                                     "--max-shots",
+                                     "300",
+                                     "--width",
+                                     "32",
+                                     "--height",
+                                     "32",
+                                     "--mask-res",
+                                     "24",
+                                     "--patch-size",
+                                     "90",
+                                     "--mask-method",
+                                     method,
+                                     "--round-work",
+                                     "150000"};
     auto run = [&](const std::string& out, const char* cache) {
       auto args = base;
       args.insert(args.end(), {"--out", dir.File(out), "--mask-cache", cache});
@@ -146,8 +175,15 @@ TEST(EnvTest, MethodALeaksLightAtHighResolutionAndBDoesNot) {
   // environment; cut at x = 278 into 48, each shot again as a foreign
   // shooter in the other half: 96 shots).
   TempDir dir;
-  std::vector<std::string> base = {"scenes/cornell.obj", "--patch-size", "20", "--rays", "32768",
-                                   "--width", "16", "--height", "16"};
+  std::vector<std::string> base = {"scenes/cornell.obj",
+                                   "--patch-size",
+                                   "20",
+                                   "--rays",
+                                   "32768",
+                                   "--width",
+                                   "16",
+                                   "--height",
+                                   "16"};
   auto run = [&](const std::string& out, std::vector<std::string> extra) {
     auto args = base;
     args.insert(args.end(), {"--out", dir.File(out)});
@@ -159,16 +195,16 @@ TEST(EnvTest, MethodALeaksLightAtHighResolutionAndBDoesNot) {
   // One shot an environment a round (the schedule the shot counts above
   // assume: rounds by work would spend the 96 on other shooters too).
   auto two = [&](const char* method) {
-    return run(method, {"--max-shots", "96", "--envs", "2", "--mask-method", method, "--mask-res", "250",
-                        "--round-shots", "1"});
+    return run(method, {"--max-shots", "96", "--envs", "2", "--mask-method", method, "--mask-res",
+                        "250", "--round-shots", "1"});
   };
   double a = two("A"), none = two("none"), b = two("B");
   ASSERT_GT(ref, 0.0);
   double leakA = a / ref - 1.0, leakNone = none / ref - 1.0, leakB = b / ref - 1.0;
   std::printf("shadow-edge power against one environment: A %+.1f%%, none %+.1f%%, B %+.1f%%\n",
               100 * leakA, 100 * leakNone, 100 * leakB);
-  EXPECT_GT(leakA, 0.20);         // the leak of the paper's Fig. 3
-  EXPECT_GT(leakNone, leakA);     // no mask at all is worse
+  EXPECT_GT(leakA, 0.20);      // the leak of the paper's Fig. 3
+  EXPECT_GT(leakNone, leakA);  // no mask at all is worse
   EXPECT_LT(std::fabs(leakB), 0.10);
 }
 
@@ -200,7 +236,7 @@ void WriteBoxWithBlock(const TempDir& dir) {
   };
   cube(0.0, 1.0);
   cube(0.3, 0.7);
-  obj << "f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 4 3 7 8\nf 1 4 8 5\nf 2 6 7 3\n"   // inward
+  obj << "f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 4 3 7 8\nf 1 4 8 5\nf 2 6 7 3\n"  // inward
       << "f 9 12 11 10\nf 13 14 15 16\nf 9 10 14 13\nf 12 16 15 11\nf 9 13 16 12\n"
       << "f 10 11 15 14\n";  // outward
   WriteFile(dir.File("box.obj"), obj.str());
@@ -245,8 +281,10 @@ TEST(EnvTest, MethodRLedgerClosesInTwoAndEightEnvironments) {
       }
       ++m;
     }
-    std::printf("direct light, --envs %s: |emitted - absorbed - escaped - unshot| / emitted: "
-                "R %.2g, A %.2g, B %.2g\n", envs, gap[0], gap[1], gap[2]);
+    std::printf(
+        "direct light, --envs %s: |emitted - absorbed - escaped - unshot| / emitted: "
+        "R %.2g, A %.2g, B %.2g\n",
+        envs, gap[0], gap[1], gap[2]);
   }
 }
 
@@ -280,8 +318,9 @@ TEST(EnvTest, MethodRIsUnbiasedInAClosedEnclosureIn2x2x2) {
   }
   mean /= area;
   double rms = std::sqrt(ss / patches.size());
-  std::printf("closed box and block in 2x2x2, Method R: mean B / exact - 1 = %+.2g, patch RMS %.4f\n",
-              mean, rms);
+  std::printf(
+      "closed box and block in 2x2x2, Method R: mean B / exact - 1 = %+.2g, patch RMS %.4f\n", mean,
+      rms);
   EXPECT_LT(std::fabs(mean), 1e-3);  // B: -7e-3
   EXPECT_LT(rms, 0.025);
 }
@@ -303,7 +342,8 @@ TEST(EnvTest, CompareReportsRelativeRmse) {
   std::string out = testing::internal::GetCapturedStdout();
   ASSERT_EQ(r.code, 0) << r.err;
   double rel = 0, maxAbs = 0;
-  ASSERT_EQ(std::sscanf(out.c_str(), "relative_rmse %lf\nmax_abs_error %lf", &rel, &maxAbs), 2) << out;
+  ASSERT_EQ(std::sscanf(out.c_str(), "relative_rmse %lf\nmax_abs_error %lf", &rel, &maxAbs), 2)
+      << out;
   EXPECT_NEAR(rel, 0.1, 1e-6);
   EXPECT_NEAR(maxAbs, 0.6, 1e-5);
   EXPECT_EQ(RunMain({"compare", dir.File("a.pfm"), dir.File("c.pfm")}).code, 2);  // truncated

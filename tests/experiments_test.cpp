@@ -1,11 +1,11 @@
 // The experiments pipeline (tools/experiments, make experiments) in
 // miniature: every step runs on a tiny render and writes every table, image
 // and plot docs/RESULTS.md shows, so the pipeline cannot rot unseen.
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 
@@ -28,8 +28,7 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   TempDir dir;
   const char* bin = std::getenv("VISMASK_BIN");
   std::string cmd = std::string("VISMASK_BIN=") + (bin ? bin : "build/vismask") +
-                    " tools/experiments --quick --out " + dir.path() + " 2> " +
-                    dir.File("log.txt");
+                    " tools/experiments --quick --out " + dir.path() + " 2> " + dir.File("log.txt");
   ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadFile(dir.File("log.txt"));
 
   // Tables: a header and rows, with numbers where the figures are.
@@ -39,7 +38,7 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
     std::vector<int> numericColumns;
   } tables[] = {
       {"references.csv", 1, {2, 3, 4, 5}},
-      {"fig2-quality.csv", 4, {4, 5, 6, 7}},        // R = 4, 8, 16 and the seed floor
+      {"fig2-quality.csv", 4, {4, 5, 6, 7}},  // R = 4, 8, 16 and the seed floor
       {"table1-time.csv", 8, {2, 3, 4, 5, 6, 7, 8}},
       {"fig3-leak.csv", 12, {2, 3}},
       {"closed-box.csv", 3, {3, 4, 5, 6, 7, 8}},
@@ -53,8 +52,8 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
       for (int c : t.numericColumns) {
         if (std::string(t.file) == "fig2-quality.csv" && r == 4) continue;  // the seed row
         ASSERT_LT(size_t(c), rows[r].size()) << t.file << " row " << r;
-        EXPECT_TRUE(IsNumber(rows[r][c])) << t.file << " row " << r << " col " << c << ": '"
-                                          << rows[r][c] << "'";
+        EXPECT_TRUE(IsNumber(rows[r][c]))
+            << t.file << " row " << r << " col " << c << ": '" << rows[r][c] << "'";
       }
   }
   // Table 1: a median of three, between its min and max.
@@ -97,10 +96,10 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
     size_t rows;
     std::vector<int> numericColumns;
   } gtTables[] = {
-      {"gt-time.csv", 4, {2, 3, 4, 6, 7, 8}},            // today, default, a cap, one setting
-      {"gt-goals.csv", 5, {2, 3}},                        // three budgets, the ratio, the demo
+      {"gt-time.csv", 4, {2, 3, 4, 6, 7, 8}},              // today, default, a cap, one setting
+      {"gt-goals.csv", 5, {2, 3}},                         // three budgets, the ratio, the demo
       {"gt-decomposition.csv", 4, {2, 3, 4, 5, 6, 7, 8}},  // today, default, elements 0, aa off
-      {"gt-envs.csv", 6, {2, 4, 5}},                      // 1 env, B, R: capped and converged
+      {"gt-envs.csv", 6, {2, 4, 5}},                       // 1 env, B, R: capped and converged
       {"gt-seam.csv", 2, {1, 2, 3, 4, 5}},
       {"gt-renderpark.csv", 3, {1, 2, 3}},
       {"gt-references.csv", 1, {2, 3, 4}},
@@ -112,8 +111,8 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
     for (size_t r = 1; r < rows.size(); ++r)
       for (int c : t.numericColumns) {
         ASSERT_LT(size_t(c), rows[r].size()) << t.file << " row " << r;
-        EXPECT_TRUE(IsNumber(rows[r][c])) << t.file << " row " << r << " col " << c << ": '"
-                                          << rows[r][c] << "'";
+        EXPECT_TRUE(IsNumber(rows[r][c]))
+            << t.file << " row " << r << " col " << c << ": '" << rows[r][c] << "'";
       }
   }
   // The ground-truth columns beside reference (b)'s.
@@ -127,17 +126,18 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   auto pareto = ReadCsv(dir.File("pareto.csv"));
   EXPECT_EQ(pareto[0].back(), "run_final_vs_gt");
   EXPECT_TRUE(IsNumber(pareto[1].back()));
-  for (const char* png : {"gt-error-time.png", "gt-seam.png", "img/gt-diff-today.png",
-                          "img/gt-diff-default.png", "img/gt-seam-env2-B.png",
-                          "img/gt-seam-env2-R.png"}) {
+  for (const char* png :
+       {"gt-error-time.png", "gt-seam.png", "img/gt-diff-today.png", "img/gt-diff-default.png",
+        "img/gt-seam-env2-B.png", "img/gt-seam-env2-R.png"}) {
     std::string bytes = ReadFile(dir.File(png));
     ASSERT_GT(bytes.size(), 8u) << png;
     EXPECT_EQ(bytes.substr(1, 3), "PNG") << png;
   }
-  for (const char* heading : {"### Error against solve time", "### The goals of issue 15",
-                              "### RenderPark, quoted", "not rerun by make experiments",
-                              "### Where the error comes from", "### Two environments against one",
-                              "(gt-error-time.png)", "(img/gt-diff-default.png)", "Ground truth (c)"})
+  for (const char* heading :
+       {"### Error against solve time", "### The goals of issue 15", "### RenderPark, quoted",
+        "not rerun by make experiments", "### Where the error comes from",
+        "### Two environments against one", "(gt-error-time.png)", "(img/gt-diff-default.png)",
+        "Ground truth (c)"})
     EXPECT_NE(doc.find(heading), std::string::npos) << heading;
 }
 

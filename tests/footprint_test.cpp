@@ -1,9 +1,9 @@
 // Memory: footprint's predictions are what a render reserves and uses, one
 // environment pays for no exchange, and --mem-budget refuses at init.
+#include <gtest/gtest.h>
+
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 
@@ -51,9 +51,11 @@ TEST(FootprintTest, PredictionsMatchTheRendersHighWaterMark) {
     config.insert(config.end(), {"--patch-size", "60", "--width", "64", "--height", "48"});
     std::string fp = FootprintJson(config);
     unsigned long long predicted = JsonNumber(fp, "total_bytes", fp.find("\"ranks\""));
-    std::vector<std::string> args = {"render", "scenes/cornell.obj", "--out",
-                                     dir.File(std::to_string(k++)), "--rays", "64",
-                                     "--max-shots", "40", "--quiet"};
+    std::vector<std::string> args = {"render",      "scenes/cornell.obj",
+                                     "--out",       dir.File(std::to_string(k++)),
+                                     "--rays",      "64",
+                                     "--max-shots", "40",
+                                     "--quiet"};
     args.insert(args.end(), config.begin(), config.end());
     auto r = RunMain(args);
     ASSERT_EQ(r.code, 0) << r.err;
@@ -64,9 +66,11 @@ TEST(FootprintTest, PredictionsMatchTheRendersHighWaterMark) {
     std::vector<unsigned long long> inRun, inFootprint;
     std::string list = run.substr(run.find("\"environment_arena_bytes\""));
     list = list.substr(list.find('[') + 1, list.find(']') - list.find('[') - 1);
-    for (size_t at = 0; at < list.size(); at = list.find(',', at) == std::string::npos ? list.size() : list.find(',', at) + 1)
+    for (size_t at = 0; at < list.size();
+         at = list.find(',', at) == std::string::npos ? list.size() : list.find(',', at) + 1)
       inRun.push_back(std::stoull(list.substr(at)));
-    for (size_t at = fp.find("\"arena_bytes\": "); at != std::string::npos; at = fp.find("\"arena_bytes\": ", at + 1))
+    for (size_t at = fp.find("\"arena_bytes\": "); at != std::string::npos;
+         at = fp.find("\"arena_bytes\": ", at + 1))
       inFootprint.push_back(JsonNumber(fp, "arena_bytes", at));
     EXPECT_EQ(inRun, inFootprint) << config[1];
     size_t env = inRun.size();
@@ -106,8 +110,10 @@ TEST(FootprintTest, OneEnvironmentReservesNoExchange) {
 
 TEST(FootprintTest, MethodRSlotsHoldOneBitPerRay) {
   // --envs 2 --queue 64: each environment has one neighbour, so 64 slots of N bits.
-  std::string small = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--queue", "64"});
-  std::string large = FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "80000", "--queue", "64"});
+  std::string small =
+      FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--queue", "64"});
+  std::string large =
+      FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "80000", "--queue", "64"});
   EXPECT_EQ(JsonNumber(small, "packet_size_bytes"), 128u + 104u);  // 100 bytes padded to 8
   EXPECT_EQ(JsonNumber(large, "packet_size_bytes"), 128u + 10000u);
   // 64 slots, 13 words each against 1250: 64 * (1250 - 13) * 8 bytes more,
@@ -116,14 +122,16 @@ TEST(FootprintTest, MethodRSlotsHoldOneBitPerRay) {
   EXPECT_GE(grow, 64ull * (1250 - 13) * 8);
   EXPECT_LE(grow, 64ull * (1250 - 13) * 8 + 128);
   // The mask's resolution plays no part.
-  EXPECT_EQ(FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--queue", "64", "--mask-res", "250"}),
+  EXPECT_EQ(FootprintJson({"--envs", "2", "--mask-method", "R", "--rays", "800", "--queue", "64",
+                           "--mask-res", "250"}),
             small);
 }
 
 TEST(FootprintTest, MemBudgetRefusesBelowTheNeedAndRunsAtIt) {
   TempDir dir;
-  std::vector<std::string> config = {"--envs", "2", "--patch-size", "60", "--width", "64",
-                                     "--height", "48", "--rays", "64", "--max-shots", "20", "--quiet"};
+  std::vector<std::string> config = {"--envs",      "2",        "--patch-size", "60",     "--width",
+                                     "64",          "--height", "48",           "--rays", "64",
+                                     "--max-shots", "20",       "--quiet"};
   std::string fp = FootprintJson(config);
   // What the budget must allow: the arenas, or init's own peak if larger
   // (issue 20: the prediction covers init).
@@ -131,15 +139,17 @@ TEST(FootprintTest, MemBudgetRefusesBelowTheNeedAndRunsAtIt) {
   EXPECT_GE(need, JsonNumber(fp, "total_bytes", fp.find("\"ranks\"")));
   EXPECT_GE(need, JsonNumber(fp, "init_peak_bytes", fp.find("\"ranks\"")));
   auto render = [&](unsigned long long budget, const std::string& out) {
-    std::vector<std::string> args = {"render", "scenes/cornell.obj", "--out", dir.File(out),
-                                     "--mem-budget", std::to_string(budget)};
+    std::vector<std::string> args = {"render",      "scenes/cornell.obj", "--out",
+                                     dir.File(out), "--mem-budget",       std::to_string(budget)};
     args.insert(args.end(), config.begin(), config.end());
     return RunMain(args);
   };
   auto under = render(need - 1, "under");
   EXPECT_EQ(under.code, 2);
-  EXPECT_NE(under.err.find("needs " + std::to_string(need) + " bytes"), std::string::npos) << under.err;
-  EXPECT_NE(under.err.find("budget of " + std::to_string(need - 1)), std::string::npos) << under.err;
+  EXPECT_NE(under.err.find("needs " + std::to_string(need) + " bytes"), std::string::npos)
+      << under.err;
+  EXPECT_NE(under.err.find("budget of " + std::to_string(need - 1)), std::string::npos)
+      << under.err;
   EXPECT_FALSE(test::FileExists(dir.File("under")));
   auto exact = render(need, "exact");
   EXPECT_EQ(exact.code, 0) << exact.err;
@@ -167,7 +177,8 @@ TEST(FootprintTest, CountsTextureBytes) {
   // Two ranks split at x = 5: the striped wall (x = 10) is rank 1's only.
   std::string two = footprint({"--envs", "2", "--ranks", "2"});
   size_t r0 = two.find("{\"rank\": 0"), r1 = two.find("{\"rank\": 1");
-  unsigned long long t0 = JsonNumber(two, "texture_bytes", r0), t1 = JsonNumber(two, "texture_bytes", r1);
+  unsigned long long t0 = JsonNumber(two, "texture_bytes", r0),
+                     t1 = JsonNumber(two, "texture_bytes", r1);
   EXPECT_GE(t0, checker);
   EXPECT_LT(t0, checker + stripes);
   EXPECT_GE(t1 - t0, stripes);
@@ -190,7 +201,8 @@ TEST(FootprintTest, CountsTextureBytes) {
 
 TEST(FootprintTest, PeakRssIsExplainedByArenasAndMappedFiles) {
 #if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "AddressSanitizer's shadow memory is part of the RSS; the claim is about normal builds";
+  GTEST_SKIP()
+      << "AddressSanitizer's shadow memory is part of the RSS; the claim is about normal builds";
 #endif
   TempDir dir;
   // A child process so that the test binary's own heap does not count.

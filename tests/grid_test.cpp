@@ -1,15 +1,15 @@
 #include "vismask/grid.h"
 
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <glm/geometric.hpp>
 #include <random>
 #include <string>
 #include <vector>
-
-#include <glm/geometric.hpp>
-#include <gtest/gtest.h>
 
 #include "vismask/arena.h"
 #include "vismask/sampling.h"
@@ -199,10 +199,10 @@ struct Checker {
     bool anyHinted = grid.Occluded(ray, skip, &anyPatch);
     ++rays;
     hits += wantHit;
-    bool same = wantHit == gotHit && occluded == wantHit && hinted == wantHit &&
-                anyHinted == wantHit &&
-                (!wantHit || (want.patch == got.patch && Bits(want.t) == Bits(got.t) &&
-                              want.front == got.front));
+    bool same =
+        wantHit == gotHit && occluded == wantHit && hinted == wantHit && anyHinted == wantHit &&
+        (!wantHit ||
+         (want.patch == got.patch && Bits(want.t) == Bits(got.t) && want.front == got.front));
     if (!same && ++failures <= 5) {
       ADD_FAILURE() << kind << " ray o=(" << ray.o.x << "," << ray.o.y << "," << ray.o.z << ") d=("
                     << ray.d.x << "," << ray.d.y << "," << ray.d.z << ") t=(" << ray.tMin << ","
@@ -212,7 +212,8 @@ struct Checker {
                     << ", grid "
                     << (gotHit ? std::to_string(got.patch) + "@" + std::to_string(got.t)
                                : std::string("miss"))
-                    << ", occluded " << occluded << " (hinted " << hinted << ", " << anyHinted << ")";
+                    << ", occluded " << occluded << " (hinted " << hinted << ", " << anyHinted
+                    << ")";
     }
   }
 

@@ -1,5 +1,7 @@
 // Hostile use (issue 17): closed standard descriptors, and the like. Each
 // case here once gave a wrong result, a lost output or a crash.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,10 +11,6 @@
 #include <iterator>
 #include <string>
 #include <vector>
-
-#include <sys/wait.h>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/os.h"
@@ -30,7 +28,8 @@ TEST(HardeningTest, ClosedStandardDescriptorsNeverBecomeOutputs) {
   TempDir dir;
   for (const char* redirect : {"2>&-", "1>&- 2>&-", "0<&- 1>&- 2>&-"}) {
     std::string out = dir.File("out");
-    std::string cmd = VismaskBin() + " render scenes/cornell.obj --width 32 --height 32 --max-shots 300 --out " +
+    std::string cmd = VismaskBin() +
+                      " render scenes/cornell.obj --width 32 --height 32 --max-shots 300 --out " +
                       out + " " + redirect;
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     std::string png = ReadFile(out + "/image.png");
@@ -46,7 +45,8 @@ TEST(HardeningTest, ClosedStandardDescriptorsNeverBecomeOutputs) {
 // user error that names the bytes (exit 2, no outputs), not a CHECK (134).
 TEST(HardeningTest, RefusedArenaMemoryIsAUserError) {
 #if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "ulimit -v cannot apply under AddressSanitizer (it reserves its shadow memory up front and aborts)";
+  GTEST_SKIP() << "ulimit -v cannot apply under AddressSanitizer (it reserves its shadow memory up "
+                  "front and aborts)";
 #endif
   TempDir dir;
   const std::string cases[] = {
@@ -57,8 +57,8 @@ TEST(HardeningTest, RefusedArenaMemoryIsAUserError) {
   };
   for (const std::string& extra : cases) {
     std::string out = dir.File("out");
-    std::string cmd = "(ulimit -v 4000000; " + VismaskBin() + " render scenes/cornell.obj " + extra +
-                      " --out " + out + " 2> " + dir.File("err") + ")";
+    std::string cmd = "(ulimit -v 4000000; " + VismaskBin() + " render scenes/cornell.obj " +
+                      extra + " --out " + out + " 2> " + dir.File("err") + ")";
     int status = std::system(cmd.c_str());
     ASSERT_TRUE(WIFEXITED(status)) << cmd;
     EXPECT_EQ(WEXITSTATUS(status), 2) << cmd << "\n" << ReadFile(dir.File("err"));
@@ -134,8 +134,10 @@ TEST(HardeningTest, CommitAllIsAllOrNothing) {
 TEST(HardeningTest, UnreplaceableOutputIsRefusedAtInit) {
   TempDir dir;
   std::string out = dir.File("out");
-  const std::vector<std::string> run = {"render", "scenes/cornell.obj", "--width", "32", "--height",
-                                        "32", "--max-shots", "200", "--quiet", "--out", out};
+  const std::vector<std::string> run = {
+      "render", "scenes/cornell.obj", "--width", "32",      "--height",
+      "32",     "--max-shots",        "200",     "--quiet", "--out",
+      out};
   ASSERT_EQ(test::RunMain(run).code, 0);
   std::string png = ReadFile(out + "/image.png"), json = ReadFile(out + "/run.json");
   std::filesystem::remove(out + "/patches.csv");
@@ -144,7 +146,8 @@ TEST(HardeningTest, UnreplaceableOutputIsRefusedAtInit) {
   second.insert(second.end(), {"--seed", "7"});
   auto r = test::RunMain(second);
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.err.find("patches.csv' exists and is not a regular file"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("patches.csv' exists and is not a regular file"), std::string::npos)
+      << r.err;
   EXPECT_EQ(ReadFile(out + "/image.png"), png);
   EXPECT_EQ(ReadFile(out + "/run.json"), json);
   for (const auto& e : std::filesystem::directory_iterator(out))
@@ -157,9 +160,10 @@ TEST(HardeningTest, UnreplaceableOutputIsRefusedAtInit) {
 TEST(HardeningTest, SecondRunIntoTheSameDirectoryIsRefused) {
   TempDir dir;
   std::string out = dir.File("out");
-  std::string first = VismaskBin() + " render scenes/cornell.obj --width 32 --height 32 --rays 4096 "
-                      "--max-shots 1000000 --max-seconds 6 --quiet --out " + out +
-                      " 2> " + dir.File("first.err") + " & echo $! > " + dir.File("pid");
+  std::string first = VismaskBin() +
+                      " render scenes/cornell.obj --width 32 --height 32 --rays 4096 "
+                      "--max-shots 1000000 --max-seconds 6 --quiet --out " +
+                      out + " 2> " + dir.File("first.err") + " & echo $! > " + dir.File("pid");
   ASSERT_EQ(std::system(first.c_str()), 0);
   // Wait (up to 5 s) until the first run holds the lock.
   for (int i = 0; i < 100 && ReadFile(out + "/.vismask.lock").empty(); ++i) usleep(50000);
@@ -172,7 +176,8 @@ TEST(HardeningTest, SecondRunIntoTheSameDirectoryIsRefused) {
       << r.err;
   // The first run finishes with its own outputs.
   std::string pid = ReadFile(dir.File("pid"));
-  std::string wait = "while kill -0 " + pid.substr(0, pid.find('\n')) + " 2>/dev/null; do sleep 0.1; done";
+  std::string wait =
+      "while kill -0 " + pid.substr(0, pid.find('\n')) + " 2>/dev/null; do sleep 0.1; done";
   ASSERT_EQ(std::system(wait.c_str()), 0);
   EXPECT_NE(ReadFile(out + "/run.json").find("\"width\": 32"), std::string::npos);
   EXPECT_EQ(ReadFile(out + "/image.pfm").substr(0, 9), "PF\n32 32\n");
@@ -186,15 +191,15 @@ TEST(HardeningTest, DefaultBudgetIsTheAvailableMemory) {
   // 64x64x64 environments and a 16384^2 image: some 60 GB a rank, beyond
   // the 24 GiB hosts this runs on.
   auto r = test::RunMain({"render", "scenes/cornell.obj", "--envs", "64x64x64", "--max-shots", "5",
-                          "--rays", "64", "--width", "16384", "--height", "16384", "--quiet", "--out",
-                          dir.File("out")});
+                          "--rays", "64", "--width", "16384", "--height", "16384", "--quiet",
+                          "--out", dir.File("out")});
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("more than the memory available to it"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("MemAvailable over 1 rank on this host"), std::string::npos) << r.err;
   EXPECT_FALSE(test::FileExists(dir.File("out")));
   // An explicit budget is the user's word: the same run is then judged by it.
-  r = test::RunMain({"render", "scenes/cornell.obj", "--envs", "64x64x64", "--max-shots", "5", "--rays",
-                     "64", "--quiet", "--mem-budget", "1G", "--out", dir.File("out")});
+  r = test::RunMain({"render", "scenes/cornell.obj", "--envs", "64x64x64", "--max-shots", "5",
+                     "--rays", "64", "--quiet", "--mem-budget", "1G", "--out", dir.File("out")});
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("more than the budget of 1073741824 bytes"), std::string::npos) << r.err;
 }
@@ -203,7 +208,8 @@ TEST(HardeningTest, DefaultBudgetIsTheAvailableMemory) {
 // an uncaught bad_alloc (exit 134); it is refused with exit 2.
 TEST(HardeningTest, SceneTooBigToLoadIsRefused) {
 #if defined(__SANITIZE_ADDRESS__)
-  GTEST_SKIP() << "ulimit -v cannot apply under AddressSanitizer (it reserves its shadow memory up front and aborts)";
+  GTEST_SKIP() << "ulimit -v cannot apply under AddressSanitizer (it reserves its shadow memory up "
+                  "front and aborts)";
 #endif
   TempDir dir;
   std::string obj = "mtllib big.mtl\nusemtl light\n";
@@ -211,8 +217,8 @@ TEST(HardeningTest, SceneTooBigToLoadIsRefused) {
   char line[256];
   for (int i = 0; i < n; ++i) {
     double x = (i % 97) * 1.01, y = (i / 97 % 97) * 1.01, z = (i / 9409) * 1.01;
-    std::snprintf(line, sizeof line, "v %g %g %g\nv %g %g %g\nv %g %g %g\n", x, y, z, x + 1, y, z, x, y + 1,
-                  z);
+    std::snprintf(line, sizeof line, "v %g %g %g\nv %g %g %g\nv %g %g %g\n", x, y, z, x + 1, y, z,
+                  x, y + 1, z);
     obj += line;
   }
   for (int i = 0; i < n; ++i) {
@@ -221,8 +227,8 @@ TEST(HardeningTest, SceneTooBigToLoadIsRefused) {
   }
   test::WriteFile(dir.File("big.obj"), obj);
   test::WriteFile(dir.File("big.mtl"), "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
-  std::string cmd = "(ulimit -v 250000; " + VismaskBin() + " render " + dir.File("big.obj") + " --quiet --out " +
-                    dir.File("out") + " 2> " + dir.File("err") + ")";
+  std::string cmd = "(ulimit -v 250000; " + VismaskBin() + " render " + dir.File("big.obj") +
+                    " --quiet --out " + dir.File("out") + " 2> " + dir.File("err") + ")";
   int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 2) << ReadFile(dir.File("err"));
@@ -269,7 +275,8 @@ TEST(HardeningTest, FootprintJsonEscapesTheScenePath) {
   std::string json = ReadFile(dir.File("fp.json"));
   EXPECT_NE(json.find("q\\\"x\\\\y.obj\""), std::string::npos) << json.substr(0, 200);
   if (std::system("command -v /usr/bin/python3 > /dev/null") == 0) {
-    std::string check = "/usr/bin/python3 -c 'import json,sys; json.load(open(sys.argv[1]))' " + dir.File("fp.json");
+    std::string check = "/usr/bin/python3 -c 'import json,sys; json.load(open(sys.argv[1]))' " +
+                        dir.File("fp.json");
     EXPECT_EQ(std::system(check.c_str()), 0) << json.substr(0, 200);
   }
 }

@@ -1,15 +1,14 @@
 // Output stage: PNG encoding inside its reserved scratch, PFM layout, tone
 // mapping, and the order-independent depth test used for compositing.
+#include <gtest/gtest.h>
+
 #include <cstring>
+#include <filesystem>
+#include <glm/geometric.hpp>
 #include <random>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <glm/geometric.hpp>
-#include <filesystem>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/image_io.h"
@@ -74,8 +73,8 @@ TEST(ImageTest, PfmRowsRunBottomToTop) {
 // refused naming the file; a PFM reads the same in either byte order.
 TEST(ImageTest, ImageFuzzSeedsReadOrAreRefusedWithTheName) {
   const std::string dir = "tests/fuzz/image-corpus/";
-  const std::set<std::string> goodPfm = {"pfm-le-1x1", "pfm-le-2x2", "pfm-be-2x2", "pfm-be-3x1-scale2",
-                                         "pfm-le-crlf"};
+  const std::set<std::string> goodPfm = {"pfm-le-1x1", "pfm-le-2x2", "pfm-be-2x2",
+                                         "pfm-be-3x1-scale2", "pfm-le-crlf"};
   const std::set<std::string> goodPgm = {"pgm-4x3", "pgm-1x1-maxval1", "pgm-comment-free-tabs"};
   int seen = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
@@ -107,7 +106,8 @@ TEST(ImageTest, ImageFuzzSeedsReadOrAreRefusedWithTheName) {
   ASSERT_TRUE(ReadPfm(dir + "pfm-be-2x2", &be).ok());
   EXPECT_EQ(le.pixels, be.pixels);
   // Row 0 is the top, the file's last row.
-  std::vector<float> want = {3.5f, 7.0f, 0.125f, 1e6f, 0.75f, 0.0f, 0.25f, 0.5f, 1.0f, 2.0f, 0.0f, 1e-3f};
+  std::vector<float> want = {3.5f,  7.0f, 0.125f, 1e6f, 0.75f, 0.0f,
+                             0.25f, 0.5f, 1.0f,   2.0f, 0.0f,  1e-3f};
   EXPECT_EQ(le.pixels, want);
   PgmImage pgm;
   ASSERT_TRUE(ReadPgm(dir + "pgm-4x3", &pgm).ok());

@@ -1,6 +1,7 @@
 // make install / make uninstall (issue 21): into a temporary DESTDIR, the
 // files where a Debian tool has them, the installed binary finding its own
 // viewer page (and serving its three.js files), then nothing left.
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 
@@ -10,8 +11,6 @@
 #include <filesystem>
 #include <string>
 #include <thread>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 
@@ -25,7 +24,9 @@ using test::VismaskBin;
 namespace fs = std::filesystem;
 
 // A shell command, stopped after 300 s.
-int Sh(const std::string& cmd, std::string* out) { return test::ShellOutput(cmd, 300, out); }
+int Sh(const std::string& cmd, std::string* out) {
+  return test::ShellOutput(cmd, 300, out);
+}
 
 // make in the source tree, outside the make that runs the suite (its
 // jobserver and flags are not for this one); VISMASK_MAKE_ARGS (set by make
@@ -54,11 +55,12 @@ TEST(InstallTest, InstallsFindsItsPageAndUninstalls) {
   EXPECT_TRUE(fs::status(root + "/bin/vismask").permissions() == fs::perms(0755));
   EXPECT_EQ(FileExists(root + "/bin/vismask-mpi"), mpi);
   for (const char* f : {"index.html", "viewer.js", "serve.py"})
-    EXPECT_EQ(ReadFile(root + "/share/vismask/viewer/" + f), ReadFile(std::string("viewer/") + f)) << f;
+    EXPECT_EQ(ReadFile(root + "/share/vismask/viewer/" + f), ReadFile(std::string("viewer/") + f))
+        << f;
   // Every module the page imports, so that the installed viewer works offline.
-  for (const char* f : {"three.module.js", "three.core.js", "LICENSE", "addons/loaders/GLTFLoader.js",
-                        "addons/controls/OrbitControls.js", "addons/utils/BufferGeometryUtils.js",
-                        "addons/utils/SkeletonUtils.js"})
+  for (const char* f : {"three.module.js", "three.core.js", "LICENSE",
+                        "addons/loaders/GLTFLoader.js", "addons/controls/OrbitControls.js",
+                        "addons/utils/BufferGeometryUtils.js", "addons/utils/SkeletonUtils.js"})
     EXPECT_GT(ReadFile(root + "/share/vismask/viewer/vendor/" + f).size(), 0u) << f;
   std::string man = ReadFile(root + "/share/man/man1/vismask.1");
   EXPECT_NE(man.find(".TH VISMASK \"1\""), std::string::npos);
@@ -70,8 +72,8 @@ TEST(InstallTest, InstallsFindsItsPageAndUninstalls) {
   TempDir out;
   std::string glb("glTF\x02\x00\x00\x00\x0c\x00\x00\x00", 12);
   test::WriteFile(out.File("m.glb"), glb);
-  std::string cmd = root + "/bin/vismask view " + out.path() + " > " + dir.File("view.out") + " 2> " +
-                    dir.File("view.err") + " & echo $!";
+  std::string cmd = root + "/bin/vismask view " + out.path() + " > " + dir.File("view.out") +
+                    " 2> " + dir.File("view.err") + " & echo $!";
   FILE* p = popen(cmd.c_str(), "r");
   ASSERT_NE(p, nullptr);
   int pid = -1;
@@ -80,19 +82,23 @@ TEST(InstallTest, InstallsFindsItsPageAndUninstalls) {
   std::string url;
   for (int i = 0; i < 600 && url.empty(); ++i) {
     std::string text = ReadFile(dir.File("view.out"));
-    if (text.find('\n') != std::string::npos) url = text.substr(0, text.find('\n'));
-    else std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (text.find('\n') != std::string::npos)
+      url = text.substr(0, text.find('\n'));
+    else
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   std::string origin = url.substr(0, url.find('/', 7)), fetched;
-  int fetch = Sh("python3 -c 'import sys, urllib.request; "
-                 "sys.stdout.buffer.write(urllib.request.urlopen(sys.argv[1]).read())' " +
-                     origin + "/vendor/three.module.js > " + dir.File("fetched"),
-                 &fetched);
+  int fetch =
+      Sh("python3 -c 'import sys, urllib.request; "
+         "sys.stdout.buffer.write(urllib.request.urlopen(sys.argv[1]).read())' " +
+             origin + "/vendor/three.module.js > " + dir.File("fetched"),
+         &fetched);
   std::string err = ReadFile(dir.File("view.err"));
   ::kill(pid, SIGTERM);
   ASSERT_FALSE(url.empty()) << err;
   EXPECT_EQ(fetch, 0) << fetched;
-  EXPECT_EQ(ReadFile(dir.File("fetched")), ReadFile(root + "/share/vismask/viewer/vendor/three.module.js"));
+  EXPECT_EQ(ReadFile(dir.File("fetched")),
+            ReadFile(root + "/share/vismask/viewer/vendor/three.module.js"));
   const std::string served = fs::weakly_canonical(root + "/share/vismask/viewer").string();
   EXPECT_NE(err.find("serving " + root + "/bin/../share/vismask/viewer"), std::string::npos)
       << err << " (expected " << served << ")";

@@ -1,13 +1,14 @@
 // Visibility masks, packets and the exchange's admission rule.
+#include "vismask/mask.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
+#include <glm/geometric.hpp>
 #include <random>
 #include <vector>
 
-#include <glm/geometric.hpp>
-#include <gtest/gtest.h>
-
-#include "vismask/mask.h"
 #include "vismask/mesh.h"
 #include "vismask/packet.h"
 #include "vismask/rng.h"
@@ -71,7 +72,8 @@ TEST(MaskTest, OpenFractionIsCosineWeighted) {
   EXPECT_NEAR(m.OpenFraction(), 0.5 - 0.5 * s * s, 1e-12);
   Rng rng(1, 2);
   int open = 0, n = 400000;
-  for (int i = 0; i < n; ++i) open += m.IsOpen(MaskPixel(CosineDirection(rng.NextFloat(), rng.NextFloat()), res));
+  for (int i = 0; i < n; ++i)
+    open += m.IsOpen(MaskPixel(CosineDirection(rng.NextFloat(), rng.NextFloat()), res));
   EXPECT_NEAR(static_cast<double>(open) / n, m.OpenFraction(), 0.004);
 }
 
@@ -80,7 +82,8 @@ TEST(MaskTest, PackUnpackAndAnd) {
   MaskShape shape{res};
   EXPECT_EQ(shape.bytes(), 85u);
   std::vector<uint64_t> wa(shape.words()), wb(shape.words());
-  MaskBits a(Span<uint64_t>(wa.data(), wa.size()), res), b(Span<uint64_t>(wb.data(), wb.size()), res);
+  MaskBits a(Span<uint64_t>(wa.data(), wa.size()), res),
+      b(Span<uint64_t>(wb.data(), wb.size()), res);
   a.SetAllOpen();
   std::mt19937 rng(5);
   for (int i = 0; i < 300; ++i) a.Close(rng() % shape.pixels());
@@ -98,9 +101,9 @@ TEST(MaskTest, PackUnpackAndAnd) {
 
 TEST(PacketTest, SizeIsFixedByTheMaskResolution) {
   EXPECT_EQ(PacketBytes(MaskShape{0}), sizeof(PacketHeader));
-  EXPECT_EQ(MaskShape{50}.bytes(), 1250u);  // ceil(4*50^2/8)
+  EXPECT_EQ(MaskShape{50}.bytes(), 1250u);                             // ceil(4*50^2/8)
   EXPECT_EQ(PacketBytes(MaskShape{50}), sizeof(PacketHeader) + 1256);  // padded to 8
-  EXPECT_EQ(PacketBytes(MaskShape{13}), sizeof(PacketHeader) + 88);   // 85 padded to 8
+  EXPECT_EQ(PacketBytes(MaskShape{13}), sizeof(PacketHeader) + 88);    // 85 padded to 8
   PacketHeader h{};
   h.shotKey = 0x0123456789abcdefull;
   h.power[1] = 2.5;

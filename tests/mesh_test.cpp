@@ -1,16 +1,16 @@
 #include "vismask/mesh.h"
 
+#include <gtest/gtest.h>
+
 #include <cfloat>
 #include <cmath>
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/mat4x4.hpp>
 #include <limits>
 #include <map>
 #include <numeric>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <glm/geometric.hpp>
-#include <glm/gtc/matrix_transform.hpp>
-#include <glm/mat4x4.hpp>
 
 namespace vismask {
 namespace {
@@ -27,7 +27,8 @@ glm::vec3 Tilt(float x, float y) {
 Scene MakeScene(const std::vector<std::vector<glm::vec2>>& shapes, bool flat = false) {
   Scene scene;
   scene.objPath = "test.obj";
-  scene.materials.push_back({"m", glm::vec3(0.5f), glm::vec3(1.0f, 2.0f, 3.0f), glm::vec3(0.0f), "", ""});
+  scene.materials.push_back(
+      {"m", glm::vec3(0.5f), glm::vec3(1.0f, 2.0f, 3.0f), glm::vec3(0.0f), "", ""});
   for (const auto& shape : shapes) {
     Polygon p;
     for (glm::vec2 v : shape) p.corners.push_back(flat ? glm::vec3(v, 0.0f) : Tilt(v.x, v.y));

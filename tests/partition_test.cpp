@@ -1,16 +1,16 @@
 #include "vismask/partition.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <map>
-#include <string>
-#include <vector>
-
-#include <gtest/gtest.h>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
+#include <map>
+#include <string>
+#include <vector>
 
 namespace vismask {
 namespace {
@@ -454,7 +454,8 @@ std::vector<double> WorkPerEnv(const Partition& part, float patchSize,
                                const Scene* bySourceArea = nullptr) {
   std::vector<double> work(part.grid.count(), 0.0);
   for (size_t i = 0; i < part.scene.polygons.size(); ++i) {
-    const Polygon& p = bySourceArea ? bySourceArea->polygons[part.source[i]] : part.scene.polygons[i];
+    const Polygon& p =
+        bySourceArea ? bySourceArea->polygons[part.source[i]] : part.scene.polygons[i];
     double w = EstimatedPatches(p.corners.data(), static_cast<int>(p.corners.size()), patchSize);
     if (bySourceArea) w *= part.scene.polygons[i].area / p.area;
     work[part.env[i]] += w;
@@ -512,7 +513,8 @@ TEST(PartitionTest, BalancedPlanesEvenOutTheCornellBox) {
     // The slabs by the splitter's own weight: even but for the walls across
     // an axis, which cannot be cut (each side wall of the box is about a
     // quarter of its patches, so 4 slabs on x cannot do better than that).
-    const std::vector<double> su = WorkPerEnv(u, patchSize, &scene), sb = WorkPerEnv(b, patchSize, &scene);
+    const std::vector<double> su = WorkPerEnv(u, patchSize, &scene),
+                              sb = WorkPerEnv(b, patchSize, &scene);
     for (int a = 0; a < 3; ++a) {
       if (balanced.n[a] == 1) continue;
       const double before = SlabImbalance(u, su, a), after = SlabImbalance(b, sb, a);

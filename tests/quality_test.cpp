@@ -1,5 +1,7 @@
 // Image quality (issue 15): the samples a shot draws, rays spent in
 // proportion to power, and sub-patch elements.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -7,8 +9,6 @@
 #include <set>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/environment.h"
@@ -122,9 +122,12 @@ TEST(SobolTest, SequentialAndRandomAccessAgreeAndSeedsDiffer) {
 // sampler than with the old fixed 4096 independent rays a shot.
 TEST(QualityTest, SeedNoiseAtAFixedRayBudgetIsFourTimesLower) {
   TempDir dir;
-  const std::vector<std::string> base = {"render", "scenes/cornell.obj", "--camera",
-                                         "278,273,-800,278,273,0,0,1,0,39.3076", "--width", "64",
-                                         "--height", "64", "--quiet", "--ray-budget", "6000000"};
+  const std::vector<std::string> base = {"render",   "scenes/cornell.obj",
+                                         "--camera", "278,273,-800,278,273,0,0,1,0,39.3076",
+                                         "--width",  "64",
+                                         "--height", "64",
+                                         "--quiet",  "--ray-budget",
+                                         "6000000"};
   auto run = [&](const std::string& name, const std::vector<std::string>& extra) {
     auto r = RunMain(Join(Join(base, extra), {"--out", dir.File(name)}));
     EXPECT_EQ(r.code, 0) << r.err;
@@ -254,7 +257,8 @@ TEST(ElementTest, LeavesHoldThePatchsPowerAndRefineAtShadows) {
     return n > 0 ? sum / n : 0.0;
   };
   double nearDepth = meanDepth(true), openDepth = meanDepth(false);
-  EXPECT_GT(nearDepth, openDepth + 0.3) << "near blocks " << nearDepth << ", open floor " << openDepth;
+  EXPECT_GT(nearDepth, openDepth + 0.3)
+      << "near blocks " << nearDepth << ", open floor " << openDepth;
 }
 
 // The pool is a fixed reservation: when it is used up, refinement stops,
@@ -262,9 +266,13 @@ TEST(ElementTest, LeavesHoldThePatchsPowerAndRefineAtShadows) {
 // never stops. Refinement changes the display only, never the solve.
 TEST(ElementTest, PoolExhaustionStopsRefinementAndSaysSo) {
   TempDir dir;
-  const std::vector<std::string> base = {"render", "scenes/cornell.obj", "--width", "48",
-                                         "--height", "48", "--quiet", "--emitted-rays", "2000000",
-                                         "--stop-unshot", "1e-2", "--patch-size", "140"};
+  const std::vector<std::string> base = {"render",   "scenes/cornell.obj",
+                                         "--width",  "48",
+                                         "--height", "48",
+                                         "--quiet",  "--emitted-rays",
+                                         "2000000",  "--stop-unshot",
+                                         "1e-2",     "--patch-size",
+                                         "140"};
   for (const char* k : {"0", "1", "64"}) {
     auto r = RunMain(Join(base, {"--elements", k, "--out", dir.File(k)}));
     ASSERT_EQ(r.code, 0) << r.err;
@@ -311,9 +319,12 @@ std::vector<double> ColumnProfile(const PfmImage& img, int y0, int y1) {
 // there was 2x the floor's brightness gradient over a whole patch.
 TEST(SeamTest, NoStepAtTheEnvironmentPlane) {
   TempDir dir;
-  const std::vector<std::string> base = {"render", "scenes/cornell.obj", "--camera",
-                                         "278,273,-800,278,273,0,0,1,0,39.3076", "--width", "128",
-                                         "--height", "128", "--quiet", "--emitted-rays", "1000000"};
+  const std::vector<std::string> base = {"render",   "scenes/cornell.obj",
+                                         "--camera", "278,273,-800,278,273,0,0,1,0,39.3076",
+                                         "--width",  "128",
+                                         "--height", "128",
+                                         "--quiet",  "--emitted-rays",
+                                         "1000000"};
   for (const char* e : {"1", "2"}) {
     auto r = RunMain(Join(base, {"--envs", e, "--mask-method", "R", "--out", dir.File(e)}));
     ASSERT_EQ(r.code, 0) << r.err;
@@ -329,8 +340,8 @@ TEST(SeamTest, NoStepAtTheEnvironmentPlane) {
     double scale = 0.0;
     for (int x = 56; x < 72; ++x) scale += std::fabs(p1[x + 1] - p1[x]) / 16.0;
     EXPECT_LT(std::fabs(step2 - step1), 2.0 * scale)
-        << "rows " << rows.first << "-" << rows.second << ": step " << step2 << " against "
-        << step1 << " in one environment (mean step " << scale << ")";
+        << "rows " << rows.first << "-" << rows.second << ": step " << step2 << " against " << step1
+        << " in one environment (mean step " << scale << ")";
   }
 }
 

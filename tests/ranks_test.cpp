@@ -1,6 +1,7 @@
 // The same render on one process, on 1-8 forked processes over pipes and (if
 // built) under mpirun gives the same bytes (image.pfm, patches.csv and the
 // --export .glb); a rank that dies ends the run.
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,8 +12,6 @@
 #include <filesystem>
 #include <fstream>
 #include <thread>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 
@@ -25,9 +24,15 @@ using test::RunMain;
 using test::TempDir;
 using test::VismaskBin;
 
-const std::vector<std::string> kBase = {
-    "render", "scenes/cornell.obj", "--envs", "4x1x2", "--rays", "512", "--max-shots", "1200",
-    "--width", "96", "--height", "96", "--mask-res", "24", "--patch-size", "50", "--quiet"};
+const std::vector<std::string> kBase = {"render",       "scenes/cornell.obj",
+                                        "--envs",       "4x1x2",
+                                        "--rays",       "512",
+                                        "--max-shots",  "1200",
+                                        "--width",      "96",
+                                        "--height",     "96",
+                                        "--mask-res",   "24",
+                                        "--patch-size", "50",
+                                        "--quiet"};
 
 // `kBase` with --mask-method `method`: the same bytes on one process, on
 // forked processes (`pipeRanks`) and under mpirun (`mpiRanks`, when built).
@@ -40,10 +45,16 @@ bool HaveMpi();
 // rounding drawn from each shot's stream), Sobol' samples, sub-patch
 // elements, antialiasing and the cut vertices shared across environments:
 // still the same bytes everywhere.
-const std::vector<std::string> kPowerBase = {
-    "render", "scenes/cornell.obj", "--envs", "2x1x2", "--emitted-rays", "400000", "--max-rays",
-    "2048", "--stop-unshot", "2e-2", "--width", "96", "--height", "96", "--mask-res", "24",
-    "--patch-size", "50", "--quiet"};
+const std::vector<std::string> kPowerBase = {"render",         "scenes/cornell.obj",
+                                             "--envs",         "2x1x2",
+                                             "--emitted-rays", "400000",
+                                             "--max-rays",     "2048",
+                                             "--stop-unshot",  "2e-2",
+                                             "--width",        "96",
+                                             "--height",       "96",
+                                             "--mask-res",     "24",
+                                             "--patch-size",   "50",
+                                             "--quiet"};
 
 TEST(RanksTest, PowerAllocationAndElementsGiveTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("R", {"2", "4"}, {"4"}, kPowerBase);
@@ -61,10 +72,16 @@ TEST(RanksTest, TwoSidedGivesTheSameBytesEverywhere) {
 
 // Textures: the patch means at init and the per-pixel lookups of each
 // rank's own patches, composited, do not depend on where they ran.
-const std::vector<std::string> kTexturedBase = {
-    "render", "scenes/textured/room.obj", "--envs", "2x1x1", "--emitted-rays", "300000",
-    "--max-rays", "2048", "--stop-unshot", "2e-2", "--width", "96", "--height", "96",
-    "--mask-res", "24", "--patch-size", "1", "--quiet"};
+const std::vector<std::string> kTexturedBase = {"render",         "scenes/textured/room.obj",
+                                                "--envs",         "2x1x1",
+                                                "--emitted-rays", "300000",
+                                                "--max-rays",     "2048",
+                                                "--stop-unshot",  "2e-2",
+                                                "--width",        "96",
+                                                "--height",       "96",
+                                                "--mask-res",     "24",
+                                                "--patch-size",   "1",
+                                                "--quiet"};
 
 TEST(RanksTest, TexturedSceneGivesTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("B", {"2"}, {"2"}, kTexturedBase);
@@ -87,10 +104,21 @@ TEST(RanksTest, MethodsCAndRGiveTheSameBytesEverywhere) {
 // Smoothing shares display values between polygons in different
 // environments and ranks, summed in an order that does not depend on them.
 TEST(RanksTest, SmoothingGivesTheSameBytesEverywhere) {
-  const std::vector<std::string> smooth = {
-      "render", "scenes/smooth/sphere-vn.obj", "--envs", "2x2x1", "--emitted-rays", "300000",
-      "--width", "96", "--height", "96", "--mask-res", "24", "--quiet",
-      "--camera", "0,0.3,4,0,0,0,0,1,0,35"};
+  const std::vector<std::string> smooth = {"render",
+                                           "scenes/smooth/sphere-vn.obj",
+                                           "--envs",
+                                           "2x2x1",
+                                           "--emitted-rays",
+                                           "300000",
+                                           "--width",
+                                           "96",
+                                           "--height",
+                                           "96",
+                                           "--mask-res",
+                                           "24",
+                                           "--quiet",
+                                           "--camera",
+                                           "0,0.3,4,0,0,0,0,1,0,35"};
   ExpectSameBytesEverywhere("R", {"2", "3", "4"}, {"2"}, smooth);
 }
 
@@ -100,10 +128,16 @@ TEST(RanksTest, SmoothingGivesTheSameBytesEverywhere) {
 // one process, pipes 1/2/4 and mpirun 1/2/4. The rounds hold many shots
 // (else this would test nothing new).
 TEST(RanksTest, DefaultWorkRoundsOnBalancedEnvironmentsGiveTheSameBytesEverywhere) {
-  const std::vector<std::string> base = {
-      "render", "scenes/cornell.obj", "--envs", "auto:4", "--emitted-rays", "400000",
-      "--max-rays", "2048", "--stop-unshot", "2e-2", "--width", "96", "--height", "96",
-      "--mask-res", "24", "--patch-size", "50", "--quiet"};
+  const std::vector<std::string> base = {"render",         "scenes/cornell.obj",
+                                         "--envs",         "auto:4",
+                                         "--emitted-rays", "400000",
+                                         "--max-rays",     "2048",
+                                         "--stop-unshot",  "2e-2",
+                                         "--width",        "96",
+                                         "--height",       "96",
+                                         "--mask-res",     "24",
+                                         "--patch-size",   "50",
+                                         "--quiet"};
   ExpectSameBytesEverywhere("B", {"1", "2", "4"}, {"1", "2", "4"}, base);
   TempDir dir;
   auto args = base;
@@ -123,9 +157,9 @@ TEST(RanksTest, DefaultWorkRoundsOnBalancedEnvironmentsGiveTheSameBytesEverywher
 // Issue 20, parallel by default: `--ranks 2` and `mpirun -np 2` with no
 // --envs run --envs auto:2, the same bytes as one process given auto:2.
 TEST(RanksTest, RanksWithoutEnvsGiveTheBytesOfEnvsAuto) {
-  const std::vector<std::string> base = {"render", "scenes/cornell.obj", "--patch-size", "50",
-                                         "--stop-unshot", "5e-2", "--width", "48", "--height",
-                                         "48", "--quiet"};
+  const std::vector<std::string> base = {
+      "render", "scenes/cornell.obj", "--patch-size", "50",     "--stop-unshot", "5e-2", "--width",
+      "48",     "--height",           "48",           "--quiet"};
   TempDir dir;
   auto run = [&](const std::string& out, std::vector<std::string> extra) {
     auto args = base;
@@ -138,8 +172,10 @@ TEST(RanksTest, RanksWithoutEnvsGiveTheBytesOfEnvsAuto) {
   run("pipe", {"--ranks", "2"});
   std::vector<std::string> outs = {"pipe"};
   if (HaveMpi()) {
-    std::string cmd = "ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-                      "mpirun -np 2 --oversubscribe " + VismaskBin() + "-mpi";
+    std::string cmd =
+        "ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+        "mpirun -np 2 --oversubscribe " +
+        VismaskBin() + "-mpi";
     for (const auto& a : base) cmd += " " + a;
     cmd += " --out " + dir.File("mpi") + " >" + dir.File("mpi.log") + " 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd << "\n" << ReadFile(dir.File("mpi.log"));
@@ -182,8 +218,10 @@ void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipe
     for (const char* n : mpiRanks) {
       // detect_leaks=0: under SAN=1, LeakSanitizer reports Open MPI's own
       // allocations from MPI_Init, which it never frees.
-      std::string cmd = "ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpirun -np " +
-                        std::string(n) + " --oversubscribe " + mpiBin;
+      std::string cmd =
+          "ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+          "mpirun -np " +
+          std::string(n) + " --oversubscribe " + mpiBin;
       for (const auto& a : base) cmd += " " + a;
       const std::string out = dir.File(std::string("mpi") + n);
       cmd += " --out " + out + " --export " + out + "/scene.glb >" + dir.File("mpi.log") + " 2>&1";
@@ -210,9 +248,9 @@ void ExpectSameBytesEverywhere(const char* method, std::vector<const char*> pipe
 // and no image written.
 TEST(RanksTest, KilledPipeChildEndsTheRunWithExitThree) {
   TempDir dir;
-  std::string cmd = VismaskBin() + " render scenes/cornell.obj --envs 4 --ranks 4 --rays 256 --out " +
-                    dir.File("out") + " --max-shots 100000000 --stop-unshot 0 --quiet 2>" +
-                    dir.File("err");
+  std::string cmd =
+      VismaskBin() + " render scenes/cornell.obj --envs 4 --ranks 4 --rays 256 --out " +
+      dir.File("out") + " --max-shots 100000000 --stop-unshot 0 --quiet 2>" + dir.File("err");
   pid_t pid = fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
@@ -236,7 +274,8 @@ TEST(RanksTest, KilledPipeChildEndsTheRunWithExitThree) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - killedAt).count();
+  double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - killedAt).count();
   if (!ended) {
     kill(pid, SIGKILL);
     waitpid(pid, &status, 0);
@@ -259,7 +298,6 @@ TEST(RanksTest, KilledPipeChildEndsTheRunWithExitThree) {
   EXPECT_NE(std::system(left.c_str()), 0) << "a rank outlived the run";
   std::printf("killed rank's run ended after %.2f s\n", seconds);
 }
-
 
 // A rank that stops (SIGSTOP) or hangs, issue 17 item 12, and one that dies
 // under mpirun, item 13: the run ends with the status the README gives,
@@ -367,17 +405,21 @@ void StopOnePipeRank(int victim) {
   std::printf("rank %d stopped: the run ended after %.2f s\n%s", victim, took, err.c_str());
 }
 
-TEST(RanksTest, StoppedPipeChildEndsTheRunWithExitThree) { StopOnePipeRank(2); }
+TEST(RanksTest, StoppedPipeChildEndsTheRunWithExitThree) {
+  StopOnePipeRank(2);
+}
 
-TEST(RanksTest, StoppedPipeRankZeroEndsTheRunWithExitThree) { StopOnePipeRank(0); }
+TEST(RanksTest, StoppedPipeRankZeroEndsTheRunWithExitThree) {
+  StopOnePipeRank(0);
+}
 
 // SIGTERM (or Ctrl-C) to a run: no output, no temporary file (the --export
 // .glb's, outside --out, included), and the signal's own status.
 TEST(RanksTest, SigtermLeavesNoTemporaryFiles) {
   TempDir dir;
   std::string out = dir.File("out");
-  pid_t pid = StartCommand(VismaskBin() + kEndless + " --envs 2 --ranks 2 --out " + out + " --export " +
-                           dir.File("scene.glb") + " 2>" + dir.File("err"));
+  pid_t pid = StartCommand(VismaskBin() + kEndless + " --envs 2 --ranks 2 --out " + out +
+                           " --export " + dir.File("scene.glb") + " 2>" + dir.File("err"));
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(WaitForTheSolve(out)) << ReadFile(dir.File("err"));
   ASSERT_EQ(kill(pid, SIGTERM), 0);
@@ -400,8 +442,8 @@ struct MpiRun {
   double took = 0.0;
   std::string log;
   std::vector<std::string> temp;  // temporary files left in --out
-  bool outputs = false;          // run.json or image.png written
-  bool left = false;             // a rank outlived mpirun
+  bool outputs = false;           // run.json or image.png written
+  bool left = false;              // a rank outlived mpirun
 };
 
 bool HaveMpi() {
@@ -414,8 +456,9 @@ MpiRun SignalOneMpiRank(int victim, int sig) {
   std::string out = dir.File("out");
   pid_t pid = StartCommand(
       "env ASAN_OPTIONS=detect_leaks=0 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-      "mpirun -np 3 --oversubscribe " + VismaskBin() + "-mpi" + kEndless + " --envs 3 --out " + out +
-      " >" + dir.File("log") + " 2>&1");
+      "mpirun -np 3 --oversubscribe " +
+      VismaskBin() + "-mpi" + kEndless + " --envs 3 --out " + out + " >" + dir.File("log") +
+      " 2>&1");
   EXPECT_GT(pid, 0);
   if (!WaitForTheSolve(out)) {
     ADD_FAILURE() << "no temporary outputs 20 s after the start\n" << ReadFile(dir.File("log"));
@@ -437,8 +480,8 @@ MpiRun SignalOneMpiRank(int victim, int sig) {
   run.temp = TempFilesIn(out);
   run.outputs = FileExists(out + "/run.json") || FileExists(out + "/image.png");
   run.left = RankLeft(out);
-  std::printf("mpirun -np 3, rank %d got signal %d: ended after %.2f s, wait status %d\n%s",
-              victim, sig, run.took, run.status, run.log.c_str());
+  std::printf("mpirun -np 3, rank %d got signal %d: ended after %.2f s, wait status %d\n%s", victim,
+              sig, run.took, run.status, run.log.c_str());
   return run;
 }
 

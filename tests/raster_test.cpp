@@ -1,17 +1,17 @@
 // Raster: exact pixel coverage (a 1-pixel box filter), pieces that tile a
 // patch or a plane, bilinear interpolation in a quad's own parameters, and
 // the composite's independence of grouping and order.
+#include "vismask/raster.h"
+
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <vector>
-
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
-#include <gtest/gtest.h>
-
-#include "vismask/raster.h"
+#include <vector>
 
 namespace vismask {
 namespace {
@@ -35,7 +35,8 @@ View TestView() {
 
 // The world point seen at pixel coordinates (px, py) at depth z.
 glm::vec3 AtPixel(double px, double py, double z = kFocal) {
-  return glm::vec3(float((px - 0.5 * kW) * z / kFocal), float((0.5 * kH - py) * z / kFocal), float(z));
+  return glm::vec3(float((px - 0.5 * kW) * z / kFocal), float((0.5 * kH - py) * z / kFocal),
+                   float(z));
 }
 
 DisplayPiece Piece(std::vector<glm::vec3> p, std::vector<float> c, uint32_t id) {
@@ -105,9 +106,9 @@ TEST(RasterTest, StraightEdgeMatchesExactCoverage) {
   const double s = 0.3719, y0 = 17.21;
   glm::dvec2 e0(-20, y0 - 20 * s), e1(90, y0 + 90 * s);
   // Corners counter-clockwise in the world (y up): seen from the front.
-  std::vector<DisplayPiece> face = {Piece({AtPixel(-20, 150), AtPixel(90, 150), AtPixel(e1.x, e1.y),
-                                           AtPixel(e0.x, e0.y)},
-                                          {1, 1, 1, 1}, 7)};
+  std::vector<DisplayPiece> face = {
+      Piece({AtPixel(-20, 150), AtPixel(90, 150), AtPixel(e1.x, e1.y), AtPixel(e0.x, e0.y)},
+            {1, 1, 1, 1}, 7)};
   Fb aa(true), point(false);
   DrawAll(face, &aa.fb);
   DrawAll(face, &point.fb);
@@ -133,9 +134,11 @@ TEST(RasterTest, BackFacesHideNothingBehindTheirObject) {
   // edge the wall shows in exactly the part the front face leaves open.
   glm::vec3 wall[4] = {AtPixel(-10, 80, 300), AtPixel(80, 80, 300), AtPixel(80, -10, 300),
                        AtPixel(-10, -10, 300)};
-  glm::vec3 f0 = AtPixel(20.3, 54), f1 = AtPixel(44, 54), f2 = AtPixel(44, 10), f3 = AtPixel(20.3, 10);
+  glm::vec3 f0 = AtPixel(20.3, 54), f1 = AtPixel(44, 54), f2 = AtPixel(44, 10),
+            f3 = AtPixel(20.3, 10);
   // The back face's far edge, at depth 150 (rows 32 -+ 22 * 100 / 150 on screen).
-  glm::vec3 b0 = AtPixel(30, 32 - 22.0 * 100 / 150, 150), b1 = AtPixel(30, 32 + 22.0 * 100 / 150, 150);
+  glm::vec3 b0 = AtPixel(30, 32 - 22.0 * 100 / 150, 150),
+            b1 = AtPixel(30, 32 + 22.0 * 100 / 150, 150);
   std::vector<DisplayPiece> scene = {
       Piece({wall[0], wall[1], wall[2], wall[3]}, {1, 1, 1, 1}, 1),
       Piece({f0, f1, f2, f3}, {0, 0, 0, 0}, 2),  // counter-clockwise: the front
@@ -154,7 +157,8 @@ TEST(RasterTest, BackFacesHideNothingBehindTheirObject) {
 TEST(RasterTest, PiecesSharingEdgesCoverExactlyOnce) {
   // Two coplanar quads of different patches sharing a slanted edge, covering
   // the whole image: every pixel is fully and once covered.
-  glm::vec3 tl = AtPixel(-10, -10), tr = AtPixel(80, -10), br = AtPixel(80, 80), bl = AtPixel(-10, 80);
+  glm::vec3 tl = AtPixel(-10, -10), tr = AtPixel(80, -10), br = AtPixel(80, 80),
+            bl = AtPixel(-10, 80);
   glm::vec3 m0 = AtPixel(23.3, -10), m1 = AtPixel(41.7, 80);  // the shared edge
   // Seen from behind (clockwise on screen) and from the front.
   for (bool reverse : {false, true}) {
@@ -184,11 +188,12 @@ TEST(RasterTest, PiecesSharingEdgesCoverExactlyOnce) {
   std::vector<DisplayPiece> four;
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j)
-      four.push_back(Piece({at(0.5 * i, 0.5 * j), at(0.5 * i + 0.5, 0.5 * j), at(0.5 * i + 0.5, 0.5 * j + 0.5),
-                            at(0.5 * i, 0.5 * j + 0.5)},
+      four.push_back(Piece({at(0.5 * i, 0.5 * j), at(0.5 * i + 0.5, 0.5 * j),
+                            at(0.5 * i + 0.5, 0.5 * j + 0.5), at(0.5 * i, 0.5 * j + 0.5)},
                            {1, 1, 1, 1}, 5));
   DrawAll(four, &quarters.fb);
-  DrawAll({Piece({at(0, 0), at(1, 0), at(1, 1)}, {1, 1, 1}, 5), Piece({at(0, 0), at(1, 1), at(0, 1)}, {1, 1, 1}, 5)},
+  DrawAll({Piece({at(0, 0), at(1, 0), at(1, 1)}, {1, 1, 1}, 5),
+           Piece({at(0, 0), at(1, 1), at(0, 1)}, {1, 1, 1}, 5)},
           &halves.fb);
   size_t full = 0, partial = 0;
   for (size_t i = 0; i < whole.fb.color.size(); ++i) {
@@ -198,7 +203,7 @@ TEST(RasterTest, PiecesSharingEdgesCoverExactlyOnce) {
     ASSERT_NEAR(quarters.fb.color[i].x, w, 1e-5f) << "pixel " << i;
     ASSERT_NEAR(halves.fb.color[i].x, w, 1e-5f) << "pixel " << i;
   }
-  EXPECT_GT(full, 600u);  // 40 x 32 pixels: the inner ones are whole...
+  EXPECT_GT(full, 600u);     // 40 x 32 pixels: the inner ones are whole...
   EXPECT_GT(partial, 100u);  // ...and its slanted border partial
   float area = 0;
   for (const glm::vec3& c : quarters.fb.color) area += c.x;
@@ -260,7 +265,8 @@ TEST(RasterTest, QuadsAreBilinearInTheirOwnParameters) {
       bool allIn = true;
       glm::dvec2 centreUv;
       for (int corner = 0; corner < 5; ++corner) {
-        double px = corner < 4 ? x + (corner & 1) : x + 0.5, py = corner < 4 ? y + (corner >> 1) : y + 0.5;
+        double px = corner < 4 ? x + (corner & 1) : x + 0.5,
+               py = corner < 4 ? y + (corner >> 1) : y + 0.5;
         glm::dvec3 r((px - 0.5 * kW) / kFocal, (0.5 * kH - py) / kFocal, 1.0);
         glm::dvec3 p = r * (glm::dot(n, q[0]) / glm::dot(n, r));
         glm::dvec2 uv = InverseBilinear(q, p);
@@ -281,17 +287,21 @@ TEST(RasterTest, CompositeMatchesOneFramebufferInAnyOrder) {
   // nearer, a patch drawn as two pieces with one id, and a stack of small
   // quads deep enough to overflow kFragments.
   std::vector<DisplayPiece> pieces = {
-      Piece({AtPixel(2, 60, 120), AtPixel(50, 60, 120), AtPixel(50, 4, 120), AtPixel(2, 4, 120)}, {1, 2, 3, 4}, 12),
-      Piece({AtPixel(10.5, 50, 120), AtPixel(62, 55, 120), AtPixel(60, 9, 120), AtPixel(14, 3, 120)},
-            {2, 2, 2, 2}, 11),
+      Piece({AtPixel(2, 60, 120), AtPixel(50, 60, 120), AtPixel(50, 4, 120), AtPixel(2, 4, 120)},
+            {1, 2, 3, 4}, 12),
+      Piece(
+          {AtPixel(10.5, 50, 120), AtPixel(62, 55, 120), AtPixel(60, 9, 120), AtPixel(14, 3, 120)},
+          {2, 2, 2, 2}, 11),
       Piece({AtPixel(20.2, 40, 90), AtPixel(40, 41.3, 90), AtPixel(30, 20.7, 90)}, {5, 1, 0}, 3),
-      Piece({AtPixel(5.5, 35, 100), AtPixel(27.3, 36, 100), AtPixel(27.3, 12, 100)}, {0.5, 0.5, 0.5}, 8),
-      Piece({AtPixel(5.5, 35, 100), AtPixel(27.3, 12, 100), AtPixel(5.5, 12, 100)}, {0.5, 0.5, 0.5}, 8),
+      Piece({AtPixel(5.5, 35, 100), AtPixel(27.3, 36, 100), AtPixel(27.3, 12, 100)},
+            {0.5, 0.5, 0.5}, 8),
+      Piece({AtPixel(5.5, 35, 100), AtPixel(27.3, 12, 100), AtPixel(5.5, 12, 100)}, {0.5, 0.5, 0.5},
+            8),
   };
   for (uint32_t k = 0; k < 6; ++k) {
     double z = 60 + 7 * k, o = 0.37 * k;
-    pieces.push_back(Piece({AtPixel(40 + o, 30 + o, z), AtPixel(47 + o, 30, z), AtPixel(47, 22 + o, z),
-                            AtPixel(40, 22 - o, z)},
+    pieces.push_back(Piece({AtPixel(40 + o, 30 + o, z), AtPixel(47 + o, 30, z),
+                            AtPixel(47, 22 + o, z), AtPixel(40, 22 - o, z)},
                            {float(k), 1, 1, 1}, 20 + k));
   }
   std::vector<DisplayPiece> reversed(pieces.rbegin(), pieces.rend());
@@ -321,7 +331,8 @@ TEST(RasterTest, CompositeMatchesOneFramebufferInAnyOrder) {
       int rows = std::min(5, kH - y);
       size_t n = size_t(rows) * kW, first = size_t(y) * kW;
       if (aa) {
-        std::memcpy(band.fb.frags.data(), &partB.fb.frags[first * kFragments], n * kFragments * sizeof(Fragment));
+        std::memcpy(band.fb.frags.data(), &partB.fb.frags[first * kFragments],
+                    n * kFragments * sizeof(Fragment));
         std::memcpy(band.fb.dropped.data(), &partB.fb.dropped[first], n);
       } else {
         std::memcpy(band.fb.color.data(), &partB.fb.color[first], n * sizeof(glm::vec3));
@@ -337,7 +348,8 @@ TEST(RasterTest, CompositeMatchesOneFramebufferInAnyOrder) {
       EXPECT_GT(dropped, 10u);  // the stack overflowed the list
     }
     for (Fb* f : {&back, &ab, &ba, &bands}) {
-      ASSERT_EQ(0, std::memcmp(all.fb.color.data(), f->fb.color.data(), all.fb.color.bytes())) << aa;
+      ASSERT_EQ(0, std::memcmp(all.fb.color.data(), f->fb.color.data(), all.fb.color.bytes()))
+          << aa;
       ASSERT_EQ(0, std::memcmp(all.fb.id.data(), f->fb.id.data(), all.fb.id.bytes())) << aa;
       if (aa) {
         ASSERT_EQ(0, std::memcmp(all.fb.frags.data(), f->fb.frags.data(), all.fb.frags.bytes()));

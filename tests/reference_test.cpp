@@ -1,11 +1,11 @@
 // --reference and --error-every: the error of the image against a reference,
 // measured during the solve without changing it.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/image_io.h"
@@ -19,10 +19,23 @@ using test::ReadFile;
 using test::RunMain;
 using test::TempDir;
 
-const std::vector<std::string> kBase = {"render",  "scenes/cornell.obj", "--patch-size", "70",
-                                        "--rays",  "512",  "--max-shots", "700",
-                                        "--width", "48",   "--height",   "40",
-                                        "--quiet", "--envs", "2", "--round-shots", "1"};
+const std::vector<std::string> kBase = {"render",
+                                        "scenes/cornell.obj",
+                                        "--patch-size",
+                                        "70",
+                                        "--rays",
+                                        "512",
+                                        "--max-shots",
+                                        "700",
+                                        "--width",
+                                        "48",
+                                        "--height",
+                                        "40",
+                                        "--quiet",
+                                        "--envs",
+                                        "2",
+                                        "--round-shots",
+                                        "1"};
 // (--round-shots 1: a round is a shot an environment, so --error-every 100
 // measures at every hundredth shot; rounds by work would hold many.)
 
@@ -50,7 +63,8 @@ TEST(ReferenceTest, CompareImagesIsTheRelativeRmse) {
   EXPECT_DOUBLE_EQ(e.maxAbs, 2.0);
   const float z[2] = {0, 0}, o[2] = {0, 1};
   EXPECT_EQ(CompareImages(Span<const float>(z, 2), Span<const float>(z, 2)).relativeRmse, 0.0);
-  EXPECT_TRUE(std::isinf(CompareImages(Span<const float>(o, 2), Span<const float>(z, 2)).relativeRmse));
+  EXPECT_TRUE(
+      std::isinf(CompareImages(Span<const float>(o, 2), Span<const float>(z, 2)).relativeRmse));
 }
 
 TEST(ReferenceTest, ErrorEveryKShotsWithoutChangingTheSolve) {
@@ -110,7 +124,8 @@ TEST(ReferenceTest, ErrorEveryKShotsWithoutChangingTheSolve) {
   std::string json = ReadFile(dir.File("measured/run.json"));
   EXPECT_NE(json.find("\"error_measurements\": 7"), std::string::npos) << json;
   EXPECT_NE(json.find("\"error_every\": 100"), std::string::npos) << json;
-  EXPECT_NE(ReadFile(dir.File("plain/run.json")).find("\"relative_rmse\": null"), std::string::npos);
+  EXPECT_NE(ReadFile(dir.File("plain/run.json")).find("\"relative_rmse\": null"),
+            std::string::npos);
 }
 
 TEST(ReferenceTest, ReferenceAloneMeasuresTheFinalImage) {
@@ -153,10 +168,13 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
       {{"--reference", dir.File("junk.pfm")}, "junk.pfm: not a colour PFM"},
       // Rank 0 alone reads the reference and refuses it; rank 1 stops too.
       {{"--reference", dir.File("junk.pfm"), "--ranks", "2"}, "junk.pfm: not a colour PFM"},
-      {{"--reference", dir.File("huge.pfm")}, "huge.pfm: truncated PFM: the header says 100000 x 100000"},
+      {{"--reference", dir.File("huge.pfm")},
+       "huge.pfm: truncated PFM: the header says 100000 x 100000"},
       {{"--reference", dir.File("max.pfm")}, "max.pfm: truncated PFM"},
-      {{"--reference", dir.File("nan.pfm")}, "nan.pfm: pixel (47, 0) (x, y from the top left) is not finite: NaN"},
-      {{"--reference", dir.File("inf.pfm")}, "inf.pfm: pixel (47, 0) (x, y from the top left) is not finite: Inf"},
+      {{"--reference", dir.File("nan.pfm")},
+       "nan.pfm: pixel (47, 0) (x, y from the top left) is not finite: NaN"},
+      {{"--reference", dir.File("inf.pfm")},
+       "inf.pfm: pixel (47, 0) (x, y from the top left) is not finite: Inf"},
   };
   for (const Case& c : cases) {
     auto args = kBase;
@@ -197,15 +215,17 @@ TEST(ReferenceTest, CompareImagesLeavesOutExcludedPixels) {
   // Pixel 1 alone differs; pixel 0 counts only in the denominator.
   const float b[6] = {1, 1, 1, 3, 3, 3}, a[6] = {1, 1, 1, 1, 1, 1};
   const uint8_t none[2] = {0, 0}, first[2] = {255, 0}, second[2] = {0, 1};
-  ImageError e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6),
-                               Span<const uint8_t>(none, 2));
+  ImageError e =
+      CompareImages(Span<const float>(a, 6), Span<const float>(b, 6), Span<const uint8_t>(none, 2));
   EXPECT_DOUBLE_EQ(e.relativeRmse, std::sqrt(12.0 / 30.0));
   EXPECT_EQ(e.excludedPixels, 0u);
-  e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6), Span<const uint8_t>(first, 2));
+  e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6),
+                    Span<const uint8_t>(first, 2));
   EXPECT_DOUBLE_EQ(e.relativeRmse, std::sqrt(12.0 / 27.0));
   EXPECT_EQ(e.excludedPixels, 1u);
   // Excluding the only differing pixel leaves no error at all.
-  e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6), Span<const uint8_t>(second, 2));
+  e = CompareImages(Span<const float>(a, 6), Span<const float>(b, 6),
+                    Span<const uint8_t>(second, 2));
   EXPECT_EQ(e.relativeRmse, 0.0);
   EXPECT_EQ(e.maxAbs, 0.0);
   EXPECT_EQ(e.excludedPixels, 1u);
@@ -219,9 +239,12 @@ TEST(ReferenceTest, ExcludeMaskLeavesPixelsOutOfTheRenderError) {
   test::WriteFile(dir.File("top.pgm"), Pgm(48, 40, [](int, int y) { return y < 10 ? 7 : 0; }));
   const std::string ref = dir.File("ref/image.pfm");
   Render(dir.File("plain"), {"--reference", ref, "--seed", "3", "--max-shots", "150"});
-  Render(dir.File("none"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude", dir.File("none.pgm")});
-  Render(dir.File("all"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude", dir.File("all.pgm")});
-  Render(dir.File("top"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude", dir.File("top.pgm")});
+  Render(dir.File("none"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude",
+                            dir.File("none.pgm")});
+  Render(dir.File("all"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude",
+                           dir.File("all.pgm")});
+  Render(dir.File("top"), {"--reference", ref, "--seed", "3", "--max-shots", "150", "--exclude",
+                           dir.File("top.pgm")});
   std::string plain = ReadFile(dir.File("plain/run.json"));
   std::string none = ReadFile(dir.File("none/run.json"));
   std::string all = ReadFile(dir.File("all/run.json"));
@@ -264,10 +287,13 @@ TEST(ReferenceTest, BadExcludeMaskExitsTwoAndWritesNothing) {
   } cases[] = {
       {{"--exclude", dir.File("ok.pgm")}, "--exclude: needs --reference"},
       {{"--reference", ref, "--exclude", dir.File("nothere.pgm")}, "nothere.pgm: cannot open"},
-      {{"--reference", ref, "--exclude", dir.File("small.pgm")}, "small.pgm: is 47x40, the image is 48x40"},
-      {{"--reference", ref, "--exclude", dir.File("ascii.pgm")}, "ascii.pgm: not an 8-bit binary PGM"},
+      {{"--reference", ref, "--exclude", dir.File("small.pgm")},
+       "small.pgm: is 47x40, the image is 48x40"},
+      {{"--reference", ref, "--exclude", dir.File("ascii.pgm")},
+       "ascii.pgm: not an 8-bit binary PGM"},
       {{"--reference", ref, "--exclude", dir.File("short.pgm")}, "short.pgm: truncated PGM"},
-      {{"--reference", ref, "--exclude", dir.File("small.pgm"), "--ranks", "2"}, "small.pgm: is 47x40"},
+      {{"--reference", ref, "--exclude", dir.File("small.pgm"), "--ranks", "2"},
+       "small.pgm: is 47x40"},
   };
   for (const Case& c : cases) {
     auto args = kBase;

@@ -1,11 +1,11 @@
 // End-to-end renders through the command line: the closed-box analytic
 // solution, determinism, the outputs' formats, and bad input.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/options.h"
@@ -46,8 +46,8 @@ TEST(RenderTest, ClosedBoxConvergesToAnalyticRadiosity) {
   TempDir dir;
   const double rho = 0.5, e = 2.0, exact = e / (1.0 - rho);
   WriteClosedBox(dir.path(), 1.0, rho, e);
-  auto r = RunMain({"render", dir.File("box.obj"), "--out", dir.File("out"), "--patch-size",
-                    "0.34", "--rays", "50000", "--stop-unshot", "1e-4", "--quiet", "--width", "32",
+  auto r = RunMain({"render", dir.File("box.obj"), "--out", dir.File("out"), "--patch-size", "0.34",
+                    "--rays", "50000", "--stop-unshot", "1e-4", "--quiet", "--width", "32",
                     "--height", "32"});
   ASSERT_EQ(r.code, 0) << r.err;
   auto rows = ReadCsv(dir.File("out/patches.csv"));
@@ -65,9 +65,9 @@ TEST(RenderTest, ClosedBoxConvergesToAnalyticRadiosity) {
 
 TEST(RenderTest, SameSeedSameBytesOtherSeedOtherBytes) {
   TempDir dir;
-  std::vector<std::string> base = {"render", "scenes/cornell.obj", "--rays", "256",
-                                   "--max-shots", "400", "--width", "96", "--height", "96",
-                                   "--quiet"};
+  std::vector<std::string> base = {
+      "render", "scenes/cornell.obj", "--rays", "256",    "--max-shots", "400", "--width",
+      "96",     "--height",           "96",     "--quiet"};
   auto run = [&](const std::string& out, const std::string& seed) {
     auto args = base;
     args.insert(args.end(), {"--out", dir.File(out), "--seed", seed});
@@ -235,10 +235,11 @@ TEST(RenderTest, HelpListsEveryOption) {
   auto r = RunMain({"--help"});
   std::string out = testing::internal::GetCapturedStdout();
   EXPECT_EQ(r.code, 0);
-  for (const char* flag : {"--out", "--patch-size", "--rays", "--seed", "--stop-unshot",
-                           "--max-shots", "--max-seconds", "--width", "--height", "--camera",
-                           "--exposure", "--quiet", "--correct-unshot", "--stop-error", "--aa",
-                           "--strict", "--emit", "--round-shots", "--round-work", "--envs auto"})
+  for (const char* flag :
+       {"--out",       "--patch-size",  "--rays",           "--seed",       "--stop-unshot",
+        "--max-shots", "--max-seconds", "--width",          "--height",     "--camera",
+        "--exposure",  "--quiet",       "--correct-unshot", "--stop-error", "--aa",
+        "--strict",    "--emit",        "--round-shots",    "--round-work", "--envs auto"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag;
 }
 
@@ -387,13 +388,16 @@ void ExpectSoundRender(const std::string& out, const std::string& what) {
        escaped = Triple(json, "escaped"), unshot = Triple(json, "unshot");
   for (int c = 0; c < 3; ++c) {
     EXPECT_GT(emitted[c], 0.0) << what;
-    EXPECT_NEAR(absorbed[c] + escaped[c] + unshot[c], emitted[c], 1e-9 * emitted[c]) << what << " " << c;
+    EXPECT_NEAR(absorbed[c] + escaped[c] + unshot[c], emitted[c], 1e-9 * emitted[c])
+        << what << " " << c;
   }
   for (const char* key : {"ambient", "stated_error"}) {
     size_t at = json.find(std::string("\"") + key + "\": ");
     ASSERT_NE(at, std::string::npos) << key;
-    EXPECT_EQ(json.substr(at, 40).find("inf"), std::string::npos) << what << " " << json.substr(at, 40);
-    EXPECT_EQ(json.substr(at, 40).find("nan"), std::string::npos) << what << " " << json.substr(at, 40);
+    EXPECT_EQ(json.substr(at, 40).find("inf"), std::string::npos)
+        << what << " " << json.substr(at, 40);
+    EXPECT_EQ(json.substr(at, 40).find("nan"), std::string::npos)
+        << what << " " << json.substr(at, 40);
   }
 }
 
@@ -409,18 +413,23 @@ TEST(RenderTest, RealScenesRender) {
   };
   const Case cases[] = {
       {{"scenes/real/CornellBox-Original.obj", "--camera", mcguire},
-       {"scenes/real/CornellBox-Original.obj:62: warning: 1 non-planar face triangulated (first here; up to "
+       {"scenes/real/CornellBox-Original.obj:62: warning: 1 non-planar face triangulated (first "
+        "here; up to "
         "0.005 off its plane)"}},
-      {{"scenes/real/CornellBox-Original.obj"}, {"scenes/real/CornellBox-Original.obj:62: warning: 1 non-planar"}},
+      {{"scenes/real/CornellBox-Original.obj"},
+       {"scenes/real/CornellBox-Original.obj:62: warning: 1 non-planar"}},
       {{"scenes/real/CornellBox-Sphere.obj"},  // the default camera looks in from +z
        {"scenes/real/CornellBox-Sphere.mtl:21: warning: ignoring MTL key 'v'",
-        "scenes/real/CornellBox-Sphere.mtl:15: warning: specular materials rendered as diffuse with their Kd: "
+        "scenes/real/CornellBox-Sphere.mtl:15: warning: specular materials rendered as diffuse "
+        "with their Kd: "
         "leftSphere (illum 5), rightSphere (illum 7)"}},
       {{"scenes/real/cornell_box.obj", "--emit", "light=ka"},
-       {"scenes/real/cornell_box.obj:77: warning: 1 non-planar face triangulated (first here; up to 0.8 off "
+       {"scenes/real/cornell_box.obj:77: warning: 1 non-planar face triangulated (first here; up "
+        "to 0.8 off "
         "its plane)"}},
       {{"scenes/lamp-room.obj", "--emit", "lamp=ka"},
-       {"scenes/lamp-room.obj:19: warning: 1 non-planar face triangulated (first here; up to 0.0025 off its "
+       {"scenes/lamp-room.obj:19: warning: 1 non-planar face triangulated (first here; up to "
+        "0.0025 off its "
         "plane)"}},
   };
   int k = 0;
@@ -428,19 +437,21 @@ TEST(RenderTest, RealScenesRender) {
     std::string out = dir.File("out" + std::to_string(k++));
     std::vector<std::string> args = {"render"};
     args.insert(args.end(), c.args.begin(), c.args.end());
-    args.insert(args.end(), {"--out", out, "--width", "64", "--height", "64", "--emitted-rays", "20000",
-                             "--quiet"});
+    args.insert(args.end(), {"--out", out, "--width", "64", "--height", "64", "--emitted-rays",
+                             "20000", "--quiet"});
     auto r = RunMain(args);
     ASSERT_EQ(r.code, 0) << c.args[0] << "\n" << r.err;
     std::vector<std::string> lines;
     std::istringstream err(r.err);
     for (std::string line; std::getline(err, line);) lines.push_back(line);
     ASSERT_EQ(lines.size(), c.warnings.size()) << r.err;
-    for (size_t i = 0; i < lines.size(); ++i) EXPECT_EQ(lines[i].rfind(c.warnings[i], 0), 0u) << lines[i];
+    for (size_t i = 0; i < lines.size(); ++i)
+      EXPECT_EQ(lines[i].rfind(c.warnings[i], 0), 0u) << lines[i];
     ExpectSoundRender(out, c.args[0]);
     // McGuire's boxes are closed on -z: the default view is chosen from +z.
     if (c.args.size() == 1 && c.args[0].find("CornellBox") != std::string::npos) {
-      EXPECT_NE(ReadFile(out + "/run.json").find("\"view\": \"back\""), std::string::npos) << c.args[0];
+      EXPECT_NE(ReadFile(out + "/run.json").find("\"view\": \"back\""), std::string::npos)
+          << c.args[0];
     }
   }
 }
@@ -448,10 +459,13 @@ TEST(RenderTest, RealScenesRender) {
 // --strict: the refusals before issue 16, word for word.
 TEST(RenderTest, StrictRefusesFacesAsBefore) {
   TempDir dir;
-  auto r = RunMain({"render", "scenes/real/CornellBox-Original.obj", "--strict", "--out", dir.File("out")});
+  auto r = RunMain(
+      {"render", "scenes/real/CornellBox-Original.obj", "--strict", "--out", dir.File("out")});
   EXPECT_EQ(r.code, 2);
-  EXPECT_EQ(r.err, "scenes/real/CornellBox-Original.obj:62: non-planar face: vertex 1 is 0.005 off the face's "
-                   "plane (tolerance 0.000284)\n");
+  EXPECT_EQ(
+      r.err,
+      "scenes/real/CornellBox-Original.obj:62: non-planar face: vertex 1 is 0.005 off the face's "
+      "plane (tolerance 0.000284)\n");
   EXPECT_FALSE(FileExists(dir.File("out")));
 }
 
@@ -463,8 +477,9 @@ TEST(RenderTest, EmitMarksEmittersOrExitsTwo) {
   EXPECT_NE(r.err.find("no emitter"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--emit"), std::string::npos) << r.err;
   const BadCase cases[] = {
-      {{"--emit", "lmap=ka"}, "vismask: --emit: no material 'lmap' in scenes/lamp-room.obj (its materials: "
-                              "wall, floor, lamp)"},
+      {{"--emit", "lmap=ka"},
+       "vismask: --emit: no material 'lmap' in scenes/lamp-room.obj (its materials: "
+       "wall, floor, lamp)"},
       {{"--emit", "lamp"}, "--emit: expected NAME=R,G,B"},
       {{"--emit", "=1,1,1"}, "--emit: expected NAME=R,G,B"},
       {{"--emit", "lamp=1,1"}, "--emit: expected NAME=R,G,B"},
@@ -481,8 +496,9 @@ TEST(RenderTest, EmitMarksEmittersOrExitsTwo) {
     EXPECT_FALSE(FileExists(out));
   }
   // NAME=R,G,B; a later --emit for the same name wins.
-  auto ok = RunMain({"render", "scenes/lamp-room.obj", "--out", out, "--emit", "lamp=1,1,1", "--emit",
-                     "lamp=2,3,4", "--width", "16", "--height", "16", "--emitted-rays", "2000", "--quiet"});
+  auto ok = RunMain({"render", "scenes/lamp-room.obj", "--out", out, "--emit", "lamp=1,1,1",
+                     "--emit", "lamp=2,3,4", "--width", "16", "--height", "16", "--emitted-rays",
+                     "2000", "--quiet"});
   ASSERT_EQ(ok.code, 0) << ok.err;
   auto rows = ReadCsv(out + "/patches.csv");
   bool lamp = false;
@@ -499,14 +515,15 @@ TEST(RenderTest, PerfectReflectorsInAnOpenBox) {
   WriteClosedBox(dir.path(), 1.0, 1.0, 1.0);
   auto closed = RunMain({"render", dir.File("box.obj"), "--out", dir.File("closed"), "--quiet"});
   EXPECT_EQ(closed.code, 2);
-  EXPECT_NE(closed.err.find("cannot lose power in the red channel"), std::string::npos) << closed.err;
+  EXPECT_NE(closed.err.find("cannot lose power in the red channel"), std::string::npos)
+      << closed.err;
   std::string obj = ReadFile(dir.File("box.obj"));
   obj.erase(obj.find("f 1 2 3 4\n"), 10);  // open at z = 0
   WriteFile(dir.File("box.obj"), obj);
   for (const char* correct : {"off", "on"}) {
     std::string out = dir.File(std::string("open-") + correct);
-    auto r = RunMain({"render", dir.File("box.obj"), "--out", out, "--width", "32", "--height", "32",
-                      "--emitted-rays", "20000", "--correct-unshot", correct, "--quiet"});
+    auto r = RunMain({"render", dir.File("box.obj"), "--out", out, "--width", "32", "--height",
+                      "32", "--emitted-rays", "20000", "--correct-unshot", correct, "--quiet"});
     ASSERT_EQ(r.code, 0) << r.err;
     ExpectSoundRender(out, correct);
   }

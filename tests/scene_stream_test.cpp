@@ -2,19 +2,20 @@
 // (LoadScene + PartitionScene): the same polygons, pieces, warnings and
 // errors on every scene of scenes/; the streamed emitter check and camera
 // probe against their whole-scene forms.
+#include "vismask/scene_stream.h"
+
+#include <gtest/gtest.h>
+
 #include <cstring>
 #include <filesystem>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/camera.h"
 #include "vismask/emitter_check.h"
 #include "vismask/partition.h"
 #include "vismask/scene.h"
-#include "vismask/scene_stream.h"
 
 namespace vismask {
 namespace {
@@ -32,7 +33,9 @@ std::vector<std::string> EveryScene() {
 // Bit for bit: corners, uv, vn, normal, area, material, line, smoothing.
 void ExpectSamePolygon(const Polygon& a, const Polygon& b, const std::string& where) {
   ASSERT_EQ(a.corners.size(), b.corners.size()) << where;
-  EXPECT_EQ(0, std::memcmp(a.corners.data(), b.corners.data(), a.corners.size() * sizeof(glm::vec3))) << where;
+  EXPECT_EQ(0,
+            std::memcmp(a.corners.data(), b.corners.data(), a.corners.size() * sizeof(glm::vec3)))
+      << where;
   ASSERT_EQ(a.uv.size(), b.uv.size()) << where;
   EXPECT_EQ(0, std::memcmp(a.uv.data(), b.uv.data(), a.uv.size() * sizeof(glm::vec2))) << where;
   ASSERT_EQ(a.vn.size(), b.vn.size()) << where;
@@ -60,20 +63,24 @@ TEST(SceneStreamTest, SamePolygonsPiecesAndWarningsOnEveryScene) {
     const LoadOptions options = OptionsFor(path);
     Scene whole;
     std::vector<std::string> warnings;
-    Status ws = LoadSceneFromText(path, test::ReadFile(path),
-                                  [](const std::string& p, std::string* text) {
-                                    if (!test::FileExists(p)) return std::string("cannot open");
-                                    *text = test::ReadFile(p);
-                                    return std::string();
-                                  },
-                                  &whole, &warnings, options);
+    Status ws = LoadSceneFromText(
+        path, test::ReadFile(path),
+        [](const std::string& p, std::string* text) {
+          if (!test::FileExists(p)) return std::string("cannot open");
+          *text = test::ReadFile(p);
+          return std::string();
+        },
+        &whole, &warnings, options);
     SceneInfo info;
     ASSERT_TRUE(CountObj(path, &info).ok()) << path;
     std::vector<Polygon> scanned, streamed;
-    Status ss = ScanObj(path, options, [&](uint32_t i, const Polygon& p) {
-      EXPECT_EQ(i, scanned.size());
-      scanned.push_back(p);
-    }, &info);
+    Status ss = ScanObj(
+        path, options,
+        [&](uint32_t i, const Polygon& p) {
+          EXPECT_EQ(i, scanned.size());
+          scanned.push_back(p);
+        },
+        &info);
     EXPECT_EQ(ws.ToString(), ss.ToString()) << path;
     if (!ws.ok() || !ss.ok()) continue;
     ++loaded;
@@ -84,7 +91,8 @@ TEST(SceneStreamTest, SamePolygonsPiecesAndWarningsOnEveryScene) {
       EXPECT_EQ(whole.materials[m].name, info.materials[m].name);
       EXPECT_EQ(whole.materials[m].ke, info.materials[m].ke) << path;
     }
-    ASSERT_TRUE(StreamObj(info, options, [&](uint32_t, const Polygon& p) { streamed.push_back(p); }).ok());
+    ASSERT_TRUE(
+        StreamObj(info, options, [&](uint32_t, const Polygon& p) { streamed.push_back(p); }).ok());
     ASSERT_EQ(whole.polygons.size(), scanned.size()) << path;
     ASSERT_EQ(whole.polygons.size(), streamed.size()) << path;
     EXPECT_EQ(whole.polygons.size(), info.numPolygons);
@@ -114,7 +122,8 @@ TEST(SceneStreamTest, SamePolygonsPiecesAndWarningsOnEveryScene) {
       for (size_t k = 0; k < cut.scene.polygons.size(); ++k)
         pieces.push_back({cut.env[k], i, cut.scene.polygons[k]});
     }
-    std::stable_sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) { return a.env < b.env; });
+    std::stable_sort(pieces.begin(), pieces.end(),
+                     [](const Piece& a, const Piece& b) { return a.env < b.env; });
     ASSERT_EQ(pieces.size(), all.scene.polygons.size()) << path;
     for (size_t k = 0; k < pieces.size(); ++k) {
       EXPECT_EQ(pieces[k].env, all.env[k]) << path;
@@ -128,19 +137,20 @@ TEST(SceneStreamTest, SamePolygonsPiecesAndWarningsOnEveryScene) {
 // Pass 1 gives every error LoadScene gives, at the same file:line.
 TEST(SceneStreamTest, SameErrors) {
   TempDir dir;
-  test::WriteFile(dir.File("m.mtl"), "newmtl light\nKe 1 1 1\nKd 0.5 0.5 0.5\nnewmtl dark\nKd 0.5 0.5 0.5\n"
-                                     "newmtl white\nKd 1 1 1\nKe 0 0 0\n");
+  test::WriteFile(dir.File("m.mtl"),
+                  "newmtl light\nKe 1 1 1\nKd 0.5 0.5 0.5\nnewmtl dark\nKd 0.5 0.5 0.5\n"
+                  "newmtl white\nKd 1 1 1\nKe 0 0 0\n");
   const std::string head = "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n";
   const std::vector<std::string> bodies = {
-      "f 1 2 9\n",                          // out of range
-      "f 1 2\n",                            // too few
-      "v 1 abc 0\nf 1 2 3\n",               // bad number
-      "usemtl dark\nf 1 2 3\n",             // no emitter
-      "f 1 2 3\nl 1 2\n",                   // lines
-      "usemtl nothing\n",                   // unknown material
-      "v 0 0 2e15\nf 1 2 5\n",              // beyond float's range
+      "f 1 2 9\n",                            // out of range
+      "f 1 2\n",                              // too few
+      "v 1 abc 0\nf 1 2 3\n",                 // bad number
+      "usemtl dark\nf 1 2 3\n",               // no emitter
+      "f 1 2 3\nl 1 2\n",                     // lines
+      "usemtl nothing\n",                     // unknown material
+      "v 0 0 2e15\nf 1 2 5\n",                // beyond float's range
       "v 1e-16 0 0\nv 0 1e-16 0\nf 1 5 6\n",  // a face too small
-      "f 1 2 3\nf 3 2 1\n",                 // fine
+      "f 1 2 3\nf 3 2 1\n",                   // fine
   };
   for (const std::string& body : bodies) {
     const std::string path = dir.File("s.obj");
@@ -150,15 +160,17 @@ TEST(SceneStreamTest, SameErrors) {
       options.strict = strict;
       Scene whole;
       std::vector<std::string> w;
-      Status a = LoadSceneFromText(path, head + body,
-                                   [](const std::string& p, std::string* text) {
-                                     *text = test::ReadFile(p);
-                                     return std::string();
-                                   },
-                                   &whole, &w, options);
+      Status a = LoadSceneFromText(
+          path, head + body,
+          [](const std::string& p, std::string* text) {
+            *text = test::ReadFile(p);
+            return std::string();
+          },
+          &whole, &w, options);
       SceneInfo info;
       ASSERT_TRUE(CountObj(path, &info).ok());
-      Status b = ScanObj(path, options, [](uint32_t, const Polygon&) {}, &info);
+      Status b = ScanObj(
+          path, options, [](uint32_t, const Polygon&) {}, &info);
       EXPECT_EQ(a.ToString(), b.ToString()) << body;
     }
   }

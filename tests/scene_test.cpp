@@ -1,14 +1,14 @@
 #include "vismask/scene.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <glm/geometric.hpp>
 #include <iterator>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <glm/geometric.hpp>
 
 namespace vismask {
 namespace {
@@ -33,7 +33,8 @@ class SceneTest : public testing::Test {
     return dir_ + name;
   }
   // Loads kHead + `body` with kMtl as m.mtl.
-  Status LoadBody(const std::string& body, Scene* scene, const LoadOptions& options = LoadOptions()) {
+  Status LoadBody(const std::string& body, Scene* scene,
+                  const LoadOptions& options = LoadOptions()) {
     Write("m.mtl", kMtl);
     return LoadScene(Write("s.obj", kHead + body), scene, options);
   }
@@ -173,7 +174,8 @@ TEST_F(SceneTest, PerCornerDataIsAllOrNothingAndInRange) {
   ASSERT_TRUE(LoadBodyWarnings("vt 0 0\nf 1/1 2 3\nf 1/1 3 4\n", &scene, &warnings).ok());
   EXPECT_TRUE(scene.polygons[0].uv.empty());
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0], obj() + ":8: warning: texture coordinates on some corners of a face only: ignored");
+  EXPECT_EQ(warnings[0],
+            obj() + ":8: warning: texture coordinates on some corners of a face only: ignored");
   ExpectError(LoadBody("vt 0 0\nf 1/2 2/1 3/1\n", &scene), obj(), 8,
               "texture coordinate index 2 out of range (1 texture coordinates so far)");
   ExpectError(LoadBody("f 1//1 2//1 3//1\n", &scene), obj(), 7, "normal index 1 out of range");
@@ -239,8 +241,9 @@ TEST_F(SceneTest, SeveralMtlFilesRelativeToTheObj) {
 // Keys that do not matter to diffuse radiosity are read silently; the rest
 // are named in one line at the first.
 TEST_F(SceneTest, UnknownMtlKeysWarnInOneLine) {
-  Write("m.mtl", "newmtl light\nNs 10\nKd 0.5 0.5 0.5\nNs 20\nillum 2\nKe 1 1 1\nNi 1.5\nd 1\nTr 0\n"
-                 "Tf 1 1 1\nKs 0 0 0\nKa 0.5 0.5 0.5\nmap_d a.png\nmap_Ke b.png\nmap_d c.png\nrefl d.png\n");
+  Write("m.mtl",
+        "newmtl light\nNs 10\nKd 0.5 0.5 0.5\nNs 20\nillum 2\nKe 1 1 1\nNi 1.5\nd 1\nTr 0\n"
+        "Tf 1 1 1\nKs 0 0 0\nKa 0.5 0.5 0.5\nmap_d a.png\nmap_Ke b.png\nmap_d c.png\nrefl d.png\n");
   Scene scene;
   testing::internal::CaptureStderr();
   Status s = LoadScene(Write("s.obj", kHead + std::string("f 1 2 3\n")), &scene);
@@ -258,16 +261,19 @@ TEST_F(SceneTest, UnknownMtlKeysWarnInOneLine) {
 // illum 3-9, Ks with a highlight, transparency: diffuse with their Kd, named
 // in one line (only materials that faces use).
 TEST_F(SceneTest, SpecularMaterialsAreNamedInOneWarning) {
-  Write("m.mtl", std::string(kMtl) +
-                     "newmtl mirror\nKd 0.1 0.1 0.1\nillum 5\nnewmtl glass\nKd 0.2 0.2 0.2\nTf 0.1 0.1 0.1\n"
-                     "Ni 1.5\nillum 7\nnewmtl shiny\nKd 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum 2\n"
-                     "newmtl matte\nKd 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum 1\n"
-                     "newmtl unused\nillum 5\nnewmtl veil\nKd 0.5 0.5 0.5\nd 0.25\n");
+  Write("m.mtl",
+        std::string(kMtl) +
+            "newmtl mirror\nKd 0.1 0.1 0.1\nillum 5\nnewmtl glass\nKd 0.2 0.2 0.2\nTf 0.1 0.1 0.1\n"
+            "Ni 1.5\nillum 7\nnewmtl shiny\nKd 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum 2\n"
+            "newmtl matte\nKd 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum 1\n"
+            "newmtl unused\nillum 5\nnewmtl veil\nKd 0.5 0.5 0.5\nd 0.25\n");
   Scene scene;
   std::vector<std::string> warnings;
   Status s = LoadObjWarnings(
-      Write("s.obj", kHead + std::string("f 1 2 3\nusemtl mirror\nf 1 2 3\nusemtl glass\nf 1 2 3\n"
-                                         "usemtl shiny\nf 1 2 3\nusemtl matte\nf 1 2 3\nusemtl veil\nf 1 2 3\n")),
+      Write("s.obj",
+            kHead + std::string(
+                        "f 1 2 3\nusemtl mirror\nf 1 2 3\nusemtl glass\nf 1 2 3\n"
+                        "usemtl shiny\nf 1 2 3\nusemtl matte\nf 1 2 3\nusemtl veil\nf 1 2 3\n")),
       &scene, &warnings);
   ASSERT_TRUE(s.ok()) << s.ToString();
   ASSERT_EQ(warnings.size(), 1u);
@@ -319,8 +325,10 @@ TEST_F(SceneTest, NonPlanarQuadIsTriangulatedWithAWarning) {
   EXPECT_TRUE(scene.polygons[2].uv.empty());
   EXPECT_NEAR(a.area + b.area, 1.0, 0.01);
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0], obj() + ":14: warning: 2 non-planar faces triangulated (first here; up to 0.0249 "
-                                 "off their plane)");
+  EXPECT_EQ(warnings[0],
+            obj() +
+                ":14: warning: 2 non-planar faces triangulated (first here; up to 0.0249 "
+                "off their plane)");
 }
 
 // A concave non-planar quad keeps its side: only the diagonal from its
@@ -332,7 +340,8 @@ TEST_F(SceneTest, ConcaveNonPlanarQuadSplitsAtItsReflexCorner) {
   ASSERT_EQ(scene.polygons.size(), 2u);
   for (const Polygon& p : scene.polygons) {
     EXPECT_GT(p.normal.z, 0.5f);
-    EXPECT_NE(std::find(p.corners.begin(), p.corners.end(), glm::vec3(0.5f, 0.5f, 0.3f)), p.corners.end());
+    EXPECT_NE(std::find(p.corners.begin(), p.corners.end(), glm::vec3(0.5f, 0.5f, 0.3f)),
+              p.corners.end());
   }
 }
 
@@ -361,8 +370,9 @@ TEST_F(SceneTest, DegenerateFacesAreDroppedWithACount) {
   ASSERT_EQ(scene.polygons.size(), 1u);
   EXPECT_EQ(scene.polygons[0].line, 10);
   ASSERT_EQ(warnings.size(), 1u) << warnings[0];
-  EXPECT_EQ(warnings[0], obj() + ":8: warning: 3 degenerate faces dropped (zero area: repeated or "
-                                 "collinear vertices; first here)");
+  EXPECT_EQ(warnings[0], obj() +
+                             ":8: warning: 3 degenerate faces dropped (zero area: repeated or "
+                             "collinear vertices; first here)");
 }
 
 // A corner in the middle of an edge, or repeating its neighbour, is removed
@@ -381,8 +391,9 @@ TEST_F(SceneTest, CollinearOrRepeatedCornersAreRemoved) {
   EXPECT_DOUBLE_EQ(p.area, 1.0);
   EXPECT_EQ(scene.polygons[1].corners.size(), 4u);
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0], obj() + ":13: warning: 2 repeated or collinear corners removed from 2 faces "
-                                 "(first here)");
+  EXPECT_EQ(warnings[0], obj() +
+                             ":13: warning: 2 repeated or collinear corners removed from 2 faces "
+                             "(first here)");
 }
 
 // A bow tie has no one reading: dropped, counted.
@@ -414,7 +425,8 @@ TEST_F(SceneTest, StrictAndMendedAgreeOnGoodScenes) {
 // The box [lo, hi]^3's six faces (five if `open`: none at z = lo),
 // counter-clockwise seen from inside (or, with `out`, from outside), after
 // `head`, with indices relative to its 8 vertices.
-std::string Box(const std::string& head, double lo, double hi, bool out = false, bool open = false) {
+std::string Box(const std::string& head, double lo, double hi, bool out = false,
+                bool open = false) {
   std::string s = head;
   for (int k = 0; k < 8; ++k) {
     const int x[8] = {0, 1, 1, 0, 0, 1, 1, 0}, y[8] = {0, 0, 1, 1, 0, 0, 1, 1};
@@ -437,7 +449,8 @@ std::string Cube(const std::string& head, bool out = false, bool open = false) {
 TEST_F(SceneTest, PerfectReflectorIsAccepted) {
   Write("m.mtl", "newmtl light\nKd 1 1 1\nKe 1 1 1\n");
   Scene scene;
-  ASSERT_TRUE(LoadScene(Write("s.obj", Cube("mtllib m.mtl\nusemtl light\n", false, true)), &scene).ok());
+  ASSERT_TRUE(
+      LoadScene(Write("s.obj", Cube("mtllib m.mtl\nusemtl light\n", false, true)), &scene).ok());
   EXPECT_EQ(scene.materials[0].kd, glm::vec3(1.0f));
   EXPECT_EQ(scene.polygons.size(), 5u);
   // Facing out, closed: light escapes.
@@ -466,10 +479,12 @@ TEST_F(SceneTest, ClosedPerfectReflectorIsRefused) {
 }
 
 TEST_F(SceneTest, EmitMakesAMaterialAnEmitter) {
-  Write("m.mtl", "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0.8 0.8 0.8\nKa 20 10 5\n"
-                 "newmtl old\nKe 3 3 3\n");
-  std::string path = Write("s.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl white\nf 1 2 3\n"
-                                    "usemtl lamp\nf 1 2 3\nusemtl old\nf 1 2 3\n");
+  Write("m.mtl",
+        "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0.8 0.8 0.8\nKa 20 10 5\n"
+        "newmtl old\nKe 3 3 3\n");
+  std::string path = Write("s.obj",
+                           "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl white\nf 1 2 3\n"
+                           "usemtl lamp\nf 1 2 3\nusemtl old\nf 1 2 3\n");
   Scene scene;
   std::vector<std::string> warnings;
   LoadOptions ka;
@@ -516,22 +531,28 @@ TEST_F(SceneTest, UnreadableObj) {
 // echoed (an /etc/shadow-like file printed its first fields).
 TEST_F(SceneTest, MtllibReadsOnlyRegularFilesAndEchoesNothingOfThem) {
   Scene scene;
-  ExpectError(LoadScene(Write("s.obj", "mtllib /dev/zero\n"), &scene), obj(), 1, "not a regular file");
-  ExpectError(LoadScene(Write("s.obj", "mtllib ../" + dir_.substr(dir_.rfind('/', dir_.size() - 2) + 1) + "\n"),
-                        &scene),
-              obj(), 1, "not a regular file");  // a directory
+  ExpectError(LoadScene(Write("s.obj", "mtllib /dev/zero\n"), &scene), obj(), 1,
+              "not a regular file");
+  ExpectError(
+      LoadScene(
+          Write("s.obj", "mtllib ../" + dir_.substr(dir_.rfind('/', dir_.size() - 2) + 1) + "\n"),
+          &scene),
+      obj(), 1, "not a regular file");  // a directory
   // Absolute: used as it is (it was joined to the OBJ's directory: DIR//abs).
   Write("abs.mtl", kMtl);
-  ASSERT_TRUE(LoadScene(Write("s.obj", "mtllib " + dir_ + "abs.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\n"
-                                       "v 0 1 0\nf 1 2 3\n"),
+  ASSERT_TRUE(LoadScene(Write("s.obj", "mtllib " + dir_ +
+                                           "abs.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\n"
+                                           "v 0 1 0\nf 1 2 3\n"),
                         &scene)
                   .ok());
   // A file that is not MTL: its lines are counted, not quoted.
-  Write("secret", std::string(kMtl) + "root:$6$secrethash:19000:0:99999:7:::\n"
-                                      "daemon:*:19000:0:99999:7:::\n\x1b[31mred\n");
+  Write("secret", std::string(kMtl) +
+                      "root:$6$secrethash:19000:0:99999:7:::\n"
+                      "daemon:*:19000:0:99999:7:::\n\x1b[31mred\n");
   std::vector<std::string> warnings;
-  Status st = LoadObjWarnings(Write("s.obj", std::string("mtllib secret\n") + (kHead + 12) + "f 1 2 3\n"),
-                              &scene, &warnings);
+  Status st =
+      LoadObjWarnings(Write("s.obj", std::string("mtllib secret\n") + (kHead + 12) + "f 1 2 3\n"),
+                      &scene, &warnings);
   ASSERT_TRUE(st.ok()) << st.ToString();
   std::string all;
   for (const std::string& w : warnings) all += w + "\n";
@@ -544,7 +565,8 @@ TEST_F(SceneTest, MtllibReadsOnlyRegularFilesAndEchoesNothingOfThem) {
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.message().find('\x1b'), std::string::npos);
   EXPECT_LT(bad.message().size(), 100u) << bad.message();
-  EXPECT_NE(bad.message().find("unknown statement '\\x1b[2Jxxx"), std::string::npos) << bad.message();
+  EXPECT_NE(bad.message().find("unknown statement '\\x1b[2Jxxx"), std::string::npos)
+      << bad.message();
 }
 
 // Issue 17 item 15: a UTF-8 byte-order mark gave "unknown statement 'mtllib'".
@@ -632,7 +654,8 @@ TEST_F(SceneTest, CollinearVertices) {
 
 TEST_F(SceneTest, ZeroArea) {
   Scene scene;
-  ExpectError(LoadBody("f 1 3 2 4\n", &scene, kStrict), obj(), 7, "degenerate face: zero area");  // a symmetric bow tie
+  ExpectError(LoadBody("f 1 3 2 4\n", &scene, kStrict), obj(), 7,
+              "degenerate face: zero area");  // a symmetric bow tie
 }
 
 TEST_F(SceneTest, SelfIntersecting) {
@@ -715,7 +738,8 @@ TEST_F(SceneTest, DuplicateMaterial) {
 TEST_F(SceneTest, NoEmitter) {
   Scene scene;
   ExpectError(LoadBody("usemtl white\nf 1 2 3\n", &scene), obj(), 0, "no emitter");
-  ExpectError(LoadBody("usemtl white\nf 1 2 3\n", &scene), obj(), 0, "--emit NAME=R,G,B or NAME=ka");
+  ExpectError(LoadBody("usemtl white\nf 1 2 3\n", &scene), obj(), 0,
+              "--emit NAME=R,G,B or NAME=ka");
 }
 
 }  // namespace
@@ -770,8 +794,7 @@ TEST_F(SceneTest, FromTextMatchesTheFile) {
 TEST_F(SceneTest, TruncatedMtlNamesItsLine) {
   Write("m.mtl", "newmtl light\nKd 0.5 0.5");  // cut off mid-statement, no final newline
   Scene scene;
-  ExpectError(LoadScene(Write("s.obj", kHead + std::string("f 1 2 3\n")), &scene), mtl(), 2,
-              "Kd");
+  ExpectError(LoadScene(Write("s.obj", kHead + std::string("f 1 2 3\n")), &scene), mtl(), 2, "Kd");
   Write("m.mtl", "newmtl");  // cut off before the name
   ExpectError(LoadScene(obj(), &scene), mtl(), 1, "newmtl");
   Write("m.mtl", "newmtl other\nKd 0.5 0.5 0.5\n");  // cut off before 'light'
@@ -792,27 +815,32 @@ TEST_F(SceneTest, DirectoryIsUnreadableNotAnException) {
 TEST_F(SceneTest, CoordinatesBeyondFloatRangeAreRefused) {
   Write("m.mtl", kMtl);
   Scene scene;
-  ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 2e15 0 0\n"
-                                       "v 0 2e15 0\nf 1 2 3\n"),
+  ExpectError(LoadScene(Write("s.obj",
+                              "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 2e15 0 0\n"
+                              "v 0 2e15 0\nf 1 2 3\n"),
                         &scene),
               obj(), 4, "beyond");  // at the vertex's line, before any face is judged
   // Issue 17 item 15: a far vertex was reported as a degenerate face.
-  ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1e30 0 0\n"
-                                       "f 1 2 3\n"),
+  ExpectError(LoadScene(Write("s.obj",
+                              "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1e30 0 0\n"
+                              "f 1 2 3\n"),
                         &scene),
               obj(), 5, "coordinate 1e+30 is beyond");
   // Issue 17 item 14: Ke 1e-50 became 0 and the scene "had no emitter".
   Write("tiny.mtl", "newmtl light\nKd 0.5 0.5 0.5\nKe 1e-50 0 0\n");
-  ExpectError(LoadScene(Write("s.obj", "mtllib tiny.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
-                                       "f 1 2 3\n"),
+  ExpectError(LoadScene(Write("s.obj",
+                              "mtllib tiny.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                              "f 1 2 3\n"),
                         &scene),
               dir_ + "tiny.mtl", 3, "'1e-50' is too small for float");
-  ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1e-16 0 0\n"
-                                       "v 0 1e-16 0\nf 1 2 3\n"),
+  ExpectError(LoadScene(Write("s.obj",
+                              "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1e-16 0 0\n"
+                              "v 0 1e-16 0\nf 1 2 3\n"),
                         &scene),
               obj(), 6, "below");
-  ASSERT_TRUE(LoadScene(Write("s.obj", "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1e14 0 0\n"
-                                       "v 0 1e14 0\nf 1 2 3\n"),
+  ASSERT_TRUE(LoadScene(Write("s.obj",
+                              "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1e14 0 0\n"
+                              "v 0 1e14 0\nf 1 2 3\n"),
                         &scene)
                   .ok());
 }
@@ -821,11 +849,13 @@ TEST_F(SceneTest, SceneFarFromTheOriginForItsSizeIsRefused) {
   Write("m.mtl", kMtl);
   Scene scene;
   // Float steps of 0.25 at 3e6: more than 2.5e-4 of a 600-unit scene.
-  std::string far = "mtllib m.mtl\nusemtl light\nv 3000000 0 0\nv 3000600 0 0\n"
-                    "v 3000000 600 0\nf 1 2 3\n";
+  std::string far =
+      "mtllib m.mtl\nusemtl light\nv 3000000 0 0\nv 3000600 0 0\n"
+      "v 3000000 600 0\nf 1 2 3\n";
   ExpectError(LoadScene(Write("s.obj", far), &scene), obj(), 6, "far from the origin");
-  std::string near = "mtllib m.mtl\nusemtl light\nv 1000000 0 0\nv 1000600 0 0\n"
-                     "v 1000000 600 0\nf 1 2 3\n";
+  std::string near =
+      "mtllib m.mtl\nusemtl light\nv 1000000 0 0\nv 1000600 0 0\n"
+      "v 1000000 600 0\nf 1 2 3\n";
   EXPECT_TRUE(LoadScene(Write("s.obj", near), &scene).ok());
 }
 
@@ -852,12 +882,14 @@ TEST_F(SceneTest, IllumBeyondAnyModelIsNone) {
                      "newmtl neg\nKd 0.3 0.3 0.3\nKs 0.5 0.5 0.5\nillum -1e300\n"
                      "newmtl eleven\nKd 0.3 0.3 0.3\nillum 11\n");
   std::vector<std::string> warnings;
-  s = LoadObjWarnings(Write("s.obj", kHead + std::string("f 1 2 3\nusemtl big\nf 1 2 3\nusemtl neg\nf 1 2 3\n"
-                                                         "usemtl eleven\nf 1 2 3\n")),
-                      &scene, &warnings);
+  s = LoadObjWarnings(
+      Write("s.obj", kHead + std::string("f 1 2 3\nusemtl big\nf 1 2 3\nusemtl neg\nf 1 2 3\n"
+                                         "usemtl eleven\nf 1 2 3\n")),
+      &scene, &warnings);
   ASSERT_TRUE(s.ok()) << s.ToString();
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_NE(warnings[0].find("rendered as diffuse with their Kd: big (Ks), neg (Ks)"), std::string::npos)
+  EXPECT_NE(warnings[0].find("rendered as diffuse with their Kd: big (Ks), neg (Ks)"),
+            std::string::npos)
       << warnings[0];
   EXPECT_EQ(warnings[0].find("eleven"), std::string::npos) << warnings[0];
 }

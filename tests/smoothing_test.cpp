@@ -1,17 +1,18 @@
 // Smoothing across polygons (issue 16): smoothing groups and vertex normals
 // share display values at the points where polygons meet, within the
 // crease angle; hard edges and scenes without either are untouched.
+#include "vismask/smoothing.h"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 #include <string>
 #include <vector>
 
-#include <glm/geometric.hpp>
-#include <glm/trigonometric.hpp>
-#include <gtest/gtest.h>
-
 #include "test_util.h"
 #include "vismask/image_io.h"
-#include "vismask/smoothing.h"
 
 namespace vismask {
 namespace {
@@ -21,8 +22,8 @@ using test::RunMain;
 using test::TempDir;
 
 const std::vector<std::string> kView = {
-    "--quiet", "--camera", "0,0.3,4,0,0,0,0,1,0,35", "--width", "128", "--height", "128",
-    "--emitted-rays", "1000000"};
+    "--quiet",  "--camera", "0,0.3,4,0,0,0,0,1,0,35", "--width", "128",
+    "--height", "128",      "--emitted-rays",         "1000000"};
 
 // Renders `scene` with `extra` options into dir/out; returns the image.
 PfmImage Render(const TempDir& dir, const std::string& out, const std::string& scene,

@@ -3,11 +3,11 @@
 // outputs must hold no NaN, Inf or negative radiosity, whose energy ledger
 // must close, and which reach the analytic radiosity of a closed box within
 // the error they state.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/environment.h"
@@ -41,10 +41,10 @@ double JsonNumber(const std::string& json, const std::string& key, int index = 0
 }
 
 struct Checked {
-  int badB = 0;       // non-finite or negative b in patches.csv
-  int badPixels = 0;  // non-finite or negative values in image.pfm
-  double ledger = 0;  // max over channels of |emitted - absorbed - escaped - unshot| / emitted
-  double escaped = 0; // escaped / emitted, channel 0
+  int badB = 0;           // non-finite or negative b in patches.csv
+  int badPixels = 0;      // non-finite or negative values in image.pfm
+  double ledger = 0;      // max over channels of |emitted - absorbed - escaped - unshot| / emitted
+  double escaped = 0;     // escaped / emitted, channel 0
   std::vector<double> b;  // channel 0 of each patch
   std::string json;
 };
@@ -99,10 +99,10 @@ std::vector<std::string> Args(std::vector<std::string> a, const std::vector<std:
 TEST(StabilityTest, StiffBoxReachesAnalyticWithinStatedError) {
   TempDir dir;
   const double exact = 1.0 / (1.0 - static_cast<double>(0.999f));
-  auto r = RunMain(Args({"render", "scenes/stiff/box-rho0.999.obj", "--out", dir.File("on"),
-                         "--patch-size", "0.34", "--rays", "1024", "--correct-unshot", "on",
-                         "--stop-error", "5e-4", "--max-shots", "100000"},
-                        Small()));
+  auto r = RunMain(Args(
+      {"render", "scenes/stiff/box-rho0.999.obj", "--out", dir.File("on"), "--patch-size", "0.34",
+       "--rays", "1024", "--correct-unshot", "on", "--stop-error", "5e-4", "--max-shots", "100000"},
+      Small()));
   ASSERT_EQ(r.code, 0) << r.err;
   Checked c = Check(dir.File("on"));
   EXPECT_EQ(c.badB + c.badPixels, 0);
@@ -126,12 +126,12 @@ TEST(StabilityTest, StiffBoxReachesAnalyticWithinStatedError) {
 TEST(StabilityTest, StopErrorBoundsTheUncorrectedBias) {
   TempDir dir;
   const double exact = 1.0 / (1.0 - static_cast<double>(0.9f));
-  std::vector<std::string> base = {"render", "scenes/stiff/box-rho0.9.obj", "--patch-size", "0.34",
-                                   "--rays", "1024"};
+  std::vector<std::string> base = {
+      "render", "scenes/stiff/box-rho0.9.obj", "--patch-size", "0.34", "--rays", "1024"};
   for (const char* mode : {"off", "on"}) {
-    auto r = RunMain(Args(base, Args({"--out", dir.File(mode), "--correct-unshot", mode,
-                                      "--max-shots", "300"},
-                                     Small())));
+    auto r = RunMain(Args(
+        base,
+        Args({"--out", dir.File(mode), "--correct-unshot", mode, "--max-shots", "300"}, Small())));
     ASSERT_EQ(r.code, 0) << r.err;
   }
   Checked off = Check(dir.File("off")), on = Check(dir.File("on"));
@@ -207,11 +207,11 @@ TEST(StabilityTest, AmbientCountsThePowerInFlight) {
 TEST(StabilityTest, SplitStiffBoxMethodRWithinStatedError) {
   TempDir dir;
   const double exact = 1.0 / (1.0 - static_cast<double>(0.99f));
-  auto r = RunMain(Args({"render", "scenes/stiff/box-rho0.99.obj", "--out", dir.File("r"),
-                         "--patch-size", "0.34", "--rays", "1024", "--envs", "2x2x2",
-                         "--mask-method", "R", "--correct-unshot", "on", "--stop-error", "0.008",
-                         "--max-shots", "100000"},
-                        Small()));
+  auto r = RunMain(
+      Args({"render", "scenes/stiff/box-rho0.99.obj", "--out", dir.File("r"), "--patch-size",
+            "0.34", "--rays", "1024", "--envs", "2x2x2", "--mask-method", "R", "--correct-unshot",
+            "on", "--stop-error", "0.008", "--max-shots", "100000"},
+           Small()));
   ASSERT_EQ(r.code, 0) << r.err;
   Checked c = Check(dir.File("r"));
   EXPECT_EQ(c.badB + c.badPixels, 0);
@@ -332,8 +332,8 @@ TEST(StabilityTest, ScaledCornellBoxesGiveTheSameImage) {
   for (const char* s : {"cornell", "extreme/cornell-scale1e-3", "extreme/cornell-scale1e6",
                         "extreme/cornell-moved1e6"}) {
     std::string out = dir.File(std::string(s).substr(std::string(s).rfind('/') + 1));
-    auto r = RunMain(Args(Args({"render", std::string("scenes/") + s + ".obj", "--out", out}, tail),
-                          Small()));
+    auto r = RunMain(
+        Args(Args({"render", std::string("scenes/") + s + ".obj", "--out", out}, tail), Small()));
     ASSERT_EQ(r.code, 0) << r.err;
   }
   for (const char* s : {"cornell-scale1e-3", "cornell-scale1e6", "cornell-moved1e6"}) {

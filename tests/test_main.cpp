@@ -1,8 +1,8 @@
 // The suite's main: runs every gtest and ends with the line
 // "N passed, N failed" (the project's contract with CI).
-#include <cstdio>
-
 #include <gtest/gtest.h>
+
+#include <cstdio>
 
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);

@@ -1,13 +1,12 @@
 #include "test_util.h"
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "vismask/app.h"
 
@@ -37,7 +36,9 @@ void WriteFile(const std::string& path, const std::string& text) {
   out << text;
 }
 
-bool FileExists(const std::string& path) { return std::ifstream(path).good(); }
+bool FileExists(const std::string& path) {
+  return std::ifstream(path).good();
+}
 
 RunResult RunMain(const std::vector<std::string>& args) {
   std::vector<const char*> argv = {"vismask"};

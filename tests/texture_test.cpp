@@ -3,12 +3,12 @@
 // modulating the solved irradiance.
 #include "vismask/texture.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/geometric.hpp>
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/camera.h"
@@ -64,9 +64,9 @@ Patch Square() {
 TEST(TextureTest, SrgbCodesDecodeToLinear) {
   EXPECT_EQ(SrgbToLinear(0), 0.0f);
   EXPECT_EQ(SrgbToLinear(255), 1.0f);
-  EXPECT_NEAR(SrgbToLinear(10), 10.0 / 255.0 / 12.92, 1e-7);          // the linear toe
-  EXPECT_NEAR(SrgbToLinear(128), 0.21586050011389926, 1e-7);          // ((128/255 + .055)/1.055)^2.4
-  EXPECT_NEAR(SrgbToLinear(188), 0.5028864580325687, 1e-7);           // about half
+  EXPECT_NEAR(SrgbToLinear(10), 10.0 / 255.0 / 12.92, 1e-7);  // the linear toe
+  EXPECT_NEAR(SrgbToLinear(128), 0.21586050011389926, 1e-7);  // ((128/255 + .055)/1.055)^2.4
+  EXPECT_NEAR(SrgbToLinear(188), 0.5028864580325687, 1e-7);   // about half
   // A texture of code 128 reflects 0.216 on average, not 128/255 = 0.502.
   std::vector<uint8_t> grey(4 * 4 * 3, 128);
   Texture t = TexView(grey, 4, 4);
@@ -201,8 +201,10 @@ void WriteScene(const TempDir& dir, const std::string& mtl, const std::string& f
   test::WriteFile(dir.File("s.mtl"), mtl);
   test::WriteFile(dir.File("s.obj"),
                   "mtllib s.mtl\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
-                  "usemtl " + floorMtl + "\nv 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nf 1/1 2/2 3/3 4/4\n"
-                  "usemtl light\nv 0 1 0\nv 1 1 0\nv 1 1 1\nv 0 1 1\nf 5 6 7 8\n");
+                  "usemtl " +
+                      floorMtl +
+                      "\nv 0 0 0\nv 0 0 1\nv 1 0 1\nv 1 0 0\nf 1/1 2/2 3/3 4/4\n"
+                      "usemtl light\nv 0 1 0\nv 1 1 0\nv 1 1 1\nv 0 1 1\nf 5 6 7 8\n");
 }
 
 void WritePng(const std::string& path, int w, int h, uint8_t a, uint8_t b) {
@@ -232,15 +234,16 @@ TEST(TextureTest, KdZeroWithAMapWarnsOnceNamingTheMaterials) {
   SceneTextures t;
   ASSERT_TRUE(LoadSceneTextures(scene, &t).ok());
   ASSERT_EQ(t.warnings.size(), 1u);
-  EXPECT_EQ(t.warnings[0], dir.File("s.mtl") + ":6: warning: Kd 0 0 0 with map_Kd: the map alone "
-                           "is the reflectance (Kd taken as 1) for materials 'tex', 'tex2'");
+  EXPECT_EQ(t.warnings[0], dir.File("s.mtl") +
+                               ":6: warning: Kd 0 0 0 with map_Kd: the map alone "
+                               "is the reflectance (Kd taken as 1) for materials 'tex', 'tex2'");
   ASSERT_EQ(t.images.size(), 1u);  // one file, read once
   EXPECT_EQ(t.kdOfMaterial[1], glm::vec3(1.0f));
   EXPECT_EQ(t.kdOfMaterial[3], glm::vec3(0.5f));
   // The command line prints it once.
-  auto r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out"), "--rays", "64",
-                    "--max-shots", "20", "--width", "16", "--height", "16", "--patch-size", "2",
-                    "--quiet"});
+  auto r =
+      RunMain({"render", dir.File("s.obj"), "--out", dir.File("out"), "--rays", "64", "--max-shots",
+               "20", "--width", "16", "--height", "16", "--patch-size", "2", "--quiet"});
   ASSERT_EQ(r.code, 0) << r.err;
   size_t at = r.err.find("Kd 0 0 0 with map_Kd");
   ASSERT_NE(at, std::string::npos) << r.err;
@@ -285,13 +288,16 @@ TEST(TextureTest, MissingOrUnreadableTextureIsAnErrorAtItsLine) {
   WriteScene(dir, std::string(kLight) + "newmtl tex\nKd 0.5 0.5 0.5\nmap_Kd cut.png\n");
   r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out"), "--quiet"});
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.err.find(dir.File("s.mtl") + ":6: cannot read texture '" + dir.File("cut.png") + "': "),
-            std::string::npos) << r.err;
+  EXPECT_NE(
+      r.err.find(dir.File("s.mtl") + ":6: cannot read texture '" + dir.File("cut.png") + "': "),
+      std::string::npos)
+      << r.err;
   EXPECT_FALSE(test::FileExists(dir.File("out")));
   // A material no face uses is not read.
-  WriteScene(dir, std::string(kLight) + "newmtl tex\nKd 0.5 0.5 0.5\nnewmtl unused\nmap_Kd missing.png\n");
-  r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out"), "--rays", "64",
-               "--max-shots", "10", "--width", "16", "--height", "16", "--quiet"});
+  WriteScene(
+      dir, std::string(kLight) + "newmtl tex\nKd 0.5 0.5 0.5\nnewmtl unused\nmap_Kd missing.png\n");
+  r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out"), "--rays", "64", "--max-shots",
+               "10", "--width", "16", "--height", "16", "--quiet"});
   EXPECT_EQ(r.code, 0) << r.err;
 }
 
@@ -304,10 +310,10 @@ TEST(TextureTest, TheImageShowsTheCheckerWhileTheSolveUsesItsMean) {
   TempDir dir;
   for (const char* aa : {"on", "off"}) {
     const std::string out = dir.File(std::string("aa") + aa);
-    auto r = RunMain({"render", "scenes/textured/room.obj", "--out", out, "--emitted-rays",
-                      "300000", "--width", "96", "--height", "96", "--camera",
-                      "7.5,8,2.5,7.5,0,2.5,0,0,1,30", "--aa", aa, "--patch-size", "2.5",
-                      "--quiet"});
+    auto r =
+        RunMain({"render", "scenes/textured/room.obj", "--out", out, "--emitted-rays", "300000",
+                 "--width", "96", "--height", "96", "--camera", "7.5,8,2.5,7.5,0,2.5,0,0,1,30",
+                 "--aa", aa, "--patch-size", "2.5", "--quiet"});
     ASSERT_EQ(r.code, 0) << r.err;
     PfmImage img;
     ASSERT_TRUE(ReadPfm(out + "/image.pfm", &img).ok());
@@ -341,12 +347,15 @@ TEST(TextureTest, TheImageShowsTheCheckerWhileTheSolveUsesItsMean) {
         float qx = 48.0f + view.focal * glm::dot(d2, view.right) / depth2;
         float qy = 48.0f - view.focal * glm::dot(d2, view.up) / depth2;
         if (qx < 4 || qx > 92 || qy < 4 || qy > 92) continue;
-        float other = img.pixels[(size_t(static_cast<int>(qy)) * 96 + static_cast<int>(qx)) * 3 + 1];
+        float other =
+            img.pixels[(size_t(static_cast<int>(qy)) * 96 + static_cast<int>(qx)) * 3 + 1];
         bool isBright = t.Sample(glm::vec2(x.z / 5.0f, x.x / 5.0f)).y > 0.5f;
         ASSERT_NE(isBright, t.Sample(glm::vec2(x2.z / 5.0f, x2.x / 5.0f)).y > 0.5f);
         // linear 0.83 against 0.021 under nearly the same light
-        if (isBright) EXPECT_GT(value, 10.0f * other) << aa << " square " << i << "," << j;
-        else EXPECT_LT(10.0f * value, other) << aa << " square " << i << "," << j;
+        if (isBright)
+          EXPECT_GT(value, 10.0f * other) << aa << " square " << i << "," << j;
+        else
+          EXPECT_LT(10.0f * value, other) << aa << " square " << i << "," << j;
         (isBright ? bright : dark)++;
         ++checked;
       }

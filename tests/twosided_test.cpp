@@ -1,14 +1,14 @@
 // Two-sided scenes (--two-sided, --two-sided-emitters: mesh.h's twins) and
 // the emitter check (emitter_check.h).
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <glm/geometric.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/geometric.hpp>
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 #include "vismask/camera.h"
@@ -49,8 +49,8 @@ Scene LoadText(const std::string& obj, const std::string& name = "test.obj") {
 // A tilted triangle with awkward coordinates, emitting, meshed into many
 // patches and twinned.
 Mesh TwinnedTriangle(Scene* scene, bool emitters) {
-  *scene = LoadText(
-      "usemtl light\nv 0.13 0.21 0.37\nv 1.31 0.27 0.11\nv 0.71 1.19 0.93\nf 1 2 3\n");
+  *scene =
+      LoadText("usemtl light\nv 0.13 0.21 0.37\nv 1.31 0.27 0.11\nv 0.71 1.19 0.93\nf 1 2 3\n");
   Mesh mesh;
   EXPECT_TRUE(MeshScene(*scene, {0}, 0.2f, 100000, &mesh).ok());
   TwinOptions t;
@@ -64,8 +64,8 @@ std::vector<PatchGeom> GeomOf(const Mesh& mesh) {
   std::vector<PatchGeom> geom(mesh.patches.size());
   for (size_t i = 0; i < geom.size(); ++i) {
     bool copy = mesh.twin[i] < i;
-    geom[i] = copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[i]]))
-                   : MakePatchGeom(mesh.patches[i]);
+    geom[i] =
+        copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[i]])) : MakePatchGeom(mesh.patches[i]);
   }
   return geom;
 }
@@ -171,8 +171,8 @@ TEST(TwoSidedTest, AShotSkipsItsTwin) {
   const Patch& p = mesh.patches[i];
   glm::vec3 centre = (p.corner[0] + p.corner[1] + p.corner[2]) / 3.0f;
   // Just behind the plane, leaving along the normal (a tilt keeps it general).
-  Ray ray{centre - 1e-4f * p.normal,
-          p.normal + 0.1f * glm::normalize(p.corner[1] - p.corner[0]), 0.0f, 10.0f};
+  Ray ray{centre - 1e-4f * p.normal, p.normal + 0.1f * glm::normalize(p.corner[1] - p.corner[0]),
+          0.0f, 10.0f};
   Hit hit;
   ASSERT_TRUE(grid.Intersect(ray, Skip(i), &hit));
   EXPECT_EQ(hit.patch, n + i);
@@ -197,8 +197,9 @@ TEST(TwoSidedTest, OnlyTheTwinFacingTheEyeIsDrawn) {
   ASSERT_EQ(env.numTwins(), ids.size() / 2);
   const double ambient[3] = {0, 0, 0};
   env.ComputeVertexRadiosity(ambient);
-  const glm::vec3 centre = (scene.polygons[0].corners[0] + scene.polygons[0].corners[1] +
-                            scene.polygons[0].corners[2]) / 3.0f;
+  const glm::vec3 centre =
+      (scene.polygons[0].corners[0] + scene.polygons[0].corners[1] + scene.polygons[0].corners[2]) /
+      3.0f;
   for (float side : {1.0f, -1.0f}) {
     Camera cam;
     cam.eye = centre + side * 3.0f * scene.polygons[0].normal;
@@ -245,9 +246,10 @@ double Region(const PfmImage& im, int y0, int y1, int x0, int x1) {
 TEST(TwoSidedTest, MiswoundWallsAreBlackOneSidedAndLitTwoSided) {
   TempDir dir;
   auto render = [&](const std::string& scene, const std::string& name, bool twoSided) {
-    std::vector<std::string> args = {"render", scene, "--out", dir.File(name), "--width", "64",
-                                     "--height", "64", "--emitted-rays", "300000",
-                                     "--stop-unshot", "1e-2", "--quiet", "--view", "front"};
+    std::vector<std::string> args = {"render",         scene,    "--out",         dir.File(name),
+                                     "--width",        "64",     "--height",      "64",
+                                     "--emitted-rays", "300000", "--stop-unshot", "1e-2",
+                                     "--quiet",        "--view", "front"};
     // (--view front: by default the camera would look at the mis-wound box
     // from the side its wrong-way faces front, below.)
     if (twoSided) args.push_back("--two-sided");
@@ -301,12 +303,26 @@ TEST(TwoSidedTest, LedgerClosesTwoSided) {
   for (std::vector<std::string> extra :
        // --round-shots 1: draining to exactly 0 with rounds by work runs for
        // minutes (over a million shots; open issue, see the issue 20 report).
-       {std::vector<std::string>{}, std::vector<std::string>{"--envs", "2", "--mask-method", "R",
-                                                             "--stop-unshot", "0", "--round-shots", "1"}}) {
-    std::vector<std::string> args = {"render", "scenes/miswound.obj", "--out", dir.File("out"),
-                                     "--width", "32", "--height", "32", "--emitted-rays",
-                                     "200000", "--stop-unshot", "1e-2", "--quiet", "--two-sided",
-                                     "--two-sided-emitters", "--max-rays", "1024"};
+       {std::vector<std::string>{},
+        std::vector<std::string>{"--envs", "2", "--mask-method", "R", "--stop-unshot", "0",
+                                 "--round-shots", "1"}}) {
+    std::vector<std::string> args = {"render",
+                                     "scenes/miswound.obj",
+                                     "--out",
+                                     dir.File("out"),
+                                     "--width",
+                                     "32",
+                                     "--height",
+                                     "32",
+                                     "--emitted-rays",
+                                     "200000",
+                                     "--stop-unshot",
+                                     "1e-2",
+                                     "--quiet",
+                                     "--two-sided",
+                                     "--two-sided-emitters",
+                                     "--max-rays",
+                                     "1024"};
     args.insert(args.end(), extra.begin(), extra.end());
     auto r = RunMain(args);
     ASSERT_EQ(r.code, 0) << r.err;
@@ -324,9 +340,9 @@ TEST(TwoSidedTest, LedgerClosesTwoSided) {
 TEST(TwoSidedTest, TwoSidedEmittersDoubleTheEmittedPower) {
   TempDir dir;
   auto emitted = [&](const std::string& name, std::vector<std::string> extra) {
-    std::vector<std::string> args = {"render", "scenes/cornell.obj", "--out", dir.File(name),
-                                     "--width", "16", "--height", "16", "--max-shots", "10",
-                                     "--quiet"};
+    std::vector<std::string> args = {
+        "render", "scenes/cornell.obj", "--out", dir.File(name), "--width", "16", "--height",
+        "16",     "--max-shots",        "10",    "--quiet"};
     args.insert(args.end(), extra.begin(), extra.end());
     auto r = RunMain(args);
     EXPECT_EQ(r.code, 0) << r.err;
@@ -432,9 +448,9 @@ TEST(EmitterCheckTest, ShippedScenesAreSilent) {
   std::vector<std::string> scenes = {"scenes/cornell.obj", "scenes/miswound.obj"};
   for (const char* rho : {"0.5", "0.9", "0.99", "0.999"})
     scenes.push_back(std::string("scenes/stiff/box-rho") + rho + ".obj");
-  for (const char* name : {"grazing", "one-patch", "sliver", "cornell-on-plane", "cornell-ke1e-6",
-                           "cornell-ke1e30", "cornell-moved1e6", "cornell-scale1e-3",
-                           "cornell-scale1e6"})
+  for (const char* name :
+       {"grazing", "one-patch", "sliver", "cornell-on-plane", "cornell-ke1e-6", "cornell-ke1e30",
+        "cornell-moved1e6", "cornell-scale1e-3", "cornell-scale1e6"})
     scenes.push_back(std::string("scenes/extreme/") + name + ".obj");
   for (const std::string& path : scenes) {
     Scene scene;
@@ -455,9 +471,14 @@ TEST(EmitterCheckTest, ShippedScenesAreSilent) {
 TEST(EmitterCheckTest, RaysPerPolygonShrinkWithinTheBudget) {
   EXPECT_EQ(vismask::EmitterCheckRays(0), vismask::kEmitterCheckRays);
   EXPECT_EQ(vismask::EmitterCheckRays(1), vismask::kEmitterCheckRays);
-  EXPECT_EQ(vismask::EmitterCheckRays(vismask::kEmitterCheckRayBudget / vismask::kEmitterCheckRays), vismask::kEmitterCheckRays);
-  EXPECT_EQ(vismask::EmitterCheckRays(2 * vismask::kEmitterCheckRayBudget / vismask::kEmitterCheckRays), vismask::kEmitterCheckRays / 2);
+  EXPECT_EQ(vismask::EmitterCheckRays(vismask::kEmitterCheckRayBudget / vismask::kEmitterCheckRays),
+            vismask::kEmitterCheckRays);
+  EXPECT_EQ(
+      vismask::EmitterCheckRays(2 * vismask::kEmitterCheckRayBudget / vismask::kEmitterCheckRays),
+      vismask::kEmitterCheckRays / 2);
   EXPECT_EQ(vismask::EmitterCheckRays(300000), vismask::kEmitterCheckMinRays);
   for (uint64_t n : {1ull, 100ull, 5000ull, 40000ull, 300000ull})
-    EXPECT_LE(uint64_t(vismask::EmitterCheckRays(n)) * n, std::max<uint64_t>(vismask::kEmitterCheckRayBudget, vismask::kEmitterCheckMinRays * n));
+    EXPECT_LE(
+        uint64_t(vismask::EmitterCheckRays(n)) * n,
+        std::max<uint64_t>(vismask::kEmitterCheckRayBudget, vismask::kEmitterCheckMinRays * n));
 }

@@ -4,6 +4,7 @@
 // page lookup. Every case runs the real binary (VISMASK_BIN) in a child: a
 // `view` that got past its checks would otherwise exec python3 in place of
 // the test.
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -16,8 +17,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "test_util.h"
 
@@ -44,12 +43,14 @@ Ran Shell(const std::string& cmd) {
   return r;
 }
 
-bool Have(const std::string& command) { return std::system(("command -v " + command + " >/dev/null 2>&1").c_str()) == 0; }
+bool Have(const std::string& command) {
+  return std::system(("command -v " + command + " >/dev/null 2>&1").c_str()) == 0;
+}
 
 // A render of the Cornell box with its export, cornell.glb, in `dir`.
 void RenderCornell(const std::string& dir, const std::string& extra) {
-  std::string cmd = VismaskBin() + " render scenes/cornell.obj --quiet --out " + dir + " --export " + dir +
-                    "/cornell.glb " + extra;
+  std::string cmd = VismaskBin() + " render scenes/cornell.obj --quiet --out " + dir +
+                    " --export " + dir + "/cornell.glb " + extra;
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 }
 
@@ -97,9 +98,11 @@ class Server {
 std::string Fetch(const std::string& url, const std::string& tmp) {
   std::string file = tmp + "/fetched";
   std::remove(file.c_str());
-  Ran r = Shell("python3 -c 'import sys, urllib.request, urllib.error\n"
-              "try: sys.stdout.buffer.write(urllib.request.urlopen(sys.argv[1]).read())\n"
-              "except urllib.error.HTTPError as e: print(\"HTTP\", e.code)' '" + url + "' > " + file);
+  Ran r = Shell(
+      "python3 -c 'import sys, urllib.request, urllib.error\n"
+      "try: sys.stdout.buffer.write(urllib.request.urlopen(sys.argv[1]).read())\n"
+      "except urllib.error.HTTPError as e: print(\"HTTP\", e.code)' '" +
+      url + "' > " + file);
   return r.code == 0 ? ReadFile(file) : "fetch failed: " + r.out;
 }
 
@@ -119,7 +122,9 @@ TEST(ViewTest, HelpDocumentsView) {
   EXPECT_NE(all.out.find("vismask view OUT_DIR"), std::string::npos);
   Ran view = Shell(VismaskBin() + " view --help");
   EXPECT_EQ(view.code, 0);
-  EXPECT_NE(view.out.find("usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]"), std::string::npos) << view.out;
+  EXPECT_NE(view.out.find("usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]"),
+            std::string::npos)
+      << view.out;
   EXPECT_NE(view.out.find("--export"), std::string::npos);
 }
 
@@ -168,11 +173,14 @@ TEST(ViewTest, ServesThePageAndTheOutputs) {
   WriteFile(out + "/run.json", "{\"options\": {}}\n");
   Server server(VismaskBin(), "'" + out + "'", dir.path());
   ASSERT_FALSE(server.url().empty()) << server.err();
-  EXPECT_TRUE(std::regex_match(server.url(), std::regex(R"(http://127\.0\.0\.1:\d+/\?glb=out/a%20b\.glb&run=out/run\.json)")))
+  EXPECT_TRUE(std::regex_match(
+      server.url(),
+      std::regex(R"(http://127\.0\.0\.1:\d+/\?glb=out/a%20b\.glb&run=out/run\.json)")))
       << server.url();
   EXPECT_EQ(Fetch(server.Origin() + "/", dir.path()), ReadFile("viewer/index.html"));
   EXPECT_EQ(Fetch(server.Origin() + "/viewer.js", dir.path()), ReadFile("viewer/viewer.js"));
-  EXPECT_EQ(Fetch(server.Origin() + "/vendor/three.module.js", dir.path()), ReadFile("viewer/vendor/three.module.js"));
+  EXPECT_EQ(Fetch(server.Origin() + "/vendor/three.module.js", dir.path()),
+            ReadFile("viewer/vendor/three.module.js"));
   EXPECT_EQ(Fetch(server.Origin() + "/out/a%20b.glb", dir.path()), ReadFile(out + "/a b.glb"));
   EXPECT_EQ(Fetch(server.Origin() + "/out/run.json", dir.path()), ReadFile(out + "/run.json"));
   // '..' stays inside the two roots: the file beside OUT_DIR is not served.
@@ -194,8 +202,10 @@ std::string BrowserMissing() {
     if (!Have(tool)) return std::string(tool) + " not found (tools/install-deps installs it)";
   for (const char* module : {"puppeteer-core", "pngjs"})
     if (!FileExists(std::string("viewer/node_modules/") + module + "/package.json"))
-      return std::string("viewer/node_modules/") + module + " missing (npm ci in viewer/: tools/install-deps)";
-  if (!FileExists("viewer/vendor/three.module.js")) return "viewer/vendor is not made (make viewer)";
+      return std::string("viewer/node_modules/") + module +
+             " missing (npm ci in viewer/: tools/install-deps)";
+  if (!FileExists("viewer/vendor/three.module.js"))
+    return "viewer/vendor is not made (make viewer)";
   return "";
 }
 
@@ -203,8 +213,8 @@ std::string BrowserMissing() {
 // camera and exposure, against image.png: shoot.mjs's JSON.
 std::string Shoot(const TempDir& dir, const std::string& out, const std::string& extra) {
   Ran shot = Shell("node viewer/shoot.mjs --vismask " + VismaskBin() + " --out " + out +
-                   " --width 512 --height 512 --screenshot " + dir.File("shot.png") + " --compare " + out +
-                   "/image.png " + extra);
+                   " --width 512 --height 512 --screenshot " + dir.File("shot.png") +
+                   " --compare " + out + "/image.png " + extra);
   EXPECT_EQ(shot.code, 0) << shot.out;
   std::printf("viewer: %s", shot.out.c_str());
   EXPECT_NE(shot.out.find("\"console_errors\":[]"), std::string::npos) << shot.out;
@@ -235,22 +245,28 @@ TEST(ViewerBrowserTest, SampledAlikeTheScreenshotIsImagePng) {
   // A drag orbits about run.json's target: the eye moves, the target and
   // the eye's distance to it stay.
   double target[3] = {0, 0, 0};
-  ASSERT_EQ(std::sscanf(ReadFile(out + "/run.json").substr(ReadFile(out + "/run.json").find("\"camera\"")).c_str(),
-                        "\"camera\": [%*f, %*f, %*f, %lf, %lf, %lf", &target[0], &target[1], &target[2]),
-            3);
+  ASSERT_EQ(
+      std::sscanf(ReadFile(out + "/run.json")
+                      .substr(ReadFile(out + "/run.json").find("\"camera\""))
+                      .c_str(),
+                  "\"camera\": [%*f, %*f, %*f, %lf, %lf, %lf", &target[0], &target[1], &target[2]),
+      3);
   std::smatch m;
   const std::string num = "(-?[0-9.eE+-]+)", vec = "\\[" + num + "," + num + "," + num + "\\]";
-  ASSERT_TRUE(std::regex_search(json, m, std::regex("\"orbit\":\\{\"before\":\\{\"eye\":" + vec + ",\"target\":" + vec +
-                                                    "\\},\"after\":\\{\"eye\":" + vec + ",\"target\":" + vec)))
+  ASSERT_TRUE(std::regex_search(
+      json, m,
+      std::regex("\"orbit\":\\{\"before\":\\{\"eye\":" + vec + ",\"target\":" + vec +
+                 "\\},\"after\":\\{\"eye\":" + vec + ",\"target\":" + vec)))
       << json;
   double v[12];
   for (int k = 0; k < 12; ++k) v[k] = std::stod(m[k + 1]);
   auto dist = [](const double* a, const double* b) {
-    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                     (a[2] - b[2]) * (a[2] - b[2]));
   };
   const double radius = dist(v, v + 3);
-  EXPECT_LT(dist(v + 3, target), 1e-3) << json;   // orbiting about run.json's target
-  EXPECT_LT(dist(v + 9, target), 1e-3) << json;   // still, after the drag
+  EXPECT_LT(dist(v + 3, target), 1e-3) << json;  // orbiting about run.json's target
+  EXPECT_LT(dist(v + 9, target), 1e-3) << json;  // still, after the drag
   EXPECT_NEAR(dist(v + 6, v + 9), radius, 1e-6 * radius) << json;
   EXPECT_GT(dist(v, v + 6), 0.1 * radius) << json;  // the eye moved
 }

@@ -64,6 +64,8 @@ class Arena {
 
 // Rounds `n` up to a multiple of Arena::kAlign: the size to ask for so that a
 // measured layout fits a real arena whose base is kAlign-aligned.
-inline size_t ArenaRoundUp(size_t n) { return (n + Arena::kAlign - 1) & ~(Arena::kAlign - 1); }
+inline size_t ArenaRoundUp(size_t n) {
+  return (n + Arena::kAlign - 1) & ~(Arena::kAlign - 1);
+}
 
 }  // namespace vismask

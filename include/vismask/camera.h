@@ -3,11 +3,9 @@
 // or the side chosen by ChooseViewSide).
 #pragma once
 #include <cstdint>
-
-#include <vector>
-
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <vector>
 
 #include "vismask/scene.h"
 

@@ -35,19 +35,19 @@ struct CheckValue {
                                 const CheckValue& b);
 }  // namespace vismask
 
-#define CHECK(cond) \
-  ((cond) ? (void)0 : ::vismask::CheckFailed(__FILE__, __LINE__, #cond, nullptr))
+#define CHECK(cond) ((cond) ? (void)0 : ::vismask::CheckFailed(__FILE__, __LINE__, #cond, nullptr))
 #define CHECK_MSG(cond, msg) \
   ((cond) ? (void)0 : ::vismask::CheckFailed(__FILE__, __LINE__, #cond, (msg)))
 
 // CHECK_EQ(a, b) and the like: on failure, both operands' values as well.
-#define VISMASK_CHECK_OP(a, op, b)                                                         \
-  do {                                                                                     \
-    const auto& vismask_a_ = (a);                                                          \
-    const auto& vismask_b_ = (b);                                                          \
-    if (!(vismask_a_ op vismask_b_))                                                       \
-      ::vismask::CheckOpFailed(__FILE__, __LINE__, #a " " #op " " #b,                      \
-                               ::vismask::CheckValue(vismask_a_), ::vismask::CheckValue(vismask_b_)); \
+#define VISMASK_CHECK_OP(a, op, b)                                    \
+  do {                                                                \
+    const auto& vismask_a_ = (a);                                     \
+    const auto& vismask_b_ = (b);                                     \
+    if (!(vismask_a_ op vismask_b_))                                  \
+      ::vismask::CheckOpFailed(__FILE__, __LINE__, #a " " #op " " #b, \
+                               ::vismask::CheckValue(vismask_a_),     \
+                               ::vismask::CheckValue(vismask_b_));    \
   } while (0)
 #define CHECK_EQ(a, b) VISMASK_CHECK_OP(a, ==, b)
 #define CHECK_NE(a, b) VISMASK_CHECK_OP(a, !=, b)

@@ -22,7 +22,6 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
-
 #include <glm/vec3.hpp>
 
 #include "vismask/camera.h"
@@ -66,9 +65,9 @@ constexpr uint32_t kRecordCut = 1, kRecordSmooth = 2;
 
 // The geometry ShareVertices matches by.
 struct ShareRule {
-  float tolerance = 0.0f;       // points this close are one (scene units)
-  glm::vec3 origin{0.0f};       // of the scene's box: smooth records are sorted by cells from it
-  float cosCrease = 1.0f;       // cos of the crease angle (SmoothTogether)
+  float tolerance = 0.0f;  // points this close are one (scene units)
+  glm::vec3 origin{0.0f};  // of the scene's box: smooth records are sorted by cells from it
+  float cosCrease = 1.0f;  // cos of the crease angle (SmoothTogether)
 };
 
 // This rank's environments' shared vertices into `out`, each once: cut

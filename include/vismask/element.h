@@ -18,7 +18,6 @@
 // corner triangles and the middle one (midpoint subdivision).
 #pragma once
 #include <cstdint>
-
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -29,13 +28,13 @@ namespace vismask {
 constexpr uint32_t kNoElement = 0xffffffffu;
 
 struct Element {
-  double received[3];  // reflected power received (W), history included
+  double received[3];    // reflected power received (W), history included
   double quarter[4][3];  // the part of it received in each child's region since made
   double squares;        // the sum of each received share's square (channels summed) since made
   float area;
-  uint32_t child;      // first of four consecutive children; kNoElement for a leaf
-  uint32_t hits;       // rays received since made
-  uint32_t depth;      // 0 for a patch's root
+  uint32_t child;  // first of four consecutive children; kNoElement for a leaf
+  uint32_t hits;   // rays received since made
+  uint32_t depth;  // 0 for a patch's root
 };
 
 struct ElementOptions {

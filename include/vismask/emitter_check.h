@@ -8,11 +8,10 @@
 // Init-time only; uses the heap.
 #pragma once
 #include <cstdint>
+#include <glm/vec3.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <glm/vec3.hpp>
 
 #include "vismask/scene.h"
 
@@ -29,17 +28,17 @@ constexpr uint32_t kEmitterCheckMinRays = 32;
 
 // Rays per emitting polygon and side for a scene of `emitters` of them.
 uint32_t EmitterCheckRays(uint64_t emitters);
-constexpr double kEmitterNearShare = 0.02;   // "nearby": within 2% of the scene's largest extent
-constexpr double kEmitterMostShare = 0.5;    // warn above half of the polygon's power
+constexpr double kEmitterNearShare = 0.02;  // "nearby": within 2% of the scene's largest extent
+constexpr double kEmitterMostShare = 0.5;   // warn above half of the polygon's power
 
 // One emitting polygon's estimate, each a share of its power (rays).
 struct EmitterEstimate {
-  uint32_t polygon = 0;       // its index in file order
+  uint32_t polygon = 0;  // its index in file order
   uint32_t material = 0;
-  int line = 0;               // of its 'f' statement
-  double nearShare = 0.0;      // hits a surface within the near distance of its front
-  double nearDistance = 0.0;   // the mean distance of those hits (scene units)
-  double escapeShare = 0.0;    // hits nothing: leaves the scene
+  int line = 0;                  // of its 'f' statement
+  double nearShare = 0.0;        // hits a surface within the near distance of its front
+  double nearDistance = 0.0;     // the mean distance of those hits (scene units)
+  double escapeShare = 0.0;      // hits nothing: leaves the scene
   double backEscapeShare = 0.0;  // the same for rays from its back side
   // The reason to warn: most of the power into a surface just in front, or
   // most of it out of the scene while most from the back side would hit it.

@@ -7,9 +7,8 @@
 // it knows of a foreign shooter is what its packet carries.
 #pragma once
 #include <cstdint>
-#include <vector>
-
 #include <glm/vec3.hpp>
+#include <vector>
 
 #include "vismask/arena.h"
 #include "vismask/element.h"
@@ -40,7 +39,7 @@ struct EnergyLedger {
   // that entered it from one (a ray enters exactly the next environment on
   // its path, so the sum over environments is the power not yet traced).
   double inFlight[3] = {0, 0, 0};
-  double radiosity[3] = {0, 0, 0}; // sum of b * area over local patches (emitted + reflected)
+  double radiosity[3] = {0, 0, 0};  // sum of b * area over local patches (emitted + reflected)
 };
 
 // Counters of one environment's work.
@@ -86,11 +85,11 @@ struct EnvOptions {
   uint32_t rays = 4096;
   double rayQuantum = 0.0;
   uint32_t minRays = 1;
-  bool sobol = true;         // scrambled Sobol' points; false: independent PCG32 draws
-  uint64_t seed = 1;         // run seed
+  bool sobol = true;  // scrambled Sobol' points; false: independent PCG32 draws
+  uint64_t seed = 1;  // run seed
   MaskMethod maskMethod = MaskMethod::kB;
   uint32_t maskRes = 50;
-  uint32_t roundShots = 1;   // shots per environment per round
+  uint32_t roundShots = 1;      // shots per environment per round
   uint32_t queueCapacity = 64;  // foreign shooters held at once
   // Methods B and C: bytes for the centre masks of local shooters, one slot
   // per patch (direct-mapped) while they fit; kept for the patch's later
@@ -117,8 +116,8 @@ class Environment {
   // nothing built, if the system refuses the arena's memory.
   bool Build();
   // Prepare and Build.
-  void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
-            const std::vector<uint32_t>& ids, const EnvOptions& options) {
+  void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh, const std::vector<uint32_t>& ids,
+            const EnvOptions& options) {
     Prepare(grid, index, mesh, ids, options);
     Build();
   }
@@ -135,7 +134,8 @@ class Environment {
   void RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t roundWork = 0);
   // The work rounds are measured in: the grid steps of the form-factor
   // rays, plus for Methods B and C centreStepsPerRay() for each centre ray
-  // the method would cast without the centre-mask cache. Counted, never timed, and the same with any
+  // the method would cast without the centre-mask cache. Counted, never timed, and the same with
+  // any
   // --mask-cache: the cache saves real centre rays (and their steps), and
   // the last-occluder hint makes a cast's steps depend on which pixels it
   // casts, so a cached shot's real steps differ from an uncached one's.
@@ -146,7 +146,9 @@ class Environment {
 
   // The packets this round produced, `packetBytes()` each, in send order.
   uint32_t outboxCount() const { return outCount_; }
-  const uint8_t* OutboxPacket(uint32_t i) const { return outbox_.data() + size_t(i) * packetBytes_; }
+  const uint8_t* OutboxPacket(uint32_t i) const {
+    return outbox_.data() + size_t(i) * packetBytes_;
+  }
   void ClearOutbox() { outCount_ = 0; }
   // Takes a packet addressed to this environment. Packets must be delivered
   // in a fixed order (sender, then sequence) for results to be reproducible.
@@ -233,11 +235,11 @@ class Environment {
   // upstream masks received), and how many of those have arrived.
   struct Slot {
     PacketHeader header;
-    double key;          // power * open share, channels summed
+    double key;  // power * open share, channels summed
     uint8_t used;
     uint8_t received;
     uint8_t expected;
-    float flightShare;   // of the power, booked here as in flight (FlightShare; in the padding)
+    float flightShare;  // of the power, booked here as in flight (FlightShare; in the padding)
   };
 
   void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
@@ -340,14 +342,15 @@ class Environment {
   uint32_t numCut_ = 0;
   Span<SmoothVertex> smooth_;
   Span<uint8_t> smoothMatched_;
-  Span<uint8_t> patchSmoothEdges_;  // bit k: edge k is smooth (IsSmoothEdge); empty without smooth vertices
+  Span<uint8_t>
+      patchSmoothEdges_;  // bit k: edge k is smooth (IsSmoothEdge); empty without smooth vertices
   uint32_t numShared_ = 0;
   Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
   Grid grid_;
   MaxTree tree_;
   // Exchange state: empty for an environment without neighbours.
   Span<Slot> slots_;
-  Span<uint64_t> slotWords_;  // slot s's mask: words [s * shape_.words(), ...)
+  Span<uint64_t> slotWords_;     // slot s's mask: words [s * shape_.words(), ...)
   Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
   Span<uint64_t> cacheWords_;    // B, C: cached centre masks of local shooters, slot by slot
   Span<uint32_t> cacheTag_;      // the local patch each slot holds, or kNoPatch
@@ -367,7 +370,7 @@ class Environment {
   // Between Prepare and Build only.
   std::vector<Patch> staged_;
   std::vector<PatchGeom> stagedGeom_;
-  std::vector<uint32_t> stagedTwin_;  // empty without twins
+  std::vector<uint32_t> stagedTwin_;     // empty without twins
   std::vector<PatchTexture> stagedTex_;  // empty when no patch is textured
   std::vector<glm::vec3> stagedVertices_;
   std::vector<uint32_t> stagedCut_;

@@ -19,24 +19,24 @@ namespace vismask {
 // summed in environment order, so every rank takes the same decisions
 // whatever the grouping.
 struct EnvReport {
-  double unshot;     // local unshot power plus the power in flight booked here
-  double flight;     // the latter (Environment::FlightPower), channels summed
-  double lost;       // emitted - absorbed - escaped - unshot (both parts); summed: the loss
+  double unshot;  // local unshot power plus the power in flight booked here
+  double flight;  // the latter (Environment::FlightPower), channels summed
+  double lost;    // emitted - absorbed - escaped - unshot (both parts); summed: the loss
   double emitted;
-  double elapsed;    // seconds since the solve began, on this rank's clock
-  double waited;     // this rank's SolveResult::waitSeconds so far (first entry of a rank)
-  double roundCpu;   // CPU seconds of this rank's shots in the last round (first entry)
-  double envCpu;     // CPU seconds of this environment's shots in the last round
+  double elapsed;       // seconds since the solve began, on this rank's clock
+  double waited;        // this rank's SolveResult::waitSeconds so far (first entry of a rank)
+  double roundCpu;      // CPU seconds of this rank's shots in the last round (first entry)
+  double envCpu;        // CPU seconds of this environment's shots in the last round
   uint64_t roundSteps;  // grid steps of this environment's shots in the last round
   uint64_t steps;       // grid steps so far (EnvStats::gridSteps)
-  uint64_t shots;    // local and foreign
-  uint64_t rays;     // form-factor rays traced
+  uint64_t shots;       // local and foreign
+  uint64_t rays;        // form-factor rays traced
   uint64_t recordsCreated;
   uint64_t foreignShots;
   uint64_t shootable;  // local patches with unshot power (0 or 1: any) plus queued shooters
-  double radiosity;  // sum of b * area, channels summed
-  double kdArea;     // sum of kd * area, channels averaged (constant)
-  double area;       // (constant)
+  double radiosity;    // sum of b * area, channels summed
+  double kdArea;       // sum of kd * area, channels averaged (constant)
+  double area;         // (constant)
 };
 
 struct RoundTotals {
@@ -45,13 +45,13 @@ struct RoundTotals {
   double lost = 0.0;    // the ledger's residual less the power in flight
   uint64_t shootable = 0;
   double emitted = 0.0;
-  double elapsed = 0.0;  // rank 0's clock
-  double waitedMax = 0.0;  // the most any rank has waited
-  double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
-  double envCpuMax = 0.0;    // the most CPU any environment used for them
-  uint64_t steps = 0;        // grid steps, all environments, so far
-  uint64_t envStepsMax = 0;  // the most grid steps any environment did in the last round
-  uint64_t rankStepsMax = 0; // the most any rank's environments did in it, together
+  double elapsed = 0.0;       // rank 0's clock
+  double waitedMax = 0.0;     // the most any rank has waited
+  double roundCpuMax = 0.0;   // the most CPU any rank used for the last round's shots
+  double envCpuMax = 0.0;     // the most CPU any environment used for them
+  uint64_t steps = 0;         // grid steps, all environments, so far
+  uint64_t envStepsMax = 0;   // the most grid steps any environment did in the last round
+  uint64_t rankStepsMax = 0;  // the most any rank's environments did in it, together
   uint64_t shots = 0;
   uint64_t rays = 0;
   uint64_t recordsCreated = 0;
@@ -68,15 +68,15 @@ struct RoundTotals {
 struct ExchangeBuffers {
   void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
               uint32_t packetsPerEnvRound);
-  Span<uint8_t> sendBytes;   // ranks blocks of `blockBytes`
+  Span<uint8_t> sendBytes;  // ranks blocks of `blockBytes`
   Span<uint8_t> recvBytes;
   Span<Span<const uint8_t>> send;
   Span<Span<uint8_t>> recv;
   Span<size_t> received;
-  Span<EnvReport> mine;      // perRank entries
-  Span<EnvReport> all;       // ranks * perRank entries
-  Span<double> envCpu;       // perRank: the solver's CPU seconds of each environment's round
-  Span<uint64_t> envSteps;   // perRank: the grid steps of each environment's round
+  Span<EnvReport> mine;     // perRank entries
+  Span<EnvReport> all;      // ranks * perRank entries
+  Span<double> envCpu;      // perRank: the solver's CPU seconds of each environment's round
+  Span<uint64_t> envSteps;  // perRank: the grid steps of each environment's round
   size_t blockBytes = 0;
   uint32_t packetBytes = 0;
 };

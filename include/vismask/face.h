@@ -21,10 +21,10 @@ struct FaceResult {
     kRefused,           // strict only: `error` says why, in the words of the loader before
   };
   Fate fate = kKept;
-  size_t removedCorners = 0;  // repeated corners and corners collinear with their neighbours
+  size_t removedCorners = 0;    // repeated corners and corners collinear with their neighbours
   size_t droppedTriangles = 0;  // kTriangulated: degenerate triangles left out
-  double offPlane = 0.0;     // kTriangulated: the farthest corner from the best-fit plane
-  std::string error;         // kRefused
+  double offPlane = 0.0;        // kTriangulated: the farthest corner from the best-fit plane
+  std::string error;            // kRefused
 };
 
 // Checks face `face` (corners, with per-corner uv and vn when not empty,

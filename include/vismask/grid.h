@@ -1,14 +1,12 @@
 // Grid: the SEADS-style uniform grid over one environment's patches.
 // Two flat arrays built once at init: cellStart (numCells + 1 offsets) and
 // refs (patch indices, cell by cell), and a bitmap of the cells that hold
-// any patch (so the walk reads an empty cell's bit, not its offsets). Rays walk it with a 3D-DDA (Amanatides &
-// Woo). Intersect finds the closest hit, Occluded stops at the first.
-// The resolution follows the patch count and the extent (Cleary et al.:
-// cells per axis = extent * cbrt(density * N / volume)); a face of the box
-// that walls lie on is placed just inside an outer layer of cells.
+// any patch (so the walk reads an empty cell's bit, not its offsets). Rays walk it with a 3D-DDA
+// (Amanatides & Woo). Intersect finds the closest hit, Occluded stops at the first. The resolution
+// follows the patch count and the extent (Cleary et al.: cells per axis = extent * cbrt(density * N
+// / volume)); a face of the box that walls lie on is placed just inside an outer layer of cells.
 #pragma once
 #include <cstdint>
-
 #include <glm/vec3.hpp>
 
 #include "vismask/arena.h"
@@ -61,7 +59,9 @@ class Grid {
   bool Occluded(const Ray& ray, Skip skip, uint32_t* hint) const;
 
   const Plan& plan() const { return plan_; }
-  size_t cellCount() const { return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2]; }
+  size_t cellCount() const {
+    return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2];
+  }
   size_t bytes() const { return cellStart_.bytes() + refs_.bytes() + occupied_.bytes(); }
   // The built arrays, read-only (tests, statistics): cell c holds
   // refs()[cellStart()[c] .. cellStart()[c + 1]), in ascending patch order.
@@ -88,6 +88,7 @@ class Grid {
   // Work done by the walks so far: cells entered plus patches tested (a
   // deterministic count, the same on every machine).
   uint64_t steps() const { return steps_; }
+
  private:
   mutable uint64_t steps_ = 0;
   Span<const PatchGeom> geom_;

@@ -3,10 +3,9 @@
 // Nothing here allocates from the heap.
 #pragma once
 #include <cstdint>
+#include <glm/vec3.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/vec3.hpp>
 
 #include "vismask/os.h"
 #include "vismask/span.h"

@@ -8,7 +8,6 @@
 // shot (1 = the ray is still in flight); the same bit array carries it.
 #pragma once
 #include <cstdint>
-
 #include <glm/vec3.hpp>
 
 #include "vismask/arena.h"

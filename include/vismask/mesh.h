@@ -2,10 +2,9 @@
 // display lattice of shared vertices used for Gouraud shading.
 #pragma once
 #include <cstdint>
+#include <glm/vec3.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/vec3.hpp>
 
 #include "vismask/patch.h"
 #include "vismask/scene.h"
@@ -20,20 +19,22 @@ struct SmoothVertex {
   uint32_t vertex;   // in Mesh::vertices
   uint32_t polygon;  // the source polygon (before partitioning): never shared with itself
   uint32_t group;    // its smoothing group, 0 for none
-  uint32_t edge[2];  // the source polygon's outline edges it lies on (a corner: two; else edge[1] == edge[0])
+  uint32_t edge[2];  // the source polygon's outline edges it lies on (a corner: two; else edge[1]
+                     // == edge[0])
   glm::vec3 normal;  // the polygon's geometric normal
   glm::vec3 vn;      // its vertex normal there ('vn', interpolated along the edge), or 0
   glm::vec3 dir;     // unit direction of outline edge edge[0]
 };
 
 struct Mesh {
-  std::vector<Patch> patches;        // in polygon order; Patch::globalId == index
-  std::vector<glm::vec3> vertices;   // display lattice; Patch::vertex[] index it
+  std::vector<Patch> patches;       // in polygon order; Patch::globalId == index
+  std::vector<glm::vec3> vertices;  // display lattice; Patch::vertex[] index it
   // Two-sided meshes (AddTwins): per patch, the index of its twin, the same
   // patch with its front on the other side, or kNoPatch. Empty: no twins.
   std::vector<uint32_t> twin;
   std::vector<SmoothVertex> smooth;  // by vertex; empty unless MarkSmoothVertices found some
-  std::vector<PatchTexture> textures;  // one per patch once any is textured (TextureMesh), else empty
+  std::vector<PatchTexture>
+      textures;  // one per patch once any is textured (TextureMesh), else empty
 };
 
 // Which patches AddTwins copies: every patch (--two-sided), and/or every

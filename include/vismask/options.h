@@ -21,19 +21,21 @@ struct Options {
   std::string scene;
   LoadOptions load;  // --strict, --emit NAME=R,G,B|ka (repeatable)
   std::string outDir = "out";
-  std::string exportPath;  // --export FILE.glb: the solved mesh as binary glTF (gltf.h); empty: none
+  std::string
+      exportPath;  // --export FILE.glb: the solved mesh as binary glTF (gltf.h); empty: none
   float patchSize = 0.0f;  // 0: automatic (largest scene extent / kAutoPatchDivisions)
   // Ray allocation: kPower (the default) gives a shot rays in proportion
   // to its power; kFixed (chosen by --rays N alone) gives every shot N.
   enum class RayAlloc { kPower, kFixed };
   RayAlloc rayAlloc = RayAlloc::kPower;
   bool hasRayAlloc = false;
-  uint32_t rays = 4096;           // --rays: per shot (fixed)
+  uint32_t rays = 4096;  // --rays: per shot (fixed)
   bool hasRays = false;
-  uint64_t emittedRays = 4000000; // --emitted-rays: the rays the emitted power is worth (power)
-  uint32_t minRays = 16;          // --min-rays: the fewest a shot traces (power)
-  uint32_t maxRays = 8192;        // --max-rays: the most a shot traces (power); more power -> partial shots
-  bool sobol = true;              // --sampler sobol|random
+  uint64_t emittedRays = 4000000;  // --emitted-rays: the rays the emitted power is worth (power)
+  uint32_t minRays = 16;           // --min-rays: the fewest a shot traces (power)
+  uint32_t maxRays =
+      8192;           // --max-rays: the most a shot traces (power); more power -> partial shots
+  bool sobol = true;  // --sampler sobol|random
   uint32_t elementsPerPatch = 8;  // --elements K: the element pool, K per patch beyond the roots
   uint32_t elementDepth = 4;      // --element-depth D: the deepest an element splits
   float elementSpread = 0.1f;     // --element-spread S: the least relative spread that splits
@@ -41,8 +43,8 @@ struct Options {
   uint64_t rayBudget = 0;         // --ray-budget N: stop once N rays are traced; 0: none
   uint64_t seed = 1;
   double stopUnshot = 1e-3;
-  uint64_t maxShots = 0;   // 0: none
-  double maxSeconds = 0.0; // 0: none
+  uint64_t maxShots = 0;    // 0: none
+  double maxSeconds = 0.0;  // 0: none
   int width = 512;
   int height = 512;
   bool hasCamera = false;
@@ -55,7 +57,7 @@ struct Options {
   int envs[3] = {1, 1, 1};  // --envs NX[xNY[xNZ]] (or the grid --envs auto:N chose, at init)
   // --envs auto[:N]: N environments (default: --ranks), the grid's shape and
   // its split planes chosen at init from the scene (partition.h, WorkSplitter).
-  bool hasEnvs = false;   // --envs given (else --ranks N > 1 or an MPI world > 1 means auto:N)
+  bool hasEnvs = false;  // --envs given (else --ranks N > 1 or an MPI world > 1 means auto:N)
   bool envsAuto = false;
   int envsAutoCount = 0;
   MaskMethod maskMethod = MaskMethod::kB;
@@ -72,18 +74,20 @@ struct Options {
   uint64_t roundWork = 0;
   bool hasRoundWork = false;
   bool roundWorkAuto = false;
-  uint32_t queue = 64;     // --queue Q; without it, AutoQueue (ResolveRounds)
+  uint32_t queue = 64;  // --queue Q; without it, AutoQueue (ResolveRounds)
   bool hasQueue = false;
   uint32_t maskCacheKiB = 8192;  // --mask-cache: B/C centre masks kept per environment
   std::vector<uint32_t> envOrder;
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
   int ranks = 1;          // --ranks N (pipe)
-  double rankTimeout = kDefaultRankTimeout;  // --rank-timeout S: a silent peer ends the run; 0: never
-  uint64_t memBudget = 0; // --mem-budget BYTES per rank; 0: none
-  bool json = false;      // footprint --json
-  std::string reference;  // --reference REF.pfm: the error of the image against it
+  double rankTimeout =
+      kDefaultRankTimeout;  // --rank-timeout S: a silent peer ends the run; 0: never
+  uint64_t memBudget = 0;   // --mem-budget BYTES per rank; 0: none
+  bool json = false;        // footprint --json
+  std::string reference;    // --reference REF.pfm: the error of the image against it
   uint64_t errorEvery = 0;  // --error-every K shots (with --reference); 0: at the end only
-  std::string exclude;    // --exclude MASK.pgm (render with --reference, compare): pixels left out of the error
+  std::string exclude;  // --exclude MASK.pgm (render with --reference, compare): pixels left out of
+                        // the error
   bool correctUnshot = false;
   // --two-sided: every polygon gets a second, reversed copy (its twin), so
   // both sides receive, reflect and show. --two-sided-emitters: emitting
@@ -92,9 +96,11 @@ struct Options {
   bool twoSided = false;
   bool twoSidedEmitters = false;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
-  bool smooth = true;        // --smooth on|off: share display values across smoothed polygons (smoothing.h)
-  float creaseDeg = 30.0f;   // --crease DEG: the most two normals may differ by and be smoothed
-  double stopError = 0.0;  // --stop-error E: stop when the estimated bias < E; 0: off  // --correct-unshot on: patches.csv's b gets kd * ambient
+  bool smooth =
+      true;  // --smooth on|off: share display values across smoothed polygons (smoothing.h)
+  float creaseDeg = 30.0f;  // --crease DEG: the most two normals may differ by and be smoothed
+  double stopError = 0.0;   // --stop-error E: stop when the estimated bias < E; 0: off  //
+                            // --correct-unshot on: patches.csv's b gets kd * ambient
   // vismask compare A.pfm B.pfm
   std::string compareA, compareB;
   // vismask view OUT_DIR [--glb NAME.glb] [--port P] (viewer.h)
@@ -110,7 +116,8 @@ constexpr uint32_t kAutoRoundWorkShots = 16;
 constexpr uint32_t kAutoRoundShots = 64;
 constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
 
-constexpr float kAutoPatchDivisions = 28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
+constexpr float kAutoPatchDivisions =
+    28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.

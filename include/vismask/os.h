@@ -115,7 +115,7 @@ class OutFile {
   bool Close(char* why);
 
   int fd_ = -1;
-  int tempSlot_ = -1;  // the temporary name's entry in the signal handler's table
+  int tempSlot_ = -1;   // the temporary name's entry in the signal handler's table
   int writeErrno_ = 0;  // errno of the first failed write, 0 if none
   char path_[kMaxPath] = {};
   char tmpPath_[kMaxPath + 24] = {};

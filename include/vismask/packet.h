@@ -15,19 +15,19 @@
 namespace vismask {
 
 struct PacketHeader {
-  uint64_t shotKey;     // regenerates the shot's random streams
-  double power[3];      // the shooter's unshot power when it shot (W)
-  float corner[4][3];   // the shooter's corners (corner[3] == corner[2] for triangles)
+  uint64_t shotKey;    // regenerates the shot's random streams
+  double power[3];     // the shooter's unshot power when it shot (W)
+  float corner[4][3];  // the shooter's corners (corner[3] == corner[2] for triangles)
   float normal[3];
   float area;
   uint32_t numCorners;
-  uint32_t shooterId;   // global patch id
-  uint32_t shotIndex;   // how many times the shooter had shot before
-  uint32_t sourceEnv;   // where it shot first
-  uint32_t fromEnv;     // the sender of this packet
-  uint32_t toEnv;       // the receiver
-  uint32_t sequence;    // the sender's packet count this round (ordering)
-  uint32_t rays;        // the shot's ray count (every environment traces as many)
+  uint32_t shooterId;  // global patch id
+  uint32_t shotIndex;  // how many times the shooter had shot before
+  uint32_t sourceEnv;  // where it shot first
+  uint32_t fromEnv;    // the sender of this packet
+  uint32_t toEnv;      // the receiver
+  uint32_t sequence;   // the sender's packet count this round (ordering)
+  uint32_t rays;       // the shot's ray count (every environment traces as many)
 };
 static_assert(std::is_trivially_copyable<PacketHeader>::value, "packets are plain bytes");
 static_assert(sizeof(PacketHeader) == 128, "the packet header's layout is part of the wire format");
@@ -47,13 +47,19 @@ PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey,
 // MakePatchSampler and the shot's stream regenerate its rays bit for bit.
 Patch PatchFromHeader(const PacketHeader& h);
 
-inline void WriteHeader(uint8_t* packet, const PacketHeader& h) { std::memcpy(packet, &h, sizeof h); }
+inline void WriteHeader(uint8_t* packet, const PacketHeader& h) {
+  std::memcpy(packet, &h, sizeof h);
+}
 inline PacketHeader ReadHeader(const uint8_t* packet) {
   PacketHeader h;
   std::memcpy(&h, packet, sizeof h);
   return h;
 }
-inline uint8_t* MaskBytes(uint8_t* packet) { return packet + sizeof(PacketHeader); }
-inline const uint8_t* MaskBytes(const uint8_t* packet) { return packet + sizeof(PacketHeader); }
+inline uint8_t* MaskBytes(uint8_t* packet) {
+  return packet + sizeof(PacketHeader);
+}
+inline const uint8_t* MaskBytes(const uint8_t* packet) {
+  return packet + sizeof(PacketHeader);
+}
 
 }  // namespace vismask

@@ -26,9 +26,8 @@
 // every loaded polygon in file order.
 #pragma once
 #include <cstdint>
-#include <vector>
-
 #include <glm/vec3.hpp>
+#include <vector>
 
 #include "vismask/scene.h"
 #include "vismask/status.h"

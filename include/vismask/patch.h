@@ -8,7 +8,6 @@
 //   PatchEnergy - the solver's state in double (radiosity, unshot power).
 #pragma once
 #include <cstdint>
-
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -47,15 +46,16 @@ struct PatchGeom {
 static_assert(sizeof(PatchGeom) == 80, "PatchGeom is the grid's hot data");
 
 struct Patch {
-  glm::vec3 corner[4];   // counter-clockwise seen from the front; corner[3] == corner[2] for triangles
-  glm::vec3 normal;      // unit, front side
-  glm::vec3 kd;          // diffuse reflectance per channel, in [0, 1]
-  glm::vec3 ke;          // emitted exitance per channel (W/m^2 in scene units)
-  float area;            // in scene units^2
-  uint32_t numCorners;   // 3 or 4
-  uint32_t surface;      // index of the source polygon in the scene
-  uint32_t vertex[4];    // display-lattice vertices, for Gouraud shading
-  uint32_t globalId;     // id in the whole scene, independent of partition
+  glm::vec3
+      corner[4];     // counter-clockwise seen from the front; corner[3] == corner[2] for triangles
+  glm::vec3 normal;  // unit, front side
+  glm::vec3 kd;      // diffuse reflectance per channel, in [0, 1]
+  glm::vec3 ke;      // emitted exitance per channel (W/m^2 in scene units)
+  float area;        // in scene units^2
+  uint32_t numCorners;  // 3 or 4
+  uint32_t surface;     // index of the source polygon in the scene
+  uint32_t vertex[4];   // display-lattice vertices, for Gouraud shading
+  uint32_t globalId;    // id in the whole scene, independent of partition
 };
 
 constexpr uint32_t kNoTexture = 0xffffffffu;
@@ -77,7 +77,9 @@ struct PatchEnergy {
 };
 
 // A patch's key in the shooting order: its unshot power, channels summed.
-inline double UnshotKey(const PatchEnergy& e) { return e.unshot[0] + e.unshot[1] + e.unshot[2]; }
+inline double UnshotKey(const PatchEnergy& e) {
+  return e.unshot[0] + e.unshot[1] + e.unshot[2];
+}
 
 // Builds a patch's ray-test data from its corners and normal.
 PatchGeom MakePatchGeom(const Patch& p);

@@ -26,7 +26,6 @@
 // key ties, to rounding, with a dropped id drawn as several pieces.
 #pragma once
 #include <cstdint>
-
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -42,8 +41,9 @@ constexpr int kFragments = 4;  // fragments per pixel (antialiased)
 // One patch id's share of a pixel (antialiased). Empty: id == kNoPatch,
 // depth = +inf, the rest 0.
 struct Fragment {
-  float depth;     // sort depth: the plane's at the pixel centre (back faces: farthest covered); min over pieces
-  uint32_t id;     // global patch id
+  float depth;  // sort depth: the plane's at the pixel centre (back faces: farthest covered); min
+                // over pieces
+  uint32_t id;  // global patch id
   float coverage;  // summed exact area fraction of the id's pieces in the pixel,
                    // negative for a back face (its corners clockwise on screen)
   float rgb[3];    // summed coverage * radiance

@@ -43,6 +43,8 @@ inline uint64_t ShotKey(uint64_t runSeed, uint32_t patchGlobalId, uint32_t shotI
   return Mix64(Mix64(runSeed) ^ ((static_cast<uint64_t>(patchGlobalId) << 32) | shotIndex));
 }
 
-inline Rng ShotRng(uint64_t shotKey) { return Rng(Mix64(shotKey), shotKey); }
+inline Rng ShotRng(uint64_t shotKey) {
+  return Rng(Mix64(shotKey), shotKey);
+}
 
 }  // namespace vismask

@@ -5,11 +5,10 @@
 #pragma once
 #include <cstdint>
 #include <functional>
-#include <string>
-#include <vector>
-
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <string>
+#include <vector>
 
 #include "vismask/status.h"
 
@@ -38,7 +37,7 @@ struct Polygon {
   std::vector<glm::vec2> uv;  // texture coordinates, one per corner ('vt'), or empty
   std::vector<glm::vec3> vn;  // vertex normals as written, one per corner ('vn'), or empty
   uint32_t smoothing = 0;     // smoothing group ('s N'); 0: none ('s off', 's 0' or no 's')
-  glm::vec3 normal{0.0f};  // unit, front side (Newell's method)
+  glm::vec3 normal{0.0f};     // unit, front side (Newell's method)
   double area = 0.0;
   uint32_t material = 0;  // index into Scene::materials
   int line = 0;           // line of the 'f' statement in Scene::objPath (shared by its pieces)

@@ -11,9 +11,8 @@
 // alike; elsewhere on the edge each side interpolates its own shared ends.
 #pragma once
 #include <cstdint>
-#include <vector>
-
 #include <glm/vec3.hpp>
+#include <vector>
 
 #include "vismask/mesh.h"
 #include "vismask/partition.h"

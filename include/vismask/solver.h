@@ -37,10 +37,11 @@ struct SolveOptions {
   uint64_t rayBudget = 0;    // stop once this many form-factor rays are traced; 0: no limit
   double maxSeconds = 0.0;   // 0: no limit
   uint32_t roundShots = 1;   // shots per environment per round (at most)
-  uint64_t roundWork = 0;    // a round ends for an environment after this many grid steps; 0: no limit
+  uint64_t roundWork =
+      0;  // a round ends for an environment after this many grid steps; 0: no limit
   uint32_t queueCapacity = 64;  // foreign shooters an environment can hold
-  bool quiet = false;        // no progress line on stderr
-  Span<const uint32_t> order;  // the order environments run in a round (empty: 0..n-1)
+  bool quiet = false;           // no progress line on stderr
+  Span<const uint32_t> order;   // the order environments run in a round (empty: 0..n-1)
   ErrorProbe* probe = nullptr;  // measures after the last round, and
   uint64_t errorEvery = 0;      // after every round that crosses a multiple of this many shots
   // --stop-error: stop when BiasEstimate falls below this (0: off), with
@@ -57,8 +58,8 @@ const char* StopReasonName(StopReason r);
 struct SolveResult {
   StopReason reason = StopReason::kConverged;
   uint64_t rounds = 0;
-  uint64_t shots = 0;         // local and foreign
-  uint64_t rays = 0;          // form-factor rays traced, all environments
+  uint64_t shots = 0;  // local and foreign
+  uint64_t rays = 0;   // form-factor rays traced, all environments
   double seconds = 0.0;
   double unshotFraction = 1.0;  // (unshot + in flight) / emitted, channels summed
   // With a probe: how often it measured, the seconds that took (not in
@@ -149,7 +150,7 @@ struct AmbientReport {
   double area;
   double unshot[3];  // local unshot power plus the power in flight booked here
   double kdArea[3];
-  double emitted[3];    // the ledger's (for EffectiveReflectance when kd is 1 everywhere)
+  double emitted[3];  // the ledger's (for EffectiveReflectance when kd is 1 everywhere)
   double radiosity[3];
 };
 AmbientReport AmbientOf(const Environment& env);

@@ -12,12 +12,11 @@
 // so clipped pieces and patches of one polygon agree.
 #pragma once
 #include <cstdint>
-#include <string>
-#include <vector>
-
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
+#include <string>
+#include <vector>
 
 #include "vismask/arena.h"
 #include "vismask/mesh.h"
@@ -48,7 +47,7 @@ struct Texture {
 
 // A decoded map_Kd at init (heap).
 struct TextureImage {
-  std::string path;   // as resolved by the loader
+  std::string path;  // as resolved by the loader
   uint32_t width = 0;
   uint32_t height = 0;
   std::vector<uint8_t> rgb;  // sRGB, 3 bytes a texel
@@ -85,9 +84,9 @@ glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::v
 // some face uses, decoded, and which material uses which.
 struct SceneTextures {
   std::vector<TextureImage> images;
-  std::vector<uint32_t> ofMaterial;   // per material: index into images, or kNoTexture
+  std::vector<uint32_t> ofMaterial;     // per material: index into images, or kNoTexture
   std::vector<glm::vec3> kdOfMaterial;  // per material: the Kd the map multiplies (1 for Kd 0 0 0)
-  std::vector<std::string> warnings;  // one line each
+  std::vector<std::string> warnings;    // one line each
   bool any() const { return !images.empty(); }
 };
 

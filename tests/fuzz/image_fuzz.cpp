@@ -21,7 +21,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (s.ok()) {
     // Accepted: the pixels the header promised, each finite, within the bytes given.
     if (pfm.width <= 0 || pfm.height <= 0 ||
-        pfm.pixels.size() != size_t(pfm.width) * size_t(pfm.height) * 3 || pfm.pixels.size() * 4 > size)
+        pfm.pixels.size() != size_t(pfm.width) * size_t(pfm.height) * 3 ||
+        pfm.pixels.size() * 4 > size)
       __builtin_trap();
     for (float f : pfm.pixels)
       if (!std::isfinite(f)) __builtin_trap();
@@ -29,8 +30,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   vismask::PgmImage pgm;
   s = vismask::ReadPgmFromBytes("fuzz.pgm", bytes, &pgm);
   (void)s.ToString();
-  if (s.ok() && (pgm.width <= 0 || pgm.height <= 0 ||
-                 pgm.pixels.size() != size_t(pgm.width) * size_t(pgm.height) || pgm.pixels.size() > size))
+  if (s.ok() &&
+      (pgm.width <= 0 || pgm.height <= 0 ||
+       pgm.pixels.size() != size_t(pgm.width) * size_t(pgm.height) || pgm.pixels.size() > size))
     __builtin_trap();
   return 0;
 }
