@@ -283,6 +283,40 @@ uint64_t FileRssBytes() {
   return rss > anon ? rss - anon : 0;
 }
 
+InFile::~InFile() {
+  if (fd_ >= 0) close(fd_);
+}
+
+bool InFile::Open(const char* path, std::string* why) {
+  if (fd_ >= 0) close(fd_);
+  do {
+    fd_ = open(path, O_RDONLY | O_CLOEXEC);
+  } while (fd_ < 0 && errno == EINTR);
+  if (fd_ < 0) *why = std::strerror(errno);
+  return fd_ >= 0;
+}
+
+int64_t InFile::Read(void* buf, size_t n, std::string* why) {
+  size_t got = 0;
+  while (got < n) {
+    ssize_t r = read(fd_, static_cast<char*>(buf) + got, n - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r < 0) {
+      *why = std::strerror(errno);
+      return -1;
+    }
+    if (r == 0) break;
+    got += static_cast<size_t>(r);
+  }
+  return static_cast<int64_t>(got);
+}
+
+int64_t InFile::Size() const {
+  struct stat st;
+  if (fd_ < 0 || fstat(fd_, &st) != 0) return -1;
+  return static_cast<int64_t>(st.st_size);
+}
+
 OutFile::~OutFile() {
   Discard();
 }

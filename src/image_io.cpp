@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <istream>
 #include <limits>
 #include <streambuf>
@@ -14,6 +13,7 @@
 #include <utility>
 
 #include "vismask/check.h"
+#include "vismask/os.h"
 
 namespace vismask {
 
@@ -185,18 +185,19 @@ namespace {
 // success. Only regular files: a device (/dev/zero) or a FIFO would be read
 // until memory runs out.
 std::string ReadBytes(const std::string& path, std::string* bytes) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return "cannot open";
+  os::InFile in;
+  std::string why;
+  if (!in.Open(path.c_str(), &why)) return "cannot open";
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) return "cannot read: not a regular file";
-  uintmax_t size = std::filesystem::file_size(path, ec);
-  if (ec) return "cannot read (" + ec.message() + ")";
-  if (size > static_cast<uintmax_t>(std::numeric_limits<std::streamsize>::max()))
+  const int64_t size = in.Size();
+  if (size < 0) return "cannot read";
+  if (static_cast<uint64_t>(size) > std::numeric_limits<size_t>::max() / 2)
     return "cannot read: " + std::to_string(size) + " bytes";
   std::string all(static_cast<size_t>(size), '\0');
-  in.read(&all[0], static_cast<std::streamsize>(size));
-  if (static_cast<uintmax_t>(in.gcount()) != size)
-    return "cannot read (the file changed while read)";
+  const int64_t got = size > 0 ? in.Read(&all[0], static_cast<size_t>(size), &why) : 0;
+  if (got < 0) return "cannot read (" + why + ")";
+  if (got != size) return "cannot read (the file changed while read)";
   *bytes = std::move(all);
   return "";
 }

@@ -97,7 +97,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       EmitterCheck::HeapBytes(numEmitters, std::min<size_t>(kEmitterCheckChunk, info.numPolygons)) +
       numEmitters * 256;
   // Every rank prints the loader's warnings, as LoadScene did.
-  for (const std::string& w : info.warnings) std::fprintf(stderr, "%s\n", w.c_str());
+  for (const std::string& w : info.warnings) os::PrintErr("%s\n", w.c_str());
   s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine,
                            &p->textures);
   if (!s.ok()) return s;

@@ -19,6 +19,7 @@
 
 #include "geometry_util.h"
 #include "scene_parse.h"
+#include "vismask/os.h"
 
 namespace vismask {
 namespace objload {
@@ -243,7 +244,7 @@ Status LoadSceneFromText(const std::string& objPath, const std::string& objText,
   if (warnings)
     warnings->insert(warnings->end(), lines_.begin(), lines_.end());
   else
-    for (const std::string& w : lines_) std::fprintf(stderr, "%s\n", w.c_str());
+    for (const std::string& w : lines_) os::PrintErr("%s\n", w.c_str());
   *scene = std::move(result);
   return Status::Ok();
 }

@@ -6,7 +6,6 @@
 // streaming passes (scene_stream.h) are the same code.
 #pragma once
 #include <cstdint>
-#include <fstream>
 #include <functional>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -17,6 +16,7 @@
 #include <utility>
 #include <vector>
 
+#include "vismask/os.h"
 #include "vismask/scene.h"
 #include "vismask/status.h"
 
@@ -134,7 +134,7 @@ class FileLines : public LineSource {
   std::string error() const override { return error_; }
 
  private:
-  std::ifstream in_;
+  os::InFile in_;
   std::unique_ptr<char[]> buf_;
   size_t begin_ = 0, end_ = 0;
   bool first_ = true, eof_ = false;

@@ -96,15 +96,17 @@ std::string CheckReadable(const std::string& path) {
 std::string ReadText(const std::string& path, std::string* text) {
   std::string err = CheckReadable(path);
   if (!err.empty()) return err;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return std::string("cannot open (") + std::strerror(errno) + ")";
-  // istream::read, not istreambuf_iterator: a read error (a directory)
-  // sets badbit instead of throwing.
+  os::InFile in;
+  std::string why;
+  if (!in.Open(path.c_str(), &why)) return "cannot open (" + why + ")";
   std::string all;
   char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0)
-    all.append(buf, static_cast<size_t>(in.gcount()));
-  if (in.bad()) return "cannot read";
+  for (;;) {
+    const int64_t n = in.Read(buf, sizeof buf, &why);
+    if (n < 0) return "cannot read";
+    if (n == 0) break;
+    all.append(buf, static_cast<size_t>(n));
+  }
   *text = std::move(all);
   return "";
 }
@@ -245,8 +247,8 @@ constexpr size_t kLineBuffer = size_t{1} << 16;
 std::string FileLines::Open(const std::string& path) {
   std::string err = CheckReadable(path);
   if (!err.empty()) return err;
-  in_.open(path, std::ios::binary);
-  if (!in_) return std::string("cannot open (") + std::strerror(errno) + ")";
+  std::string why;
+  if (!in_.Open(path.c_str(), &why)) return "cannot open (" + why + ")";
   buf_.reset(new char[kLineBuffer]);
   begin_ = end_ = 0;
   first_ = true;
@@ -259,11 +261,12 @@ bool FileLines::Next(std::string* line) {
   bool any = false;  // a line has begun (bytes, or a '\n' ends an empty one)
   for (;;) {
     if (begin_ == end_) {
-      if (eof_ || !in_.is_open()) return any;
-      in_.read(buf_.get(), static_cast<std::streamsize>(kLineBuffer));
-      end_ = static_cast<size_t>(in_.gcount());
+      if (eof_ || !in_.isOpen()) return any;
+      std::string why;
+      const int64_t n = in_.Read(buf_.get(), kLineBuffer, &why);
+      end_ = n > 0 ? static_cast<size_t>(n) : 0;
       begin_ = 0;
-      if (in_.bad()) {
+      if (n < 0) {
         error_ = "cannot read";
         eof_ = true;
         return false;

@@ -4,13 +4,14 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <glm/geometric.hpp>
 #include <limits>
 #include <map>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "vismask/os.h"
 
 // stb_image, compiled here only, for init: it allocates with malloc, which
 // is allowed before the solve starts. Memory in, so the file is read (and a
@@ -131,13 +132,17 @@ Status ReadTexture(const std::string& path, const std::string& where, TextureIma
   auto fail = [&](const std::string& why) {
     return ErrorAt(where, "cannot read texture '" + path + "': " + why);
   };
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return fail("cannot open");
+  os::InFile in;
+  std::string why;
+  if (!in.Open(path.c_str(), &why)) return fail("cannot open");
   std::string bytes;
   char buf[1 << 16];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0)
-    bytes.append(buf, static_cast<size_t>(in.gcount()));
-  if (in.bad()) return fail("read error");
+  for (;;) {
+    const int64_t n = in.Read(buf, sizeof buf, &why);
+    if (n < 0) return fail("read error");
+    if (n == 0) break;
+    bytes.append(buf, static_cast<size_t>(n));
+  }
   if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
     return fail("file too large");
   int w = 0, h = 0, comp = 0;

@@ -2,7 +2,6 @@
 
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 
 #include "vismask/os.h"
 
@@ -23,13 +22,13 @@ uint32_t Le32(const unsigned char* p) {
 
 // A binary glTF 2.0 header: "glTF", version 2, the file's length.
 Status CheckGlbHeader(const std::string& path) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return Status::Error("vismask: view: cannot read " + path);
-  const std::streamoff size = in.tellg();
+  os::InFile in;
+  std::string why;
+  if (!in.Open(path.c_str(), &why)) return Status::Error("vismask: view: cannot read " + path);
+  const int64_t size = in.Size();
   unsigned char h[12] = {};
-  in.seekg(0);
-  if (size < 12 || !in.read(reinterpret_cast<char*>(h), sizeof h) ||
-      std::memcmp(h, "glTF", 4) != 0 || Le32(h + 4) != 2)
+  if (size < 12 || in.Read(h, sizeof h, &why) != 12 || std::memcmp(h, "glTF", 4) != 0 ||
+      Le32(h + 4) != 2)
     return Status::Error("vismask: view: " + path +
                          ": not binary glTF 2.0 (vismask render --export FILE.glb writes it)");
   if (Le32(h + 8) != static_cast<uint64_t>(size))

@@ -84,6 +84,27 @@ void InstallSignalCleanup();
 // signal N while waiting for rank PEER" (under mpirun, the rank that died).
 void NoteWaiting(int self, int peer);
 
+// A file opened for reading (the loaders at init: OBJ, MTL, PFM, PGM,
+// textures, a .glb's header). Read fills `buf` with up to n bytes, fewer
+// only at the end of the file: the count, 0 at the end, -1 on an error
+// (*why: strerror's text). Closed on destruction.
+class InFile {
+ public:
+  InFile() = default;
+  ~InFile();
+  InFile(const InFile&) = delete;
+  InFile& operator=(const InFile&) = delete;
+
+  bool Open(const char* path, std::string* why);
+  int64_t Read(void* buf, size_t n, std::string* why);
+  // The file's size in bytes, -1 on an error.
+  int64_t Size() const;
+  bool isOpen() const { return fd_ >= 0; }
+
+ private:
+  int fd_ = -1;
+};
+
 // An output file written under a temporary name ("NAME.tmp.PID", unique to
 // the process) and renamed to its final name only by Commit() or CommitAll(),
 // so an interrupted run never leaves a file that looks complete. Discard()
