@@ -1,0 +1,66 @@
+// The defaults that follow from the run's shape (options.h): how big a
+// round is (ResolveRounds, AutoRoundWork), the foreign-shooter queue
+// (AutoQueue), and --envs auto for a run of several ranks without --envs
+// (SetWorldSize). ParseArgs calls ResolveRounds once the environment count
+// is known; init sets the automatic round work from the scene.
+#include <algorithm>
+#include <cmath>
+
+#include "vismask/options.h"
+#include "vismask/packet.h"
+#include "vismask/partition.h"
+
+namespace vismask {
+
+namespace {
+
+uint32_t MostRaysAShot(const Options& o) {
+  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
+}
+
+}  // namespace
+
+void ResolveRounds(int numEnvs, Options* o) {
+  o->roundWorkAuto = false;
+  const uint64_t packet = PacketBytes(MaskShapeOf(o->maskMethod, o->maskRes, MostRaysAShot(*o)));
+  if (o->hasRoundWork || o->hasRoundShots || numEnvs <= 1) {
+    if (!o->hasRoundShots) o->roundShots = o->hasRoundWork ? kAutoRoundShots : 1;
+    if (!o->hasRoundWork) o->roundWork = 0;
+  } else {
+    // The outbox holds 6 packets a shot: fewer shots a round with big packets.
+    uint64_t shots = kAutoRoundOutboxBytes / (6 * packet);
+    o->roundShots =
+        static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
+    o->roundWorkAuto = true;
+  }
+  if (!o->hasQueue) o->queue = AutoQueue(numEnvs, o->roundShots, packet);
+}
+
+uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes) {
+  // Admission shares the free slots among the environments, so a round of
+  // `roundShots` local shots in each needs numEnvs x roundShots of them.
+  const uint64_t want = uint64_t(std::max(numEnvs, 1)) * roundShots;
+  const uint64_t fit = kAutoQueueBytes / std::max<uint64_t>(packetBytes, 1);
+  return static_cast<uint32_t>(std::max<uint64_t>(kMinAutoQueue, std::min(want, fit)));
+}
+
+bool SetWorldSize(int ranks, Options* o) {
+  if (o->hasEnvs || ranks <= 1 || o->envsAuto) return false;
+  o->envsAuto = true;
+  o->envsAutoCount = std::min(ranks, kMaxAutoEnvs);
+  if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs)) return false;
+  ResolveRounds(o->envsAutoCount, o);
+  return true;
+}
+
+uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs, float gridDensity) {
+  // B's and C's centre rays (one per mask pixel at most) walk like rays.
+  double rays = MostRaysAShot(o);
+  if (o.maskMethod == MaskMethod::kB || o.maskMethod == MaskMethod::kC)
+    rays += 4.0 * o.maskRes * o.maskRes;
+  double cells = gridDensity * patches / std::max(1, numEnvs);
+  double steps = std::max(1.0, std::cbrt(std::max(cells, 1.0)));
+  return static_cast<uint64_t>(kAutoRoundWorkShots * rays * steps);
+}
+
+}  // namespace vismask
