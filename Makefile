@@ -82,12 +82,14 @@ endif
 
 # The transport is chosen by what is linked: each binary gets one of these.
 TRANSPORT_SRC := platform/transport_posix.cpp platform/transport_loop.cpp platform/transport_pipe.cpp \
+                 platform/transport_pipe_process.cpp platform/transport_pipe_frames.cpp \
                  platform/transport_mpi.cpp
 LIB_SRC := $(wildcard src/*.cpp) $(wildcard platform/*.cpp)
 LIB_SRC := $(filter-out src/main.cpp $(TRANSPORT_SRC),$(LIB_SRC))
 LIB_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(LIB_SRC))
 POSIX_OBJ := $(BUILD)/obj/platform/transport_posix.o $(BUILD)/obj/platform/transport_loop.o \
-             $(BUILD)/obj/platform/transport_pipe.o
+             $(BUILD)/obj/platform/transport_pipe.o $(BUILD)/obj/platform/transport_pipe_process.o \
+             $(BUILD)/obj/platform/transport_pipe_frames.o
 MPI_OBJ := $(BUILD)/obj/platform/transport_mpi.o
 TEST_SRC := $(wildcard tests/*.cpp)
 TEST_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(TEST_SRC))
