@@ -11,7 +11,7 @@ namespace {
 // rank 0 (the other ranks only help draw it).
 class ReferenceProbe : public ErrorProbe {
  public:
-  explicit ReferenceProbe(Render* r) : r_(r) {}
+  explicit ReferenceProbe(RunState* r) : r_(r) {}
   double Measure() override {
     RenderImage(r_);
     if (!r_->isRoot()) return 0.0;
@@ -22,7 +22,7 @@ class ReferenceProbe : public ErrorProbe {
   }
 
  private:
-  Render* r_;
+  RunState* r_;
 };
 
 }  // namespace
@@ -69,7 +69,7 @@ using namespace run;
 int Main(int argc, const char* const* argv) {
   SetPhase(Phase::kInit);
   double start = os::Seconds();
-  auto r = std::make_unique<Render>();
+  auto r = std::make_unique<RunState>();
   Status s = ParseArgs(argc, argv, &r->options);
   if (!s.ok()) return Fail(s);
   if (r->options.help) {

@@ -31,7 +31,7 @@ MaskBits Environment::ScratchMask(uint32_t k) const {
 
 int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
   int source[3];
-  grid3_.Cell(static_cast<int>(sourceEnv), source);
+  envGrid_.Cell(static_cast<int>(sourceEnv), source);
   int count = 0;
   for (int a = 0; a < 3; ++a) {
     // Downstream: away from the source; both ways on an axis the source shares.
@@ -39,7 +39,7 @@ int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
       if (cell_[a] != source[a] && step != (cell_[a] > source[a] ? 1 : -1)) continue;
       int c[3] = {cell_[0], cell_[1], cell_[2]};
       c[a] += step;
-      if (c[a] < 0 || c[a] >= grid3_.n[a]) continue;
+      if (c[a] < 0 || c[a] >= envGrid_.n[a]) continue;
       for (int k = 0; k < 3; ++k) next[count][k] = c[k];
       ++count;
     }
@@ -55,7 +55,7 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
     const int* c = next[k];
     CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
     uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
-    h.toEnv = static_cast<uint32_t>(grid3_.Index(c[0], c[1], c[2]));
+    h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
     h.sequence = outCount_++;
     WriteHeader(packet, h);
     if (!shape_.empty()) mask.Pack(MaskBytes(packet));
@@ -169,7 +169,7 @@ void Environment::Deliver(const uint8_t* packet) {
     slot.header = h;
     slot.used = 1;
     int source[3];
-    grid3_.Cell(static_cast<int>(h.sourceEnv), source);
+    envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
     for (int a = 0; a < 3; ++a) slot.expected += cell_[a] != source[a];
     ++queued_;
   }
@@ -235,7 +235,7 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
   constexpr uint32_t kNoMaskRes = 16;
   const uint32_t res = bits ? shape_.res : kNoMaskRes, cols = 4 * res;
   int from[3];
-  grid3_.Cell(static_cast<int>(h.fromEnv), from);
+  envGrid_.Cell(static_cast<int>(h.fromEnv), from);
   int axis = 0;
   for (int a = 0; a < 3; ++a)
     if (from[a] != cell_[a]) axis = a;

@@ -88,7 +88,7 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
                                          const EnvOptions& options) {
   index_ = index;
   options_ = options;
-  grid3_ = grid;
+  envGrid_ = grid;
   grid.Cell(static_cast<int>(index), cell_);
   box_ = grid.EnvBox(static_cast<int>(index));
   numNeighbours_ = 0;

@@ -31,7 +31,7 @@ namespace {
 // when full (or at the end), so rank 0 receives the same sizes it expects.
 class Stream {
  public:
-  Stream(Render* r, size_t itemBytes) : r_(r), item_(itemBytes) {
+  Stream(RunState* r, size_t itemBytes) : r_(r), item_(itemBytes) {
     CHECK(r->exportChunk.size() % itemBytes == 0);
   }
   uint8_t* Next() {
@@ -61,7 +61,7 @@ class Stream {
   }
 
  private:
-  Render* r_;
+  RunState* r_;
   size_t item_;
   size_t used_ = 0;
 };
@@ -71,7 +71,7 @@ class Stream {
 // The file is the head, every vertex (environment order: rank 0's, then
 // each other rank's), then every triangle in the same order, its indices
 // offset by the vertices of the environments before its own.
-void WriteExport(Render* r) {
+void WriteExport(RunState* r) {
   if (r->options.exportPath.empty()) return;
   Transport* t = r->transport.get();
   for (uint32_t i = 0; i < r->layout.perRank; ++i) r->exportMine[i] = GlbMesh{};

@@ -9,7 +9,7 @@ namespace vismask::run {
 // The figures `footprint` reports for one way of meshing the scene.
 struct FootprintFigures {
   std::vector<std::unique_ptr<Environment>> envs;
-  std::vector<Render> probes;  // per rank: its own buffers' layout
+  std::vector<RunState> probes;  // per rank: its own buffers' layout
   std::vector<uint64_t> rankTotal, rankEnvBytes, rankOwn, rankInitPeak;
   uint64_t patches = 0, twins = 0, envBytes = 0, total = 0;
   GlbMesh exportMesh;  // counts only: what --export would write
@@ -24,10 +24,10 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
   f->rankEnvBytes.assign(ranks, 0);
   f->rankOwn.assign(ranks, 0);
   f->rankInitPeak.assign(ranks, 0);
-  f->probes = std::vector<Render>(ranks);
+  f->probes = std::vector<RunState>(ranks);
   auto& envs = f->envs;
   for (int k = 0; k < ranks; ++k) {
-    Render& r = f->probes[k];
+    RunState& r = f->probes[k];
     r.options = o;
     r.layout = EnvsOfRank(total, ranks, k);
     for (int q = 0; q < ranks; ++q) {
@@ -153,7 +153,7 @@ int Footprint(const Options& o) {
     }
     out += "  ],\n  \"ranks\": [\n";
     for (int k = 0; k < ranks; ++k) {
-      const Render& r = probes[k];
+      const RunState& r = probes[k];
       add("    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
           "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
           "\"texture_bytes\": %llu, \"export_bytes\": %llu, \"rank_arena_bytes\": %llu, "
@@ -188,7 +188,7 @@ int Footprint(const Options& o) {
     add("\n%4s %4s %14s %12s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B", "exchange_B",
         "image_B", "output_B", "texture_B", "total_B");
     for (int k = 0; k < ranks; ++k) {
-      const Render& r = probes[k];
+      const RunState& r = probes[k];
       add("%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.layout.count,
           (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
           (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)rankTotal[k]);

@@ -12,9 +12,9 @@ namespace vismask {
 
 namespace {
 
-using gridcells::CellFrame;
+using gridcells::CellGeometry;
+using gridcells::CellGeometryOf;
 using gridcells::ForEachCell;
-using gridcells::FrameOf;
 using gridcells::MakeShape;
 using gridcells::Scale;
 using gridcells::ScaleOf;
@@ -129,11 +129,11 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
   }
 
   // Exact reference count, by the same rule Build uses.
-  CellFrame frame = FrameOf(plan);
+  CellGeometry cellGeom = CellGeometryOf(plan);
   uint64_t refs = 0;
   for (size_t i = 0; i < n; ++i) {
     MakeShape(patches[i], geom[i], scale, &shape);
-    ForEachCell(frame, shape, [&refs](size_t) { ++refs; });
+    ForEachCell(cellGeom, shape, [&refs](size_t) { ++refs; });
   }
   plan.refs = refs;
   return plan;
@@ -159,7 +159,7 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   geom_ = geom;
   Scale scale = ScaleOf(patches);
   farLimit_ = scale.farLimit;
-  CellFrame frame = FrameOf(plan_);
+  CellGeometry cellGeom = CellGeometryOf(plan_);
   size_t cells = cellCount();
   uint32_t* start = cellStart_.data();
 
@@ -170,7 +170,7 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   uint64_t total = 0;
   for (size_t i = 0; i < patches.size(); ++i) {
     MakeShape(patches[i], geom[i], scale, &shape);
-    ForEachCell(frame, shape, [&](size_t c) {
+    ForEachCell(cellGeom, shape, [&](size_t c) {
       ++start[c];
       ++total;
     });
@@ -187,7 +187,7 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   for (size_t i = 0; i < patches.size(); ++i) {
     MakeShape(patches[i], geom[i], scale, &shape);
     uint32_t index = static_cast<uint32_t>(i);
-    ForEachCell(frame, shape, [&](size_t c) { refs[start[c]++] = index; });
+    ForEachCell(cellGeom, shape, [&](size_t c) { refs[start[c]++] = index; });
   }
   for (size_t c = cells; c > 0; --c) start[c] = start[c - 1];
   start[0] = 0;

@@ -167,8 +167,8 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s)
   }
 }
 
-CellFrame FrameOf(const Grid::Plan& plan) {
-  CellFrame f;
+CellGeometry CellGeometryOf(const Grid::Plan& plan) {
+  CellGeometry f;
   f.lo = glm::dvec3(plan.bounds.lo);
   for (int a = 0; a < 3; ++a) {
     f.res[a] = plan.res[a];

@@ -43,13 +43,13 @@ struct Shape {
 void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s);
 
 // Cell geometry of a plan, in double for registration.
-struct CellFrame {
+struct CellGeometry {
   glm::dvec3 lo;
   glm::dvec3 size;
   glm::dvec3 inv;
   int res[3];
 };
-CellFrame FrameOf(const Grid::Plan& plan);
+CellGeometry CellGeometryOf(const Grid::Plan& plan);
 
 inline int ClampCell(double x, int res) {
   if (!(x >= 0.0)) return 0;  // also NaN
@@ -59,7 +59,7 @@ inline int ClampCell(double x, int res) {
 
 // Calls visit(cellIndex) for every cell the shape may overlap, in index order.
 template <class Visit>
-void ForEachCell(const CellFrame& f, const Shape& s, Visit&& visit) {
+void ForEachCell(const CellGeometry& f, const Shape& s, Visit&& visit) {
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
     lo[a] = ClampCell(std::floor((s.lo[a] - f.lo[a]) * f.inv[a]), f.res[a]);

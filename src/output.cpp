@@ -6,7 +6,7 @@ namespace vismask::run {
 
 // The radiosity patches.csv holds for patch i: the solved b, plus kd times
 // the ambient term with --correct-unshot on.
-double OutputB(const Render& r, const Environment& env, size_t i, int c) {
+double OutputB(const RunState& r, const Environment& env, size_t i, int c) {
   double b = env.energy()[i].b[c];
   if (r.options.correctUnshot) b += static_cast<double>(env.patches()[i].kd[c]) * r.ambientB[c];
   return b;
@@ -15,7 +15,7 @@ double OutputB(const Render& r, const Environment& env, size_t i, int c) {
 // The stated error's sums over one environment's patches: the Monte Carlo
 // variance of each b relative to b (area-weighted), b * area, and the
 // ambient term's share.
-void ErrorSums(const Render& r, const Environment& env, EnvSummary* s) {
+void ErrorSums(const RunState& r, const Environment& env, EnvSummary* s) {
   for (size_t i = 0; i < env.patches().size(); ++i) {
     const Patch& p = env.patches()[i];
     for (int c = 0; c < 3; ++c) {
@@ -30,7 +30,7 @@ void ErrorSums(const Render& r, const Environment& env, EnvSummary* s) {
   }
 }
 
-PatchRecord RecordOf(const Render& r, const Environment& env, size_t i) {
+PatchRecord RecordOf(const RunState& r, const Environment& env, size_t i) {
   const Patch& p = env.patches()[i];
   PatchRecord rec{};
   rec.id = p.globalId;
@@ -58,7 +58,7 @@ void WriteRecord(TextWriter* w, const PatchRecord& p) {
 
 // patches.csv in id order: rank 0's environments, then every other rank's,
 // sent to rank 0 in chunks (ids rise with environment and rank).
-void WritePatchesCsv(Render* r) {
+void WritePatchesCsv(RunState* r) {
   Transport* t = r->transport.get();
   uint64_t count = 0;
   for (Environment* env : r->envPtrs) count += env->patches().size();
@@ -96,7 +96,7 @@ void WritePatchesCsv(Render* r) {
 // Draws the current solution into rank 0's framebuffer: the ambient term
 // from every environment (summed in environment order), each rank's patches
 // drawn by that rank, and rank 0 depth-compositing the others'. Collective.
-void RenderImage(Render* r) {
+void RenderImage(RunState* r) {
   Transport* t = r->transport.get();
   for (uint32_t i = 0; i < r->layout.perRank; ++i) r->ambientMine[i] = AmbientReport{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
@@ -170,7 +170,7 @@ void WarnIfEmpty(const Framebuffer& fb, bool hasCamera) {
         fix);
 }
 
-int WriteOutputs(Render* r, const SolveResult& res) {
+int WriteOutputs(RunState* r, const SolveResult& res) {
   double start = os::Seconds();
   RenderImage(r);
   WritePatchesCsv(r);
@@ -197,8 +197,8 @@ int WriteOutputs(Render* r, const SolveResult& res) {
   }
   GatherByEnv(r, r->summaryMine, r->summaryAll, r->summary);
   // Every rank's memory for run.json: predicted and measured.
-  Render::RankMemory mine{r->predictedBytes, r->initPeakBytes, os::PeakRssBytes(),
-                          os::FileRssBytes(), 0};
+  RunState::RankMemory mine{r->predictedBytes, r->initPeakBytes, os::PeakRssBytes(),
+                            os::FileRssBytes(), 0};
   for (Environment* e : r->envPtrs)
     mine.bytesSent += e->stats().packetsSent * r->exchange.packetBytes;
   r->transport->AllGather(&mine, sizeof mine, r->rankMemory);

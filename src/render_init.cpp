@@ -24,7 +24,7 @@ void PrintWarnings(const SceneTextures& t) {
 // Init: load, partition, mesh and measure this rank's environments, check
 // the memory budget, then make the arenas, build, and open the output files
 // under temporary names. Heap allocation is allowed here only.
-int Init(Render* r) {
+int Init(RunState* r) {
   const Options& o = r->options;
   PfmImage ref;
   PgmImage mask;  // --exclude: checked here too, before any output exists

@@ -1,5 +1,5 @@
 // The render pipeline's shared pieces (internal to src/): the run's state on
-// one rank (Render), what init prepares (Prepared), and the stages that
+// one rank (RunState), what init prepares (Prepared), and the stages that
 // src/app.cpp (dispatch, compare, Main), src/render_init.cpp (init),
 // src/output.cpp (the image and the outputs), src/run_json.cpp (run.json)
 // and src/footprint.cpp (`vismask footprint`) define.
@@ -86,8 +86,8 @@ constexpr int kBandRows = 16;         // framebuffer rows per transfer to rank 0
 constexpr size_t kExportChunkBytes = 2048 * kGlbVertexBytes;
 static_assert(kExportChunkBytes % kGlbTriangleBytes == 0, "whole triangles per chunk");
 
-// Everything a render needs after init, carved from arenas at init.
-struct Render {
+// Everything a run needs after init, carved from arenas at init.
+struct RunState {
   Options options;
   std::unique_ptr<Transport> transport;
   RankEnvs layout;
@@ -219,7 +219,7 @@ struct Render {
 // Gathers one fixed-size record per environment from every rank into
 // `byEnv`, in environment order (rank blocks are padded to perRank).
 template <class T>
-void GatherByEnv(Render* r, Span<T> mine, Span<T> all, Span<T> byEnv) {
+void GatherByEnv(RunState* r, Span<T> mine, Span<T> all, Span<T> byEnv) {
   r->transport->AllGather(mine.data(), mine.bytes(), all.data());
   int ranks = r->transport->size();
   for (int k = 0; k < ranks; ++k) {
@@ -236,7 +236,7 @@ inline int Fail(const Status& s) {
 }
 
 // A user error found at init: every rank finds it, rank 0 reports it.
-inline int FailInit(const Render* r, const Status& s) {
+inline int FailInit(const RunState* r, const Status& s) {
   if (r->isRoot()) return Fail(s);
   return kExitUsage;
 }
@@ -315,16 +315,16 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
 // The patches (twins included) of the environments p holds.
 uint64_t OwnPatches(const Prepared& p);
 std::vector<uint8_t> TexturesUsed(const Prepared& p, uint32_t first, uint32_t count);
-int Init(Render* r);
+int Init(RunState* r);
 void PrintWarnings(const SceneTextures& t);
-void WritePatchesCsv(Render* r);
+void WritePatchesCsv(RunState* r);
 GlbMesh ExportMeshOf(const Environment& env);
-void WriteExport(Render* r);
+void WriteExport(RunState* r);
 void JsonString(TextWriter* w, const char* s);
 std::string JsonQuoted(const std::string& s);
-void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outputSeconds);
-void RenderImage(Render* r);
-int WriteOutputs(Render* r, const SolveResult& res);
+void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double outputSeconds);
+void RenderImage(RunState* r);
+int WriteOutputs(RunState* r, const SolveResult& res);
 int Footprint(const Options& o);
 int Compare(const Options& o);
 

@@ -37,7 +37,7 @@ void JsonTriple(TextWriter* w, const char* name, const double v[3], bool comma) 
   w->Printf("    \"%s\": [%.17g, %.17g, %.17g]%s\n", name, v[0], v[1], v[2], comma ? "," : "");
 }
 
-void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outputSeconds) {
+void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double outputSeconds) {
   const Options& o = r->options;
   TextWriter w(&r->files[kRunJson], r->textBuffer);
   w.Printf("{\n  \"vismask_version\": 1,\n  \"command\": \"render\",\n  \"scene\": ");
@@ -268,7 +268,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   w.Printf("    \"rank0_texture_bytes\": %llu,\n    \"textures\": [",
            static_cast<unsigned long long>(r->rankTextureBytes));
   for (size_t i = 0; i < r->textureInfo.size(); ++i) {
-    const Render::TextureInfo& t = r->textureInfo[i];
+    const RunState::TextureInfo& t = r->textureInfo[i];
     w.Printf("%s{\"path\": ", i ? ", " : "");
     JsonString(&w, t.path.c_str());
     w.Printf(", \"width\": %u, \"height\": %u, \"texel_bytes\": %llu}", t.width, t.height,
@@ -286,7 +286,7 @@ void WriteRunJson(Render* r, const SolveResult& res, float exposure, double outp
   // the visibility-mask bytes its environments sent.
   w.Printf("    \"ranks\": [");
   for (int k = 0; k < r->transport->size(); ++k) {
-    const Render::RankMemory& m = r->rankMemory[k];
+    const RunState::RankMemory& m = r->rankMemory[k];
     w.Printf(
         "%s\n      {\"rank\": %d, \"predicted_bytes\": %llu, \"init_peak_predicted_bytes\": %llu, "
         "\"peak_rss_bytes\": %llu, \"file_rss_bytes\": %llu, \"bytes_sent\": %llu}",

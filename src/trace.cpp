@@ -121,7 +121,7 @@ bool Environment::LeavesScene(const Ray& ray) const {
     }
   }
   int next = cell_[axis] + step;
-  return next < 0 || next >= grid3_.n[axis];
+  return next < 0 || next >= envGrid_.n[axis];
 }
 
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],

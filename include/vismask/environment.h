@@ -310,7 +310,7 @@ class Environment {
   MaskBits SlotMask(uint32_t slot) const;
 
   uint32_t index_ = 0;
-  EnvGrid grid3_;
+  EnvGrid envGrid_;  // the environment partition (grid_ is the ray-casting grid)
   int cell_[3] = {0, 0, 0};
   Bounds box_;
   uint32_t numNeighbours_ = 0;
