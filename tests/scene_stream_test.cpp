@@ -38,11 +38,13 @@ void ExpectSamePolygon(const Polygon& a, const Polygon& b, const std::string& wh
       << where;
   ASSERT_EQ(a.uv.size(), b.uv.size()) << where;
   // (memcmp of an empty vector's null data() is undefined: UBSan says so.)
-  if (!a.uv.empty())
+  if (!a.uv.empty()) {
     EXPECT_EQ(0, std::memcmp(a.uv.data(), b.uv.data(), a.uv.size() * sizeof(glm::vec2))) << where;
+  }
   ASSERT_EQ(a.vn.size(), b.vn.size()) << where;
-  if (!a.vn.empty())
+  if (!a.vn.empty()) {
     EXPECT_EQ(0, std::memcmp(a.vn.data(), b.vn.data(), a.vn.size() * sizeof(glm::vec3))) << where;
+  }
   EXPECT_EQ(0, std::memcmp(&a.normal, &b.normal, sizeof a.normal)) << where;
   EXPECT_EQ(0, std::memcmp(&a.area, &b.area, sizeof a.area)) << where;
   EXPECT_EQ(a.material, b.material) << where;
