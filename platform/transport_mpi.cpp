@@ -90,6 +90,8 @@ class MpiTransport final : public Transport {
   void Wait(const char* call);
   [[noreturn]] void Silent(int peer, bool reading, double limit);
   double WaitLimit() const;
+  // Send (recv false) or Recv: moves `bytes` in messages of at most kChunkBytes.
+  void PointToPoint(int peer, void* data, size_t bytes, bool recv);
 
   int rank_ = 0;
   int size_ = 1;
@@ -322,33 +324,33 @@ void MpiTransport::AllGather(const void* mine, size_t bytes, void* all) {
 }
 
 void MpiTransport::Send(int to, const void* data, size_t bytes) {
+  PointToPoint(to, const_cast<void*>(data), bytes, false);
+}
+
+void MpiTransport::Recv(int from, void* data, size_t bytes) {
+  PointToPoint(from, data, bytes, true);
+}
+
+void MpiTransport::PointToPoint(int peer, void* data, size_t bytes, bool recv) {
+  const char* call = recv ? "Recv" : "Send";
   CHECK_MSG(!finished_, "transport used after Finish");
-  CHECK(to >= 0 && to < size_ && to != rank_);
-  const uint8_t* p = static_cast<const uint8_t*>(data);
+  CHECK(peer >= 0 && peer < size_ && peer != rank_);
+  uint8_t* p = static_cast<uint8_t*>(data);
   // At least one message, so an empty Send still meets its Recv.
   size_t offset = 0;
   do {
     size_t n = bytes - offset < kChunkBytes ? bytes - offset : kChunkBytes;
-    Post(MPI_Isend(n > 0 ? p + offset : &dummy_, static_cast<int>(n), MPI_BYTE, to, kTagPoint,
-                   MPI_COMM_WORLD, &requests_[posted_]),
-         to, false, "MPI_Isend");
-    Wait("Send");
-    offset += n;
-  } while (offset < bytes);
-}
-
-void MpiTransport::Recv(int from, void* data, size_t bytes) {
-  CHECK_MSG(!finished_, "transport used after Finish");
-  CHECK(from >= 0 && from < size_ && from != rank_);
-  uint8_t* p = static_cast<uint8_t*>(data);
-  size_t offset = 0;
-  do {
-    size_t n = bytes - offset < kChunkBytes ? bytes - offset : kChunkBytes;
-    Post(MPI_Irecv(n > 0 ? p + offset : &dummy_, static_cast<int>(n), MPI_BYTE, from, kTagPoint,
-                   MPI_COMM_WORLD, &requests_[posted_]),
-         from, true, "MPI_Irecv");
-    Wait("Recv");
-    CHECK_MSG(static_cast<size_t>(received_[0]) == n, "Send/Recv sizes disagree");
+    uint8_t* at = n > 0 ? p + offset : &dummy_;
+    const int count = static_cast<int>(n);
+    if (recv) {
+      Post(MPI_Irecv(at, count, MPI_BYTE, peer, kTagPoint, MPI_COMM_WORLD, &requests_[posted_]),
+           peer, true, "MPI_Irecv");
+    } else {
+      Post(MPI_Isend(at, count, MPI_BYTE, peer, kTagPoint, MPI_COMM_WORLD, &requests_[posted_]),
+           peer, false, "MPI_Isend");
+    }
+    Wait(call);
+    if (recv) CHECK_MSG(static_cast<size_t>(received_[0]) == n, "Send/Recv sizes disagree");
     offset += n;
   } while (offset < bytes);
 }

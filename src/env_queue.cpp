@@ -1,7 +1,8 @@
 // Environment, its shots and its queue: local shots, the foreign shooters
 // queued from other environments (slots, admission, delivery), forwarding
 // records downstream with their masks, a round's work, and the power still
-// in flight. The rest of Environment is in environment.cpp and trace.cpp.
+// in flight. The rest of Environment is in environment.cpp, env_receive.cpp
+// and trace.cpp.
 #include <algorithm>
 #include <cmath>
 #include <glm/common.hpp>

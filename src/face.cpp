@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
@@ -13,9 +12,13 @@
 #include <vector>
 
 #include "geometry_util.h"
+#include "scene_parse.h"
 
 namespace vismask {
 namespace {
+
+using objload::Num;
+using objload::Str;
 
 // Face checks, relative to the face's size (its largest corner-to-corner
 // distance). Planarity: corners may be off the Newell plane by 1e-4 of the
@@ -26,16 +29,6 @@ constexpr double kPlanarTol = 1e-4;     // max corner distance from the plane
 constexpr double kRepeatTol = 1e-6;     // min distance between two corners
 constexpr double kAreaTol = 1e-6;       // min area, times size^2
 constexpr double kCollinearTol = 1e-5;  // min |sin| of the angle at a corner
-
-std::string Str(size_t n) {
-  return std::to_string(n);
-}
-
-std::string Num(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.3g", x);
-  return buf;
-}
 
 double Orient(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) {
   return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);

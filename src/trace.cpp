@@ -1,8 +1,9 @@
 // Environment, its rays: a shot's form-factor rays traced through this
 // environment's grid (Distribute: radiosity received, Method A/B/C masks
 // marked; TraceAlive: Method R's rays in flight), and where a ray leaves the
-// environment's box. The rest of Environment is in environment.cpp (init,
-// receiving, elements, display) and env_queue.cpp (shots and the queue).
+// environment's box. The rest of Environment is in environment.cpp (init),
+// env_receive.cpp (receiving, elements, display) and env_queue.cpp (shots
+// and the queue).
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>

@@ -1,0 +1,268 @@
+// POSIX implementation of include/vismask/os.h's files and directories:
+// InFile, OutFile and their all-or-nothing commit, DirLock, MakeDirs.
+#include <errno.h>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "posix_internal.h"
+#include "vismask/os.h"
+
+namespace vismask::os {
+
+bool MakeDirs(const char* path, char* why) {
+  char buf[kMaxPath];
+  if (std::strlen(path) >= sizeof buf) {
+    if (why) std::snprintf(why, kWhyBytes, "path too long");
+    return false;
+  }
+  std::strcpy(buf, path);
+  for (char* p = buf + 1;; ++p) {
+    if (*p == '/' || *p == '\0') {
+      char saved = *p;
+      *p = '\0';
+      if (::mkdir(buf, 0777) != 0 && errno != EEXIST) {
+        SetWhy(why, "cannot create directory", buf);
+        return false;
+      }
+      struct stat st;
+      if (::stat(buf, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        errno = ENOTDIR;
+        SetWhy(why, "cannot create directory", buf);
+        return false;
+      }
+      *p = saved;
+      if (saved == '\0') break;
+    }
+  }
+  return true;
+}
+
+bool Exists(const char* path) {
+  struct stat st;
+  return ::stat(path, &st) == 0;
+}
+
+InFile::~InFile() {
+  if (fd_ >= 0) close(fd_);
+}
+
+bool InFile::Open(const char* path, std::string* why) {
+  if (fd_ >= 0) close(fd_);
+  do {
+    fd_ = open(path, O_RDONLY | O_CLOEXEC);
+  } while (fd_ < 0 && errno == EINTR);
+  if (fd_ < 0) *why = std::strerror(errno);
+  return fd_ >= 0;
+}
+
+int64_t InFile::Read(void* buf, size_t n, std::string* why) {
+  size_t got = 0;
+  while (got < n) {
+    ssize_t r = read(fd_, static_cast<char*>(buf) + got, n - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r < 0) {
+      *why = std::strerror(errno);
+      return -1;
+    }
+    if (r == 0) break;
+    got += static_cast<size_t>(r);
+  }
+  return static_cast<int64_t>(got);
+}
+
+int64_t InFile::Size() const {
+  struct stat st;
+  if (fd_ < 0 || fstat(fd_, &st) != 0) return -1;
+  return static_cast<int64_t>(st.st_size);
+}
+
+OutFile::~OutFile() {
+  Discard();
+}
+
+bool OutFile::Open(const char* path, char* why) {
+  Discard();
+  if (std::strlen(path) >= kMaxPath) {
+    if (why) std::snprintf(why, kWhyBytes, "path too long: %.200s...", path);
+    return false;
+  }
+  struct stat st;
+  if (::lstat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+    if (why) std::snprintf(why, kWhyBytes, "'%s' exists and is not a regular file", path);
+    return false;
+  }
+  std::strcpy(path_, path);
+  std::snprintf(tmpPath_, sizeof tmpPath_, "%s.tmp.%ld", path, static_cast<long>(::getpid()));
+  fd_ = ::open(tmpPath_, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
+    SetWhy(why, "cannot open", tmpPath_);
+    return false;
+  }
+  tempSlot_ = ClaimTempSlot(tmpPath_);
+  InstallSignalCleanup();
+  writeErrno_ = 0;
+  return true;
+}
+
+bool OutFile::Write(const void* data, size_t n) {
+  if (fd_ < 0 || writeErrno_ != 0) return false;
+  const char* s = static_cast<const char*>(data);
+  while (n > 0) {
+    ssize_t w = ::write(fd_, s, n);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      writeErrno_ = errno;
+      return false;
+    }
+    s += w;
+    n -= static_cast<size_t>(w);
+  }
+  return true;
+}
+
+bool OutFile::Close(char* why) {
+  if (fd_ < 0) {
+    if (why) std::snprintf(why, kWhyBytes, "'%s' is not open", path_);
+    return false;
+  }
+  int failed = writeErrno_;
+  if (::close(fd_) != 0 && failed == 0) failed = errno;
+  fd_ = -1;
+  // CommitAll (the only caller) renames or removes it before a signal is handled.
+  ReleaseTempSlot(&tempSlot_);
+  if (failed != 0) {
+    if (why)
+      std::snprintf(why, kWhyBytes, "cannot write '%s': %s", tmpPath_, std::strerror(failed));
+    ::unlink(tmpPath_);
+    return false;
+  }
+  return true;
+}
+
+bool OutFile::Commit(char* why) {
+  return CommitAll(this, 1, why);
+}
+
+void OutFile::Discard() {
+  if (fd_ >= 0) {
+    ::close(fd_);
+    fd_ = -1;
+    ::unlink(tmpPath_);
+  }
+  ReleaseTempSlot(&tempSlot_);
+}
+
+bool CommitAll(OutFile* const* files, int n, char* why) {
+  CommitGuard guard;
+  bool ok = true;
+  for (int i = 0; i < n; ++i) {
+    if (!ok) {
+      files[i]->Discard();
+      continue;
+    }
+    ok = files[i]->Close(why);
+    if (!ok)
+      for (int j = 0; j < i; ++j) ::unlink(files[j]->tmpPath_);
+  }
+  if (!ok) return false;
+  // The files that exist keep a second name (a hard link, "NAME.old.PID")
+  // until every rename has succeeded, so that a failure can put them back.
+  constexpr int kMax = 16;
+  if (n > kMax) {
+    if (why) std::snprintf(why, kWhyBytes, "too many files to commit at once (%d)", n);
+    for (int i = 0; i < n; ++i) ::unlink(files[i]->tmpPath_);
+    return false;
+  }
+  char old[kMax][kMaxPath + 24];
+  bool kept[kMax] = {};
+  int renamed = 0;
+  for (int i = 0; i < n && ok; ++i) {
+    std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i]->path_,
+                  static_cast<long>(::getpid()));
+    ::unlink(old[i]);
+    if (::link(files[i]->path_, old[i]) == 0) {
+      kept[i] = true;
+    } else if (errno != ENOENT) {
+      SetWhy(why, "cannot keep the previous", files[i]->path_);
+      ok = false;
+    }
+  }
+  for (int i = 0; i < n && ok; ++i) {
+    if (::rename(files[i]->tmpPath_, files[i]->path_) != 0) {
+      SetWhy(why, "cannot rename", files[i]->tmpPath_);
+      ok = false;
+    } else {
+      ++renamed;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!ok && i < renamed) {
+      // Put back what was there: the previous file, or nothing.
+      if (kept[i])
+        ::rename(old[i], files[i]->path_);
+      else
+        ::unlink(files[i]->path_);
+    }
+    if (!ok && i >= renamed) ::unlink(files[i]->tmpPath_);
+    if (kept[i]) ::unlink(old[i]);  // a no-op after the rename back
+  }
+  return ok;
+}
+
+bool CommitAll(OutFile* files, int n, char* why) {
+  constexpr int kMax = 16;
+  if (n > kMax) {
+    if (why) std::snprintf(why, kWhyBytes, "too many files to commit at once (%d)", n);
+    for (int i = 0; i < n; ++i) files[i].Discard();
+    return false;
+  }
+  OutFile* list[kMax];
+  for (int i = 0; i < n; ++i) list[i] = &files[i];
+  return CommitAll(list, n, why);
+}
+
+DirLock::~DirLock() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+bool DirLock::Acquire(const char* dir, char* why) {
+  char path[kMaxPath + 16];
+  std::snprintf(path, sizeof path, "%s/.vismask.lock", dir);
+  int fd = ::open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    SetWhy(why, "cannot open the lock file", path);
+    return false;
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    int err = errno;
+    char pid[32] = {};
+    ssize_t got = ::pread(fd, pid, sizeof pid - 1, 0);
+    ::close(fd);
+    if (err == EWOULDBLOCK) {
+      if (why)
+        std::snprintf(why, kWhyBytes, "'%s' is in use by another vismask run (pid %s)", dir,
+                      got > 0 ? pid : "unknown");
+    } else if (why) {
+      std::snprintf(why, kWhyBytes, "cannot lock '%s': %s", path, std::strerror(err));
+    }
+    return false;
+  }
+  char pid[32];
+  int len = std::snprintf(pid, sizeof pid, "%ld", static_cast<long>(::getpid()));
+  if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, pid, static_cast<size_t>(len), 0) != len) {
+    SetWhy(why, "cannot write the lock file", path);
+    ::close(fd);
+    return false;
+  }
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = fd;
+  return true;
+}
+
+}  // namespace vismask::os
