@@ -126,7 +126,7 @@ int Main(int argc, const char* const* argv) {
   if (!r->options.reference.empty()) so.probe = &probe;
   so.errorEvery = r->options.errorEvery;
   SolveResult res =
-      Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->layout,
+      Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->rankEnvs,
             r->transport.get(), &r->exchange, so, r->isRoot() ? &r->convergence : nullptr);
   if (res.reason == StopReason::kStalled) {  // no outputs: the solve did not finish
     if (r->isRoot()) {
@@ -136,7 +136,7 @@ int Main(int argc, const char* const* argv) {
           "while %.3g of the emitted power was unshot or in flight (the admission of "
           "new records let no environment shoot; try a larger --queue)\n",
           static_cast<unsigned long long>(res.shots),
-          static_cast<unsigned long long>(r->layout.total), res.unshotFraction);
+          static_cast<unsigned long long>(r->rankEnvs.total), res.unshotFraction);
     }
     return r->transport->Finish(kExitStalled);
   }

@@ -1,6 +1,6 @@
 // Environment, its shots and its queue: local shots, the foreign shooters
 // queued from other environments (slots, admission, delivery), forwarding
-// records downstream with their masks, a round's work, and the power still
+// shooters downstream with their masks, a round's work, and the power still
 // in flight. The rest of Environment is in environment.cpp, env_receive.cpp
 // and trace.cpp.
 #include <algorithm>
@@ -99,8 +99,8 @@ void Environment::ShootLocal(uint32_t i) {
                cached && options_.maskMethod == MaskMethod::kC ? &known : nullptr);
   }
   Forward(ShotHeader(p, power, key, shotIndex, index_, rays), out);
-  ++stats_.recordsCreated;
-  --newRecords_;
+  ++stats_.forwardsCreated;
+  --newForwards_;
 }
 
 MaskBits Environment::SlotMask(uint32_t slot) const {
@@ -200,8 +200,8 @@ void Environment::Deliver(const uint8_t* packet) {
     slot.key = power * mask.OpenFraction();
 }
 
-void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t roundWork) {
-  newRecords_ = newRecords;
+void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork) {
+  newForwards_ = newForwards;
   // The round's work: grid steps counted, never timed, so the round ends
   // at the same shot whatever the machine, the ranks or the transport.
   const uint64_t work0 = workSteps();
@@ -209,7 +209,7 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t ro
     if (roundWork > 0 && workSteps() - work0 >= roundWork) break;
     uint32_t local = tree_.Top();
     double localKey = local == kNoPatch ? 0.0 : tree_.Key(local);
-    bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newRecords_ > 0);
+    bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newForwards_ > 0);
     int s = numNeighbours_ > 0 ? BestReadySlot() : -1;
     if (s >= 0 && (!localOk || slots_[s].key >= localKey)) {
       ShootForeign(static_cast<uint32_t>(s));

@@ -40,9 +40,9 @@ void Timed(double* waited, Call&& call) {
 
 }  // namespace
 
-RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
                          ExchangeBuffers* x, double elapsed, double roundCpu, double* waited) {
-  for (uint32_t i = 0; i < layout.perRank; ++i) x->mine[i] = EnvReport{};
+  for (uint32_t i = 0; i < rankEnvs.perRank; ++i) x->mine[i] = EnvReport{};
   for (uint32_t i = 0; i < envs.size(); ++i) {
     const Environment* e = envs[i];
     EnvReport& r = x->mine[i];
@@ -57,7 +57,7 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
     r.shootable = e->queuedCount() + (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
     r.shots = e->stats().shots + e->stats().foreignShots;
     r.rays = e->stats().rays;
-    r.recordsCreated = e->stats().recordsCreated;
+    r.forwardsCreated = e->stats().forwardsCreated;
     r.foreignShots = e->stats().foreignShots;
     r.radiosity = Sum3(e->ledger().radiosity);
     r.area = e->totalArea();
@@ -75,21 +75,21 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
   tot.elapsed = x->all[0].elapsed;
   int ranks = t->size();
   for (int r = 0; r < ranks; ++r) {
-    const EnvReport& first = x->all[size_t(r) * layout.perRank];
+    const EnvReport& first = x->all[size_t(r) * rankEnvs.perRank];
     if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
     if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
-    RankEnvs re = EnvsOfRank(layout.total, ranks, r);
+    RankEnvs re = EnvsOfRank(rankEnvs.total, ranks, r);
     uint64_t rankSteps = 0;
     for (uint32_t k = 0; k < re.count; ++k)
-      rankSteps += x->all[size_t(r) * layout.perRank + k].roundSteps;
+      rankSteps += x->all[size_t(r) * rankEnvs.perRank + k].roundSteps;
     if (rankSteps > tot.rankStepsMax) tot.rankStepsMax = rankSteps;
   }
   auto report = [&](uint32_t env) -> const EnvReport& {
-    int r = RankOfEnv(env, layout.total, ranks);
-    RankEnvs re = EnvsOfRank(layout.total, ranks, r);
-    return x->all[size_t(r) * layout.perRank + (env - re.first)];
+    int r = RankOfEnv(env, rankEnvs.total, ranks);
+    RankEnvs re = EnvsOfRank(rankEnvs.total, ranks, r);
+    return x->all[size_t(r) * rankEnvs.perRank + (env - re.first)];
   };
-  for (uint32_t env = 0; env < layout.total; ++env) {
+  for (uint32_t env = 0; env < rankEnvs.total; ++env) {
     const EnvReport& r = report(env);
     tot.unshot += r.unshot;
     tot.flight += r.flight;
@@ -98,7 +98,7 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
     tot.emitted += r.emitted;
     tot.shots += r.shots;
     tot.rays += r.rays;
-    tot.recordsCreated += r.recordsCreated;
+    tot.forwardsCreated += r.forwardsCreated;
     tot.radiosity += r.radiosity;
     tot.kdArea += r.kdArea;
     tot.area += r.area;
@@ -106,20 +106,20 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, 
     if (r.roundSteps > tot.envStepsMax) tot.envStepsMax = r.roundSteps;
     tot.steps += r.steps;
   }
-  for (uint32_t env = 0; env < layout.total; ++env) {
+  for (uint32_t env = 0; env < rankEnvs.total; ++env) {
     const EnvReport& r = report(env);
-    uint64_t outstanding = tot.recordsCreated - r.recordsCreated - r.foreignShots;
+    uint64_t outstanding = tot.forwardsCreated - r.forwardsCreated - r.foreignShots;
     if (outstanding > tot.maxOutstanding) tot.maxOutstanding = outstanding;
   }
   return tot;
 }
 
-void ExchangePackets(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+void ExchangePackets(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
                      ExchangeBuffers* x, double* waited) {
   int ranks = t->size(), me = t->rank();
   if (ranks > 1) {
     for (int r = 0; r < ranks; ++r) {
-      RankEnvs re = EnvsOfRank(layout.total, ranks, r);
+      RankEnvs re = EnvsOfRank(rankEnvs.total, ranks, r);
       uint8_t* block = x->sendBytes.data() + size_t(r) * x->blockBytes;
       size_t used = 0;
       if (r != me) {

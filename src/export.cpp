@@ -74,7 +74,7 @@ class Stream {
 void WriteExport(RunState* r) {
   if (r->options.exportPath.empty()) return;
   Transport* t = r->transport.get();
-  for (uint32_t i = 0; i < r->layout.perRank; ++i) r->exportMine[i] = GlbMesh{};
+  for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->exportMine[i] = GlbMesh{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) r->exportMine[i] = ExportMeshOf(*r->envPtrs[i]);
   GatherByEnv(r, r->exportMine, r->exportAll, r->exportByEnv);
   GlbMesh whole;
@@ -84,14 +84,14 @@ void WriteExport(RunState* r) {
   // this rank's environments.
   const int ranks = t->size();
   auto rankBytes = [&](int k, size_t item, bool vertices) {
-    RankEnvs re = EnvsOfRank(r->layout.total, ranks, k);
+    RankEnvs re = EnvsOfRank(r->rankEnvs.total, ranks, k);
     uint64_t n = 0;
     for (uint32_t e = re.first; e < re.first + re.count; ++e)
       n += vertices ? r->exportByEnv[e].vertices : r->exportByEnv[e].triangles;
     return n * item;
   };
   uint64_t firstVertex = 0;
-  for (uint32_t e = 0; e < r->layout.first; ++e) firstVertex += r->exportByEnv[e].vertices;
+  for (uint32_t e = 0; e < r->rankEnvs.first; ++e) firstVertex += r->exportByEnv[e].vertices;
 
   if (r->isRoot()) {
     size_t head = WriteGlbHead(whole, r->exportHead);

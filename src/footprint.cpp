@@ -29,7 +29,7 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
   for (int k = 0; k < ranks; ++k) {
     RunState& r = f->probes[k];
     r.options = o;
-    r.layout = EnvsOfRank(total, ranks, k);
+    r.rankEnvs = EnvsOfRank(total, ranks, k);
     for (int q = 0; q < ranks; ++q) {
       RankEnvs re = EnvsOfRank(total, ranks, q);
       uint64_t shared = 0;
@@ -41,15 +41,15 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
     }
     Arena measure = Arena::Measure();
     r.LayoutRank(measure, p.packetBytes, ranks, k == 0, p.textures,
-                 TexturesUsed(p, r.layout.first, r.layout.count));
+                 TexturesUsed(p, r.rankEnvs.first, r.rankEnvs.count));
     f->rankOwn[k] = ArenaRoundUp(measure.used());
-    for (uint32_t e = r.layout.first; e < r.layout.first + r.layout.count; ++e)
+    for (uint32_t e = r.rankEnvs.first; e < r.rankEnvs.first + r.rankEnvs.count; ++e)
       f->rankEnvBytes[k] += envs[e]->footprint().total;
     f->rankTotal[k] = f->rankEnvBytes[k] + f->rankOwn[k];
     const uint64_t held = k == 0 ? (o.reference.empty() ? 0 : uint64_t(o.width) * o.height * 12) +
                                        (o.exclude.empty() ? 0 : uint64_t(o.width) * o.height)
                                  : 0;
-    f->rankInitPeak[k] = p.InitPeak(r.layout.first, r.layout.first + r.layout.count, k == 0,
+    f->rankInitPeak[k] = p.InitPeak(r.rankEnvs.first, r.rankEnvs.first + r.rankEnvs.count, k == 0,
                                     f->rankEnvBytes[k], f->rankOwn[k], held);
     f->total += f->rankTotal[k];
   }
@@ -158,9 +158,9 @@ int Footprint(const Options& o) {
           "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
           "\"texture_bytes\": %llu, \"export_bytes\": %llu, \"rank_arena_bytes\": %llu, "
           "\"total_bytes\": %llu, \"init_peak_bytes\": %llu, \"budget_bytes\": %llu}%s\n",
-          k, r.layout.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
-          (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)r.rankExportBytes, (ull)rankOwn[k],
-          (ull)rankTotal[k], (ull)fig.rankInitPeak[k],
+          k, r.rankEnvs.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes,
+          (ull)r.rankImageBytes, (ull)r.rankOutputBytes, (ull)r.rankTextureBytes,
+          (ull)r.rankExportBytes, (ull)rankOwn[k], (ull)rankTotal[k], (ull)fig.rankInitPeak[k],
           (ull)std::max(rankTotal[k], fig.rankInitPeak[k]), k + 1 < ranks ? "," : "");
     }
     out += "  ]\n}\n";
@@ -189,7 +189,7 @@ int Footprint(const Options& o) {
         "image_B", "output_B", "texture_B", "total_B");
     for (int k = 0; k < ranks; ++k) {
       const RunState& r = probes[k];
-      add("%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.layout.count,
+      add("%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.rankEnvs.count,
           (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
           (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)rankTotal[k]);
     }

@@ -3,6 +3,7 @@
 // the other ranks' framebuffers a band of rows at a time); resolving the
 // antialiased pixels' fragments into colour and id; and inspecting what an
 // image shows.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -45,19 +46,48 @@ void Framebuffer::Clear() {
   for (float& d : depth) d = kInf;
   for (Fragment& f : frags) f = kEmptyFragment;
   for (uint8_t& d : dropped) d = 0;
+  dirtyLo = 0;
+  dirtyHi = -1;
 }
 
-void CompositeRows(const Framebuffer& band, int firstRow, int rows, Framebuffer* fb) {
-  CHECK(band.width == fb->width && band.aa == fb->aa && rows <= band.height);
+void Framebuffer::ClearDirty() {
+  if (!aa) return Clear();
+  const size_t w = static_cast<size_t>(width);
+  for (int y = dirtyLo; y <= dirtyHi; ++y) {
+    const size_t first = static_cast<size_t>(y) * w;
+    for (size_t i = first; i < first + w; ++i) {
+      color[i] = glm::vec3(0.0f);
+      id[i] = kNoPatch;
+      dropped[i] = 0;
+    }
+    for (size_t i = first * kFragments; i < (first + w) * kFragments; ++i)
+      frags[i] = kEmptyFragment;
+  }
+  dirtyLo = 0;
+  dirtyHi = -1;
+}
+
+namespace {
+
+// Rows [srcRow, srcRow + rows) of `band` into rows [firstRow, firstRow + rows) of `fb`.
+void MergeRows(const Framebuffer& band, int srcRow, int firstRow, int rows, Framebuffer* fb) {
+  CHECK(band.width == fb->width && band.aa == fb->aa && srcRow >= 0 &&
+        srcRow + rows <= band.height);
   CHECK(firstRow >= 0 && firstRow + rows <= fb->height);
   size_t n = static_cast<size_t>(rows) * static_cast<size_t>(fb->width);
   size_t base = static_cast<size_t>(firstRow) * static_cast<size_t>(fb->width);
+  size_t from = static_cast<size_t>(srcRow) * static_cast<size_t>(fb->width);
   if (fb->aa) {
+    if (rows > 0) {
+      if (fb->dirtyLo > fb->dirtyHi) fb->dirtyLo = firstRow, fb->dirtyHi = firstRow + rows - 1;
+      fb->dirtyLo = std::min(fb->dirtyLo, firstRow);
+      fb->dirtyHi = std::max(fb->dirtyHi, firstRow + rows - 1);
+    }
     for (size_t i = 0; i < n; ++i) {
-      const Fragment* src = &band.frags[i * kFragments];
+      const Fragment* src = &band.frags[(from + i) * kFragments];
       Fragment* dst = &fb->frags[(base + i) * kFragments];
       uint8_t* dropped = &fb->dropped[base + i];
-      *dropped |= band.dropped[i];
+      *dropped |= band.dropped[from + i];
       for (int k = 0; k < kFragments && src[k].id != kNoPatch; ++k)
         AddFragment(dst, dropped, src[k]);
     }
@@ -65,12 +95,25 @@ void CompositeRows(const Framebuffer& band, int firstRow, int rows, Framebuffer*
   }
   for (size_t i = 0; i < n; ++i) {
     size_t j = base + i;
-    if (Nearer(band.depth[i], band.id[i], fb->depth[j], fb->id[j])) {
-      fb->color[j] = band.color[i];
-      fb->depth[j] = band.depth[i];
-      fb->id[j] = band.id[i];
+    size_t k = from + i;
+    if (Nearer(band.depth[k], band.id[k], fb->depth[j], fb->id[j])) {
+      fb->color[j] = band.color[k];
+      fb->depth[j] = band.depth[k];
+      fb->id[j] = band.id[k];
     }
   }
+}
+
+}  // namespace
+
+void CompositeRows(const Framebuffer& band, int firstRow, int rows, Framebuffer* fb) {
+  MergeRows(band, 0, firstRow, rows, fb);
+}
+
+void CompositeDirty(const Framebuffer& other, Framebuffer* fb) {
+  CHECK(other.aa && other.width == fb->width && other.height == fb->height);
+  if (other.dirtyLo <= other.dirtyHi)
+    MergeRows(other, other.dirtyLo, other.dirtyLo, other.dirtyHi + 1 - other.dirtyLo, fb);
 }
 
 void Composite(const Framebuffer& other, Framebuffer* fb) {

@@ -93,12 +93,105 @@ void WritePatchesCsv(RunState* r) {
   w.Flush();
 }
 
+namespace {
+
+// Point sampled: each rank draws its environments into its framebuffer, and
+// rank 0 depth-composites the others', a band of rows at a time, in rank
+// order. The nearest (depth, id) wins and ties keep the first drawn, so the
+// image is the same whichever rank holds which environment.
+void DrawPointSampled(RunState* r, const double* ambient) {
+  Transport* t = r->transport.get();
+  for (Environment* env : r->envPtrs)
+    DrawEnvironment(r->view, *env, ambient, &r->fb, r->textures.textures);
+  const Framebuffer& mine = r->fb;
+  const size_t w = static_cast<size_t>(mine.width);
+  for (int src = 1; src < t->size(); ++src) {
+    if (!r->isRoot() && t->rank() != src) continue;
+    for (int y = 0; y < mine.height; y += kBandRows) {
+      int rows = std::min(kBandRows, mine.height - y);
+      size_t first = static_cast<size_t>(y) * w, n = static_cast<size_t>(rows) * w;
+      if (r->isRoot()) {
+        Framebuffer& in = r->incoming;
+        t->Recv(src, in.color.data(), in.color.subspan(0, n).bytes());
+        t->Recv(src, in.depth.data(), in.depth.subspan(0, n).bytes());
+        t->Recv(src, in.id.data(), in.id.subspan(0, n).bytes());
+        CompositeRows(in, y, rows, &r->fb);
+      } else {
+        auto c = mine.color.subspan(first, n);
+        auto d = mine.depth.subspan(first, n);
+        auto i = mine.id.subspan(first, n);
+        t->Send(0, c.data(), c.bytes());
+        t->Send(0, d.data(), d.bytes());
+        t->Send(0, i.data(), i.bytes());
+      }
+    }
+  }
+}
+
+// Antialiased: a pixel's fragments sum the pieces of one polygon (its id),
+// which may lie in several environments, and keep the kFragments nearest.
+// Float sums and a bounded list depend on the order things arrive in, so
+// each environment is drawn alone (into an empty framebuffer) and merged
+// into rank 0's image in environment order, whichever rank holds it: rank
+// 0's own through r->envFb, the others' sent one environment at a time,
+// only the rows it drew, a band of rows at a time.
+void DrawAntialiased(RunState* r, const double* ambient) {
+  Transport* t = r->transport.get();
+  Framebuffer& mine = r->fb;
+  const size_t w = static_cast<size_t>(mine.width);
+  if (r->isRoot()) {
+    for (size_t k = 0; k < r->envPtrs.size(); ++k) {
+      // The first is drawn straight into the empty image: the same as
+      // merging it into one.
+      Framebuffer* target = k == 0 ? &mine : &r->envFb;
+      DrawEnvironment(r->view, *r->envPtrs[k], ambient, target, r->textures.textures);
+      if (k == 0) continue;
+      CompositeDirty(r->envFb, &mine);
+      r->envFb.ClearDirty();
+    }
+    for (int src = 1; src < t->size(); ++src) {
+      RankEnvs theirs = EnvsOfRank(r->rankEnvs.total, t->size(), src);
+      for (uint32_t k = 0; k < theirs.count; ++k) {
+        int32_t rowsDrawn[2];
+        t->Recv(src, rowsDrawn, sizeof rowsDrawn);
+        CHECK(rowsDrawn[0] >= 0 && rowsDrawn[1] < mine.height);
+        for (int y = rowsDrawn[0]; y <= rowsDrawn[1]; y += kBandRows) {
+          int rows = std::min(kBandRows, rowsDrawn[1] + 1 - y);
+          size_t n = static_cast<size_t>(rows) * w;
+          Framebuffer& in = r->incoming;
+          t->Recv(src, in.frags.data(), in.frags.subspan(0, n * kFragments).bytes());
+          t->Recv(src, in.dropped.data(), in.dropped.subspan(0, n).bytes());
+          CompositeRows(in, y, rows, &mine);
+        }
+      }
+    }
+    return;
+  }
+  for (Environment* env : r->envPtrs) {
+    mine.ClearDirty();
+    DrawEnvironment(r->view, *env, ambient, &mine, r->textures.textures);
+    // An environment that drew nothing sends the empty range [0, -1].
+    int32_t rowsDrawn[2] = {mine.dirtyLo, mine.dirtyHi};
+    t->Send(0, rowsDrawn, sizeof rowsDrawn);
+    for (int y = mine.dirtyLo; y <= mine.dirtyHi; y += kBandRows) {
+      int rows = std::min(kBandRows, mine.dirtyHi + 1 - y);
+      size_t first = static_cast<size_t>(y) * w, n = static_cast<size_t>(rows) * w;
+      auto f = mine.frags.subspan(first * kFragments, n * kFragments);
+      auto d = mine.dropped.subspan(first, n);
+      t->Send(0, f.data(), f.bytes());
+      t->Send(0, d.data(), d.bytes());
+    }
+  }
+}
+
+}  // namespace
+
 // Draws the current solution into rank 0's framebuffer: the ambient term
 // from every environment (summed in environment order), each rank's patches
 // drawn by that rank, and rank 0 depth-compositing the others'. Collective.
 void RenderImage(RunState* r) {
   Transport* t = r->transport.get();
-  for (uint32_t i = 0; i < r->layout.perRank; ++i) r->ambientMine[i] = AmbientReport{};
+  for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->ambientMine[i] = AmbientReport{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
   GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
   double* ambient = r->ambientB;
@@ -111,43 +204,10 @@ void RenderImage(RunState* r) {
     t->AllGather(r->sharedMine.data(), r->sharedMine.bytes(), r->sharedAll.data());
     ShareVertices(envs, r->sharedAll, r->sharedScratch, r->shareRule);
   }
-  for (Environment* env : r->envPtrs)
-    DrawEnvironment(r->view, *env, ambient, &r->fb, r->textures.textures);
-  // The other ranks' framebuffers, a band of rows at a time (rank 0 holds
-  // one band), composited in rank order; then the fragments are resolved.
-  const Framebuffer& mine = r->fb;
-  const size_t w = static_cast<size_t>(mine.width);
-  for (int src = 1; src < t->size(); ++src) {
-    if (!r->isRoot() && t->rank() != src) continue;
-    for (int y = 0; y < mine.height; y += kBandRows) {
-      int rows = std::min(kBandRows, mine.height - y);
-      size_t first = static_cast<size_t>(y) * w, n = static_cast<size_t>(rows) * w;
-      if (r->isRoot()) {
-        Framebuffer& in = r->incoming;
-        if (mine.aa) {
-          t->Recv(src, in.frags.data(), in.frags.subspan(0, n * kFragments).bytes());
-          t->Recv(src, in.dropped.data(), in.dropped.subspan(0, n).bytes());
-        } else {
-          t->Recv(src, in.color.data(), in.color.subspan(0, n).bytes());
-          t->Recv(src, in.depth.data(), in.depth.subspan(0, n).bytes());
-          t->Recv(src, in.id.data(), in.id.subspan(0, n).bytes());
-        }
-        CompositeRows(in, y, rows, &r->fb);
-      } else if (mine.aa) {
-        auto f = mine.frags.subspan(first * kFragments, n * kFragments);
-        auto d = mine.dropped.subspan(first, n);
-        t->Send(0, f.data(), f.bytes());
-        t->Send(0, d.data(), d.bytes());
-      } else {
-        auto c = mine.color.subspan(first, n);
-        auto d = mine.depth.subspan(first, n);
-        auto i = mine.id.subspan(first, n);
-        t->Send(0, c.data(), c.bytes());
-        t->Send(0, d.data(), d.bytes());
-        t->Send(0, i.data(), i.bytes());
-      }
-    }
-  }
+  if (r->fb.aa)
+    DrawAntialiased(r, ambient);
+  else
+    DrawPointSampled(r, ambient);
   if (r->isRoot()) Resolve(&r->fb);
 }
 
@@ -175,7 +235,7 @@ int WriteOutputs(RunState* r, const SolveResult& res) {
   RenderImage(r);
   WritePatchesCsv(r);
   WriteExport(r);
-  for (uint32_t i = 0; i < r->layout.perRank; ++i) r->summaryMine[i] = EnvSummary{};
+  for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->summaryMine[i] = EnvSummary{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) {
     const Environment& e = *r->envPtrs[i];
     EnvSummary& s = r->summaryMine[i];

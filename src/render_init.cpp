@@ -87,15 +87,15 @@ int Init(RunState* r) {
           static_cast<unsigned long long>(p.info.normals), whose);
       return kExitUsage;
     }
-    r->layout = EnvsOfRank(static_cast<uint32_t>(o.envs[0] * o.envs[1] * o.envs[2]),
-                           r->transport->size(), r->transport->rank());
+    r->rankEnvs = EnvsOfRank(static_cast<uint32_t>(o.envs[0] * o.envs[1] * o.envs[2]),
+                             r->transport->size(), r->transport->rank());
     p.budget = budget;
     p.held = held;
     p.overBudget = [&](uint64_t need, const char* what) {
       os::PrintErr("vismask: --mem-budget: rank %d needs %llu bytes at init %s, more than %s\n",
                    r->transport->rank(), static_cast<unsigned long long>(need), what, whose);
     };
-    s = PrepareScene(o, &p, r->layout.first, r->layout.first + r->layout.count, r->isRoot());
+    s = PrepareScene(o, &p, r->rankEnvs.first, r->rankEnvs.first + r->rankEnvs.count, r->isRoot());
     // (An error with no text: over the budget, which this rank has said.)
     if (!s.ok()) return s.message().empty() ? kExitUsage : FailInit(r, s);
     for (int a = 0; a < 3; ++a) r->options.envs[a] = p.grid.n[a];  // --envs auto's shape
@@ -109,8 +109,8 @@ int Init(RunState* r) {
     r->patchSize = p.patchSize;
     // Before meshing: the pieces and a bound on the meshes and staged
     // copies (the arenas are not known yet).
-    const uint64_t early =
-        p.InitPeak(r->layout.first, r->layout.first + r->layout.count, r->isRoot(), 0, 0, held);
+    const uint64_t early = p.InitPeak(r->rankEnvs.first, r->rankEnvs.first + r->rankEnvs.count,
+                                      r->isRoot(), 0, 0, held);
     if (budget > 0 && early > budget) {
       os::PrintErr(
           "vismask: --mem-budget: rank %d needs %llu bytes at init (its pieces of the "
@@ -120,7 +120,7 @@ int Init(RunState* r) {
           static_cast<unsigned long long>(OwnPatches(p)), whose);
       return kExitUsage;
     }
-    s = PrepareEnvs(p, r->layout.first, r->layout.first + r->layout.count, &r->envs);
+    s = PrepareEnvs(p, r->rankEnvs.first, r->rankEnvs.first + r->rankEnvs.count, &r->envs);
     if (!s.ok()) return FailInit(r, s);
     return kExitOk;
   };
@@ -171,7 +171,7 @@ int Init(RunState* r) {
   // A hair below the cosine, so that equal normals share at --crease 0.
   r->shareRule.cosCrease =
       static_cast<float>(std::cos(o.creaseDeg * 3.14159265358979323846 / 180.0)) - 1e-6f;
-  const std::vector<uint8_t> texturesUsed = TexturesUsed(p, r->layout.first, r->layout.count);
+  const std::vector<uint8_t> texturesUsed = TexturesUsed(p, r->rankEnvs.first, r->rankEnvs.count);
   for (const TextureImage& t : p.textures.images)
     r->textureInfo.push_back({t.path, t.width, t.height});
   Arena measure = Arena::Measure();
@@ -183,8 +183,9 @@ int Init(RunState* r) {
   r->predictedBytes = need;
   // Init at its peak: the staged copies of the environments with their
   // arenas (or, earlier, the passes or the meshing), whichever is larger.
-  r->initPeakBytes = p.InitPeak(r->layout.first, r->layout.first + r->layout.count, r->isRoot(),
-                                envBytes, ArenaRoundUp(measure.used()), referenceBytes);
+  r->initPeakBytes =
+      p.InitPeak(r->rankEnvs.first, r->rankEnvs.first + r->rankEnvs.count, r->isRoot(), envBytes,
+                 ArenaRoundUp(measure.used()), referenceBytes);
   if (budget > 0 && std::max(need, r->initPeakBytes) > budget) {
     // Every rank checks its own need; each that is over says so.
     os::PrintErr(
@@ -230,6 +231,7 @@ int Init(RunState* r) {
     return refused("the rank's exchange and output buffers", ArenaRoundUp(measure.used()));
   r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot(), p.textures,
                 texturesUsed);
+  r->envFb.Clear();  // kept clear between uses (RenderImage clears only what it drew)
   if (!r->isRoot()) return kExitOk;
   for (size_t i = 0; i < r->reference.size(); ++i) r->reference[i] = ref.pixels[i];
   for (size_t i = 0; i < r->exclude.size(); ++i) {

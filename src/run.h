@@ -90,7 +90,7 @@ static_assert(kExportChunkBytes % kGlbTriangleBytes == 0, "whole triangles per c
 struct RunState {
   Options options;
   std::unique_ptr<Transport> transport;
-  RankEnvs layout;
+  RankEnvs rankEnvs;
   size_t numPolygons = 0;
   EnvGrid envGrid;        // the environments' grid and its planes (run.json)
   uint64_t numTwins = 0;  // twin patches, all ranks (--two-sided, --two-sided-emitters)
@@ -106,6 +106,7 @@ struct RunState {
   ExchangeBuffers exchange;
   Framebuffer fb;
   Framebuffer incoming;   // rank 0 with several ranks: kBandRows rows of another rank's image
+  Framebuffer envFb;      // rank 0, antialiased, holding several environments: one drawn alone
   Span<float> reference;  // rank 0 with --reference: the reference image, RGB floats
   Span<uint8_t> exclude;  // rank 0 with --exclude: nonzero where a pixel is left out of the error
   size_t excludedPixels = 0;
@@ -172,18 +173,18 @@ struct RunState {
     // A shot sends at most one packet to each neighbour: an environment
     // sends another rank at most --round-shots packets a round for each of
     // that rank's environments it neighbours (at most 6 and perRank).
-    exchange.Layout(arena, layout, ranks, packetBytes,
-                    ranks > 1 ? std::min<uint32_t>(6, layout.perRank) * options.roundShots : 0);
+    exchange.Layout(arena, rankEnvs, ranks, packetBytes,
+                    ranks > 1 ? std::min<uint32_t>(6, rankEnvs.perRank) * options.roundShots : 0);
     part(&rankExchangeBytes);
     fb.Layout(arena, options.width, options.height, options.aa);
     part(&rankImageBytes);
     records = arena.Alloc<PatchRecord>(kPatchChunk);
-    summaryMine = arena.Alloc<EnvSummary>(layout.perRank);
-    summaryAll = arena.Alloc<EnvSummary>(size_t(ranks) * layout.perRank);
-    summary = arena.Alloc<EnvSummary>(layout.total);
-    ambientMine = arena.Alloc<AmbientReport>(layout.perRank);
-    ambientAll = arena.Alloc<AmbientReport>(size_t(ranks) * layout.perRank);
-    ambient = arena.Alloc<AmbientReport>(layout.total);
+    summaryMine = arena.Alloc<EnvSummary>(rankEnvs.perRank);
+    summaryAll = arena.Alloc<EnvSummary>(size_t(ranks) * rankEnvs.perRank);
+    summary = arena.Alloc<EnvSummary>(rankEnvs.total);
+    ambientMine = arena.Alloc<AmbientReport>(rankEnvs.perRank);
+    ambientAll = arena.Alloc<AmbientReport>(size_t(ranks) * rankEnvs.perRank);
+    ambient = arena.Alloc<AmbientReport>(rankEnvs.total);
     part(&rankOutputBytes);
     // Shared vertices: every rank's block holds sharedCapacity records.
     sharedMine = arena.Alloc<VertexRecord>(sharedCapacity);
@@ -193,9 +194,9 @@ struct RunState {
     textures.Layout(arena, sceneTextures, used);
     part(&rankTextureBytes);
     if (!options.exportPath.empty()) {
-      exportMine = arena.Alloc<GlbMesh>(layout.perRank);
-      exportAll = arena.Alloc<GlbMesh>(size_t(ranks) * layout.perRank);
-      exportByEnv = arena.Alloc<GlbMesh>(layout.total);
+      exportMine = arena.Alloc<GlbMesh>(rankEnvs.perRank);
+      exportAll = arena.Alloc<GlbMesh>(size_t(ranks) * rankEnvs.perRank);
+      exportByEnv = arena.Alloc<GlbMesh>(rankEnvs.total);
       exportChunk = arena.Alloc<uint8_t>(kExportChunkBytes);
       if (root) exportHead = arena.Alloc<uint8_t>(kGlbHeadBytes);
     }
@@ -203,6 +204,7 @@ struct RunState {
     if (!root) return;
     if (ranks > 1)
       incoming.Layout(arena, options.width, std::min(options.height, kBandRows), options.aa);
+    if (options.aa && rankEnvs.count > 1) envFb.Layout(arena, options.width, options.height, true);
     if (!options.reference.empty())
       reference = arena.Alloc<float>(size_t(options.width) * size_t(options.height) * 3);
     if (!options.exclude.empty())
@@ -223,9 +225,9 @@ void GatherByEnv(RunState* r, Span<T> mine, Span<T> all, Span<T> byEnv) {
   r->transport->AllGather(mine.data(), mine.bytes(), all.data());
   int ranks = r->transport->size();
   for (int k = 0; k < ranks; ++k) {
-    RankEnvs re = EnvsOfRank(r->layout.total, ranks, k);
+    RankEnvs re = EnvsOfRank(r->rankEnvs.total, ranks, k);
     for (uint32_t i = 0; i < re.count; ++i)
-      byEnv[re.first + i] = all[size_t(k) * r->layout.perRank + i];
+      byEnv[re.first + i] = all[size_t(k) * r->rankEnvs.perRank + i];
   }
 }
 

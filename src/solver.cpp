@@ -24,10 +24,10 @@ const char* StopReasonName(StopReason r) {
   return "?";
 }
 
-uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
-                         uint64_t maxOutstanding) {
+uint32_t AdmittedForwards(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
+                          uint64_t maxOutstanding) {
   if (numEnvs <= 1) return 0;
-  // Every record created now may land in every other environment's queue,
+  // Every forwarded shot created now may land in every other environment's queue,
   // so the total admitted across environments is what the fullest can take.
   uint64_t admit = capacity > maxOutstanding ? capacity - maxOutstanding : 0;
   uint64_t base = admit / numEnvs, extra = admit % numEnvs;
@@ -93,11 +93,11 @@ bool ShouldStop(const RoundTotals& totals, const SolveOptions& options, SolveRes
 
 }  // namespace
 
-SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transport* transport,
+SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* transport,
                   ExchangeBuffers* buffers, const SolveOptions& options, TextWriter* convergence) {
-  const uint32_t n = layout.total;
-  CHECK(envs.size() == layout.count);
-  for (uint32_t i = 0; i < envs.size(); ++i) CHECK(envs[i]->index() == layout.first + i);
+  const uint32_t n = rankEnvs.total;
+  CHECK(envs.size() == rankEnvs.count);
+  for (uint32_t i = 0; i < envs.size(); ++i) CHECK(envs[i]->index() == rankEnvs.first + i);
   SolveResult result;
   Progress progress(options.quiet || transport->rank() != 0);
   ErrorProbe* probe = options.probe;
@@ -112,7 +112,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
   };
   uint64_t measuredAt = ~0ull;  // the shot count last measured
   RoundTotals totals =
-      GatherTotals(envs, layout, transport, buffers, 0.0, 0.0, &result.waitSeconds);
+      GatherTotals(envs, rankEnvs, transport, buffers, 0.0, 0.0, &result.waitSeconds);
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
   result.lossEstimate = LossEstimate(totals);
@@ -138,23 +138,24 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transpo
     double cpu0 = os::CpuSeconds();
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
-      if (i < layout.first || i >= layout.first + layout.count) continue;
+      if (i < rankEnvs.first || i >= rankEnvs.first + rankEnvs.count) continue;
       double envCpu0 = os::CpuSeconds();
-      uint64_t steps0 = envs[i - layout.first]->stats().gridSteps;
-      envs[i - layout.first]->RunRound(
+      uint64_t steps0 = envs[i - rankEnvs.first]->stats().gridSteps;
+      envs[i - rankEnvs.first]->RunRound(
           ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
-          AdmittedRecords(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding),
+          AdmittedForwards(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding),
           options.roundWork);
-      envCpu[i - layout.first] = os::CpuSeconds() - envCpu0;
-      buffers->envSteps[i - layout.first] = envs[i - layout.first]->stats().gridSteps - steps0;
+      envCpu[i - rankEnvs.first] = os::CpuSeconds() - envCpu0;
+      buffers->envSteps[i - rankEnvs.first] = envs[i - rankEnvs.first]->stats().gridSteps - steps0;
     }
     double roundCpu = os::CpuSeconds() - cpu0;
     result.computeSeconds += roundCpu;
-    ExchangePackets(envs, layout, transport, buffers, &result.waitSeconds);
+    ExchangePackets(envs, rankEnvs, transport, buffers, &result.waitSeconds);
     ++result.rounds;
     uint64_t before = result.shots;
     double elapsed = clock();
-    totals = GatherTotals(envs, layout, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
+    totals =
+        GatherTotals(envs, rankEnvs, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
     result.waitSecondsMax = totals.waitedMax;
     result.criticalSeconds += totals.roundCpuMax;
     result.criticalEnvSeconds += totals.envCpuMax;

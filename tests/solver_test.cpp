@@ -1,5 +1,5 @@
 // The solver's scheduling rules: the exchange's admission of records
-// (AdmittedRecords) and the shot budget of a round (ShotBudget).
+// (AdmittedForwards) and the shot budget of a round (ShotBudget).
 #include "vismask/solver.h"
 
 #include <gtest/gtest.h>
@@ -28,7 +28,7 @@ TEST(SolverTest, AdmissionNeverOverfillsAQueue) {
     ASSERT_LE(maxOut, capacity);
     uint64_t admitted = 0;
     for (uint32_t e = 0; e < n; ++e) {
-      uint32_t a = AdmittedRecords(round, e, n, capacity, maxOut);
+      uint32_t a = AdmittedForwards(round, e, n, capacity, maxOut);
       admitted += a;
       created[e] += rng() % (a + 1);
     }

@@ -274,14 +274,14 @@ TEST(StabilityTest, ASolveThatCannotShootStalls) {
   Status error;
   std::unique_ptr<Transport> loop = MakeTransport(TransportRequest{"loop", 1}, &error);
   ASSERT_TRUE(loop) << error.ToString();
-  RankEnvs layout = EnvsOfRank(2, 1, 0);
+  RankEnvs rankEnvs = EnvsOfRank(2, 1, 0);
   Arena arena(1 << 16);
   ExchangeBuffers buffers;
-  buffers.Layout(arena, layout, 1, ptrs[0]->packetBytes(), 0);
+  buffers.Layout(arena, rankEnvs, 1, ptrs[0]->packetBytes(), 0);
   SolveOptions so;
   so.queueCapacity = 0;
   so.quiet = true;
-  SolveResult res = Solve(Span<Environment* const>(ptrs.data(), ptrs.size()), layout, loop.get(),
+  SolveResult res = Solve(Span<Environment* const>(ptrs.data(), ptrs.size()), rankEnvs, loop.get(),
                           &buffers, so, nullptr);
   EXPECT_EQ(StopReasonName(res.reason), std::string("stalled"));
   EXPECT_EQ(res.shots, 0u);

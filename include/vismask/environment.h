@@ -51,9 +51,9 @@ struct EnvStats {
   uint64_t gridSteps = 0;     // their walks' cells entered and patches tested (Grid::steps)
   uint64_t hits = 0;
   uint64_t packetsSent = 0;
-  uint64_t recordsCreated = 0;  // local shots that went on to neighbours
-  uint64_t splits = 0;          // elements split into four
-  uint64_t refusedSplits = 0;   // splits refused because the element pool was used up
+  uint64_t forwardsCreated = 0;  // local shots that went on to neighbours
+  uint64_t splits = 0;           // elements split into four
+  uint64_t refusedSplits = 0;    // splits refused because the element pool was used up
 };
 
 // What an environment's arena holds, in bytes, by part (from the measuring
@@ -127,11 +127,11 @@ class Environment {
   void Reset();
 
   // One round: up to `shotBudget` shots, each the larger of the local patch
-  // with most unshot power (allowed while `newRecords` remains, when there
+  // with most unshot power (allowed while `newForwards` remains, when there
   // are neighbours) and the queued foreign shooter with most power, ending
   // early once the round's work has reached `roundWork` grid steps (0: no
   // limit; workSteps below). Packets for neighbours go to the outbox.
-  void RunRound(uint32_t shotBudget, uint32_t newRecords, uint64_t roundWork = 0);
+  void RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork = 0);
   // The work rounds are measured in: the grid steps of the form-factor
   // rays, plus for Methods B and C centreStepsPerRay() for each centre ray
   // the method would cast without the centre-mask cache. Counted, never timed, and the same with
@@ -295,7 +295,7 @@ class Environment {
   void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
   // True if a ray that leaves this environment's box leaves the scene.
   bool LeavesScene(const Ray& ray) const;
-  // Sends the shooter's record and `mask` to the neighbours downstream from
+  // Sends the shooter's packet header and `mask` to the neighbours downstream from
   // the source environment.
   void Forward(PacketHeader header, const MaskBits& mask);
   // The grid cells downstream of this environment for a shooter from
@@ -358,7 +358,7 @@ class Environment {
   uint32_t outCapacity_ = 0;
   uint32_t outCount_ = 0;
   uint32_t queued_ = 0;
-  uint32_t newRecords_ = 0;
+  uint32_t newForwards_ = 0;
   EnergyLedger ledger_;
   EnvStats stats_;
   uint64_t centreSteps_ = 0;  // grid steps of the centre rays really cast

@@ -31,7 +31,7 @@ struct EnvReport {
   uint64_t steps;       // grid steps so far (EnvStats::gridSteps)
   uint64_t shots;       // local and foreign
   uint64_t rays;        // form-factor rays traced
-  uint64_t recordsCreated;
+  uint64_t forwardsCreated;
   uint64_t foreignShots;
   uint64_t shootable;  // local patches with unshot power (0 or 1: any) plus queued shooters
   double radiosity;    // sum of b * area, channels summed
@@ -54,7 +54,7 @@ struct RoundTotals {
   uint64_t rankStepsMax = 0;  // the most any rank's environments did in it, together
   uint64_t shots = 0;
   uint64_t rays = 0;
-  uint64_t recordsCreated = 0;
+  uint64_t forwardsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
   double radiosity = 0.0;
   double kdArea = 0.0;
@@ -84,12 +84,12 @@ struct ExchangeBuffers {
 // Gathers every environment's report (those of `envs` from this rank) and
 // sums them in environment order; the seconds spent in the collective are
 // added to *waited.
-RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
                          ExchangeBuffers* x, double elapsed, double roundCpu, double* waited);
 
 // Moves the round's packets to their receivers and delivers them: for each
 // receiver, senders in environment order and packets in send order.
-void ExchangePackets(Span<Environment* const> envs, const RankEnvs& layout, Transport* t,
+void ExchangePackets(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
                      ExchangeBuffers* x, double* waited);
 
 }  // namespace vismask

@@ -60,11 +60,16 @@ struct Framebuffer {
   Span<float> depth;      // point sampled: distance along the view direction; +inf = empty
   Span<Fragment> frags;   // antialiased: kFragments per pixel, nearest first
   Span<uint8_t> dropped;  // antialiased: 1 where a fragment fell off the list
+  // Antialiased: the rows [dirtyLo, dirtyHi] hold every fragment drawn since
+  // the last Clear (empty: dirtyLo > dirtyHi).
+  int dirtyLo = 0, dirtyHi = -1;
 
   // Carves w x h pixels from `arena`: point sampled 20 bytes a pixel,
   // antialiased 16 + kFragments * 24 + 1.
   void Layout(Arena& arena, int w, int h, bool antialiased);
   void Clear();
+  // Clears the dirty rows only (antialiased; point sampled: Clear).
+  void ClearDirty();
 };
 
 struct Texture;
@@ -102,6 +107,8 @@ void RasterPatches(const View& view, Span<const Patch> patches, Span<const glm::
 void CompositeRows(const Framebuffer& band, int firstRow, int rows, Framebuffer* fb);
 // The whole of `other` (same size and mode) into `fb`.
 void Composite(const Framebuffer& other, Framebuffer* fb);
+// Antialiased: the dirty rows of `other` (same size) into the same rows of `fb`.
+void CompositeDirty(const Framebuffer& other, Framebuffer* fb);
 
 // Antialiased: composes each pixel's fragments into color and id (empty
 // coverage is black; where fragments were dropped, the kept ones are scaled

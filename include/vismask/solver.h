@@ -51,7 +51,7 @@ struct SolveOptions {
 };
 
 // kStalled: rounds without a shot while power was left to shoot (a bug in
-// the admission of records, never a convergence).
+// the admission of forwarded shots, never a convergence).
 enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget, kStalled };
 const char* StopReasonName(StopReason r);
 
@@ -121,12 +121,12 @@ double LossEstimate(const RoundTotals& totals);
 // as 1 (no estimate) and AmbientTerm as no ambient term.
 double EffectiveReflectance(double rhoKd, double emitted, double unshot, double radiosity);
 
-// Per-environment admission: how many new records (local shots with
+// Per-environment admission: how many new forwarded shots (local shots with
 // neighbours) environment `env` of `numEnvs` may create this round, given
 // how many each environment still has to receive. Keeps every queue within
-// `capacity`, whatever order the records arrive in.
-uint32_t AdmittedRecords(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
-                         uint64_t maxOutstanding);
+// `capacity`, whatever order the forwarded shots arrive in.
+uint32_t AdmittedForwards(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,
+                          uint64_t maxOutstanding);
 
 // The shot budget of environment `env` of `numEnvs` this round under
 // --max-shots: the shots left spread evenly (the first environments one
@@ -142,7 +142,7 @@ uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_
 // (always on the last row, which repeats the shot count when the solve ended
 // on a round with nothing left to shoot and that state was not yet
 // measured). Allocates nothing.
-SolveResult Solve(Span<Environment* const> envs, const RankEnvs& layout, Transport* transport,
+SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* transport,
                   ExchangeBuffers* buffers, const SolveOptions& options, TextWriter* convergence);
 
 // What an environment contributes to Cohen's ambient term.
