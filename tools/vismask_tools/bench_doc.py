@@ -75,7 +75,7 @@ not counted.""", "", rays_md, "", "### Cell size", "",
                       "uniform closest", "uniform any hit", "cosine closest", "cosine any hit"], rows)
 
 
-def pct(x):
+def signed_pct(x):
     return f"{x:+.0f}%"
 
 
@@ -89,7 +89,7 @@ def masks_section(s, profile):
             rays, mr = x.same("result", "rays"), x.same("result", "mask_rays")
             t = x.median("timings", "solve_seconds")
             rows.append([m, r, x.spread("timings", "solve_seconds"), rays, mr,
-                         pct(100 * (rays + mr - nr) / nr), pct(100 * (t - nt) / nt)])
+                         signed_pct(100 * (rays + mr - nr) / nr), signed_pct(100 * (t - nt) / nt)])
     b100 = s.runs(s.names("B100_")).median("timings", "solve_seconds")
     L = ["", "## 3. Mask cost", "",
          f"`{s.build}/vismask {s.m} --mask-method none|A|B --mask-res R`: the same number of",
@@ -98,7 +98,7 @@ rays (a foreign environment skips those whose pixel is closed upstream),
 *mask rays* Method B's centre rays; *extra* is against `none`.""", ""]
     L += table(["method", "R", "solve s", "rays", "mask rays", "extra rays", "extra time"], rows)
     met = "**met**" if (b100 - nt) / nt <= 0.10 else "**not met**"
-    L += ["", f"Target: Method B at R = 100 within 10% of `none`: {met} ({pct(100 * (b100 - nt) / nt)})."]
+    L += ["", f"Target: Method B at R = 100 within 10% of `none`: {met} ({signed_pct(100 * (b100 - nt) / nt)})."]
 
     xs = {m: s.runs(s.names(f"x{m}")) for m in ("none", "B", "C")}
     xt, xc = xs["none"].median("timings", "solve_seconds"), xs["none"].median_cpu()
@@ -107,8 +107,8 @@ rays (a foreign environment skips those whose pixel is closed upstream),
         t, c = x.median("timings", "solve_seconds"), x.median_cpu()
         rows.append([m, x.spread("timings", "solve_seconds"), x.cpu_spread(), x.same("result", "shots"),
                      x.same("result", "rays"), x.same("result", "mask_rays"),
-                     "–" if m == "none" else pct(100 * (t - xt) / xt),
-                     "–" if m == "none" else pct(100 * (c - xc) / xc)])
+                     "–" if m == "none" else signed_pct(100 * (t - xt) / xt),
+                     "–" if m == "none" else signed_pct(100 * (c - xc) / xc)])
     b, c = xs["B"].median_cpu(), xs["C"].median_cpu()
     L += ["", "### In the experiments' set-up (issue 19)", "",
           f"`{s.build}/vismask {s.x} --mask-method none|B|C --mask-res 100`: whole solves",
@@ -122,8 +122,8 @@ per environment), so *mask rays* counts the centre rays cast.""", ""]
                 "extra (CPU s)"], rows)
     L += ["", "Target (issue 19): B at most +50% over none, and C no more than B:",
           "B %s (%s CPU), C %s (%s, %s B)." % (
-              "**met**" if (b - xc) / xc <= 0.5 else "**not met**", pct(100 * (b - xc) / xc),
-              "**met**" if c <= b else "**not met**", pct(100 * (c - xc) / xc),
+              "**met**" if (b - xc) / xc <= 0.5 else "**not met**", signed_pct(100 * (b - xc) / xc),
+              "**met**" if c <= b else "**not met**", signed_pct(100 * (c - xc) / xc),
               "at most" if c <= b else "more than")]
     if profile:
         L += ["", "Where the time goes with Method B at R = 100 (callgrind, `--max-shots 20`,",

@@ -22,5 +22,5 @@ def fmt_spread(xs, fmt="{:.2f}", alone=True):
 
 
 def pct(x, digits=2):
-    """A fraction as a percentage string."""
-    return f"{100 * x:.{digits}f}%"
+    """A fraction (a number or its text, as read from a CSV) as a percentage string."""
+    return f"{100 * float(x):.{digits}f}%"
