@@ -184,7 +184,8 @@ $(BUILD)/vismask_tests: $(TEST_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
 
 # The benchmark binary: the only one that links Embree and Google Benchmark
 # (tools/install-deps --bench installs them). make bench runs it and the
-# solve benchmarks and writes docs/BENCHMARKS.md (bench/run).
+# solve benchmarks and writes docs/BENCHMARKS.md (bench/run, Python on
+# tools/vismask_tools; make bench QUICK=1 passes --quick: a smoke run).
 BENCH_SRC := $(wildcard bench/*.cpp)
 BENCH_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(BENCH_SRC))
 $(BUILD)/vismask_bench: $(BENCH_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
@@ -194,7 +195,7 @@ $(BUILD)/vismask_bench: $(BENCH_OBJ) $(LIB_OBJ) $(POSIX_OBJ)
 bench:
 	tools/install-deps --bench
 	$(MAKE) -j$$(nproc) all $(BUILD)/vismask_bench
-	BUILD=$(BUILD) bench/run
+	BUILD=$(BUILD) bench/run $(if $(filter 1,$(QUICK)),--quick)
 
 # Every public header compiles on its own.
 headers: $(patsubst include/vismask/%.h,$(BUILD)/headers/%.ok,$(HEADERS))

@@ -1,7 +1,8 @@
 """vismask's tools library: what every report script under tools/ uses.
 
   cli        the scripts' shared arguments (--quick, --out DIR, --help)
-  runner     running vismask (with a run cache keyed by the command line)
+  runner     running vismask (with a run cache keyed by the command line), timed commands
+  reps       repeated runs: counts checked equal, timings as median (min–max)
   files      JSON, CSV, PFM, PGM and PNG files, run.json
   images     image error (relative RMSE, as `vismask compare`), difference images
   stats      medians with their min-max, percentages
@@ -12,10 +13,13 @@
   experiments, groundtruth   the steps of make experiments (docs/RESULTS.md)
   checks     the checks of one output directory (make stability)
   fuzz       the Fuzzing section of docs/STABILITY.md (make fuzz-report)
+  bench_runs, bench_parallel, bench_doc   make bench (bench/run): docs/BENCHMARKS.md
+  cluster, cluster_doc   make cluster-experiments: docs/CLUSTER.md
   blender_render, scale      run by tools/reference: inside Blender, and its check
 
 Scripts in tools/ import it as `from vismask_tools import ...` (Python puts
-the script's own directory first on sys.path); it needs only Python 3's
+the script's own directory first on sys.path; bench/run, outside tools/,
+adds it); it needs only Python 3's
 standard library, except scale.py (numpy, /usr/bin/python3)."""
 import os
 

@@ -1,10 +1,8 @@
 """Checks of one vismask output directory: no NaN, Inf or negative value in
 patches.csv's b or in image.pfm, and the energy ledger of run.json."""
-import json
 import math
 
-
-from .files import read_pfm
+from .files import read_pfm, run_json
 
 
 def check(out):
@@ -25,8 +23,7 @@ def check(out):
                     min_b, max_b = min(min_b, v), max(max_b, v)
     _, _, pixels = read_pfm(out + "/image.pfm")
     bad_pixels = sum(1 for v in pixels if not math.isfinite(v) or v < 0)
-    with open(out + "/run.json") as f:
-        run = json.load(f)
+    run = run_json(out)
     e = run["energy"]
     ledger = 0.0
     for c in range(3):

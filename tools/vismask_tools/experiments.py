@@ -5,7 +5,6 @@ Run them with tools/experiments [STEP...] [--quick] [--out DIR]: references,
 quality, timing, leak, error-time, closed-box, ground-truth, report, or all
 (the default)."""
 
-import json
 import math
 import os
 import shutil
@@ -14,14 +13,16 @@ import sys
 import time
 
 from . import ROOT, groundtruth
-from .scales import CAMERA, SCALES, SEED_MINUTES, SPLIT, arg, context
 from .cli import parse
-from .cornell import SCENE, ShadowRegion, region_patch_mean
+from .cornell import ShadowRegion, region_patch_mean
 from .files import load_json, read_csv, read_pfm, write_csv, write_png
+from .gt_references import exp_reference
 from .images import average_pfm, diff_png, rel_rmse
-from .machine import commit, facts, loadavg
+from .machine import facts, loadavg
 from .plot import gnuplot
-from .runner import log, render
+from .results_report import report
+from .runner import log
+from .scales import SEED_MINUTES, SPLIT, context
 from .stats import median
 
 METHODS_CURVES = ["A", "B", "C"]  # masks of R x 4R pixels, at each R
@@ -111,7 +112,7 @@ def quality(ctx):
     right = region_mask(ctx, ref_a_json, right_only=True)
     _, _, ra = read_pfm(ctx.path(ref_a_name, "image.pfm"))
     w, h, rb = read_pfm(ref_b)
-    gt = groundtruth.exp_reference(ctx)
+    gt = exp_reference(ctx)
     rows = []
     os.makedirs(ctx.result("img"), exist_ok=True)
     for r in s["table_res"] + [s["ref_res"]]:
@@ -215,7 +216,7 @@ def leak(ctx):
     ref_mean = sum(m for m, _ in refs) / len(refs)
     # Beside the patch measure, the same in the image: the mean over the
     # right part's pixels, against (b)'s image and against the ground truth's.
-    gt = groundtruth.exp_reference(ctx)
+    gt = exp_reference(ctx)
     _, _, rb = read_pfm(ref_b_path(ctx))
     right = region_mask(ctx, load_json(ctx.path(f"ref-b-seed{seeds[0]}", "run.json")), right_only=True)
     if gt is not None:
@@ -291,7 +292,7 @@ def error_time(ctx):
             rows.append([b, e, name, t])
     # The ground truth: the curves measure against (b) only; beside them, the
     # final image of the same run against the ground truth.
-    gt = groundtruth.exp_reference(ctx)
+    gt = exp_reference(ctx)
     final_gt = {}
     for name, _, _ in series:
         final_gt[name] = "" if gt is None else gt.error(read_pfm(ctx.path(name, "image.pfm"))[2])
@@ -354,312 +355,6 @@ def closed_box(ctx):
                          capture_output=True, text=True).stdout
     with open(ctx.result("closed-box.csv"), "w") as f:
         f.write(out)
-
-
-# --- docs/RESULTS.md --------------------------------------------------------------
-
-def table_md(path, header_map=None, digits=None):
-    header, rows = read_csv(path)
-    names = [header_map.get(h, h) if header_map else h for h in header]
-    out = ["| " + " | ".join(names) + " |", "|" + "---|" * len(names)]
-    for r in rows:
-        cells = []
-        for h, v in zip(header, r):
-            cells.append(pretty(v, h))
-        out.append("| " + " | ".join(cells) + " |")
-    return "\n".join(out)
-
-
-def pretty(v, h):
-    try:
-        x = float(v)
-    except ValueError:
-        return v
-    if v.isdigit():
-        return f"{int(v):,}".replace(",", " ")
-    if h.startswith("mean_b") or h == "std_error":
-        return f"{x:.6f}"
-    if "percent" in h:
-        return f"{x:+.1f}%"
-    if h in groundtruth.POINTS:
-        return f"{100 * x:+.2f} pt"
-    if "rmse" in h or h.startswith("vs_") or h.startswith("noise") or h in groundtruth.PERCENT:
-        return f"{100 * x:.3f}%"
-    if "ratio" in h:
-        return f"{x:.2e}"
-    return f"{x:.3g}"
-
-
-def rows_of(ctx, f):
-    header, rows = read_csv(ctx.result(f))
-    return [dict(zip(header, r)) for r in rows]
-
-
-def report(ctx, meta=None):
-    s = ctx.s
-    # The run's facts, kept from `all` so that the report can be remade alone.
-    meta_path = ctx.result("meta.json")
-    if meta:
-        with open(meta_path, "w") as f:
-            json.dump(meta, f, indent=1)
-    elif os.path.exists(meta_path):
-        meta = load_json(meta_path)
-    meta = meta or {}
-    doc = os.path.join(os.path.dirname(ctx.out), "RESULTS.md") if ctx.out.endswith(
-        os.path.join("docs", "results")) else os.path.join(ctx.out, "RESULTS.md")
-    rel = os.path.relpath(ctx.out, os.path.dirname(doc))
-    link = lambda f: f"{rel}/{f}" if rel != "." else f
-
-    q = rows_of(ctx, "fig2-quality.csv")
-    t = rows_of(ctx, "table1-time.csv")
-    lk = rows_of(ctx, "fig3-leak.csv")
-    pareto = rows_of(ctx, "pareto.csv")
-    ref = rows_of(ctx, "references.csv")[0]
-    pct = lambda x: f"{100 * float(x):.2f}%"
-    floor = q[-1]
-    by_r = {r["mask_res"]: r for r in q}
-    tm = {(r["method"], r["mask_res"]): float(r["median_solve_seconds"]) for r in t}
-    none_s = tm[("none", "")]
-    leak_of = {(r["method"], r["mask_res"]): float(r["leak_percent"]) for r in lk}
-    spread = abs(float(lk[0]["leak_percent"]))
-    hi = str(s["leak_res"])
-
-    L = []
-    w = L.append
-    w("# Results: the paper's figures and table as numbers\n")
-    w("Generated by `make experiments` (tools/experiments); every figure below comes from "
-      "that run. Do not edit by hand.\n")
-    if meta:
-        w(f"- command: `{meta.get('command', 'tools/experiments')}`, scale `{ctx.scale}`")
-        w(f"- commit {meta.get('commit', '?')}, {meta.get('date', '?')}")
-        w(f"- machine: {meta.get('cpu', '?')}, {meta.get('cores', '?')} cores; load average "
-          f"{meta.get('load_start', '?')} at the start, {meta.get('load_end', '?')} at the end")
-        w(f"- wall time of the whole run: {meta.get('seconds', 0):.0f} s\n")
-    common = " ".join(s["common"])
-    w("## Set-up\n")
-    w(f"The Cornell box (scenes/cornell.obj) split into two environments at x = 278 (`--envs 2`), "
-      f"rendered with `{common}` unless a row says otherwise. Times are `solve_seconds` from run.json: "
-      "the solve alone, without init, output, or the error measurements of `--error-every` "
-      "(their cost is in the last table).\n")
-    w("**References.** (a) the paper's: Method B at R = "
-      f"{s['ref_res']}, two environments, the same settings. (b) a converged single-environment "
-      "solution (no masks): " + ref["what"] + ". Its own noise is estimated from the two seeds: "
-      "two independent solves differ by √2 σ, so one has σ = RMSE(seed 1, seed 2)/√2 and their "
-      "mean σ/√2 = RMSE/2.\n")
-    w(table_md(ctx.result("references.csv")) + "\n")
-    lowest = min(float(r["vs_ref_b_whole"]) for r in q if r["vs_ref_b_whole"])
-    w(f"Reference (b)'s noise, {pct(ref['noise_whole'])} over the image and "
-      f"{pct(ref['noise_region'])} in the shadow region, against the smallest difference measured "
-      f"against it below, {pct(lowest)}: "
-      + ("well below (under a third)." if float(ref["noise_whole"]) < lowest / 3 else
-         "NOT well below: the differences against (b) below include its noise.") + "\n")
-    gtx = ctx.result("gt-experiments.csv")
-    if os.path.exists(gtx):
-        x = rows_of(ctx, "gt-experiments.csv")[0]
-        w("**Ground truth (c)**, a path-traced reference of the same view (issue 15): "
-          f"{x['what']}; its own noise {pct(x['noise'])} (from its two halves; a measured error "
-          "cannot fall below it). The pixels that see the emitter are left out of every comparison "
-          "with it (its mask). Reference (b) against it: "
-          f"{pct(x['ref_b_vs_gt_whole'])} over the image, {pct(x['ref_b_vs_gt_region'])} in the "
-          f"shadow region, {pct(x['ref_b_vs_gt_right'])} in its right part. The `vs_gt` columns "
-          "below are against (c), beside those against (b).\n")
-    else:
-        w("**Ground truth (c)**: not made (blender not found; tools/install-deps --reference "
-          "installs it): the `vs_gt` columns below are empty.\n")
-    w("**The shadow region** (below, bright): the points of the floor and back wall from which at "
-      "least one of 5 × 5 points spread over the light is hidden by the tall block (umbra and "
-      "penumbra), as seen from the camera: the pixels whose visible surface is such a point. The "
-      "right environment's part is its x < 278 side (the image's right half looks at x < 278).\n")
-    w(f"![shadow region]({link('img/region.png')})\n")
-
-    w("## Fig. 2 → table: quality against mask resolution (Method B)\n")
-    w(table_md(ctx.result("fig2-quality.csv")) + "\n")
-    w("Relative RMSE = √(Σ(a−b)²/Σb²) over all channels of the pixels: the whole image, the shadow "
-      "region, or its part in the second environment (`right`, x < 278). "
-      "The last row is the noise floor of any comparison between two two-environment runs: the "
-      "lowest R again with another seed.\n")
-    imgs = " ".join(f"![B R={r}]({link(f'img/fig2-B-{r}.png')})" for r in s["table_res"] + [s["ref_res"]])
-    w("Images, R = " + ", ".join(str(r) for r in s["table_res"]) + f" and reference (a), R = {s['ref_res']}:\n")
-    w(imgs + "\n")
-    w("|x − reference (a)| (same seed: what differs is the mask; black = equal, white = 10% of the "
-      "image's mean), the shadow region outlined in blue:\n")
-    w(" ".join(f"![diff R={r}]({link(f'img/fig2-B-{r}-diff.png')})" for r in s["table_res"] + [s["ref_res"]]) + "\n")
-
-    w("## Table 1 → table: time of Method A and Method B\n")
-    w(table_md(ctx.result("table1-time.csv")) + "\n")
-    w(f"Median of {s['reps']} runs each (min and max beside it), one after another on this machine; "
-      "the first of each is the error-curve run below, whose measurements are off its clock. "
-      "`mask_rays` are Method B's centre rays; `bytes_sent` the packet bytes (128-byte header and "
-      "the mask) sent between the environments. `seed_time` is the paper's Table 1 and `ratio_to_seed` our median time over it.\n")
-
-    w("## Fig. 3 → number: light leaking through Method A's masks\n")
-    w(table_md(ctx.result("fig3-leak.csv")) + "\n")
-    w("`leak_percent`: the area-weighted mean radiosity of the patches in the right environment's "
-      "shadow region (patch centre in the region, x < 278), above reference (b)'s, in percent "
-      "(power received = mean radiosity × area). The first row is the difference between reference "
-      "(b)'s two seeds: the noise of this measure.\n")
-    w("`image_leak_vs_b_percent` and `image_leak_vs_gt_percent`: the same in the image, the mean "
-      "of the pixels in the right environment's part of the shadow region above reference (b)'s "
-      "image and above the ground truth (c)'s; in the first row, (b)'s image above (c)'s.\n")
-    w(f"Method A at R = {hi}, and |A − B| at R = {hi} with the same seed (what differs is the mask; "
-      "white = 10% of the image's mean), the right environment's part of the shadow region outlined "
-      "in blue:\n")
-    w(f"![A R={hi}]({link(f'img/fig3-A-{hi}.png')}) ![A R={hi} diff]({link(f'img/fig3-A-{hi}-diff.png')})\n")
-
-    w("## Error against run time\n")
-    w(f"Every curve run measured its image against reference (b) every {s['error_every']} shots "
-      "(`--reference`, `--error-every`).\n")
-    w(f"![error against time]({link('error-time.png')})\n")
-    w("The Pareto front: the lowest error any run had reached within each time budget. The curves "
-      "are against reference (b); `run_final_vs_gt` is the final image of the run named in that "
-      "row against the ground truth (c) (`final_vs_gt` in the last table).\n")
-    w(table_md(ctx.result("pareto.csv")) + "\n")
-    w("What measuring cost (not in the solve times):\n")
-    w(table_md(ctx.result("curves.csv")) + "\n")
-
-    w("## Beyond the paper: Methods C and R\n")
-    w("Method C marks, per pixel, whether a form-factor ray hit or passed, and casts B's centre ray "
-      "only where the marks disagree or no ray came; Method R sends one bit per Monte Carlo ray "
-      "(docs/DESIGN.md). From the curve runs above (one run each):\n")
-    by = {(r["method"], r["mask_res"]): r for r in lk}
-    cmp_rows = ["| R | B mask rays | C mask rays | C / B | B leak | C leak | B s | C s |",
-                "|---|---|---|---|---|---|---|---|"]
-    for r in s["curve_res"]:
-        b, c = by.get(("B", str(r))), by.get(("C", str(r)))
-        if b and c:
-            cmp_rows.append(f"| {r} | {num(b['mask_rays'])} | {num(c['mask_rays'])} | "
-                            f"{int(c['mask_rays']) / max(1, int(b['mask_rays'])):.2f} | "
-                            f"{float(b['leak_percent']):+.1f}% | {float(c['leak_percent']):+.1f}% | "
-                            f"{float(b['solve_seconds']):.1f} | {float(c['solve_seconds']):.1f} |")
-    w("\n".join(cmp_rows) + "\n")
-    rr = by.get(("R", ""))
-    if rr:
-        n = int(arg(s["common"], "--rays"))
-        w(f"Method R: leak {float(rr['leak_percent']):+.1f}%, {num(rr['bytes_sent'])} bytes sent "
-          f"({num(rr['rays'])} rays traced, no mask rays), {float(rr['solve_seconds']):.1f} s. Its "
-          "packet is 128 + N/8 bytes for N rays a shot, a mask's 128 + 4R²/8: here N = "
-          f"{n}, so R's packet is the size of a mask of R = {math.sqrt(n / 4):.0f}, smaller than "
-          "the masks above it and larger than those below.\n")
-    if os.path.exists(ctx.result("closed-box.csv")):
-        w("**The closed box** (tools/closed-box-methods): a unit cube around a block "
-          "[0.3, 0.7]³, one material (kd 0.5, Ke 2, so B = 4 everywhere), split 2×2×2; the mean of B "
-          "over the patches against 4, with its standard error over the seeds, the noise of one "
-          "patch (RMS), and the ledger's largest residual (emitted − absorbed − escaped − unshot − "
-          "in flight, over emitted). A closed box of one material fixes the mean by conservation, "
-          "so a bias beyond the standard error is rays lost or counted twice.\n")
-        w(table_md(ctx.result("closed-box.csv")) + "\n")
-
-    groundtruth.report_section(ctx, w, link, table_md)
-
-    w("## Reading\n")
-    res = [str(r) for r in s["table_res"]]
-    r_lo, r_hi = res[0], res[-1]
-    fl = float(floor["vs_ref_a_right"])
-
-    def vs(r):
-        return float(by_r[r]["vs_ref_a_right"])
-    w("- **Quality against resolution (Fig. 2).** In the second environment's part of the shadow "
-      "region, where the occluder (the tall block) is in the shooter's environment and only the mask "
-      "stands for it, Method B differs from "
-      "reference (a) by " + ", ".join(f"{pct(vs(r))} at R = {r}" for r in res) +
-      f". Every run uses seed 1, so their Monte Carlo noise is largely shared (common random "
-      f"numbers) and these differences are mostly the masks'; two runs that differ only in their "
-      f"seed differ by {pct(fl)}. " +
-      ("So the paper's ordering holds: the error falls with R and R = "
-       f"{r_hi} is within the noise of R = {s['ref_res']}." if vs(r_lo) > vs(r_hi) and vs(r_hi) <= 1.2 * fl
-       else "The paper's ordering does not show clearly above the Monte Carlo noise here.")
-      + " Over the whole image the mask's effect is swamped by that noise: the shadow edge is a "
-      "small part of the picture.")
-    ratio = [tm[("B", int_or(r))] / tm[("A", int_or(r))] for r in s["table_res"]]
-    seed_ratio = [SEED_MINUTES[("B", r)] / SEED_MINUTES[("A", r)]
-                  for r in s["table_res"] if ("B", r) in SEED_MINUTES]
-    b_slower = all(x > 1.0 for x in ratio)
-    w(f"- **Time (Table 1).** Method A costs {fmt_pct(tm[('A', int_or(r_lo))] / none_s - 1)} to "
-      f"{fmt_pct(tm[('A', int_or(r_hi))] / none_s - 1)} over no mask (marking, packing, sending, "
-      "merging and reading the masks). Method B's time over A's is " +
-      ", ".join(f"{x:.2f}×" for x in ratio) + " at R = " + ", ".join(str(r) for r in s["table_res"]) +
-      ("; in the paper it was " + ", ".join(f"{x:.2f}×" for x in seed_ratio) + ". "
-       if seed_ratio else " (the paper has no times at these R). ") +
-      ("Here B is the slower at every R: the paper's A paid for wasteful marking (\"pixels may be "
-       "marked off multiple times\"), which here is one bit write per ray that hits, while B's one "
-       "extra ray per open pixel (4R² per shot that sends a mask) outweighs it. The paper's finding "
-       "that B is faster does not carry over; its finding that B's cost grows with R does."
-       if b_slower else "B is not the slower at every R here; see the table."))
-    a_hi, b_hi = leak_of.get(("A", hi)), leak_of.get(("B", hi))
-    if a_hi is not None and b_hi is not None:
-        w(f"- **Leak (Fig. 3).** At R = {hi}, Method A puts {a_hi:+.1f}% more light in the right "
-          f"environment's shadow than reference (b); Method B {b_hi:+.1f}%; the reference's own "
-          f"seed-to-seed spread is {spread:.1f}%. " +
-          ("The paper's light leak is reproduced and measured." if a_hi > max(3 * spread, b_hi + 3 * spread)
-           else "The leak is not clearly above the noise at this scale."))
-    cs = [(r, by.get(("B", str(r))), by.get(("C", str(r)))) for r in s["curve_res"]]
-    cs = [(r, b, c) for r, b, c in cs if b and c]
-    if cs:
-        fewer = [r for r, b, c in cs if int(c["mask_rays"]) < int(b["mask_rays"])]
-        leak_gap = max(abs(float(c["leak_percent"]) - float(b["leak_percent"])) for _, b, c in cs)
-        darker = all(float(c["leak_percent"]) <= float(b["leak_percent"]) + spread for _, b, c in cs)
-        w(f"- **Method C** cast fewer centre rays than B at R = {', '.join(str(r) for r in fewer) or 'none'} "
-          f"(C/B from {min(int(c['mask_rays']) / max(1, int(b['mask_rays'])) for _, b, c in cs):.2f} to "
-          f"{max(int(c['mask_rays']) / max(1, int(b['mask_rays'])) for _, b, c in cs):.2f}; the saving "
-          "shrinks as R grows, because pixels then outnumber the rays and most get no mark). Its leak "
-          f"differs from B's by at most {leak_gap:.1f} points, against the reference's seed spread of "
-          f"{spread:.1f}%" + (": no leak beyond B's; where it differs it is darker (a pixel whose "
-                              "rays all hit is closed, even where its centre ray would pass)."
-                              if darker else "; at some R it lets more light through than B."))
-    if rr:
-        line = (f"- **Method R** has {float(rr['leak_percent']):+.1f}% in the same region (the "
-                f"reference's seed spread is {spread:.1f}%): it has no mask; every ray is traced "
-                "until it is absorbed in exactly one environment or escapes.")
-        curves = {r["run"]: r for r in rows_of(ctx, "curves.csv")}
-        if "R" in curves and f"B-{hi}" in curves:
-            line += (f" Its whole-image error, {pct(curves['R']['final_relative_rmse'])} against "
-                     f"B-{hi}'s {pct(curves[f'B-{hi}']['final_relative_rmse'])}, is most likely noise (the "
-                     "region and the closed box show no bias): R traces "
-                     "each ray once, so the second environment receives only the rays that reach "
-                     "it, where the other methods draw --rays fresh rays in every environment.")
-        if os.path.exists(ctx.result("closed-box.csv")):
-            cb = {r["method"]: r for r in rows_of(ctx, "closed-box.csv")}
-            if "R" in cb and "B" in cb:
-                f = lambda r: (f"{float(r['mean_b_over_analytic']):.6f} ± {float(r['std_error']):.6f} "
-                               f"(ledger residual {float(r['max_ledger_residual']):.2g})")
-                line += (f" In the closed box split 2×2×2 its mean B over the analytic value is "
-                         f"{f(cb['R'])}, B's {f(cb['B'])}, one environment's {f(cb['none'])}.")
-        w(line)
-    if pareto:
-        names = []
-        for p in pareto:
-            if p["run"] not in names:
-                names.append(p["run"])
-        curves = rows_of(ctx, "curves.csv")
-        best = min(curves, key=lambda r: float(r["final_relative_rmse"]))
-        w(f"- **Error against time.** The Pareto front is made of {', '.join(names)}: at each "
-          "budget, the lowest whole-image error any run had reached came from these. The lowest "
-          f"final error is {best['run']}'s, {pct(best['final_relative_rmse'])} after "
-          f"{float(best['solve_seconds']):.1f} s; the final errors range from "
-          f"{pct(min(float(r['final_relative_rmse']) for r in curves))} to "
-          f"{pct(max(float(r['final_relative_rmse']) for r in curves))}, against reference (b)'s "
-          f"own noise of {pct(ref['noise_whole'])}.")
-    groundtruth.reading(ctx, w)
-    w("")
-    with open(doc, "w") as f:
-        f.write("\n".join(L) + "\n")
-    log(f"wrote {doc}")
-    return doc
-
-
-def num(v):
-    return f"{int(v):,}".replace(",", " ")
-
-
-def int_or(r):
-    try:
-        return str(int(r))
-    except (TypeError, ValueError):
-        return r
-
-
-def fmt_pct(x):
-    return f"{100 * x:+.0f}%"
 
 
 # --- all ----------------------------------------------------------------------------

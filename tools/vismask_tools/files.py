@@ -22,6 +22,12 @@ def read_csv(path):
     return rows[0], rows[1:]
 
 
+def csv_dicts(path):
+    """A CSV file's rows as dicts keyed by its header."""
+    header, rows = read_csv(path)
+    return [dict(zip(header, r)) for r in rows]
+
+
 def write_csv(path, header, rows):
     with open(path, "w") as f:
         f.write(",".join(header) + "\n")

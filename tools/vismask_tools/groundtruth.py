@@ -1,26 +1,18 @@
 """Error against a path-traced ground truth (issue 15): the 'ground-truth' step
-of the experiments and the ground-truth columns of the paper's tables. The
-references are Blender Cycles renders made by tools/reference (cached under
-build/reference-cache/); a reference committed under docs/results/reference/
-is used instead when present. Python 3 standard library only."""
+of the experiments (runs at the original camera against its reference,
+tables gt-*.csv, plots and difference images). The references are in
+gt_references.py, the report's section in gt_report.py. Python 3 standard
+library only."""
 
-import gzip
 import math
 import os
-import shutil
-import subprocess
 
-from . import ROOT
-from .cornell import SCENE
-from .files import load_json, read_pgm, read_csv, read_pfm, write_csv as write_csv_, write_png
+from .files import load_json, read_csv, read_pfm, write_csv as write_csv_, write_png
+from .gt_references import ORIGINAL, demo_reference, have_blender, original_reference
 from .images import rel_rmse
 from .plot import gnuplot
 from .runner import log
-from .scales import CAMERA, arg
-
-# The Cornell box's original camera (eye, target, up, vertical fov).
-ORIGINAL = "278,273,-800,278,273,0,0,1,0,39.3076"
-COMMITTED = os.path.join(ROOT, "docs", "results", "reference")
+from .scales import arg
 
 # Issue 15's configurations. "today" is the render before issue 15.
 TODAY = ["--rays", "4096", "--sampler", "random", "--elements", "0", "--aa", "off"]
@@ -46,7 +38,7 @@ RENDERPARK = [("hierarchical Galerkin", 0.12, 0.038), ("hierarchical Galerkin", 
 GOAL_1S, GOAL_10S, GOAL_RATIO, GOAL_DEMO, GOAL_DEMO_S, GOAL_ENVS = 0.03, 0.02, 2.0, 0.025, 10.0, 0.003
 
 
-# Columns of the ground-truth tables shown as percentages (steps.pretty), and
+# Columns of the ground-truth tables shown as percentages (results_report.pretty), and
 # as differences in percentage points.
 PERCENT = {"vs_gt_minus_ref_noise", "noise_seed", "total_vs_gt", "aa_off_vs_on", "aliasing",
            "ref_noise", "discretisation", "renderpark_vs_gt", "vismask_front_vs_gt",
@@ -59,100 +51,6 @@ def write_csv(path, header, rows):
     """files.write_csv with no comma inside a cell (files.read_csv splits on them)."""
     write_csv_(path, header, [[c.replace(",", ";") if isinstance(c, str) else c for c in r]
                                  for r in rows])
-
-
-def have_blender():
-    return shutil.which("blender") is not None
-
-
-# --- references ------------------------------------------------------------------
-
-class Reference:
-    """A ground truth: its PFM, its mask (PGM), the pixels kept (1) or
-    excluded (0), its own noise (relative RMSE) and how it was made."""
-
-    def __init__(self, pfm, pgm, noise, what):
-        self.pfm, self.pgm, self.noise, self.what = pfm, pgm, noise, what
-        self.w, self.h, self.px = read_pfm(pfm)
-        self.keep = [0 if m else 1 for m in read_pgm(pgm)[2]]
-
-    def args(self):
-        return ["--reference", self.pfm, "--exclude", self.pgm]
-
-    def error(self, img, mask=None):
-        keep = self.keep if mask is None else [k and m for k, m in zip(self.keep, mask)]
-        return rel_rmse(img, self.px, keep)
-
-
-def render_reference(ctx, name, camera, size, spp):
-    """tools/reference with --halves into runs/gt/NAME.pfm (cached by tools/reference)."""
-    d = os.path.join(ctx.runs, "gt")
-    os.makedirs(d, exist_ok=True)
-    out = os.path.join(d, f"{name}.pfm")
-    cmd = [os.path.join(ROOT, "tools", "reference"), SCENE] + (
-        ["--camera", camera] if camera else []) + [
-        "--size", str(size), str(size), "--spp", str(spp), "--halves", "--quiet", "--out", out]
-    log("  " + " ".join(os.path.relpath(c, ROOT) if c.startswith(ROOT) else c for c in cmd))
-    subprocess.run(cmd, check=True, env=dict(os.environ, VISMASK_BIN=ctx.bin))
-    meta = load_json(out[:-4] + ".json")
-    return Reference(out, out[:-4] + ".mask.pgm", meta["noise_relative_rmse"],
-                     f"tools/reference scenes/cornell.obj{' --camera ' + camera.replace(',', ' ') if camera else ''} "
-                     f"--size {size} {size} "
-                     f"--spp {spp} --halves (Blender {meta.get('blender', '?')}, "
-                     f"{meta.get('wall_seconds', 0):.0f} s)")
-
-
-def committed(ctx, stem):
-    """docs/results/reference/STEM.pfm.gz (+ mask, + json), decompressed into
-    the runs directory, or None."""
-    src = os.path.join(COMMITTED, stem)
-    if not os.path.exists(src + ".pfm.gz"):
-        return None
-    d = os.path.join(ctx.runs, "gt")
-    os.makedirs(d, exist_ok=True)
-    out = {}
-    for ext in (".pfm", ".mask.pgm", ".json"):
-        dst = os.path.join(d, "committed-" + stem + ext)
-        for cand in (src + ext + ".gz", src + ext):
-            if os.path.exists(cand):
-                opener = gzip.open if cand.endswith(".gz") else open
-                with opener(cand, "rb") as f, open(dst, "wb") as g:
-                    shutil.copyfileobj(f, g)
-                out[ext] = dst
-                break
-    if ".mask.pgm" not in out:
-        return None
-    meta = load_json(out[".json"]) if ".json" in out else {}
-    noise = meta.get("noise_relative_rmse", meta.get("noise", float("nan")))
-    return Reference(out[".pfm"], out[".mask.pgm"], noise,
-                     f"docs/results/reference/{stem}.pfm.gz (committed: "
-                     f"{meta.get('command', 'command in its json')})")
-
-
-def original_reference(ctx):
-    g = ctx.s["gt"]
-    ref = committed(ctx, f"cornell-original-{g['size']}") if ctx.scale == "full" else None
-    return ref or render_reference(ctx, f"cornell-original-{g['size']}", ORIGINAL, g["size"], g["spp"])
-
-
-def demo_reference(ctx):
-    """At vismask's default camera (make demo's), full scale only."""
-    g = ctx.s["gt"]
-    return render_reference(ctx, f"cornell-default-{g['size']}", None, g["size"], g["spp"])
-
-
-def experiments_reference(ctx):
-    """At the experiments' own camera and size (CAMERA): the committed one
-    when there is one, else rendered; None without blender."""
-    g = ctx.s["gt"]
-    w = int(arg(ctx.s["common"], "--width"))
-    ref = committed(ctx, f"cornell-experiments-{w}") if ctx.scale == "full" else None
-    if ref:
-        return ref
-    if not have_blender():
-        return None
-    return render_reference(ctx, f"cornell-experiments-{w}", arg(CAMERA, "--camera"), w,
-                            g["exp_spp"])
 
 
 # --- runs --------------------------------------------------------------------------
@@ -454,182 +352,3 @@ set ylabel 'relative RMSE against the Cycles ground truth'
 set title 'Cornell box, original camera, 1 environment (grey dots: RenderPark, quoted)'
 plot {', '.join(plots)}
 {data}""")
-
-
-# --- the ground-truth columns of the paper's tables --------------------------------
-
-_EXP = {}
-
-
-def exp_reference(ctx):
-    """The experiments camera's reference, made once per process (None without blender)."""
-    if ctx.out not in _EXP:
-        _EXP[ctx.out] = experiments_reference(ctx)
-    return _EXP[ctx.out]
-
-
-# --- the report's section -------------------------------------------------------------
-
-def rows_of(path):
-    header, rows = read_csv(path)
-    return [dict(zip(header, r)) for r in rows]
-
-
-def pc(x, digits=2):
-    return f"{100 * float(x):.{digits}f}%"
-
-
-def report_section(ctx, w, link, table_md):
-    """The '## Against a path-traced ground truth' section of RESULTS.md."""
-    g = ctx.s["gt"]
-    w("## Against a path-traced ground truth (issue 15)\n")
-    skip = ctx.result("gt-skipped.txt")
-    if os.path.exists(skip) or not os.path.exists(ctx.result("gt-goals.csv")):
-        why = open(skip).read().strip() if os.path.exists(skip) else "no results"
-        w(f"**Skipped**: {why}. The ground-truth columns of the tables above are empty for the "
-          "same reason.\n")
-        return
-    refs = rows_of(ctx.result("gt-references.csv"))
-    ref = refs[0]
-    noise = float(ref["noise"])
-    w(f"The Cornell box at its original camera (`--camera {ORIGINAL}`: eye 278,273,−800, target "
-      f"278,273,0, up +y, fovy 39.3076°), {g['size']}², one environment, one process (loop "
-      "transport, one core), against a Blender Cycles render under vismask's conventions "
-      "(tools/reference). The pixels that see the emitter, dilated by 2 px, are left out "
-      "(`--exclude`, the reference's mask). Errors are relative RMSEs "
-      "√(Σ(a−b)²/Σb²) over the RGB values of the other pixels; times are `solve_seconds`. "
-      "Runs at other settings than the defaults: " + (" ".join(g["common"]) or "none") + ".\n")
-    w(table_md(ctx.result("gt-references.csv")) + "\n")
-    w("The references are cached (build/reference-cache/, keyed by scene, camera, size, spp, "
-      "seed and Blender's version); the render time in `what` is in this run's wall time only "
-      "if they were not already there. A reference committed as "
-      "docs/results/reference/cornell-original-SIZE.pfm.gz (with its mask and json) replaces "
-      "the original camera's.\n")
-    w(f"`noise` is the reference's own relative RMSE against the noise-free image, estimated from "
-      f"its two halves (tools/reference --halves). **No measured error can fall below it**: an "
-      f"image equal to the truth would measure {pc(noise)}. Where a column says "
-      "`minus_ref_noise` it is √(measured² − noise²), the error against the noise-free image "
-      "estimated by removing the reference's noise in quadrature (the two are independent); "
-      "it is the better estimate of vismask's own error, and the less certain the closer the "
-      "measured figure is to the noise.\n")
-
-    w("### Error against solve time\n")
-    w(f"Each run measured its image against the reference about {g['points']} times during the "
-      "solve (`--error-every`, off the clock). `today` is the render before issue 15 "
-      "(`--rays 4096 --sampler random --elements 0 --aa off --patch-size 34.95`, the former "
-      "extent/16); `default` every default option "
-      "(power allocation, `--emitted-rays 4000000`, `--min-rays 16`, patches of extent/28, "
-      "Sobol', elements, exact-coverage antialiasing); the `emitted-*` runs the defaults with "
-      "another `--emitted-rays` (one also with `--stop-unshot 3e-3`), chosen so that they "
-      "converge in about 0.3, 1, 3, 10 and 30 s here, and the `patch-15-*` runs the same with "
-      "finer patches (their measured times are in the table: a budget figure below uses what "
-      "was reached by then). A converged solve takes some 30 000 shots of at least "
-      "`--min-rays` rays, so no setting "
-      "of `--emitted-rays` converges in 0.1 s: `cap-0.1s` is a `--max-seconds 0.1` cap (its "
-      "result depends on the machine's speed). `noise_seed` is the run's own Monte Carlo noise: "
-      "the RMSE between seeds 1 and 2 over √2. The front (orange) is the lowest error any "
-      "run other than `today` had reached within each solve time; the grey dots are "
-      "RenderPark (below).\n")
-    w(f"![error against time, ground truth]({link('gt-error-time.png')})\n")
-    w(table_md(ctx.result("gt-time.csv")) + "\n")
-
-    w("### The goals of issue 15\n")
-    rows = ["| figure | goal | measured | minus the reference's noise | how | verdict | "
-            "verdict minus the reference's noise |", "|---|---|---|---|---|---|---|"]
-    for r in rows_of(ctx.result("gt-goals.csv")):
-        ratio = r["figure"].startswith("ratio")
-        f = (lambda x: f"{float(x):.2f}") if ratio else pc
-        rows.append(f"| {r['figure']} | {r['goal']} | {f(r['measured']) if r['measured'] else ''} | "
-                    f"{f(r['minus_ref_noise']) if r['minus_ref_noise'] else ''} | {r['how']} | "
-                    f"{r['verdict']} | {r['verdict_minus_ref_noise']} |")
-    w("\n".join(rows) + "\n")
-    w("The error within a time is the front's: the lowest error any run (other than `today`) "
-      "had measured by then. "
-      + (f"The demo row is `make demo`'s command itself at its own camera (vismask's default, "
-         f"which frames the scene's box: eye 278,274.4,−809.7), against a second reference "
-         f"at that camera: {refs[1]['what']}, noise {pc(refs[1]['noise'])}."
-         if len(refs) > 1 else "At quick scale the demo row is the default run above.") + "\n")
-
-    w("### RenderPark, quoted\n")
-    w("Measured by an earlier session on this machine (issue 15), **not rerun by make "
-      "experiments**, against that session's Cycles reference of the same view (not the one "
-      "above), so the comparison is indicative:\n")
-    w("| RenderPark method | solve time | relative RMSE |\n|---|---|---|\n" + "\n".join(
-        f"| {m} | {t:g} s | {100 * e:.1f}% |" for m, t, e in RENDERPARK) + "\n")
-    w("vismask's front (this run) at the same solve times:\n")
-    w(table_md(ctx.result("gt-renderpark.csv")) + "\n")
-
-    w("### Where the error comes from\n")
-    w("Per configuration, from three runs: seed 1 (`total_vs_gt`), seed 2, and seed 1 drawn with "
-      "the other `--aa` (the same seed gives the same solve: `same_solve_aa_on_off` says whether "
-      "their patches.csv are identical). `noise` = RMSE(seed 1, seed 2)/√2; `aa_off_vs_on` = "
-      "RMSE between the `--aa off` and `--aa on` images of the same solve; `aliasing` is that "
-      "difference for the configurations drawn with `--aa off`, and 0 for those drawn with "
-      "`--aa on` (each pixel is then the exact box-filtered mean of what it sees, the "
-      "reference's own pixel filter); `discretisation` the rest: "
-      "√(total² − noise² − aliasing² − ref_noise²), clamped at 0 where that is negative (`note` "
-      "says so). The split assumes the parts independent, which noise and the reference's "
-      "noise are, but aliasing and discretisation need not be: read the last two as "
-      "estimates.\n")
-    w(table_md(ctx.result("gt-decomposition.csv")) + "\n")
-    w(f"The image minus the ground truth (channels averaged, over the reference's mean): red "
-      f"where vismask is brighter, blue where darker, full colour at ±{100 * g['diff_scale']:.0f}% "
-      "of the reference's mean; grey: excluded pixels. `today` (left) and `default` (right):\n")
-    w(f"![today minus ground truth]({link('img/gt-diff-today.png')}) "
-      f"![default minus ground truth]({link('img/gt-diff-default.png')})\n")
-
-    w("### Two environments against one\n")
-    w(f"`--envs 2` (split at x = 278) with Method B at `--mask-res {g['env_res']}` and with "
-      f"Method R, against one environment, all at the default options: capped at "
-      f"`--max-seconds {g['env_seconds']:g}` (a run that converges sooner stops there: `stop`), "
-      "and run to convergence. Goal: within 0.3 points of one environment at the same "
-      "solve time.\n")
-    w(table_md(ctx.result("gt-envs.csv")) + "\n")
-    w(f"The seam: the converged 2-environment image minus the converged 1-environment image, "
-      f"over the latter's mean, averaged over rows {int(g['band'][0] * g['size'])}–"
-      f"{int(g['band'][1] * g['size']) - 1} per pixel column; the plane x = 278 projects to the "
-      "middle of the image (dashed). `max_abs_at_seam` is the largest |profile| in the 4 middle "
-      "columns, `mean_abs_elsewhere` its mean more than 8 columns away, "
-      "`step_left_minus_right` the mean of the 8 columns left of the middle minus the 8 right "
-      "of it.\n")
-    w(f"![seam profile]({link('gt-seam.png')})\n")
-    w(table_md(ctx.result("gt-seam.csv")) + "\n")
-    w(f"Difference images (2 environments − 1, red brighter, blue darker, full colour at "
-      f"±{100 * g['seam_scale']:.0f}% of the 1-environment image's mean): Method B (left), "
-      "Method R (right):\n")
-    w(f"![B seam]({link('img/gt-seam-env2-B.png')}) ![R seam]({link('img/gt-seam-env2-R.png')})\n")
-
-
-def reading(ctx, w):
-    """A bullet for the report's Reading."""
-    if not os.path.exists(ctx.result("gt-goals.csv")) or os.path.exists(ctx.result("gt-skipped.txt")):
-        return
-    goals = rows_of(ctx.result("gt-goals.csv"))
-    noise = float(rows_of(ctx.result("gt-references.csv"))[0]["noise"])
-    parts = []
-    for r in goals:
-        if not r["goal"] or not r["measured"]:
-            continue
-        ratio = r["figure"].startswith("ratio")
-        f = (lambda x: f"{float(x):.2f}") if ratio else pc
-        parts.append(f"{r['figure']}: {f(r['measured'])} ({f(r['minus_ref_noise'])} without the "
-                     f"reference's noise), goal {r['goal']}: {r['verdict']}"
-                     + ("" if r["verdict"] == r["verdict_minus_ref_noise"]
-                        else f" ({r['verdict_minus_ref_noise']} without the reference's noise)"))
-    envs = rows_of(ctx.result("gt-envs.csv"))
-    env_parts = [f"{e['run']} {pc(e['vs_gt'])} ({float(e['minus_1_env_points']) * 100:+.2f} points: "
-                 f"{e['within_0.3']})" for e in envs if e["max_seconds"] != "none" and e["minus_1_env_points"]]
-    rp = rows_of(ctx.result("gt-renderpark.csv"))
-    rp_parts = [f"{r['who']} at {r['solve_seconds']} s ({pc(r['vismask_front_vs_gt'])} against "
-                f"{r['renderpark']}'s quoted {pc(r['renderpark_vs_gt'], 1)})" for r in rp if r["who"]]
-    seam = rows_of(ctx.result("gt-seam.csv"))
-    seam_parts = [f"{r['run']} {pc(r['max_abs_at_seam'])} at the middle columns against "
-                  f"{pc(r['mean_abs_elsewhere'])} elsewhere" for r in seam]
-    w(f"- **Against the ground truth (issue 15).** " + "; ".join(parts) + ". Two environments "
-      f"at the same capped solve time: " + "; ".join(env_parts) + ". Converged: " + "; ".join(
-          f"{e['run']} {pc(e['vs_gt'])} in {float(e['solve_seconds']):.3g} s"
-          for e in envs if e["max_seconds"] == "none") + ". The seam (2 environments − 1, "
-      "column profile): " + "; ".join(seam_parts) + f". The reference's own noise "
-      f"is {pc(noise)}: every measured figure includes it. Against RenderPark's quoted figures "
-      "(another session's reference, so indicative only): " + ("; ".join(rp_parts) or
-                                                               "no vismask measurement that early") + ".")

@@ -14,12 +14,32 @@ def sh(cmd):
         return ""
 
 
+def commit_state(paths=("src", "include", "platform")):
+    """(the short commit or "unknown", whether `paths` have local changes)."""
+    short = sh(f"git -C {ROOT} rev-parse --short HEAD") or "unknown"
+    return short, bool(sh(f"git -C {ROOT} status --porcelain -- " + " ".join(paths)))
+
+
 def commit():
     """The short commit, marked when src/, include/ or platform/ have local changes."""
-    c = sh(f"git -C {ROOT} rev-parse --short HEAD") or "?"
-    if sh(f"git -C {ROOT} status --porcelain -- src include platform"):
-        c += " (with local changes)"
-    return c
+    short, dirty = commit_state()
+    return ("?" if short == "unknown" else short) + (" (with local changes)" if dirty else "")
+
+
+def cores():
+    """The cores this process may run on (as nproc counts them)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:
+        return os.cpu_count()
+
+
+def threads_per_core():
+    return sh("lscpu | sed -n 's/^Thread(s) per core: *//p'") or "?"
+
+
+def kernel():
+    return os.uname().release
 
 
 def loadavg():

@@ -24,3 +24,15 @@ def replace_section(text, heading, lines):
                 if src[i].startswith(level + " ") and not src[i].startswith(level + "#")), len(src))
     tail = src[end:]
     return "\n".join(src[:start] + new + ([""] if tail else []) + tail).rstrip("\n") + "\n"
+
+
+def replace_marked(text, begin, end, lines, before):
+    """`text` with the part from the line `begin` to the line `end` (markers
+    included; `lines` holds them) replaced by `lines`; when there is no such
+    part, `lines` and a blank line go just before the line `before`."""
+    new = "\n".join(lines)
+    if begin in text:
+        a, b = text.index(begin), text.index(end) + len(end)
+        return text[:a] + new + text[b:]
+    at = text.index(before)
+    return text[:at] + new + "\n\n" + text[at:]

@@ -4,6 +4,7 @@ A cached run keeps its command line in OUT/args.txt; the same command line
 later reuses OUT's files instead of running again."""
 
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -60,3 +61,17 @@ def run(cmd, **kw):
     t0 = time.time()
     p = subprocess.run([str(c) for c in cmd], capture_output=True, text=True, **kw)
     return p.returncode, p.stdout, p.stderr, time.time() - t0
+
+
+def timed(cmd, log_path, env=None):
+    """Runs a command with its stdout and stderr into log_path; returns
+    (returncode, wall seconds, user seconds, system seconds), the CPU times
+    those of the command and every child it waited for (as bash's `time`)."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.monotonic()
+    with open(log_path, "w") as log:
+        rc = subprocess.run([str(c) for c in cmd], stdout=log, stderr=subprocess.STDOUT,
+                            env=env).returncode
+    wall = time.monotonic() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return rc, wall, r1.ru_utime - r0.ru_utime, r1.ru_stime - r0.ru_stime

@@ -12,14 +12,15 @@ def spread(xs):
     return statistics.median(xs), min(xs), max(xs)
 
 
-def fmt_spread(xs, fmt="{:.2f}"):
-    """"median (min-max)" of a list, or the one value of a list of one."""
+def fmt_spread(xs, fmt="{:.2f}", alone=True):
+    """"median (min-max)" of a list, or (alone=True) the one value of a list
+    of one."""
     m, lo, hi = spread(xs)
-    if len(xs) == 1:
+    if alone and len(xs) == 1:
         return fmt.format(m)
     return f"{fmt.format(m)} ({fmt.format(lo)}–{fmt.format(hi)})"
 
 
 def pct(x, digits=2):
-    """A fraction as a percentage string."""
-    return f"{100 * x:.{digits}f}%"
+    """A fraction (a number or its text, as read from a CSV) as a percentage string."""
+    return f"{100 * float(x):.{digits}f}%"

@@ -1,0 +1,248 @@
+"""make cluster-experiments' runs (tools/cluster-experiments): the settings
+of a full and a quick run, the one-process references, the simulated
+clusters (tools/cluster-sim), the board that is too small, the
+million-patch building and the parallel efficiency of 16 ranks.
+docs/CLUSTER.md is written from them by cluster_doc."""
+
+import filecmp
+import json
+import os
+import shlex
+import shutil
+
+from .files import load_json, run_json
+from .runner import log as log_line, run as run_cmd
+
+LINKS = ["100mbit", "1gbit"]
+CAMERA_IN_ROOM = "0.5,1.6,0.5,8,1.2,8,0,1,0,70"
+COMPARED = ["image.pfm", "patches.csv"]
+MILLION_BEGIN, MILLION_END = "<!-- million: begin -->", "<!-- million: end -->"
+EFF_BEGIN, EFF_END = "<!-- efficiency: begin -->", "<!-- efficiency: end -->"
+LATENCY, BANDWIDTH = 100e-6, 117e6  # per message step; per link, bytes/s (1 Gbit TCP)
+STEPS16 = 4 + 2 * 15                # AllGather + two all-to-alls at 16 ranks
+
+
+def log(msg):
+    log_line("cluster-experiments: " + msg)
+
+
+def run(cmd):
+    """Runs a command (logged); returns (returncode, stderr, wall seconds)."""
+    log("$ " + " ".join(shlex.quote(c) for c in cmd))
+    rc, _, err, wall = run_cmd(cmd)
+    return rc, err, wall
+
+
+def fresh(d):
+    """An empty directory d."""
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+
+
+def same_bytes(a, b):
+    return all(filecmp.cmp(os.path.join(a, f), os.path.join(b, f), shallow=False)
+               if os.path.exists(os.path.join(a, f)) and os.path.exists(os.path.join(b, f)) else False
+               for f in COMPARED)
+
+
+class Config:
+    """What a run measures. --quick: 2 nodes, a tenth of the shots, a small
+    building and a small 'million' case (the pipeline, in minutes; its figures
+    mean nothing). Runs go to build/cluster/ (build/cluster-quick/), the
+    document and its figure to DOC_DIR (docs/)."""
+
+    def __init__(self, quick=False, doc_dir=None):
+        self.quick = quick
+        self.out = "build/cluster-quick" if quick else "build/cluster"
+        self.doc_dir = doc_dir or "docs"
+        self.doc = os.path.join(self.doc_dir, "CLUSTER.md")
+        self.png = os.path.join(self.doc_dir, "img", "cluster-time.png")
+        self.command = "sudo tools/cluster-experiments --quick" if quick else "sudo make cluster-experiments"
+        self.nodes = [int(n) for n in os.environ.get("CLUSTER_NODES", "2" if quick else "2 4 8 16").split()]
+        self.rooms = "4x4" if quick else "8x8"
+        self.building = os.path.join(self.out, "building.obj") if quick else "build/building.obj"
+        shots = (lambda n: str(n // 10)) if quick else str
+        self.scenes = [
+            ("cornell", "the Cornell box", "scenes/cornell.obj",
+             ["--envs", "4x1x4", "--rays", "1024", "--max-shots", shots(1600), "--width", "128",
+              "--height", "128"]),
+            ("building", f"a building of {self.rooms}x2 rooms (tools/gen-building)", self.building,
+             ["--patch-size", "0.25", "--envs", "4x1x4", "--rays", "512", "--max-shots", shots(800),
+              "--width", "128", "--height", "128", "--camera", CAMERA_IN_ROOM]),
+        ]
+        # A million patches on sixteen 1 GB boards (issue 20): the building's
+        # faces written as triangles of at most 0.2 m, one patch each.
+        self.million_scene = os.path.join(self.out, "building-1m.obj") if quick else "build/building-1m.obj"
+        self.million_gen = ["tools/gen-building", "--rooms", "2x2" if quick else "8x8", "--floors",
+                            "1" if quick else "2", "--tile", "0.5" if quick else "0.2", "--out",
+                            self.million_scene]
+        # --rank-timeout: ranks 1-15 wait at init's agreement while rank 0
+        # runs the emitter check (9216 emitting triangles, 65536 polygons at
+        # a time), on 16 ranks sharing this machine's 2 cores: minutes,
+        # beyond the default 60 s.
+        self.million_args = ["--patch-size", "1", "--envs", "4x1x4", "--rays", "256", "--max-shots",
+                             shots(320), "--width", "128", "--height", "128", "--camera", CAMERA_IN_ROOM,
+                             "--rank-timeout", "1800"]
+        self.million_nodes, self.million_mem = (2 if quick else 16), "1G"
+        # A scene too big for a 512 MiB board (Pi Zero 2 W): refused at init.
+        self.refuse_cmd = ["tools/cluster-sim", "--nodes", "2", "--link", "100mbit", "--mem", "512M", "--",
+                           "render", "scenes/cornell.obj", "--envs", "2", "--mask-res", "3000",
+                           "--out", self.out + "/refused", "--quiet"]
+        # Issue 20: 16 ranks on the building, judged by the critical path
+        # measured per environment on one process and a modelled network.
+        self.eff_args = ["--patch-size", "0.25", "--rays", "512", "--mask-res", "20", "--stop-unshot",
+                         "0.7" if quick else "0.55", "--width", "64", "--height", "64", "--camera",
+                         CAMERA_IN_ROOM, "--quiet"]
+        self.eff_cases = [("uniform 4x1x4, rounds by work (default)", ["--envs", "4x1x4"]),
+                          ("auto:16, rounds by work (default)", ["--envs", "auto:16"]),
+                          ("auto:16, one shot a round (before)", ["--envs", "auto:16", "--round-shots", "1"])]
+
+    def path(self, *parts):
+        return os.path.join(self.out, *parts)
+
+    def save(self, name, data):
+        with open(self.path(name), "w") as f:
+            json.dump(data, f, indent=1)
+
+    def gen_building(self):
+        rc, err, _ = run(["tools/gen-building", "--rooms", self.rooms, "--floors", "2", "--out",
+                          self.building])
+        if rc != 0:
+            log(err)
+        return rc == 0
+
+
+def reference(c, name, scene, args):
+    """The one-process run of a scene: its figures."""
+    ref = c.path(name + "-ref")
+    shutil.rmtree(ref, ignore_errors=True)
+    rc, err, wall = run(["build/vismask", "render", scene] + args + ["--out", ref, "--quiet"])
+    if rc != 0:
+        log(err)
+        return None
+    rj = run_json(ref)
+    return {"wall": wall, "solve": rj["timings"]["solve_seconds"],
+            "init": rj["timings"]["init_seconds"], "rounds": rj["result"]["rounds"],
+            "patches": rj["counts"]["patches"], "sent": rj["result"]["bytes_sent"],
+            "packet_bytes": rj["result"]["packet_bytes"], "predicted": rj["memory"]["predicted_bytes"]}
+
+
+def sim(c, name, scene, args, nodes, link, slots=1):
+    """One cluster-sim run; returns a row of figures (None if it failed)."""
+    d = c.path("%s-%s-%d" % (name, link if slots == 1 else "lo", nodes * slots))
+    fresh(d)
+    rc, err, _ = run(["tools/cluster-sim", "--nodes", str(nodes), "--link", link, "--slots", str(slots),
+                      "--report", os.path.join(d, "report.json"), "--",
+                      "render", scene] + args + ["--out", os.path.join(d, "out"), "--quiet"])
+    with open(os.path.join(d, "log.txt"), "w") as f:
+        f.write(err)
+    if rc != 0:
+        log("FAILED (%d):\n%s" % (rc, err[-3000:]))
+        return None
+    rep = load_json(os.path.join(d, "report.json"))
+    rj = run_json(os.path.join(d, "out"))
+    links = rep["links"]
+    mpi = sorted(rep["mpi_collective_seconds"])
+    return {
+        "nodes": nodes * slots, "link": link if slots == 1 else "loopback",
+        "wall": rep["wall_seconds"], "init": rj["timings"]["init_seconds"],
+        "solve": rj["timings"]["solve_seconds"], "output": rj["timings"]["output_seconds"],
+        "rounds": rj["result"]["rounds"], "shots": rj["result"]["shots"],
+        "sent": rj["result"]["bytes_sent"],
+        "up_bytes": sum(l["up_bytes"] for l in links),
+        "up_packets": sum(l["up_packets"] for l in links),
+        "max_up": max(l["up_bytes"] for l in links),
+        "max_down": max(l["down_bytes"] for l in links),
+        "drops": sum(l["drops"] for l in links),
+        "lo_bytes": sum(l["lo_bytes"] for l in links),
+        "mpi_min": mpi[0] if mpi else float("nan"),
+        "mpi_med": mpi[len(mpi) // 2] if mpi else float("nan"),
+        "mpi_max": mpi[-1] if mpi else float("nan"),
+        "mpi_span": max(rep["mpi_span_seconds"]) if rep["mpi_span_seconds"] else float("nan"),
+        "identical": same_bytes(os.path.join(d, "out"), c.path(name + "-ref")),
+        "shaper": rep["shaper"],
+    }
+
+
+def refused(c):
+    """The scene too big for a 512 MiB board: exit status and message."""
+    shutil.rmtree(c.path("refused"), ignore_errors=True)
+    rc, err, _ = run(c.refuse_cmd)
+    return {"code": rc,
+            "lines": [l for l in err.splitlines() if l.startswith("vismask:") or "ulimit" in l],
+            "no_output": not os.path.exists(c.path("refused"))}
+
+
+def efficiency_runs(c):
+    """The building in 16 environments on one process, for each case: its
+    counts, CPU and critical path, and the modelled network time."""
+    rows = []
+    for label, extra in c.eff_cases:
+        d = c.path("eff-" + str(len(rows)))
+        shutil.rmtree(d, ignore_errors=True)
+        rc, err, _ = run(["build/vismask", "render", c.building] + c.eff_args + extra + ["--out", d])
+        if rc != 0:
+            log(err)
+            return None
+        r = run_json(d)["result"]
+        net = r["rounds"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
+        rows.append({"label": label, "args": extra, "rounds": r["rounds"], "shots": r["shots"],
+                     "cpu": r["compute_cpu_seconds"], "crit": r["critical_env_cpu_seconds"],
+                     "steps": r["grid_steps"], "crit_steps": r["critical_env_steps"], "net": net})
+    return rows
+
+
+def million(c):
+    """The million-patch building: one process, then 16 nodes of 1 GB."""
+    scene = c.million_scene
+    if not (os.environ.get("CLUSTER_MILLION_REUSE") == "1" and os.path.exists(scene)):
+        rc, err, _ = run(c.million_gen)
+        if rc != 0:
+            log(err)
+            return None
+    ref = c.path("million-ref")
+    ref_cmd = ["build/vismask", "render", scene] + c.million_args + ["--out", ref, "--quiet"]
+    stamp = c.path("million-ref.cmd")
+    # The one-process run is reused when its command, binary and scene are
+    # older than its outputs (CLUSTER_MILLION_REUSE=1; it takes minutes).
+    reuse = (os.environ.get("CLUSTER_MILLION_REUSE") == "1" and os.path.exists(stamp) and
+             open(stamp).read() == " ".join(ref_cmd) and os.path.exists(os.path.join(ref, "run.json")) and
+             os.path.getmtime(os.path.join(ref, "run.json")) > max(os.path.getmtime("build/vismask"),
+                                                                  os.path.getmtime(scene)))
+    ref_wall = None
+    if not reuse:
+        shutil.rmtree(ref, ignore_errors=True)
+        rc, err, ref_wall = run(ref_cmd)
+        if rc != 0:
+            log(err[-3000:])
+            return None
+        with open(stamp, "w") as f:
+            f.write(" ".join(ref_cmd))
+    rj = run_json(ref)
+    m = {"ref": {"wall": ref_wall, "solve": rj["timings"]["solve_seconds"],
+                 "init": rj["timings"]["init_seconds"], "rounds": rj["result"]["rounds"],
+                 "patches": rj["counts"]["patches"], "polygons": rj["counts"].get("polygons"),
+                 "predicted": rj["memory"]["predicted_bytes"],
+                 "init_peak": rj["memory"]["init_peak_predicted_bytes"],
+                 "peak_rss": rj["memory"]["peak_rss_bytes"],
+                 "file_rss": rj["memory"]["file_rss_bytes"]}}
+    d = c.path("million-%d" % c.million_nodes)
+    fresh(d)
+    cmd = ["tools/cluster-sim", "--nodes", str(c.million_nodes), "--link", "1gbit", "--mem", c.million_mem,
+           "--report", os.path.join(d, "report.json"), "--", "render", scene] + c.million_args + \
+          ["--out", os.path.join(d, "out"), "--quiet"]
+    rc, err, _ = run(cmd)
+    with open(os.path.join(d, "log.txt"), "w") as f:
+        f.write(err)
+    m["cmd"] = cmd
+    m["code"] = rc
+    m["log_tail"] = [l for l in err.splitlines() if l.startswith("vismask") or "ulimit" in l][-20:]
+    if rc == 0:
+        rj = run_json(os.path.join(d, "out"))
+        rep = load_json(os.path.join(d, "report.json"))
+        m["run"] = {"wall": rep["wall_seconds"], "solve": rj["timings"]["solve_seconds"],
+                    "init": rj["timings"]["init_seconds"], "rounds": rj["result"]["rounds"],
+                    "sent": rj["result"]["bytes_sent"], "ranks": rj["memory"]["ranks"],
+                    "budget": rep["mem_budget"],
+                    "identical": same_bytes(os.path.join(d, "out"), ref)}
+    return m

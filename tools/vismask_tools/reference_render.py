@@ -1,0 +1,276 @@
+"""tools/reference's renders: Blender Cycles run on a job (blender_render.py),
+the cache under build/reference-cache/ (keyed by the scene's bytes, camera,
+size, spp, seed, kVersion and Blender's version), supersampling, the two
+halves with their noise estimate, and the published REF.pfm, REF.mask.pgm
+and REF.json (see tools/reference --help)."""
+
+import array
+import hashlib
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+from . import ROOT
+from .files import read_pfm
+from .reference_scene import CheckCamera, DefaultCamera, InputError, LoadScene
+
+kVersion = 1  # of the conventions and the Blender script: part of the cache key
+kMaskDilate = 2
+kBlenderScript = os.path.join(ROOT, "tools", "vismask_tools", "blender_render.py")
+
+
+def Paths(out):
+    base = out[:-len(".pfm")]
+    return {"pfm": out, "pgm": base + ".mask.pgm", "json": base + ".json"}
+
+
+def BlenderVersion():
+    try:
+        p = subprocess.run(["blender", "--version"], capture_output=True, text=True, timeout=120)
+    except OSError:
+        print("tools/reference: blender not found (tools/install-deps --reference installs it)",
+              file=sys.stderr)
+        sys.exit(2)
+    m = re.search(r"Blender (\S+)", p.stdout)
+    return m.group(1) if m else "unknown"
+
+
+def CheckWithVismask(scene):
+    """vismask's own loader on the scene, when the binary is there, so that the
+    reference refuses exactly what vismask refuses."""
+    binary = os.environ.get("VISMASK_BIN", os.path.join(ROOT, "build", "vismask"))
+    if not os.access(binary, os.X_OK):
+        return
+    p = subprocess.run([binary, "footprint", scene, "--json"], capture_output=True, text=True)
+    if p.returncode == 2:
+        raise InputError(p.stderr.strip() or scene + ": vismask refuses this scene")
+
+
+def Render(a, argvForRecord):
+    """Renders (or finds in the cache) and publishes REF.pfm, .mask.pgm, .json."""
+    if a["supersample"] == 1:
+        cache = Cached(a, argvForRecord)
+        Publish(cache, Paths(a["out"]))
+    else:
+        px, mask, meta = Image(a, argvForRecord)
+        meta["command"] = "tools/reference " + " ".join(argvForRecord)
+        WriteResult(px, mask, meta, a["size"], Paths(a["out"]))
+    return json.load(open(Paths(a["out"])["json"]))
+
+
+def Image(a, argv):
+    """The cached render for `a` as (RGB floats rows bottom to top, mask bytes
+    rows top to bottom, its ref.json); with --supersample K, rendered at K
+    times the size and box-averaged over K x K pixels (exactly a 1-pixel box
+    filter at the smaller size), the mask the OR over the K x K pixels, dilated
+    further so that it covers kMaskDilate pixels at the smaller size."""
+    K, (w, h) = a["supersample"], a["size"]
+    b = dict(a, size=(K * w, K * h), supersample=1)
+    rec = [x for x in argv if x != "--halves"]
+    if K > 1:
+        rec = ReplaceArg(rec, "--size", str(K * w), str(K * h))
+        i = rec.index("--supersample")
+        rec = rec[:i] + rec[i + 2:]
+    rec = ReplaceArg(ReplaceArg(rec, "--spp", str(a["spp"])), "--seed", str(a["seed"]))
+    cache = Cached(b, rec)
+    meta = json.load(open(os.path.join(cache, "ref.json")))
+    px = read_pfm(os.path.join(cache, "ref.pfm"), top_first=False)[2]
+    mask = open(os.path.join(cache, "ref.mask.pgm"), "rb").read()[-K * w * K * h:]
+    if K == 1:
+        return array.array("f", px), mask, meta
+    W = K * w
+    out = array.array("f", bytes(12 * w * h))
+    for y in range(h):
+        for x in range(w):
+            for c in range(3):
+                out[3 * (y * w + x) + c] = sum(px[3 * ((K * y + j) * W + K * x + i) + c]
+                                               for j in range(K) for i in range(K)) / (K * K)
+    hit = [any(mask[(K * y + j) * W + K * x + i] for j in range(K) for i in range(K))
+           for y in range(h) for x in range(w)]
+    extra = kMaskDilate - kMaskDilate // K
+    small = bytearray(w * h)
+    for k in [k for k in range(w * h) if hit[k]]:
+        y, x = divmod(k, w)
+        for yy in range(max(0, y - extra), min(h, y + extra + 1)):
+            for xx in range(max(0, x - extra), min(w, x + extra + 1)):
+                small[yy * w + xx] = 255
+    meta.update({"width": w, "height": h, "supersample": K, "rendered_size": [W, K * h],
+                 "masked_pixels": sum(1 for v in small if v),
+                 "mask": meta["mask"] + " at the rendered size; OR over %dx%d, dilated %d px more"
+                 % (K, K, extra)})
+    return out, bytes(small), meta
+
+
+def WriteResult(px, mask, meta, size, out):
+    w, h = size
+    work = tempfile.mkdtemp(prefix="result.", dir=os.path.dirname(os.path.abspath(out["pfm"])))
+    try:
+        if sys.byteorder != "little":
+            px.byteswap()
+        with open(os.path.join(work, "ref.pfm"), "wb") as f:
+            f.write(b"PF\n%d %d\n-1.0\n" % (w, h))
+            f.write(px.tobytes())
+        with open(os.path.join(work, "ref.mask.pgm"), "wb") as f:
+            f.write(b"P5\n%d %d\n255\n" % (w, h))
+            f.write(mask)
+        with open(os.path.join(work, "ref.json"), "w") as f:
+            json.dump(meta, f, indent=1)
+            f.write("\n")
+        Publish(work, out)
+    finally:
+        shutil.rmtree(work)
+
+
+def Publish(cache, out):
+    # Copies under temporary names beside the outputs, then renames.
+    tmp = {k: v + ".tmp%d" % os.getpid() for k, v in out.items()}
+    try:
+        for k, src in (("pfm", "ref.pfm"), ("pgm", "ref.mask.pgm"), ("json", "ref.json")):
+            shutil.copyfile(os.path.join(cache, src), tmp[k])
+        for k in tmp:
+            os.replace(tmp[k], out[k])
+    finally:
+        for t in tmp.values():
+            if os.path.exists(t):
+                os.remove(t)
+
+
+def Cached(a, argvForRecord):
+    """The cache directory holding this render (ref.pfm, ref.mask.pgm,
+    ref.json), rendered first if it is not there."""
+    scene, (w, h) = a["scene"], a["size"]
+    CheckWithVismask(scene)
+    vertices, faces, faceMats, mats, blobs = LoadScene(scene)
+    cam = a["camera"] or DefaultCamera(vertices, faces)
+    CheckCamera(cam)
+    outDir = os.path.dirname(os.path.abspath(a["out"]))
+    if not os.path.isdir(outDir):
+        raise InputError("--out: directory '%s' does not exist" % outDir)
+    version = BlenderVersion()
+    key = hashlib.sha256()
+    for b in blobs:
+        key.update(hashlib.sha256(b).digest())
+    key.update(json.dumps({"camera": [float(c) for c in cam], "size": [w, h], "spp": a["spp"],
+                           "seed": a["seed"], "version": kVersion, "blender": version},
+                          sort_keys=True).encode())
+    key = key.hexdigest()[:24]
+    cache = os.path.join(ROOT, "build", "reference-cache", key)
+    if not (a["cache"] and os.path.exists(os.path.join(cache, "ref.json"))):
+        Blend(a, vertices, faces, faceMats, mats, cam, key, version, cache, argvForRecord)
+    elif not a["quiet"]:
+        print("reference: cached (%s)" % cache, file=sys.stderr)
+    return cache
+
+
+def RenderHalves(a, argv):
+    """--halves: two cached renders of spp/2 (seeds S, S+1), averaged, with the
+    noise estimate (see the usage text)."""
+    w, h = a["size"]
+    halves = [Image(dict(a, spp=a["spp"] // 2, seed=a["seed"] + k), argv) for k in range(2)]
+    px = [x[0] for x in halves]
+    meta = [x[2] for x in halves]
+    mask = bytes(255 if (m0 or m1) else 0 for m0, m1 in zip(halves[0][1], halves[1][1]))
+    avg = array.array("f", [0.5 * (x + y) for x, y in zip(*px)])
+    num = den = 0.0
+    for i in range(w * h):
+        y, x = divmod(i, w)
+        if mask[(h - 1 - y) * w + x]:  # PFM rows bottom to top, PGM top to bottom
+            continue
+        for c in range(3 * i, 3 * i + 3):
+            d = px[0][c] - px[1][c]
+            num += d * d
+            den += avg[c] * avg[c]
+    noise = math.sqrt(num / den) / 2 if den > 0 else 0.0
+    m = dict(meta[0])
+    m.update({"command": "tools/reference " + " ".join(argv), "spp": a["spp"], "seed": a["seed"],
+              "halves": [{"spp": x["spp"], "seed": x["seed"], "cache_key": x["cache_key"],
+                          "wall_seconds": x["wall_seconds"], "threads": x["threads"]}
+                         for x in meta],
+              "wall_seconds": round(sum(x["wall_seconds"] for x in meta), 1),
+              "render_seconds": round(sum(x["render_seconds"] for x in meta), 1),
+              "masked_pixels": sum(1 for v in mask if v),
+              "mask": meta[0]["mask"] + "; the union of the two halves' masks",
+              "noise_relative_rmse": round(noise, 6),
+              "noise_method": "sqrt(sum (h1-h2)^2 / sum ((h1+h2)/2)^2) / 2 over the RGB values "
+                              "of unmasked pixels: the estimated relative RMSE of this average "
+                              "against the noise-free image"})
+    del m["cache_key"]
+    WriteResult(avg, mask, m, a["size"], Paths(a["out"]))
+    return json.load(open(Paths(a["out"])["json"]))
+
+
+def ReplaceArg(argv, flag, *values):
+    if flag in argv:
+        i = argv.index(flag)
+        return argv[:i + 1] + list(values) + argv[i + 1 + len(values):]
+    return argv + [flag] + list(values)
+
+
+def Blend(a, vertices, faces, faceMats, mats, cam, key, version, cache, argvForRecord):
+    (w, h) = a["size"]
+    os.makedirs(os.path.dirname(cache), exist_ok=True)
+    work = tempfile.mkdtemp(prefix=key + ".", dir=os.path.dirname(cache))
+    p = None
+    try:
+        job = {"vertices": vertices, "faces": faces, "face_materials": faceMats, "materials": mats,
+               "camera": {"eye": cam[0:3], "target": cam[3:6], "up": cam[6:9], "fovy": cam[9]},
+               "width": w, "height": h, "spp": a["spp"], "seed": a["seed"],
+               "threads": a["threads"], "work": work, "pfm": os.path.join(work, "ref.pfm"),
+               "pgm": os.path.join(work, "ref.mask.pgm"), "mask_dilate": kMaskDilate}
+        with open(os.path.join(work, "job.json"), "w") as f:
+            json.dump(job, f)
+        # Line-buffered, so that the progress line follows Cycles' own.
+        cmd = (["stdbuf", "-oL"] if shutil.which("stdbuf") else []) + [
+            "blender", "-b", "--factory-startup", "--python-exit-code", "3",
+            "--python", kBlenderScript, "--", os.path.join(work, "job.json")]
+        t0 = time.time()
+        log = open(os.path.join(work, "blender.log"), "w")
+        p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        sample = re.compile(r"Sample (\d+)/(\d+)")
+        for line in p.stdout:
+            log.write(line)
+            m = sample.search(line)
+            if m and not a["quiet"]:
+                s, n = int(m.group(1)), int(m.group(2))
+                el = time.time() - t0
+                print("\rreference: sample %d/%d, %.0f s, %.0f s left   " %
+                      (s, n, el, el / max(s, 1) * (n - s)), end="", file=sys.stderr, flush=True)
+        rc = p.wait()
+        p = None
+        log.close()
+        seconds = time.time() - t0
+        if not a["quiet"]:
+            print("", file=sys.stderr)
+        if rc != 0 or not os.path.exists(job["pfm"]):
+            tail = open(os.path.join(work, "blender.log")).read().splitlines()[-15:]
+            print("tools/reference: Blender failed (exit %d); its log ends:\n  %s" %
+                  (rc, "\n  ".join(tail)), file=sys.stderr)
+            sys.exit(1)
+        stats = json.load(open(os.path.join(work, "stats.json")))
+        meta = {"command": "tools/reference " + " ".join(argvForRecord),
+                "scene": a["scene"], "camera": cam, "width": w, "height": h, "spp": a["spp"],
+                "seed": a["seed"], "threads": a["threads"] or os.cpu_count(), "blender": version,
+                "script_version": kVersion, "cache_key": key,
+                "wall_seconds": round(seconds, 1), "render_seconds": round(stats["render_seconds"], 1),
+                "mask": "Cycles Emit pass > 0 in any channel, dilated %d px (square)" % kMaskDilate,
+                "masked_pixels": stats["masked_pixels"]}
+        with open(os.path.join(work, "ref.json"), "w") as f:
+            json.dump(meta, f, indent=1)
+            f.write("\n")
+        for name in ("job.json", "combined_0001.exr", "emit_0001.exr"):
+            if os.path.exists(os.path.join(work, name)):
+                os.remove(os.path.join(work, name))
+        if os.path.exists(cache):
+            shutil.rmtree(cache)
+        os.replace(work, cache)
+    finally:
+        if p is not None:
+            p.kill()
+        if os.path.exists(work):
+            shutil.rmtree(work)
