@@ -85,8 +85,11 @@ class Config:
                              "--rank-timeout", "1800"]
         self.million_nodes, self.million_mem = (2 if quick else 16), "1G"
         # A scene too big for a 512 MiB board (Pi Zero 2 W): refused at init.
+        # R = 4096 (8 MB mask packets): about 690 MB a rank. R = 3000 was
+        # refused only while the queue held 8 times as many slots; with the
+        # default queue it fits in 400 MB and runs (a shot every 5 s).
         self.refuse_cmd = ["tools/cluster-sim", "--nodes", "2", "--link", "100mbit", "--mem", "512M", "--",
-                           "render", "scenes/cornell.obj", "--envs", "2", "--mask-res", "3000",
+                           "render", "scenes/cornell.obj", "--envs", "2", "--mask-res", "4096",
                            "--out", self.out + "/refused", "--quiet"]
         # Issue 20: 16 ranks on the building, judged by the critical path
         # measured per environment on one process and a modelled network.
