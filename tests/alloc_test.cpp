@@ -116,22 +116,46 @@ void free(void* p) {
 namespace vismask {
 namespace {
 
-long AllocationsAfterInit(const std::vector<std::string>& args, int* code,
-                          std::string* err = nullptr) {
+// The hooks replace malloc for the whole test binary, but only count (and
+// only can) in a build without AddressSanitizer.
+#define SKIP_WITHOUT_ALLOC_HOOKS() \
+  if (!VISMASK_ALLOC_HOOKS) GTEST_SKIP() << "allocation hooks are off under AddressSanitizer"
+
+// Runs vismask::Main with `args` with the counters armed and zeroed: this
+// process counts, forked ranks die on an allocation after init.
+test::RunResult RunArmed(const std::vector<std::string>& args) {
   gTestPid = getpid();
   gAfterInit = 0;
+  gLive = 0;
+  gInitPeak = 0;
   gArmed = true;
   test::RunResult r = test::RunMain(args);
   gArmed = false;
-  *code = r.code;
-  if (err) *err = r.err;
-  return gAfterInit.load();
+  return r;
 }
 
+// "render SCENE --out DIR FLAGS" (FLAGS split at spaces), DIR a fresh
+// directory, run armed: its exit code, stderr and the heap allocations
+// after init in this process.
+struct CountedRender {
+  CountedRender(const std::string& scene, const std::string& flags) {
+    std::vector<std::string> args = {"render", scene, "--out", dir.path()};
+    for (const std::string& w : test::Words(flags)) args.push_back(w);
+    test::RunResult r = RunArmed(args);
+    code = r.code;
+    err = r.err;
+    allocations = gAfterInit.load();
+  }
+  std::string Json() const { return test::ReadFile(dir.File("run.json")); }
+
+  test::TempDir dir;
+  int code = -1;
+  std::string err;
+  long allocations = -1;
+};
+
 TEST(AllocTest, CounterSeesAllocationsInSolvePhase) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
+  SKIP_WITHOUT_ALLOC_HOOKS();
   // The counter itself must be able to fail: an allocation made while the
   // phase is kSolve is counted.
   gTestPid = getpid();
@@ -148,219 +172,128 @@ TEST(AllocTest, CounterSeesAllocationsInSolvePhase) {
 }
 
 TEST(AllocTest, CornellRenderAllocatesNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  test::TempDir dir;
-  int code = -1;
-  long n = AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--rays",
-                                 "512", "--max-shots", "3000", "--width", "160", "--height", "120"},
-                                &code);
-  ASSERT_EQ(code, 0);
-  EXPECT_TRUE(test::FileExists(dir.File("image.png")));
-  EXPECT_EQ(n, 0) << "heap allocations after init";
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  CountedRender run("scenes/cornell.obj",
+                    "--rays 512 --max-shots 3000 --width 160 --height 120");
+  ASSERT_EQ(run.code, 0);
+  EXPECT_TRUE(test::FileExists(run.dir.File("image.png")));
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
   // The counted solve did refine elements (and drew them).
-  std::string json = test::ReadFile(dir.File("run.json"));
+  std::string json = run.Json();
   size_t at = json.find("\"splits\": ");
   ASSERT_NE(at, std::string::npos);
   EXPECT_GT(std::atol(json.c_str() + at + 10), 10) << "no element split during the counted solve";
 }
 
 TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
+  SKIP_WITHOUT_ALLOC_HOOKS();
   // The defaults (power allocation with partial shots, Sobol' samples,
   // elements, antialiasing) on two environments, so cut vertices are shared.
-  test::TempDir dir;
-  int code = -1;
-  long n =
-      AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2",
-                            "--mask-method", "R", "--emitted-rays", "500000", "--max-rays", "2048",
-                            "--width", "96", "--height", "96", "--stop-unshot", "1e-2"},
-                           &code);
-  ASSERT_EQ(code, 0);
-  EXPECT_EQ(n, 0) << "heap allocations after init";
-  std::string json = test::ReadFile(dir.File("run.json"));
-  EXPECT_EQ(json.find("\"splits\": 0,"), std::string::npos) << "no element split";
+  CountedRender run("scenes/cornell.obj",
+                    "--envs 2 --mask-method R --emitted-rays 500000 --max-rays 2048 --width 96 "
+                    "--height 96 --stop-unshot 1e-2");
+  ASSERT_EQ(run.code, 0);
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
+  EXPECT_EQ(run.Json().find("\"splits\": 0,"), std::string::npos) << "no element split";
 }
 
 TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  test::TempDir dir;
-  int code = -1;
-  long n = AllocationsAfterInit({"render",        "scenes/cornell.obj",
-                                 "--out",         dir.path(),
-                                 "--envs",        "2x2x2",
-                                 "--mask-method", "B",
-                                 "--mask-res",    "30",
-                                 "--rays",        "256",
-                                 "--max-shots",   "1500",
-                                 "--width",       "96",
-                                 "--height",      "96",
-                                 "--patch-size",  "50"},
-                                &code);
-  ASSERT_EQ(code, 0);
-  EXPECT_EQ(n, 0) << "heap allocations after init";
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  CountedRender run("scenes/cornell.obj",
+                    "--envs 2x2x2 --mask-method B --mask-res 30 --rays 256 --max-shots 1500 "
+                    "--width 96 --height 96 --patch-size 50");
+  ASSERT_EQ(run.code, 0);
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
 }
 
 // Issue 20: balanced environments (--envs auto) and the default rounds
 // sized by grid steps, whose per-environment CPU and step accounting runs
 // every round, on one process and on two.
 TEST(AllocTest, BalancedEnvironmentsAndWorkRoundsAllocateNothing) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  for (const char* ranks : {"1", "2"}) {
-    test::TempDir dir;
-    int code = -1;
-    long n = AllocationsAfterInit(
-        {"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "auto:4", "--ranks", ranks,
-         "--emitted-rays", "200000", "--stop-unshot", "0.05", "--width", "64", "--height", "64",
-         "--patch-size", "50"},
-        &code);
-    ASSERT_EQ(code, 0) << ranks;
-    EXPECT_EQ(n, 0) << "heap allocations after init, ranks " << ranks;
-    std::string json = test::ReadFile(dir.File("run.json"));
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string ranks : {"1", "2"}) {
+    CountedRender run("scenes/cornell.obj",
+                      "--envs auto:4 --ranks " + ranks +
+                          " --emitted-rays 200000 --stop-unshot 0.05 --width 64 --height 64 "
+                          "--patch-size 50");
+    ASSERT_EQ(run.code, 0) << ranks;
+    EXPECT_EQ(run.allocations, 0) << "heap allocations after init, ranks " << ranks;
+    std::string json = run.Json();
     EXPECT_NE(json.find("\"envs_auto\": 4"), std::string::npos) << json;
     EXPECT_EQ(json.find("\"round_work\": 0,"), std::string::npos) << json;
   }
 }
 
 TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
+  SKIP_WITHOUT_ALLOC_HOOKS();
   test::TempDir dir;
   // One shot an environment a round, so that every 50 shots is a round's
   // end and the measurements number 12 (rounds by work hold many shots).
-  std::vector<std::string> args = {"render",
-                                   "scenes/cornell.obj",
-                                   "--envs",
-                                   "2",
-                                   "--rays",
-                                   "256",
-                                   "--max-shots",
-                                   "600",
-                                   "--width",
-                                   "64",
-                                   "--height",
-                                   "64",
-                                   "--patch-size",
-                                   "60",
-                                   "--quiet",
-                                   "--round-shots",
-                                   "1"};
-  auto ref = args;
-  ref.insert(ref.end(), {"--out", dir.File("ref")});
-  ASSERT_EQ(test::RunMain(ref).code, 0);
+  const std::string flags =
+      "--envs 2 --rays 256 --max-shots 600 --width 64 --height 64 --patch-size 60 --quiet "
+      "--round-shots 1";
+  ASSERT_EQ(test::RunMain(test::Words("render scenes/cornell.obj " + flags + " --out " +
+                                      dir.File("ref")))
+                .code,
+            0);
   // With an --exclude mask too (its pixels left out of every measurement).
   std::string mask = "P5\n64 64\n255\n" + std::string(64 * 32, '\xff') + std::string(64 * 32, '\0');
   test::WriteFile(dir.File("mask.pgm"), mask);
-  args.insert(args.end(),
-              {"--out", dir.File("out"), "--reference", dir.File("ref/image.pfm"), "--exclude",
-               dir.File("mask.pgm"), "--error-every", "50", "--seed", "2"});
-  int code = -1;
-  long n = AllocationsAfterInit(args, &code);
-  ASSERT_EQ(code, 0);
-  EXPECT_NE(test::ReadFile(dir.File("out/run.json")).find("\"error_measurements\": 12"),
-            std::string::npos);
-  EXPECT_NE(test::ReadFile(dir.File("out/run.json")).find("\"excluded_pixels\": 2048"),
-            std::string::npos);
-  EXPECT_EQ(n, 0) << "heap allocations after init";
+  CountedRender run("scenes/cornell.obj", flags + " --reference " + dir.File("ref/image.pfm") +
+                                              " --exclude " + dir.File("mask.pgm") +
+                                              " --error-every 50 --seed 2");
+  ASSERT_EQ(run.code, 0);
+  EXPECT_NE(run.Json().find("\"error_measurements\": 12"), std::string::npos);
+  EXPECT_NE(run.Json().find("\"excluded_pixels\": 2048"), std::string::npos);
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
 }
 
 TEST(AllocTest, MethodsCAndRAllocateNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  for (const char* method : {"C", "R"}) {
-    test::TempDir dir;
-    int code = -1;
-    long n = AllocationsAfterInit({"render",        "scenes/cornell.obj",
-                                   "--out",         dir.path(),
-                                   "--envs",        "2x2x2",
-                                   "--mask-method", method,
-                                   "--mask-res",    "30",
-                                   "--rays",        "300",
-                                   "--max-shots",   "1500",
-                                   "--width",       "96",
-                                   "--height",      "96",
-                                   "--patch-size",  "50"},
-                                  &code);
-    ASSERT_EQ(code, 0) << method;
-    EXPECT_EQ(n, 0) << method << ": heap allocations after init";
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string method : {"C", "R"}) {
+    CountedRender run("scenes/cornell.obj",
+                      "--envs 2x2x2 --mask-method " + method +
+                          " --mask-res 30 --rays 300 --max-shots 1500 --width 96 --height 96 "
+                          "--patch-size 50");
+    ASSERT_EQ(run.code, 0) << method;
+    EXPECT_EQ(run.allocations, 0) << method << ": heap allocations after init";
   }
 }
 
 TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
+  SKIP_WITHOUT_ALLOC_HOOKS();
   // Four processes: this one (rank 0, counted) and three forked ranks, each
   // of which dies on its first allocation after init.
-  test::TempDir dir;
-  int code = -1;
-  long n = AllocationsAfterInit({"render",       "scenes/cornell.obj",
-                                 "--out",        dir.path(),
-                                 "--envs",       "2x1x2",
-                                 "--ranks",      "4",
-                                 "--mask-res",   "30",
-                                 "--rays",       "256",
-                                 "--max-shots",  "1500",
-                                 "--width",      "96",
-                                 "--height",     "96",
-                                 "--patch-size", "50",
-                                 "--quiet"},
-                                &code);
-  EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
-  EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
+  CountedRender run("scenes/cornell.obj",
+                    "--envs 2x1x2 --ranks 4 --mask-res 30 --rays 256 --max-shots 1500 --width 96 "
+                    "--height 96 --patch-size 50 --quiet");
+  EXPECT_EQ(run.code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init in rank 0";
 }
 
 // Two-sided scenes: twins everywhere, both sides of the light emitting, on
 // two environments and two ranks (cut vertices of both sides shared).
 TEST(AllocTest, TwoSidedRenderAllocatesNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  for (const char* ranks : {"1", "2"}) {
-    test::TempDir dir;
-    int code = -1;
-    long n = AllocationsAfterInit({"render",         "scenes/miswound.obj",
-                                   "--out",          dir.path(),
-                                   "--envs",         "2",
-                                   "--ranks",        ranks,
-                                   "--mask-method",  "R",
-                                   "--two-sided",    "--two-sided-emitters",
-                                   "--emitted-rays", "300000",
-                                   "--max-rays",     "2048",
-                                   "--width",        "96",
-                                   "--height",       "96",
-                                   "--stop-unshot",  "1e-2",
-                                   "--quiet"},
-                                  &code);
-    EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
-    EXPECT_EQ(n, 0) << ranks << " ranks: heap allocations after init";
-    EXPECT_NE(test::ReadFile(dir.File("run.json")).find("\"twin_patches\""), std::string::npos);
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string ranks : {"1", "2"}) {
+    CountedRender run("scenes/miswound.obj",
+                      "--envs 2 --ranks " + ranks +
+                          " --mask-method R --two-sided --two-sided-emitters --emitted-rays 300000 "
+                          "--max-rays 2048 --width 96 --height 96 --stop-unshot 1e-2 --quiet");
+    EXPECT_EQ(run.code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(run.allocations, 0) << ranks << " ranks: heap allocations after init";
+    EXPECT_NE(run.Json().find("\"twin_patches\""), std::string::npos);
   }
 }
 
 // Smoothing's shared vertices, in one environment and across four.
 TEST(AllocTest, SmoothingAllocatesNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  for (const char* envs : {"1", "2x2x1"}) {
-    test::TempDir dir;
-    int code = -1;
-    long n = AllocationsAfterInit(
-        {"render", "scenes/smooth/sphere-s.obj", "--out", dir.path(), "--envs", envs,
-         "--emitted-rays", "200000", "--width", "64", "--height", "64", "--quiet"},
-        &code);
-    ASSERT_EQ(code, 0);
-    EXPECT_EQ(n, 0) << envs;
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string envs : {"1", "2x2x1"}) {
+    CountedRender run("scenes/smooth/sphere-s.obj",
+                      "--envs " + envs + " --emitted-rays 200000 --width 64 --height 64 --quiet");
+    ASSERT_EQ(run.code, 0);
+    EXPECT_EQ(run.allocations, 0) << envs;
   }
 }
 
@@ -368,68 +301,45 @@ TEST(AllocTest, SmoothingAllocatesNothingAfterInit) {
 // wall are cut, so textured cut vertices are shared), antialiased and point
 // sampled on two ranks.
 TEST(AllocTest, TexturedRenderAllocatesNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  for (const char* aa : {"on", "off"}) {
-    test::TempDir dir;
-    int code = -1;
-    long n = AllocationsAfterInit({"render",         "scenes/textured/room.obj",
-                                   "--out",          dir.path(),
-                                   "--envs",         "2",
-                                   "--ranks",        "2",
-                                   "--aa",           aa,
-                                   "--mask-method",  "R",
-                                   "--emitted-rays", "100000",
-                                   "--max-rays",     "2048",
-                                   "--stop-unshot",  "2e-2",
-                                   "--width",        "64",
-                                   "--height",       "64",
-                                   "--quiet"},
-                                  &code);
-    EXPECT_EQ(code, 0) << aa
-                       << ": a rank failed (an allocation after init in a forked rank exits 97)";
-    EXPECT_EQ(n, 0) << aa << ": heap allocations after init in rank 0";
-    EXPECT_NE(test::ReadFile(dir.File("run.json")).find("checker.png"), std::string::npos);
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string aa : {"on", "off"}) {
+    CountedRender run("scenes/textured/room.obj",
+                      "--envs 2 --ranks 2 --aa " + aa +
+                          " --mask-method R --emitted-rays 100000 --max-rays 2048 "
+                          "--stop-unshot 2e-2 --width 64 --height 64 --quiet");
+    EXPECT_EQ(run.code, 0) << aa
+                           << ": a rank failed (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(run.allocations, 0) << aa << ": heap allocations after init in rank 0";
+    EXPECT_NE(run.Json().find("checker.png"), std::string::npos);
   }
 }
 
 // The point-sampled raster and its band-wise composite (the tests above use
 // the default, antialiased).
 TEST(AllocTest, PointSampledRenderOnTwoRanksAllocatesNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  test::TempDir dir;
-  int code = -1;
-  long n = AllocationsAfterInit(
-      {"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2", "--ranks", "2", "--aa",
-       "off", "--rays", "256", "--max-shots", "300", "--width", "64", "--height", "40", "--quiet"},
-      &code);
-  EXPECT_EQ(code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
-  EXPECT_EQ(n, 0) << "heap allocations after init in rank 0";
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  CountedRender run("scenes/cornell.obj",
+                    "--envs 2 --ranks 2 --aa off --rays 256 --max-shots 300 --width 64 "
+                    "--height 40 --quiet");
+  EXPECT_EQ(run.code, 0) << "a rank failed (an allocation after init in a forked rank exits 97)";
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init in rank 0";
 }
 
 // --export: every rank streams its vertices and triangles through its
 // chunk, and rank 0 writes the .glb (one process; 2x2 environments on two
 // pipe ranks, whose forked rank dies on an allocation after init).
 TEST(AllocTest, ExportAllocatesNothingAfterInit) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
-  for (const char* ranks : {"1", "2"}) {
-    test::TempDir dir;
-    int code = -1;
-    std::string err;
-    long n =
-        AllocationsAfterInit({"render", "scenes/cornell.obj", "--out", dir.path(), "--envs", "2x2",
-                              "--ranks", ranks, "--rays", "256", "--max-shots", "400", "--width",
-                              "48", "--height", "48", "--export", dir.File("scene.glb"), "--quiet"},
-                             &code, &err);
-    ASSERT_EQ(code, 0) << ranks << " ranks: " << err
-                       << " (an allocation after init in a forked rank exits 97)";
-    EXPECT_EQ(n, 0) << ranks << " ranks: heap allocations after init in rank 0";
-    EXPECT_GT(test::ReadFile(dir.File("scene.glb")).size(), 10000u);
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string ranks : {"1", "2"}) {
+    test::TempDir glb;
+    CountedRender run("scenes/cornell.obj",
+                      "--envs 2x2 --ranks " + ranks +
+                          " --rays 256 --max-shots 400 --width 48 --height 48 --export " +
+                          glb.File("scene.glb") + " --quiet");
+    ASSERT_EQ(run.code, 0) << ranks << " ranks: " << run.err
+                           << " (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(run.allocations, 0) << ranks << " ranks: heap allocations after init in rank 0";
+    EXPECT_GT(test::ReadFile(glb.File("scene.glb")).size(), 10000u);
   }
 }
 
@@ -437,9 +347,7 @@ TEST(AllocTest, ExportAllocatesNothingAfterInit) {
 // runs in the output phase, on a scene whose walls face away from the
 // camera (a box closed on -z, open on +z, seen with --view front).
 TEST(AllocTest, ChosenViewAndBlackImageWarningAllocateNothing) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
+  SKIP_WITHOUT_ALLOC_HOOKS();
   test::TempDir dir;
   test::WriteFile(dir.File("box.obj"),
                   "mtllib box.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\n"
@@ -448,17 +356,13 @@ TEST(AllocTest, ChosenViewAndBlackImageWarningAllocateNothing) {
                   "usemtl light\nf 9 10 11 12\n");
   test::WriteFile(dir.File("box.mtl"),
                   "newmtl wall\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n");
-  for (const char* view : {"", "front"}) {
-    std::vector<std::string> args = {
-        "render", dir.File("box.obj"), "--out", dir.File("out"), "--rays", "256", "--max-shots",
-        "200",    "--width",           "48",    "--height",      "48"};
-    if (*view) args.insert(args.end(), {"--view", view});
-    int code = -1;
-    std::string err;
-    long n = AllocationsAfterInit(args, &code, &err);
-    ASSERT_EQ(code, 0) << err;
-    EXPECT_EQ(n, 0) << "heap allocations after init (--view '" << view << "')";
-    EXPECT_EQ(err.find("warning: the image is black:") != std::string::npos, *view != 0) << err;
+  for (const std::string view : {"", "front"}) {
+    CountedRender run(dir.File("box.obj"), "--rays 256 --max-shots 200 --width 48 --height 48" +
+                                               (view.empty() ? "" : " --view " + view));
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_EQ(run.allocations, 0) << "heap allocations after init (--view '" << view << "')";
+    EXPECT_EQ(run.err.find("warning: the image is black:") != std::string::npos, !view.empty())
+        << run.err;
   }
 }
 
@@ -473,12 +377,7 @@ long long InitPeakOf(const std::vector<std::string>& args, std::string* json) {
   std::vector<std::string> a = args;
   a.insert(a.end(), {"--out", dir.path(), "--quiet", "--width", "64", "--height", "48",
                      "--max-shots", "50"});
-  gTestPid = getpid();
-  gLive = 0;
-  gInitPeak = 0;
-  gArmed = true;
-  test::RunResult r = test::RunMain(a);
-  gArmed = false;
+  test::RunResult r = RunArmed(a);
   EXPECT_EQ(r.code, 0) << r.err;
   *json = test::ReadFile(dir.File("run.json"));
   return gInitPeak.load();
@@ -492,9 +391,7 @@ unsigned long long JsonField(const std::string& json, const std::string& key) {
 }
 
 TEST(AllocTest, InitPeakHeapIsWithinThePrediction) {
-#if !VISMASK_ALLOC_HOOKS
-  GTEST_SKIP() << "allocation hooks are off under AddressSanitizer";
-#endif
+  SKIP_WITHOUT_ALLOC_HOOKS();
   test::TempDir gen;
   const std::string building = gen.File("b.obj");
   ASSERT_EQ(std::system(

@@ -90,6 +90,17 @@ struct Glb {
   return ::testing::AssertionSuccess();
 }
 
+// The three numbers after `key` in `json` (comma-separated) are `want`,
+// parsed as doubles.
+void ExpectVector(const std::string& json, const std::string& key, const float want[3]) {
+  const char* p = json.c_str() + json.find(key) + key.size();
+  for (int a = 0; a < 3; ++a) {
+    char* end = nullptr;
+    EXPECT_EQ(std::strtod(p, &end), static_cast<double>(want[a])) << key << a;
+    p = end + 1;
+  }
+}
+
 TEST(ExportTest, HeadDescribesTheDataThatFollows) {
   GlbMesh m;
   m.vertices = 5;
@@ -118,20 +129,9 @@ TEST(ExportTest, HeadDescribesTheDataThatFollows) {
     EXPECT_NE(g.json.find(s), std::string::npos) << s << " in " << g.json;
   EXPECT_EQ(g.json.find("extensionsRequired"), std::string::npos);
   // The bounds are the floats themselves: parsed as doubles, they are equal.
-  size_t at = g.json.find("\"min\":[");
-  ASSERT_NE(at, std::string::npos);
-  const char* p = g.json.c_str() + at + 7;
-  for (int a = 0; a < 3; ++a) {
-    char* end = nullptr;
-    EXPECT_EQ(std::strtod(p, &end), static_cast<double>(lo[a])) << a;
-    p = end + 1;
-  }
-  p = g.json.c_str() + g.json.find("\"max\":[") + 7;
-  for (int a = 0; a < 3; ++a) {
-    char* end = nullptr;
-    EXPECT_EQ(std::strtod(p, &end), static_cast<double>(hi[a])) << a;
-    p = end + 1;
-  }
+  ASSERT_NE(g.json.find("\"min\":["), std::string::npos);
+  ExpectVector(g.json, "\"min\":[", lo);
+  ExpectVector(g.json, "\"max\":[", hi);
   // Vertices and triangles are little-endian floats and 32-bit indices.
   uint8_t v[kGlbVertexBytes], t[kGlbTriangleBytes];
   PutGlbVertex(glm::vec3(1.0f, -2.0f, 0.5f), glm::vec3(3.25f, 0.0f, 7.0f), 1.0f, v);
@@ -156,18 +156,13 @@ TEST(ExportTest, HeadDescribesTheDataThatFollows) {
 TEST(ExportTest, RadianceScaleIsTheLeastPowerOfTwoAboveTheBrightest) {
   GlbMesh m;
   EXPECT_EQ(GlbRadianceScale(m), 1.0f);
-  m.maxRadiance = 0.3f;
-  EXPECT_EQ(GlbRadianceScale(m), 1.0f);
-  m.maxRadiance = 1.0f;
-  EXPECT_EQ(GlbRadianceScale(m), 1.0f);
-  m.maxRadiance = 1.0001f;
-  EXPECT_EQ(GlbRadianceScale(m), 2.0f);
-  m.maxRadiance = 5.45f;
-  EXPECT_EQ(GlbRadianceScale(m), 8.0f);
-  m.maxRadiance = 4096.0f;
-  EXPECT_EQ(GlbRadianceScale(m), 4096.0f);
-  m.maxRadiance = 1e38f;
-  EXPECT_EQ(GlbRadianceScale(m), 0x1p127f);
+  const float brightestAndScale[][2] = {{0.3f, 1.0f},       {1.0f, 1.0f},    {1.0001f, 2.0f},
+                                        {5.45f, 8.0f},      {4096.0f, 4096.0f},
+                                        {1e38f, 0x1p127f}};
+  for (const auto& c : brightestAndScale) {
+    m.maxRadiance = c[0];
+    EXPECT_EQ(GlbRadianceScale(m), c[1]) << c[0];
+  }
   m.vertices = m.triangles = 1;
   std::vector<uint8_t> head(kGlbHeadBytes);
   size_t n = WriteGlbHead(m, Span<uint8_t>(head.data(), head.size()));

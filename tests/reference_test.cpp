@@ -19,23 +19,9 @@ using test::ReadFile;
 using test::RunMain;
 using test::TempDir;
 
-const std::vector<std::string> kBase = {"render",
-                                        "scenes/cornell.obj",
-                                        "--patch-size",
-                                        "70",
-                                        "--rays",
-                                        "512",
-                                        "--max-shots",
-                                        "700",
-                                        "--width",
-                                        "48",
-                                        "--height",
-                                        "40",
-                                        "--quiet",
-                                        "--envs",
-                                        "2",
-                                        "--round-shots",
-                                        "1"};
+const std::vector<std::string> kBase = test::Words(
+    "render scenes/cornell.obj --patch-size 70 --rays 512 --max-shots 700 --width 48 --height 40 "
+    "--quiet --envs 2 --round-shots 1");
 // (--round-shots 1: a round is a shot an environment, so --error-every 100
 // measures at every hundredth shot; rounds by work would hold many.)
 
@@ -45,6 +31,23 @@ void Render(const std::string& out, std::vector<std::string> extra) {
   args.insert(args.end(), extra.begin(), extra.end());
   auto r = RunMain(args);
   ASSERT_EQ(r.code, 0) << r.err;
+}
+
+// kBase with `extra`, into `out`.
+struct Refusal {
+  std::vector<std::string> extra;
+  const char* message;  // a substring of the expected stderr
+};
+
+// The render of `c` exits 2, says `c.message` and writes nothing.
+void ExpectRefused(const std::string& out, const Refusal& c) {
+  auto args = kBase;
+  args.insert(args.end(), {"--out", out});
+  args.insert(args.end(), c.extra.begin(), c.extra.end());
+  auto r = RunMain(args);
+  EXPECT_EQ(r.code, 2) << c.message;
+  EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+  EXPECT_FALSE(FileExists(out)) << c.message;
 }
 
 double FileError(const std::string& a, const std::string& b) {
@@ -157,10 +160,7 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
   };
   withPixel("nan.pfm", std::nanf(""));
   withPixel("inf.pfm", INFINITY);
-  struct Case {
-    std::vector<std::string> extra;
-    const char* message;
-  } cases[] = {
+  const Refusal cases[] = {
       {{"--error-every", "10"}, "--error-every: needs --reference"},
       {{"--reference", dir.File("ref/image.pfm"), "--error-every", "0"}, "--error-every"},
       {{"--reference", dir.File("ref/image.pfm"), "--width", "50"}, "is 48x40, the image is 50x40"},
@@ -176,15 +176,7 @@ TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {
       {{"--reference", dir.File("inf.pfm")},
        "inf.pfm: pixel (47, 0) (x, y from the top left) is not finite: Inf"},
   };
-  for (const Case& c : cases) {
-    auto args = kBase;
-    args.insert(args.end(), {"--out", dir.File("out")});
-    args.insert(args.end(), c.extra.begin(), c.extra.end());
-    auto r = RunMain(args);
-    EXPECT_EQ(r.code, 2) << c.message;
-    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
-    EXPECT_FALSE(FileExists(dir.File("out"))) << c.message;
-  }
+  for (const Refusal& c : cases) ExpectRefused(dir.File("out"), c);
   // compare reads with the same reader: refused too, exit 2.
   for (const char* bad : {"huge.pfm", "max.pfm", "nan.pfm", "inf.pfm"}) {
     auto r = RunMain({"compare", dir.File("ref/image.pfm"), dir.File(bad)});
@@ -281,10 +273,7 @@ TEST(ReferenceTest, BadExcludeMaskExitsTwoAndWritesNothing) {
   test::WriteFile(dir.File("ascii.pgm"), "P2\n48 40\n255\n0 0 0\n");
   test::WriteFile(dir.File("short.pgm"), "P5\n48 40\n255\nabc");
   test::WriteFile(dir.File("ok.pgm"), Pgm(48, 40, [](int, int) { return 0; }));
-  struct Case {
-    std::vector<std::string> extra;
-    const char* message;
-  } cases[] = {
+  const Refusal cases[] = {
       {{"--exclude", dir.File("ok.pgm")}, "--exclude: needs --reference"},
       {{"--reference", ref, "--exclude", dir.File("nothere.pgm")}, "nothere.pgm: cannot open"},
       {{"--reference", ref, "--exclude", dir.File("small.pgm")},
@@ -295,15 +284,7 @@ TEST(ReferenceTest, BadExcludeMaskExitsTwoAndWritesNothing) {
       {{"--reference", ref, "--exclude", dir.File("small.pgm"), "--ranks", "2"},
        "small.pgm: is 47x40"},
   };
-  for (const Case& c : cases) {
-    auto args = kBase;
-    args.insert(args.end(), {"--out", dir.File("out")});
-    args.insert(args.end(), c.extra.begin(), c.extra.end());
-    auto r = RunMain(args);
-    EXPECT_EQ(r.code, 2) << c.message;
-    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
-    EXPECT_FALSE(FileExists(dir.File("out"))) << c.message;
-  }
+  for (const Refusal& c : cases) ExpectRefused(dir.File("out"), c);
   // vismask compare: the same checks on its mask.
   auto r = RunMain({"compare", ref, ref, "--exclude", dir.File("small.pgm")});
   EXPECT_EQ(r.code, 2);

@@ -149,36 +149,43 @@ struct BadCase {
 TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
   TempDir dir;
   std::string out = dir.File("out");
-  const BadCase cases[] = {
-      {{"render", "scenes/cornell.obj", "--rays", "0"}, "--rays"},
-      {{"render", "scenes/cornell.obj", "--rays", "12x"}, "--rays"},
-      {{"render", "scenes/cornell.obj", "--patch-size", "nan"}, "--patch-size"},
-      {{"render", "scenes/cornell.obj", "--patch-size", "-3"}, "--patch-size"},
-      {{"render", "scenes/cornell.obj", "--stop-unshot", "1.5"}, "--stop-unshot"},
-      {{"render", "scenes/cornell.obj", "--width"}, "missing value"},
-      {{"render", "scenes/cornell.obj", "--bogus", "1"}, "unknown option"},
-      {{"render", "scenes/cornell.obj", "--camera", "0,0,0,0,0,0,0,1,0,40"}, "--camera"},
-      {{"render", "scenes/cornell.obj", "--camera", "1,2,3"}, "--camera"},
-      {{"render", "scenes/cornell.obj", "--camera", "0,0,-5,0,0,0,0,1,0,40,1"}, "--camera"},
-      {{"render", "scenes/cornell.obj", "--seed", "-1"}, "--seed"},
-      {{"render", "scenes/cornell.obj", "--correct-unshot", "maybe"}, "--correct-unshot"},
-      {{"render", "scenes/cornell.obj", "--aa", "4"}, "--aa"},
-      {{"render", "scenes/cornell.obj", "--aa"}, "missing value"},
-      {{"render", "scenes/cornell.obj", "--stop-error", "0"}, "--stop-error"},
-      {{"render", "scenes/cornell.obj", "--stop-error", "1"}, "--stop-error"},
-      {{"render", "scenes/cornell.obj", "--stop-error", "nan"}, "--stop-error"},
-      {{"render", "scenes/cornell.obj", "--stop-error"}, "missing value"},
-      {{"render", "scenes/cornell.obj", "--round-work", "-1"}, "--round-work"},
-      {{"render", "scenes/cornell.obj", "--round-work", "1e6"}, "--round-work"},
-      {{"render", "scenes/cornell.obj", "--envs", "auto:0"}, "--envs"},
-      {{"render", "scenes/cornell.obj", "--envs", "auto:"}, "--envs"},
-      {{"render", "scenes/cornell.obj", "--envs", "auto:67"}, "no grid"},
-      {{"render", "scenes/cornell.obj", "--envs", "autox"}, "--envs"},
-      {{"render", "scenes/cornell.obj", "--envs", "auto:2", "--ranks", "3"}, "--ranks"},
-      {{"render"}, "no scene"},
-      {{"frobnicate"}, "unknown command"},
-      {{"render", dir.File("missing.obj")}, "missing.obj"},
+  // Options after "render scenes/cornell.obj".
+  const BadCase onCornell[] = {
+      {{"--rays", "0"}, "--rays"},
+      {{"--rays", "12x"}, "--rays"},
+      {{"--patch-size", "nan"}, "--patch-size"},
+      {{"--patch-size", "-3"}, "--patch-size"},
+      {{"--stop-unshot", "1.5"}, "--stop-unshot"},
+      {{"--width"}, "missing value"},
+      {{"--bogus", "1"}, "unknown option"},
+      {{"--camera", "0,0,0,0,0,0,0,1,0,40"}, "--camera"},
+      {{"--camera", "1,2,3"}, "--camera"},
+      {{"--camera", "0,0,-5,0,0,0,0,1,0,40,1"}, "--camera"},
+      {{"--seed", "-1"}, "--seed"},
+      {{"--correct-unshot", "maybe"}, "--correct-unshot"},
+      {{"--aa", "4"}, "--aa"},
+      {{"--aa"}, "missing value"},
+      {{"--stop-error", "0"}, "--stop-error"},
+      {{"--stop-error", "1"}, "--stop-error"},
+      {{"--stop-error", "nan"}, "--stop-error"},
+      {{"--stop-error"}, "missing value"},
+      {{"--round-work", "-1"}, "--round-work"},
+      {{"--round-work", "1e6"}, "--round-work"},
+      {{"--envs", "auto:0"}, "--envs"},
+      {{"--envs", "auto:"}, "--envs"},
+      {{"--envs", "auto:67"}, "no grid"},
+      {{"--envs", "autox"}, "--envs"},
+      {{"--envs", "auto:2", "--ranks", "3"}, "--ranks"},
   };
+  std::vector<BadCase> cases;
+  for (const BadCase& c : onCornell) {
+    BadCase full = {{"render", "scenes/cornell.obj"}, c.message};
+    full.args.insert(full.args.end(), c.args.begin(), c.args.end());
+    cases.push_back(full);
+  }
+  cases.push_back({{"render"}, "no scene"});
+  cases.push_back({{"frobnicate"}, "unknown command"});
+  cases.push_back({{"render", dir.File("missing.obj")}, "missing.obj"});
   for (const BadCase& c : cases) {
     auto args = c.args;  // --out right after the command, so a flag at the end lacks its value
     args.insert(args.begin() + 1, {"--out", out});

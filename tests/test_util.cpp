@@ -50,6 +50,13 @@ RunResult RunMain(const std::vector<std::string>& args) {
   return r;
 }
 
+std::vector<std::string> Words(const std::string& words) {
+  std::vector<std::string> out;
+  std::stringstream ss(words);
+  for (std::string w; ss >> w;) out.push_back(w);
+  return out;
+}
+
 std::vector<std::vector<std::string>> ReadCsv(const std::string& path) {
   std::vector<std::vector<std::string>> rows;
   std::ifstream in(path);

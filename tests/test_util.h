@@ -38,6 +38,10 @@ struct RunResult {
 // Runs vismask::Main with `args` (without the program name), capturing stderr.
 RunResult RunMain(const std::vector<std::string>& args);
 
+// `words` split at spaces: a command line written as one string (no word
+// holds a space; the paths of TempDir hold none).
+std::vector<std::string> Words(const std::string& words);
+
 // Rows of a CSV file (header included), split on commas.
 std::vector<std::vector<std::string>> ReadCsv(const std::string& path);
 
