@@ -173,8 +173,7 @@ TEST(AllocTest, CounterSeesAllocationsInSolvePhase) {
 
 TEST(AllocTest, CornellRenderAllocatesNothingAfterInit) {
   SKIP_WITHOUT_ALLOC_HOOKS();
-  CountedRender run("scenes/cornell.obj",
-                    "--rays 512 --max-shots 3000 --width 160 --height 120");
+  CountedRender run("scenes/cornell.obj", "--rays 512 --max-shots 3000 --width 160 --height 120");
   ASSERT_EQ(run.code, 0);
   EXPECT_TRUE(test::FileExists(run.dir.File("image.png")));
   EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
@@ -232,10 +231,10 @@ TEST(AllocTest, ErrorMeasurementsAllocateNothing) {
   const std::string flags =
       "--envs 2 --rays 256 --max-shots 600 --width 64 --height 64 --patch-size 60 --quiet "
       "--round-shots 1";
-  ASSERT_EQ(test::RunMain(test::Words("render scenes/cornell.obj " + flags + " --out " +
-                                      dir.File("ref")))
-                .code,
-            0);
+  ASSERT_EQ(
+      test::RunMain(test::Words("render scenes/cornell.obj " + flags + " --out " + dir.File("ref")))
+          .code,
+      0);
   // With an --exclude mask too (its pixels left out of every measurement).
   std::string mask = "P5\n64 64\n255\n" + std::string(64 * 32, '\xff') + std::string(64 * 32, '\0');
   test::WriteFile(dir.File("mask.pgm"), mask);
@@ -307,8 +306,8 @@ TEST(AllocTest, TexturedRenderAllocatesNothingAfterInit) {
                       "--envs 2 --ranks 2 --aa " + aa +
                           " --mask-method R --emitted-rays 100000 --max-rays 2048 "
                           "--stop-unshot 2e-2 --width 64 --height 64 --quiet");
-    EXPECT_EQ(run.code, 0) << aa
-                           << ": a rank failed (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(run.code, 0)
+        << aa << ": a rank failed (an allocation after init in a forked rank exits 97)";
     EXPECT_EQ(run.allocations, 0) << aa << ": heap allocations after init in rank 0";
     EXPECT_NE(run.Json().find("checker.png"), std::string::npos);
   }

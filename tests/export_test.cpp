@@ -156,9 +156,8 @@ TEST(ExportTest, HeadDescribesTheDataThatFollows) {
 TEST(ExportTest, RadianceScaleIsTheLeastPowerOfTwoAboveTheBrightest) {
   GlbMesh m;
   EXPECT_EQ(GlbRadianceScale(m), 1.0f);
-  const float brightestAndScale[][2] = {{0.3f, 1.0f},       {1.0f, 1.0f},    {1.0001f, 2.0f},
-                                        {5.45f, 8.0f},      {4096.0f, 4096.0f},
-                                        {1e38f, 0x1p127f}};
+  const float brightestAndScale[][2] = {{0.3f, 1.0f},  {1.0f, 1.0f},       {1.0001f, 2.0f},
+                                        {5.45f, 8.0f}, {4096.0f, 4096.0f}, {1e38f, 0x1p127f}};
   for (const auto& c : brightestAndScale) {
     m.maxRadiance = c[0];
     EXPECT_EQ(GlbRadianceScale(m), c[1]) << c[0];

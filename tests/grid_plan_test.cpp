@@ -1,7 +1,5 @@
 // The grid's plan and layout: resolution, measured arenas, exact
 // reference arrays, and which cells patches and walls are registered in.
-#include "vismask/grid.h"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +8,7 @@
 #include <vector>
 
 #include "grid_test_util.h"
+#include "vismask/grid.h"
 
 namespace vismask {
 namespace {

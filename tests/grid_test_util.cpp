@@ -128,8 +128,8 @@ Grid::Plan AnchoredPlan(std::mt19937& rng, int count, float sizeLo, float sizeHi
     return ::testing::AssertionFailure() << "other bounds";
   for (int a = 0; a < 3; ++a)
     if (got.res[a] != want.res[a])
-      return ::testing::AssertionFailure() << "res[" << a << "] " << got.res[a] << ", not "
-                                           << want.res[a];
+      return ::testing::AssertionFailure()
+             << "res[" << a << "] " << got.res[a] << ", not " << want.res[a];
   return ::testing::AssertionSuccess();
 }
 
@@ -164,40 +164,39 @@ uint32_t Bits(float f) {
 }
 
 void Checker::Check(const Ray& ray, uint32_t skip, const char* kind) {
-    Hit want, got;
-    bool wantHit = BruteIntersect(scene, ray, skip, &want);
-    bool gotHit = grid.Intersect(ray, skip, &got);
-    bool occluded = grid.Occluded(ray, skip);
-    // With a hint: the last occluder found (kept from ray to ray, as Method
-    // B's centre rays keep it), and any patch at all.
-    bool hinted = grid.Occluded(ray, skip, &hint);
-    uint32_t anyPatch = static_cast<uint32_t>((rays * 2654435761u) % scene.patches.size());
-    bool anyHinted = grid.Occluded(ray, skip, &anyPatch);
-    ++rays;
-    hits += wantHit;
-    bool same =
-        wantHit == gotHit && occluded == wantHit && hinted == wantHit && anyHinted == wantHit &&
-        (!wantHit ||
-         (want.patch == got.patch && Bits(want.t) == Bits(got.t) && want.front == got.front));
-    if (!same && ++failures <= 5) {
-      ADD_FAILURE() << kind << " ray o=(" << ray.o.x << "," << ray.o.y << "," << ray.o.z << ") d=("
-                    << ray.d.x << "," << ray.d.y << "," << ray.d.z << ") t=(" << ray.tMin << ","
-                    << ray.tMax << ") skip=" << skip << ": brute "
-                    << (wantHit ? std::to_string(want.patch) + "@" + std::to_string(want.t)
-                                : std::string("miss"))
-                    << ", grid "
-                    << (gotHit ? std::to_string(got.patch) + "@" + std::to_string(got.t)
-                               : std::string("miss"))
-                    << ", occluded " << occluded << " (hinted " << hinted << ", " << anyHinted
-                    << ")";
-    }
+  Hit want, got;
+  bool wantHit = BruteIntersect(scene, ray, skip, &want);
+  bool gotHit = grid.Intersect(ray, skip, &got);
+  bool occluded = grid.Occluded(ray, skip);
+  // With a hint: the last occluder found (kept from ray to ray, as Method
+  // B's centre rays keep it), and any patch at all.
+  bool hinted = grid.Occluded(ray, skip, &hint);
+  uint32_t anyPatch = static_cast<uint32_t>((rays * 2654435761u) % scene.patches.size());
+  bool anyHinted = grid.Occluded(ray, skip, &anyPatch);
+  ++rays;
+  hits += wantHit;
+  bool same = wantHit == gotHit && occluded == wantHit && hinted == wantHit &&
+              anyHinted == wantHit &&
+              (!wantHit ||
+               (want.patch == got.patch && Bits(want.t) == Bits(got.t) && want.front == got.front));
+  if (!same && ++failures <= 5) {
+    ADD_FAILURE() << kind << " ray o=(" << ray.o.x << "," << ray.o.y << "," << ray.o.z << ") d=("
+                  << ray.d.x << "," << ray.d.y << "," << ray.d.z << ") t=(" << ray.tMin << ","
+                  << ray.tMax << ") skip=" << skip << ": brute "
+                  << (wantHit ? std::to_string(want.patch) + "@" + std::to_string(want.t)
+                              : std::string("miss"))
+                  << ", grid "
+                  << (gotHit ? std::to_string(got.patch) + "@" + std::to_string(got.t)
+                             : std::string("miss"))
+                  << ", occluded " << occluded << " (hinted " << hinted << ", " << anyHinted << ")";
   }
+}
 
 void Checker::CheckWithSkips(const Ray& ray, const char* kind) {
-    Check(ray, kNoPatch, kind);
-    Hit first;
-    if (BruteIntersect(scene, ray, kNoPatch, &first)) Check(ray, first.patch, kind);
-  }
+  Check(ray, kNoPatch, kind);
+  Hit first;
+  if (BruteIntersect(scene, ray, kNoPatch, &first)) Check(ray, first.patch, kind);
+}
 
 glm::vec3 PointOnPatch(std::mt19937& rng, const Patch& p) {
   std::uniform_real_distribution<float> u01(0.0f, 1.0f);

@@ -1,7 +1,5 @@
 // Grid throughput, closest-hit and any-hit (disabled: run with
 // --gtest_also_run_disabled_tests).
-#include "vismask/grid.h"
-
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -11,6 +9,7 @@
 #include <vector>
 
 #include "grid_test_util.h"
+#include "vismask/grid.h"
 
 namespace vismask {
 namespace {

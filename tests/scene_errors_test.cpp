@@ -1,11 +1,10 @@
 // Scene errors: each names its file and line.
-#include "vismask/scene.h"
-
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "scene_test_util.h"
+#include "vismask/scene.h"
 
 namespace vismask {
 namespace {

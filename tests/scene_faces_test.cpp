@@ -1,7 +1,5 @@
 // Faces, reflectance and lights as users bring them (issue 16): non-planar,
 // degenerate and self-intersecting faces, perfect reflectors, --emit.
-#include "vismask/scene.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,6 +8,7 @@
 #include <vector>
 
 #include "scene_test_util.h"
+#include "vismask/scene.h"
 
 namespace vismask {
 namespace {

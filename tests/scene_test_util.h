@@ -16,12 +16,14 @@ namespace vismask::test {
 
 // A good MTL (one emitter) and an OBJ header using it: 6 lines, so the first
 // statement of a test's body is line 7.
-inline constexpr char kMtl[] = "newmtl white\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
+inline constexpr char kMtl[] =
+    "newmtl white\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
 inline constexpr char kHead[] = "mtllib m.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
 
 inline const LoadOptions kStrict{true, {}};  // --strict
 
-inline void ExpectError(const Status& s, const std::string& file, int line, const std::string& word) {
+inline void ExpectError(const Status& s, const std::string& file, int line,
+                        const std::string& word) {
   ASSERT_FALSE(s.ok());
   EXPECT_EQ(s.file(), file);
   EXPECT_EQ(s.line(), line);
@@ -78,6 +80,5 @@ class SceneTest : public testing::Test {
 
   std::string dir_;
 };
-
 
 }  // namespace vismask::test

@@ -1,6 +1,4 @@
 // In-memory loading, ranges and hostile input (issue #8).
-#include "vismask/scene.h"
-
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -9,6 +7,7 @@
 #include <vector>
 
 #include "scene_test_util.h"
+#include "vismask/scene.h"
 
 namespace vismask {
 namespace {

@@ -21,7 +21,6 @@
 #include "vismask/rng.h"
 #include "vismask/scene.h"
 
-
 namespace vismask {
 namespace {
 

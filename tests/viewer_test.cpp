@@ -254,8 +254,8 @@ class ViewerBrowserTest : public testing::Test {
 // view gives 0.52 mean and 0.6% beyond 16, a 2.2 sRGB exponent instead of
 // 2.4 gives 6.1 mean (docs/DESIGN.md, The viewer).
 TEST_F(ViewerBrowserTest, SampledAlikeTheScreenshotIsImagePng) {
-  std::string json = RenderAndShoot("--elements 0 --aa off --emitted-rays 1000000",
-                                    "--aa off --probe-orbit");
+  std::string json =
+      RenderAndShoot("--elements 0 --aa off --emitted-rays 1000000", "--aa off --probe-orbit");
   EXPECT_LE(Field(json, "mean_abs"), 0.1) << json;
   EXPECT_LE(Field(json, "p999"), 2.0) << json;
   EXPECT_LE(Field(json, "over_16"), 0.001) << json;

@@ -1,0 +1,246 @@
+// The render command's options: bad options and scenes exit 2 naming what is
+// wrong, --help lists every option, and the defaults chosen at init.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "test_util.h"
+#include "vismask/options.h"
+#include "vismask/packet.h"
+
+namespace vismask {
+namespace {
+
+using test::FileExists;
+using test::ReadCsv;
+using test::ReadFile;
+using test::RunMain;
+using test::TempDir;
+using test::WriteFile;
+
+struct BadCase {
+  std::vector<std::string> args;
+  const char* message;  // a substring of the expected stderr
+};
+
+TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
+  TempDir dir;
+  std::string out = dir.File("out");
+  // Options after "render scenes/cornell.obj".
+  const BadCase onCornell[] = {
+      {{"--rays", "0"}, "--rays"},
+      {{"--rays", "12x"}, "--rays"},
+      {{"--patch-size", "nan"}, "--patch-size"},
+      {{"--patch-size", "-3"}, "--patch-size"},
+      {{"--stop-unshot", "1.5"}, "--stop-unshot"},
+      {{"--width"}, "missing value"},
+      {{"--bogus", "1"}, "unknown option"},
+      {{"--camera", "0,0,0,0,0,0,0,1,0,40"}, "--camera"},
+      {{"--camera", "1,2,3"}, "--camera"},
+      {{"--camera", "0,0,-5,0,0,0,0,1,0,40,1"}, "--camera"},
+      {{"--seed", "-1"}, "--seed"},
+      {{"--correct-unshot", "maybe"}, "--correct-unshot"},
+      {{"--aa", "4"}, "--aa"},
+      {{"--aa"}, "missing value"},
+      {{"--stop-error", "0"}, "--stop-error"},
+      {{"--stop-error", "1"}, "--stop-error"},
+      {{"--stop-error", "nan"}, "--stop-error"},
+      {{"--stop-error"}, "missing value"},
+      {{"--round-work", "-1"}, "--round-work"},
+      {{"--round-work", "1e6"}, "--round-work"},
+      {{"--envs", "auto:0"}, "--envs"},
+      {{"--envs", "auto:"}, "--envs"},
+      {{"--envs", "auto:67"}, "no grid"},
+      {{"--envs", "autox"}, "--envs"},
+      {{"--envs", "auto:2", "--ranks", "3"}, "--ranks"},
+  };
+  std::vector<BadCase> cases;
+  for (const BadCase& c : onCornell) {
+    BadCase full = {{"render", "scenes/cornell.obj"}, c.message};
+    full.args.insert(full.args.end(), c.args.begin(), c.args.end());
+    cases.push_back(full);
+  }
+  cases.push_back({{"render"}, "no scene"});
+  cases.push_back({{"frobnicate"}, "unknown command"});
+  cases.push_back({{"render", dir.File("missing.obj")}, "missing.obj"});
+  for (const BadCase& c : cases) {
+    auto args = c.args;  // --out right after the command, so a flag at the end lacks its value
+    args.insert(args.begin() + 1, {"--out", out});
+    auto r = RunMain(args);
+    std::string joined;
+    for (auto& a : c.args) joined += a + " ";
+    EXPECT_EQ(r.code, 2) << joined;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << joined << "\n" << r.err;
+    EXPECT_FALSE(FileExists(out)) << joined << ": wrote output";
+  }
+}
+
+TEST(RenderTest, MalformedSceneNamesFileAndLine) {
+  TempDir dir;
+  WriteFile(dir.File("s.mtl"), "newmtl a\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+  WriteFile(dir.File("s.obj"), "mtllib s.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+  auto r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(dir.File("s.obj") + ":6:"), std::string::npos) << r.err;
+  EXPECT_FALSE(FileExists(dir.File("out")));
+}
+
+// A truncated MTL, an OBJ cut mid-face and an unsolvable range: each names
+// its file and line, exits 2 and writes nothing.
+TEST(RenderTest, TruncatedFilesNameFileAndLine) {
+  TempDir dir;
+  struct Case {
+    const char* mtl;
+    const char* obj;
+    const char* file;  // "obj" or "mtl"
+    int line;
+  };
+  const char* head = "mtllib s.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  const Case cases[] = {
+      {"newmtl a\nKd 0.5 0.5 0.5\nKe 1 1", "f 1 2 3\n", "mtl", 3},
+      {"newmtl a\nKd 0.5 0", "f 1 2 3\n", "mtl", 2},
+      {"newmtl a\nKd 0.5 0.5 0.5\nKe 1 1 1\n", "f 1 2", "obj", 6},
+      {"newmtl a\nKd 0.5 0.5 0.5\nKe 1 1 1\n", "f 1 2 3/", "obj", 6},
+      {"newmtl a\nKd 0.99 0.5 0.5\nKe 1e35 1 1\n", "f 1 2 3\n", "obj", 6},
+  };
+  for (const Case& c : cases) {
+    test::WriteFile(dir.File("s.mtl"), c.mtl);
+    test::WriteFile(dir.File("s.obj"), std::string(head) + c.obj);
+    auto r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out")});
+    EXPECT_EQ(r.code, 2) << c.obj;
+    std::string where = dir.File(std::string("s.") + c.file) + ":" + std::to_string(c.line) + ": ";
+    EXPECT_EQ(r.err.rfind(where, 0), 0u) << r.err;
+    EXPECT_FALSE(FileExists(dir.File("out")));
+  }
+}
+
+TEST(RenderTest, HelpListsEveryOption) {
+  testing::internal::CaptureStdout();
+  auto r = RunMain({"--help"});
+  std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_EQ(r.code, 0);
+  for (const char* flag :
+       {"--out",       "--patch-size",  "--rays",           "--seed",       "--stop-unshot",
+        "--max-shots", "--max-seconds", "--width",          "--height",     "--camera",
+        "--exposure",  "--quiet",       "--correct-unshot", "--stop-error", "--aa",
+        "--strict",    "--emit",        "--round-shots",    "--round-work", "--envs auto"})
+    EXPECT_NE(out.find(flag), std::string::npos) << flag;
+}
+
+// Issue 20: how big a round is. With several environments and neither
+// --round-shots nor --round-work, rounds by work (its size chosen at init);
+// --round-shots alone keeps the rounds of before; one environment, one shot.
+TEST(RenderTest, RoundSizeDefaults) {
+  struct Case {
+    std::vector<const char*> args;
+    uint32_t shots;
+    bool autoWork;
+    uint64_t work;
+  };
+  const Case cases[] = {
+      {{"--envs", "1"}, 1, false, 0},
+      // 6 packets a shot of 128 + 4R^2/8 bytes (padded to 8) in 512 KiB:
+      // 63 at the default R = 50, the cap of 64 at R = 20, 17 at R = 100.
+      {{"--envs", "2"}, 63, true, 0},
+      {{"--envs", "2", "--mask-res", "20"}, 64, true, 0},
+      {{"--envs", "auto:4"}, 63, true, 0},
+      {{"--envs", "2", "--round-shots", "8"}, 8, false, 0},
+      {{"--envs", "2", "--round-shots", "1"}, 1, false, 0},
+      {{"--envs", "2", "--round-work", "5000"}, 64, false, 5000},
+      {{"--envs", "2", "--round-work", "0"}, 64, false, 0},
+      {{"--envs", "2", "--round-work", "7", "--round-shots", "3"}, 3, false, 7},
+      {{"--envs", "1", "--round-work", "9"}, 64, false, 9},
+      {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
+  };
+  for (const Case& c : cases) {
+    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    Options o;
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    ASSERT_TRUE(s.ok()) << s.ToString();
+    EXPECT_EQ(o.roundShots, c.shots) << c.args.size();
+    EXPECT_EQ(o.roundWorkAuto, c.autoWork) << c.args.size();
+    EXPECT_EQ(o.roundWork, c.work) << c.args.size();
+  }
+  // The automatic size: 16 full shots of rays and centre rays, times the
+  // cube root of an environment's grid cells.
+  Options o;
+  o.maxRays = 1000;
+  o.maskRes = 10;  // + 400 centre rays (B)
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1400 * 20));
+  EXPECT_EQ(AutoRoundWork(o, 16000.0, 8, 4.0f), uint64_t(16 * 1400 * 20));
+  o.maskMethod = MaskMethod::kR;  // no centre rays
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1000 * 20));
+}
+
+// Issue 20: the default queue lets every environment make a whole round
+// (admission shares the free slots among them): environments x round
+// shots, within 1 MiB of slots an environment, at least the 64 of before.
+TEST(RenderTest, QueueDefaults) {
+  struct Case {
+    std::vector<const char*> args;
+    uint32_t queue;
+  };
+  const uint64_t packet50 = PacketBytes(MaskShapeOf(MaskMethod::kB, 50, Options().maxRays));
+  const Case cases[] = {
+      {{"--envs", "1"}, 64},
+      {{"--envs", "2"}, 2 * 63},
+      {{"--envs", "2", "--round-shots", "1"}, 64},
+      {{"--envs", "4x1x4", "--mask-res", "20"}, 16 * 64},
+      {{"--envs", "5x5x5"}, static_cast<uint32_t>(kAutoQueueBytes / packet50)},
+      {{"--envs", "5x5x5", "--queue", "7"}, 7},
+      {{"--envs", "2", "--queue", "64"}, 64},
+  };
+  for (const Case& c : cases) {
+    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    Options o;
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    ASSERT_TRUE(s.ok()) << s.ToString();
+    EXPECT_EQ(o.queue, c.queue) << c.args[1];
+  }
+  EXPECT_LT(kAutoQueueBytes / packet50, 125u * 63u);  // the byte cap is what binds at 5x5x5
+}
+
+// Issue 20, parallel by default: more than one rank and no --envs means
+// --envs auto, one balanced environment a rank (--ranks at parse; the MPI
+// world's size through SetWorldSize), with the rounds of several
+// environments; --envs given is kept as given.
+TEST(RenderTest, RanksWithoutEnvsMeanOneBalancedEnvironmentARank) {
+  auto parse = [](std::vector<const char*> args, Options* o) {
+    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), o);
+    EXPECT_TRUE(s.ok()) << s.ToString();
+  };
+  Options three;
+  parse({"--ranks", "3"}, &three);
+  EXPECT_TRUE(three.envsAuto);
+  EXPECT_EQ(three.envsAutoCount, 3);
+  EXPECT_EQ(three.envs[0] * three.envs[1] * three.envs[2], 3);
+  EXPECT_TRUE(three.roundWorkAuto);
+  EXPECT_FALSE(SetWorldSize(3, &three));  // already auto
+  Options given;
+  parse({"--ranks", "2", "--envs", "2"}, &given);
+  EXPECT_FALSE(given.envsAuto);
+  EXPECT_FALSE(SetWorldSize(2, &given));
+  Options one;
+  parse({}, &one);
+  EXPECT_FALSE(one.envsAuto);
+  EXPECT_EQ(one.roundShots, 1u);
+  EXPECT_FALSE(SetWorldSize(1, &one));
+  EXPECT_TRUE(SetWorldSize(4, &one));  // mpirun -np 4, no --envs
+  EXPECT_TRUE(one.envsAuto);
+  EXPECT_EQ(one.envsAutoCount, 4);
+  EXPECT_EQ(one.envs[0] * one.envs[1] * one.envs[2], 4);
+  EXPECT_TRUE(one.roundWorkAuto);
+  EXPECT_GT(one.roundShots, 1u);
+}
+
+}  // namespace
+}  // namespace vismask
