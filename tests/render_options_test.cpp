@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "render_test_util.h"
 #include "test_util.h"
 #include "vismask/options.h"
 #include "vismask/packet.h"
@@ -16,17 +17,13 @@
 namespace vismask {
 namespace {
 
+using test::BadCase;
 using test::FileExists;
 using test::ReadCsv;
 using test::ReadFile;
 using test::RunMain;
 using test::TempDir;
 using test::WriteFile;
-
-struct BadCase {
-  std::vector<std::string> args;
-  const char* message;  // a substring of the expected stderr
-};
 
 TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
   TempDir dir;

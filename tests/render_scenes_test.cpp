@@ -16,6 +16,7 @@
 namespace vismask {
 namespace {
 
+using test::BadCase;
 using test::FileExists;
 using test::ReadCsv;
 using test::ReadFile;

@@ -1,12 +1,19 @@
-// A scene written for the render tests: the closed box whose radiosity has
-// a closed form.
+// Shared by the render tests: bad command lines, and the closed box whose
+// radiosity has a closed form.
 #pragma once
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "test_util.h"
 
 namespace vismask::test {
+
+// A command line that must fail.
+struct BadCase {
+  std::vector<std::string> args;
+  const char* message;  // a substring of the expected stderr
+};
 
 // A closed cube of side `s`, six faces facing inward, one material.
 inline void WriteClosedBox(const std::string& dir, double s, double rho, double e) {
