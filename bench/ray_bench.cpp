@@ -73,6 +73,25 @@ Args ParseArgs(int* argc, char** argv) {
   return a;
 }
 
+// Registers the benchmark `name`: an iteration casts the `n` rays of a set,
+// `cast(i)` the i-th (true on a hit).
+template <typename Cast>
+void RegisterCasts(const std::string& name, int reps, size_t n, Cast cast) {
+  benchmark::RegisterBenchmark(
+      name.c_str(),
+      [n, cast](benchmark::State& state) mutable {
+        for (auto _ : state) {
+          uint32_t hits = 0;
+          for (size_t i = 0; i < n; ++i) hits += cast(i);
+          benchmark::DoNotOptimize(hits);
+        }
+        state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(n));
+      })
+      ->Repetitions(reps)
+      ->ReportAggregatesOnly(false)
+      ->Unit(benchmark::kMillisecond);
+}
+
 }  // namespace
 }  // namespace vismask::bench
 
@@ -119,68 +138,29 @@ int main(int argc, char** argv) {
     for (int s = 0; s < 2; ++s) {
       const RaySet* set = &c->sets[s];
       std::string tag = std::to_string(ci) + "/" + set->name + "/";
-      auto reg = [&](const std::string& name, auto fn) {
-        benchmark::RegisterBenchmark((tag + name).c_str(), fn)
-            ->Repetitions(args.reps)
-            ->ReportAggregatesOnly(false)
-            ->Unit(benchmark::kMillisecond);
+      auto reg = [&](const std::string& name, auto cast) {
+        RegisterCasts(tag + name, args.reps, set->rays.size(), cast);
       };
-      reg("vismask_intersect", [c, set](benchmark::State& state) {
-        const Ray* rays = set->rays.data();
-        const uint32_t* skip = set->skip.data();
-        size_t n = set->rays.size();
-        for (auto _ : state) {
-          uint32_t hits = 0;
-          for (size_t i = 0; i < n; ++i) {
-            Hit hit;
-            hits += c->vis.grid.Intersect(rays[i], skip[i], &hit);
-          }
-          benchmark::DoNotOptimize(hits);
-        }
-        state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(n));
+      const Ray* rays = set->rays.data();
+      const uint32_t* skip = set->skip.data();
+      reg("vismask_intersect", [c, rays, skip](size_t i) {
+        Hit hit;
+        return c->vis.grid.Intersect(rays[i], skip[i], &hit);
       });
-      reg("vismask_occluded", [c, set](benchmark::State& state) {
-        const Ray* rays = set->rays.data();
-        const uint32_t* skip = set->skip.data();
-        size_t n = set->rays.size();
-        for (auto _ : state) {
-          uint32_t hits = 0;
-          for (size_t i = 0; i < n; ++i) hits += c->vis.grid.Occluded(rays[i], skip[i]);
-          benchmark::DoNotOptimize(hits);
-        }
-        state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(n));
-      });
+      reg("vismask_occluded",
+          [c, rays, skip](size_t i) { return c->vis.grid.Occluded(rays[i], skip[i]); });
       for (int q = 0; q < 2; ++q) {
         const EmbreeScene* e = q ? &c->quad : &c->tri;
         std::string kind = q ? "embree_quad" : "embree_tri";
-        reg(kind + "_intersect", [e, set](benchmark::State& state) {
-          RTCIntersectContext ctx;
-          rtcInitIntersectContext(&ctx);
-          const Ray* rays = set->rays.data();
-          size_t n = set->rays.size();
-          for (auto _ : state) {
-            uint32_t hits = 0;
-            for (size_t i = 0; i < n; ++i) {
-              uint32_t prim;
-              float t;
-              hits += EmbreeIntersect(e->scene, &ctx, rays[i], &prim, &t);
-            }
-            benchmark::DoNotOptimize(hits);
-          }
-          state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(n));
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        reg(kind + "_intersect", [e, rays, ctx](size_t i) mutable {
+          uint32_t prim;
+          float t;
+          return EmbreeIntersect(e->scene, &ctx, rays[i], &prim, &t);
         });
-        reg(kind + "_occluded", [e, set](benchmark::State& state) {
-          RTCIntersectContext ctx;
-          rtcInitIntersectContext(&ctx);
-          const Ray* rays = set->rays.data();
-          size_t n = set->rays.size();
-          for (auto _ : state) {
-            uint32_t hits = 0;
-            for (size_t i = 0; i < n; ++i) hits += EmbreeOccluded(e->scene, &ctx, rays[i]);
-            benchmark::DoNotOptimize(hits);
-          }
-          state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(n));
-        });
+        reg(kind + "_occluded",
+            [e, rays, ctx](size_t i) mutable { return EmbreeOccluded(e->scene, &ctx, rays[i]); });
       }
     }
   }

@@ -13,11 +13,7 @@
 namespace vismask {
 namespace {
 
-using test::FileExists;
-using test::ReadCsv;
-using test::ReadFile;
-using test::RunMain;
-using test::TempDir;
+using namespace test;
 
 const std::vector<std::string> kBase = test::Words(
     "render scenes/cornell.obj --patch-size 70 --rays 512 --max-shots 700 --width 48 --height 40 "

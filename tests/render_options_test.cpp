@@ -17,13 +17,7 @@
 namespace vismask {
 namespace {
 
-using test::BadCase;
-using test::FileExists;
-using test::ReadCsv;
-using test::ReadFile;
-using test::RunMain;
-using test::TempDir;
-using test::WriteFile;
+using namespace test;
 
 TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
   TempDir dir;

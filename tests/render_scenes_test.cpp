@@ -16,14 +16,7 @@
 namespace vismask {
 namespace {
 
-using test::BadCase;
-using test::FileExists;
-using test::ReadCsv;
-using test::ReadFile;
-using test::RunMain;
-using test::TempDir;
-using test::WriteClosedBox;
-using test::WriteFile;
+using namespace test;
 
 // run.json's energy triple `key`.
 std::vector<double> Triple(const std::string& json, const std::string& key) {

@@ -16,13 +16,7 @@
 namespace vismask {
 namespace {
 
-using test::FileExists;
-using test::ReadCsv;
-using test::ReadFile;
-using test::RunMain;
-using test::TempDir;
-using test::WriteClosedBox;
-using test::WriteFile;
+using namespace test;
 
 TEST(RenderTest, ClosedBoxConvergesToAnalyticRadiosity) {
   TempDir dir;

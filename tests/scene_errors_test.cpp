@@ -9,11 +9,7 @@
 namespace vismask {
 namespace {
 
-using test::ExpectError;
-using test::kHead;
-using test::kMtl;
-using test::kStrict;
-using test::SceneTest;
+using namespace test;
 
 TEST_F(SceneTest, MissingObj) {
   Scene scene;

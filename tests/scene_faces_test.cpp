@@ -13,11 +13,7 @@
 namespace vismask {
 namespace {
 
-using test::ExpectError;
-using test::kHead;
-using test::kMtl;
-using test::kStrict;
-using test::SceneTest;
+using namespace test;
 
 // --- Faces as they come (issue 16) -------------------------------------------
 

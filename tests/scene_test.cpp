@@ -14,11 +14,7 @@
 namespace vismask {
 namespace {
 
-using test::ExpectError;
-using test::kHead;
-using test::kMtl;
-using test::kStrict;
-using test::SceneTest;
+using namespace test;
 
 TEST_F(SceneTest, LoadsCornellBox) {
   Scene scene;

@@ -12,11 +12,7 @@
 namespace vismask {
 namespace {
 
-using test::ExpectError;
-using test::kHead;
-using test::kMtl;
-using test::kStrict;
-using test::SceneTest;
+using namespace test;
 
 // The fuzz target's split: OBJ text, then NUL and the text every MTL reads as.
 Status LoadFuzzInput(const std::string& input, Scene* scene) {
