@@ -10,11 +10,13 @@
   markdown   Markdown tables and generated sections of docs/*.md
   machine    facts about the machine and the commit, for reports
   cornell    the Cornell box's shadow region (the experiments' leak figures)
-  experiments, groundtruth   the steps of make experiments (docs/RESULTS.md)
+  experiments, groundtruth   the steps of make experiments (docs/RESULTS.md);
+             results_report writes it, gt_references and gt_report the ground truth's part
   checks     the checks of one output directory (make stability)
   fuzz       the Fuzzing section of docs/STABILITY.md (make fuzz-report)
   bench_runs, bench_parallel, bench_doc   make bench (bench/run): docs/BENCHMARKS.md
   cluster, cluster_doc   make cluster-experiments: docs/CLUSTER.md
+  reference_scene, reference_render   tools/reference: the scene and cameras, Blender runs
   blender_render, scale      run by tools/reference: inside Blender, and its check
 
 Scripts in tools/ import it as `from vismask_tools import ...` (Python puts
