@@ -79,14 +79,15 @@ def write_million(c, add, m):
         add(MILLION_END)
         return
     r = m["run"]
-    add("Sixteen ranks, one per node, each under `ulimit -v` of 1 GiB + 256 MiB and"
+    n = c.million_nodes
+    add("%d ranks, one per node, each under `ulimit -v` of 1 GiB + 256 MiB and"
         " `--mem-budget %s`: exit 0, %d rounds, %.1f s of solve (%.1f s init, %.1f s wall);"
         " `image.pfm` and `patches.csv` %s the one-process run's. Parallel efficiency of the"
-        " solve, one process's solve time over 16 × the 16-rank solve time: %.2f (on this"
+        " solve, one process's solve time over %d × the %d-rank solve time: %.2f (on this"
         " machine's 2 shared cores, see above)." % (
-            r["budget"], r["rounds"], r["solve"], r["init"], r["wall"],
-            "are byte for byte" if r["identical"] else "**differ from**",
-            ref["solve"] / (c.million_nodes * r["solve"]) if r["solve"] > 0 else float("nan")))
+            n, r["budget"], r["rounds"], r["solve"], r["init"], r["wall"],
+            "are byte for byte" if r["identical"] else "**differ from**", n, n,
+            ref["solve"] / (n * r["solve"]) if r["solve"] > 0 else float("nan")))
     add("")
     add("| rank | predicted arenas | predicted init peak | peak resident | file-backed | peak / (1.1 × predicted + file) | mask bytes sent |")
     add("|---|---|---|---|---|---|---|")
