@@ -3,7 +3,6 @@
 // the other ranks' framebuffers a band of rows at a time); resolving the
 // antialiased pixels' fragments into colour and id; and inspecting what an
 // image shows.
-#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -78,11 +77,7 @@ void MergeRows(const Framebuffer& band, int srcRow, int firstRow, int rows, Fram
   size_t base = static_cast<size_t>(firstRow) * static_cast<size_t>(fb->width);
   size_t from = static_cast<size_t>(srcRow) * static_cast<size_t>(fb->width);
   if (fb->aa) {
-    if (rows > 0) {
-      if (fb->dirtyLo > fb->dirtyHi) fb->dirtyLo = firstRow, fb->dirtyHi = firstRow + rows - 1;
-      fb->dirtyLo = std::min(fb->dirtyLo, firstRow);
-      fb->dirtyHi = std::max(fb->dirtyHi, firstRow + rows - 1);
-    }
+    if (rows > 0) fb->MarkDirty(firstRow, firstRow + rows - 1);
     for (size_t i = 0; i < n; ++i) {
       const Fragment* src = &band.frags[(from + i) * kFragments];
       Fragment* dst = &fb->frags[(base + i) * kFragments];

@@ -260,11 +260,7 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
   const float invF = 1.0f / f;
   // 1/depth on the plane is affine in pixel coordinates: iz(x, y) = ia x + ib y + ic.
   if (s.d == 0.0f) return;  // the plane passes through the eye
-  if (y0 <= y1) {
-    if (fb->dirtyLo > fb->dirtyHi) fb->dirtyLo = y0, fb->dirtyHi = y1;
-    fb->dirtyLo = std::min(fb->dirtyLo, y0);
-    fb->dirtyHi = std::max(fb->dirtyHi, y1);
-  }
+  if (y0 <= y1) fb->MarkDirty(y0, y1);
   const float ia = s.n.x * invF / s.d, ib = -s.n.y * invF / s.d;
   const float ic = (s.n.z - s.n.x * halfW * invF + s.n.y * halfH * invF) / s.d;
   for (int y = y0; y <= y1; ++y) {

@@ -70,6 +70,16 @@ struct Framebuffer {
   void Clear();
   // Clears the dirty rows only (antialiased; point sampled: Clear).
   void ClearDirty();
+  // Widens the dirty rows to include [lo, hi] (lo <= hi).
+  void MarkDirty(int lo, int hi) {
+    if (dirtyLo > dirtyHi) {
+      dirtyLo = lo;
+      dirtyHi = hi;
+    } else {
+      dirtyLo = lo < dirtyLo ? lo : dirtyLo;
+      dirtyHi = hi > dirtyHi ? hi : dirtyHi;
+    }
+  }
 };
 
 struct Texture;
