@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 #include <limits>
 
+#include "vismask/centre_raster.h"
 #include "vismask/environment.h"
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
@@ -231,10 +232,32 @@ void Environment::FlightPower(double power[3]) const {
       for (int c = 0; c < 3; ++c) power[c] += s.header.power[c] * s.flightShare;
 }
 
+// Without a mask, FlightShare looks at directions on a hemisphere of this resolution.
+constexpr uint32_t kNoMaskRes = 16;
+
+uint32_t Environment::FlightRes() const {
+  return shape_.empty() ? kNoMaskRes : shape_.res;
+}
+
+void Environment::FillFlightCols() {
+  if (flightCols_.empty()) return;
+  // A rotation by one column's angle per column, from half a column: the
+  // very recurrence FlightShare used to run in every row, so the same bits.
+  const uint32_t cols = 4 * FlightRes();
+  const double step = 6.283185307179586 / cols;
+  const double cs = std::cos(step), sn = std::sin(step);
+  double c = std::cos(0.5 * step), s = std::sin(0.5 * step);
+  for (uint32_t col = 0; col < cols; ++col) {
+    flightCols_[2 * col] = c;
+    flightCols_[2 * col + 1] = s;
+    double rc = c * cs - s * sn;
+    s = s * cs + c * sn;
+    c = rc;
+  }
+}
+
 double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) const {
-  // Without a mask, directions on a hemisphere of this resolution.
-  constexpr uint32_t kNoMaskRes = 16;
-  const uint32_t res = bits ? shape_.res : kNoMaskRes, cols = 4 * res;
+  const uint32_t res = FlightRes(), cols = 4 * res;
   int from[3];
   envGrid_.Cell(static_cast<int>(h.fromEnv), from);
   int axis = 0;
@@ -249,32 +272,79 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
   const glm::vec3 o = centre + options_.rayEpsilon * f.n;
-  const double halfPi = 1.5707963267948966, step = 6.283185307179586 / cols;
-  const double cs = std::cos(step), sn = std::sin(step);
+  const double halfPi = 1.5707963267948966;
+  const double* colCs = flightCols_.data();
+  auto isOpen = [bits](uint32_t p) { return !bits || ((bits[p >> 3] >> (p & 7)) & 1u); };
+  // Whether the centre direction of (row, col) crosses the face into this box.
+  auto crosses = [&](double st, double ct, uint32_t col) {
+    double lx = st * colCs[2 * col], ly = st * colCs[2 * col + 1];
+    // The crossing axis first: about half the directions point away.
+    double dAxis = lx * f.t[axis] + ly * f.b[axis] + ct * f.n[axis];
+    if (dAxis == 0.0) return false;
+    double t = (plane - o[axis]) / dAxis;
+    if (!(t > 0.0)) return false;
+    double d1 = lx * f.t[a1] + ly * f.b[a1] + ct * f.n[a1];
+    double d2 = lx * f.t[a2] + ly * f.b[a2] + ct * f.n[a2];
+    double q1 = o[a1] + t * d1, q2 = o[a2] + t * d2;
+    // Half-open, so a direction through an edge enters one box only.
+    return q1 >= box_.lo[a1] && q1 < box_.hi[a1] && q2 >= box_.lo[a2] && q2 < box_.hi[a2];
+  };
+  // With a mask, the face's view: only the columns that may see the face
+  // are looked at, and of those, the ones surely inside it by far more
+  // than the rounding of `crosses` are counted without it (the same count:
+  // tests/env_test.cpp).
+  Patch face;
+  PolygonView view;
+  const CentreRays rays{o, f, &maskDirections_};
+  bool framed = false;
+  if (bits && maskDirections_.res() == res) {
+    const int b1 = a1, b2 = a2;
+    const float u[4] = {box_.lo[b1], box_.hi[b1], box_.hi[b1], box_.lo[b1]};
+    const float v[4] = {box_.lo[b2], box_.lo[b2], box_.hi[b2], box_.hi[b2]};
+    for (int k = 0; k < 4; ++k) {
+      face.corner[k][axis] = static_cast<float>(plane);
+      face.corner[k][b1] = u[k];
+      face.corner[k][b2] = v[k];
+    }
+    face.normal = glm::vec3(0.0f);
+    face.normal[axis] = 1.0f;
+    face.numCorners = 4;
+    framed = FaceView(face, rays, 1e-7, 1e-7, &view);
+  }
   double share = 0.0;
   for (uint32_t row = 0; row < res; ++row) {
     double s0 = std::sin(row * halfPi / res), s1 = std::sin((row + 1) * halfPi / res);
     double theta = (row + 0.5) * halfPi / res, st = std::sin(theta), ct = std::cos(theta);
-    double c = std::cos(0.5 * step), s = std::sin(0.5 * step);  // phi of the column's centre
     uint32_t crossing = 0;
-    for (uint32_t col = 0; col < cols; ++col) {
-      uint32_t p = row * cols + col;
-      double lx = st * c, ly = st * s;
-      double rc = c * cs - s * sn;  // on to the next column
-      s = s * cs + c * sn;
-      c = rc;
-      if (bits && !((bits[p >> 3] >> (p & 7)) & 1u)) continue;
-      // The crossing axis first: about half the directions point away.
-      double dAxis = lx * f.t[axis] + ly * f.b[axis] + ct * f.n[axis];
-      if (dAxis == 0.0) continue;
-      double t = (plane - o[axis]) / dAxis;
-      if (!(t > 0.0)) continue;
-      double d1 = lx * f.t[a1] + ly * f.b[a1] + ct * f.n[a1];
-      double d2 = lx * f.t[a2] + ly * f.b[a2] + ct * f.n[a2];
-      double q1 = o[a1] + t * d1, q2 = o[a2] + t * d2;
-      // Half-open, so a direction through an edge enters one box only.
-      if (q1 >= box_.lo[a1] && q1 < box_.hi[a1] && q2 >= box_.lo[a2] && q2 < box_.hi[a2])
-        ++crossing;
+    const uint32_t base = row * cols;
+    if (framed) {
+      PixelArc may, sure;
+      if (ViewRow(view, rays, row, &may, &sure)) {
+        int span = std::min<int>(may.hi - may.lo + 1, static_cast<int>(cols));
+        int sureLo = sure.lo - may.lo, sureHi = sure.hi - may.lo;  // as offsets in may
+        if (sure.lo <= sure.hi) {
+          int shift = ((sureLo % int(cols)) + int(cols)) % int(cols) - sureLo;
+          sureLo += shift;
+          sureHi += shift;
+        }
+        uint32_t col = static_cast<uint32_t>(((may.lo % int(cols)) + int(cols)) % int(cols));
+        for (int k = 0; k < span; ++k, col = col + 1 == cols ? 0 : col + 1)
+          if (isOpen(base + col) && ((k >= sureLo && k <= sureHi) || crosses(st, ct, col)))
+            ++crossing;
+      }
+    } else {
+      for (uint32_t col = 0; col < cols; ++col) {
+        uint32_t p = base + col;
+        if (bits) {
+          uint8_t byte = bits[p >> 3] >> (p & 7);
+          if (byte == 0) {
+            col += 7 - (p & 7);  // the rest of this byte is closed
+            continue;
+          }
+          if (!(byte & 1u)) continue;
+        }
+        crossing += crosses(st, ct, col);
+      }
     }
     share += (s1 * s1 - s0 * s0) * crossing / cols;
   }

@@ -71,7 +71,11 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
   const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
                                                  options_.maskMethod == MaskMethod::kC);
-  maskDirections_.Layout(arena, centreRays ? shape_.res : 0);
+  // The pixels' centre directions: B's and C's centre rays, and FlightShare for A, B and C.
+  maskDirections_.Layout(arena, numNeighbours_ > 0 ? shape_.res : 0);
+  // FlightShare's column directions: (cos, sin) of each column's phi.
+  const bool flight = numNeighbours_ > 0 && options_.maskMethod != MaskMethod::kR;
+  flightCols_ = arena.Alloc<double>(flight ? 2 * 4 * size_t(FlightRes()) : 0);
   // The centre-mask cache: a slot per patch while they fit (C: a second
   // mask per slot, the pixels whose centre ray is known).
   size_t cacheSlots = 0, perSlot = (options_.maskMethod == MaskMethod::kC ? 2 : 1) * shape_.words();
@@ -96,6 +100,23 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   box_ = grid.EnvBox(static_cast<int>(index));
   numNeighbours_ = 0;
   for (int a = 0; a < 3; ++a) numNeighbours_ += (cell_[a] > 0) + (cell_[a] + 1 < grid.n[a]);
+  numExits_ = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int side = 0; side < 2; ++side) {
+      if (side == 0 ? cell_[a] == 0 : cell_[a] + 1 == grid.n[a]) continue;
+      Patch& f = exits_[numExits_++];
+      const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
+      const float u[4] = {box_.lo[a1], box_.hi[a1], box_.hi[a1], box_.lo[a1]};
+      const float v[4] = {box_.lo[a2], box_.lo[a2], box_.hi[a2], box_.hi[a2]};
+      for (int k = 0; k < 4; ++k) {
+        f.corner[k][a] = side == 0 ? box_.lo[a] : box_.hi[a];
+        f.corner[k][a1] = u[k];
+        f.corner[k][a2] = v[k];
+      }
+      f.normal = glm::vec3(0.0f);
+      f.normal[a] = side == 0 ? -1.0f : 1.0f;
+      f.numCorners = 4;
+    }
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
@@ -266,6 +287,7 @@ bool Environment::Build() {
          grid_.cellCount())
     ++centreStepsPerRay_;
   maskDirections_.Fill();
+  FillFlightCols();
   for (uint32_t& tag : cacheTag_) tag = kNoPatch;
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);

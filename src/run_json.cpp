@@ -142,6 +142,8 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     st.foreignShots += e.stats.foreignShots;
     st.rays += e.stats.rays;
     st.maskRays += e.stats.maskRays;
+    st.maskRaysByPatch += e.stats.maskRaysByPatch;
+    st.maskNoExit += e.stats.maskNoExit;
     st.hits += e.stats.hits;
     st.packetsSent += e.stats.packetsSent;
   }
@@ -154,6 +156,9 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"rays\": %llu,\n    \"mask_rays\": %llu,\n    \"hits\": %llu,\n",
            static_cast<unsigned long long>(st.rays), static_cast<unsigned long long>(st.maskRays),
            static_cast<unsigned long long>(st.hits));
+  w.Printf("    \"mask_rays_by_patch\": %llu,\n    \"mask_pixels_no_exit\": %llu,\n",
+           static_cast<unsigned long long>(st.maskRaysByPatch),
+           static_cast<unsigned long long>(st.maskNoExit));
   w.Printf("    \"packets\": %llu,\n    \"packet_bytes\": %u,\n    \"bytes_sent\": %llu,\n",
            static_cast<unsigned long long>(st.packetsSent), packetBytes,
            static_cast<unsigned long long>(st.packetsSent * packetBytes));

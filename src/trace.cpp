@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 #include <limits>
 
+#include "vismask/centre_raster.h"
 #include "vismask/environment.h"
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
@@ -242,19 +243,27 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
-  const glm::vec3 origin = centre + options_.rayEpsilon * sampler.frame.n;
-  uint32_t pixels = shape_.pixels(), cast = 0;
-  uint32_t hint = kNoPatch;  // the last pixel's occluder: neighbours' rays often hit it too
-  const uint64_t steps0 = grid_.steps();
-  for (uint32_t p = 0; p < pixels; ++p) {
-    if (!mask->IsOpen(p)) continue;
-    Ray ray{origin, sampler.frame.ToWorld(maskDirections_.Centre(p)), 0.0f,
-            std::numeric_limits<float>::infinity()};
-    ++cast;
-    if (grid_.Occluded(ray, skip, &hint)) mask->Close(p);
-  }
+  const CentreRays rays{centre + options_.rayEpsilon * sampler.frame.n, sampler.frame,
+                        &maskDirections_};
+  // From inside this box, a direction that cannot leave through a face
+  // with a neighbour beyond it reaches no other environment: nobody
+  // downstream reads its pixel, which closes without a ray.
+  bool inside = true;
+  for (int a = 0; a < 3; ++a) inside &= centre[a] >= box_.lo[a] && centre[a] <= box_.hi[a];
+  if (inside && numExits_ < 6)
+    stats_.maskNoExit += KeepExits(Span<const Patch>(exits_, numExits_), rays, mask);
+  uint32_t cast = mask->CountOpen();
   stats_.maskRays += cast;
-  centreSteps_ += grid_.steps() - steps0;
+  // By patch or by ray, whichever costs less (the same bits either way):
+  // a patch's view costs about four centre rays' walks (measured with
+  // callgrind on the experiments' set-up: even at R = 33, 368 patches and
+  // about 1 500 open pixels).
+  if (4 * patches_.size() <= cast) {
+    stats_.maskRaysByPatch += cast;
+    RasterCentres(patches_, geom_, skip, rays, mask);
+  } else {
+    centreSteps_ += WalkCentres(grid_, skip, rays, mask);
+  }
 }
 
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {

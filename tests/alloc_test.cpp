@@ -196,6 +196,13 @@ TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
   EXPECT_EQ(run.Json().find("\"splits\": 0,"), std::string::npos) << "no element split";
 }
 
+unsigned long long JsonField(const std::string& json, const std::string& key) {
+  size_t at = json.find("\"" + key + "\": ");
+  EXPECT_NE(at, std::string::npos) << key;
+  return at == std::string::npos ? 0
+                                 : std::strtoull(json.c_str() + at + key.size() + 4, nullptr, 10);
+}
+
 TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   CountedRender run("scenes/cornell.obj",
@@ -203,6 +210,10 @@ TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
                     "--width 96 --height 96 --patch-size 50");
   ASSERT_EQ(run.code, 0);
   EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
+  // Centre masks by patch (RasterCentres), after closing the pixels that
+  // lead to no neighbour (KeepExits).
+  EXPECT_GT(JsonField(run.Json(), "mask_rays_by_patch"), 0u);
+  EXPECT_GT(JsonField(run.Json(), "mask_pixels_no_exit"), 0u);
 }
 
 // Issue 20: balanced environments (--envs auto) and the default rounds
@@ -256,6 +267,11 @@ TEST(AllocTest, MethodsCAndRAllocateNothingAfterInit) {
                           "--patch-size 50");
     ASSERT_EQ(run.code, 0) << method;
     EXPECT_EQ(run.allocations, 0) << method << ": heap allocations after init";
+    if (method == "C") {  // C's small casts walk the grid (WalkCentres), its large ones not
+      std::string json = run.Json();
+      EXPECT_GT(JsonField(json, "mask_rays_by_patch"), 0u);
+      EXPECT_LT(JsonField(json, "mask_rays_by_patch"), JsonField(json, "mask_rays"));
+    }
   }
 }
 
@@ -380,13 +396,6 @@ long long InitPeakOf(const std::vector<std::string>& args, std::string* json) {
   EXPECT_EQ(r.code, 0) << r.err;
   *json = test::ReadFile(dir.File("run.json"));
   return gInitPeak.load();
-}
-
-unsigned long long JsonField(const std::string& json, const std::string& key) {
-  size_t at = json.find("\"" + key + "\": ");
-  EXPECT_NE(at, std::string::npos) << key;
-  return at == std::string::npos ? 0
-                                 : std::strtoull(json.c_str() + at + key.size() + 4, nullptr, 10);
 }
 
 TEST(AllocTest, InitPeakHeapIsWithinThePrediction) {

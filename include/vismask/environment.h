@@ -44,11 +44,13 @@ struct EnergyLedger {
 
 // Counters of one environment's work.
 struct EnvStats {
-  uint64_t shots = 0;         // local shots
-  uint64_t foreignShots = 0;  // queued foreign shooters distributed here
-  uint64_t rays = 0;          // form-factor rays traced
-  uint64_t maskRays = 0;      // Method B's and C's centre rays
-  uint64_t gridSteps = 0;     // their walks' cells entered and patches tested (Grid::steps)
+  uint64_t shots = 0;            // local shots
+  uint64_t foreignShots = 0;     // queued foreign shooters distributed here
+  uint64_t rays = 0;             // form-factor rays traced
+  uint64_t maskRays = 0;         // Method B's and C's centre rays (pixels decided)
+  uint64_t maskRaysByPatch = 0;  // those decided patch by patch (RasterCentres)
+  uint64_t maskNoExit = 0;       // pixels closed because they lead to no neighbour (KeepExits)
+  uint64_t gridSteps = 0;        // their walks' cells entered and patches tested (Grid::steps)
   uint64_t hits = 0;
   uint64_t packetsSent = 0;
   uint64_t forwardsCreated = 0;  // local shots that went on to neighbours
@@ -305,6 +307,11 @@ class Environment {
   // in the packet's mask `bits` (null: no mask, all open) and cross the face
   // from h.fromEnv into this box.
   double FlightShare(const PacketHeader& h, const uint8_t* bits) const;
+  // FlightShare's hemisphere resolution (the mask's, or kNoMaskRes without
+  // one) and its table of column directions, made once.
+  uint32_t FlightRes() const;
+  void FillFlightCols();
+  Span<double> flightCols_;  // per column: cos(phi), sin(phi) of its centre
   int FindSlot(uint32_t shooterId, uint32_t shotIndex) const;
   int BestReadySlot() const;
   MaskBits SlotMask(uint32_t slot) const;
@@ -313,6 +320,9 @@ class Environment {
   EnvGrid envGrid_;  // the environment partition (grid_ is the ray-casting grid)
   int cell_[3] = {0, 0, 0};
   Bounds box_;
+  // The faces of box_ that another environment lies beyond (KeepExits).
+  Patch exits_[6] = {};
+  uint32_t numExits_ = 0;
   uint32_t numNeighbours_ = 0;
   EnvOptions options_;
   MaskShape shape_;

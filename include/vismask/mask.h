@@ -55,8 +55,11 @@ class MaskDirections {
   void Layout(Arena& arena, uint32_t res);
   // Computes them; after Layout on a real arena.
   void Fill();
-  glm::vec3 Centre(uint32_t pixel) const {
-    uint32_t row = pixel / (4 * res_), col = pixel % (4 * res_);
+  uint32_t res() const { return res_; }
+  double rowSin(uint32_t row) const { return rowSin_[row]; }
+  double rowCos(uint32_t row) const { return rowCos_[row]; }
+  glm::vec3 Centre(uint32_t pixel) const { return Centre(pixel / (4 * res_), pixel % (4 * res_)); }
+  glm::vec3 Centre(uint32_t row, uint32_t col) const {
     double s = rowSin_[row];
     return glm::vec3(static_cast<float>(s * colCos_[col]), static_cast<float>(s * colSin_[col]),
                      static_cast<float>(rowCos_[row]));
