@@ -5,6 +5,8 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 
+#include "vismask/fast_trig.h"
+
 namespace vismask {
 
 using Arc = PixelArc;
@@ -17,43 +19,10 @@ constexpr double kPi = 3.141592653589793;
 constexpr double kTwoPi = 6.283185307179586;
 constexpr int kMaxCols = 4 * 4096;  // --mask-res is at most 4096
 
-// acos and atan2 in plain arithmetic (Abramowitz & Stegun 4.4.46 and
-// 4.4.49, within 2e-8 rad), cheaper than libm's and the same on every
-// machine. Their error, kApprox with room to spare, widens the arcs that
-// must hold every hit and narrows those that must hold only hits.
+// The error of FastAcos and FastAtan2, with room to spare: it widens the
+// arcs that must hold every hit and narrows those that must hold only hits.
 constexpr double kApprox = 1e-6;
-
-double Acos(double x) {
-  double a = std::fabs(x);
-  double p = -0.0012624911;
-  p = p * a + 0.0066700901;
-  p = p * a - 0.0170881256;
-  p = p * a + 0.0308918810;
-  p = p * a - 0.0501743046;
-  p = p * a + 0.0889789874;
-  p = p * a - 0.2145988016;
-  p = p * a + 1.5707963050;
-  double r = std::sqrt(1.0 - a) * p;
-  return x < 0.0 ? kPi - r : r;
-}
-
-double Atan2(double y, double x) {
-  double ax = std::fabs(x), ay = std::fabs(y);
-  if (ax == 0.0 && ay == 0.0) return 0.0;
-  double u = ay <= ax ? ay / ax : ax / ay, u2 = u * u;
-  double p = 0.0028662257;
-  p = p * u2 - 0.0161657367;
-  p = p * u2 + 0.0429096138;
-  p = p * u2 - 0.0752896400;
-  p = p * u2 + 0.1065626393;
-  p = p * u2 - 0.1420889944;
-  p = p * u2 + 0.1999355085;
-  p = p * u2 - 0.3333314528;
-  double a = u + u * u2 * p;  // atan(u), u in [0, 1]
-  if (ay > ax) a = kHalfPi - a;
-  if (x < 0.0) a = kPi - a;
-  return y < 0.0 ? -a : a;
-}
+static_assert(kApprox > 10 * kTrigError, "room for the approximations' error");
 
 // floor and ceil to int (libm's are calls on baseline x86-64).
 int Floor(double x) {
@@ -156,7 +125,7 @@ bool EdgePlanes(const Local& l, double margin, double colsPerRad, View* v) {
     glm::dvec3 u = sign > 0.0 ? e[k] : -e[k];
     double xy = std::sqrt(u.x * u.x + u.y * u.y);
     v->invXY[k] = xy > 1e-9 ? 1.0 / xy : 0.0;
-    v->psiCols[k] = Atan2(u.y, u.x) * colsPerRad - 0.5;
+    v->psiCols[k] = FastAtan2(u.y, u.x) * colsPerRad - 0.5;
     v->z[k] = u.z;
   }
   v->edges = static_cast<int>(l.corners);
@@ -190,8 +159,8 @@ bool PatchView(const Patch& p, const CentreRays& rays, uint32_t res, View* v) {
   if (v->rowLo > v->rowHi) return false;  // below the horizon
   if (theta - alpha > 0.0 && theta + alpha < kPi) {
     double beta = std::asin(std::min(1.0, std::sin(alpha) / std::sin(theta)));
-    Arc arc =
-        Grown(Atan2(l.mean.y, l.mean.x) * colsPerRad - 0.5, (beta + 2.0 * kApprox) * colsPerRad);
+    Arc arc = Grown(FastAtan2(l.mean.y, l.mean.x) * colsPerRad - 0.5,
+                    (beta + 2.0 * kApprox) * colsPerRad);
     if (arc.hi - arc.lo + 1 < cols) {
       v->colLo = arc.lo;
       v->colHi = arc.hi;
@@ -232,7 +201,7 @@ bool RowArcs(const View& v, double s, double c, int cols, double colsPerRad, Arc
     double ratio = (h - v.margin) * scale;
     if (ratio > 1.0) return false;
     if (ratio > -1.0) {
-      Arc arc = Grown(v.psiCols[k], (Acos(ratio) + 2.0 * kApprox) * colsPerRad);
+      Arc arc = Grown(v.psiCols[k], (FastAcos(ratio) + 2.0 * kApprox) * colsPerRad);
       if (!Intersect(arc, cols, true, out)) return false;
     }
     if (!inner) continue;
@@ -240,7 +209,7 @@ bool RowArcs(const View& v, double s, double c, int cols, double colsPerRad, Arc
     if (in > 1.0) {
       inner = false;
     } else if (in > -1.0) {
-      Arc arc = Shrunk(v.psiCols[k], (Acos(in) - 2.0 * kApprox) * colsPerRad);
+      Arc arc = Shrunk(v.psiCols[k], (FastAcos(in) - 2.0 * kApprox) * colsPerRad);
       if (arc.lo > arc.hi || !Intersect(arc, cols, false, sure)) inner = false;
     }
   }
@@ -265,7 +234,7 @@ bool BehindOrigin(const PatchGeom& g, const CentreRays& rays) {
   double nz = glm::dot(n, glm::dvec3(rays.frame.n));
   double nt = glm::dot(n, glm::dvec3(rays.frame.t)), nb = glm::dot(n, glm::dvec3(rays.frame.b));
   double q = std::sqrt(nt * nt + nb * nb), a = std::sqrt(nz * nz + q * q);
-  double gamma = Atan2(q, nz);  // in [0, pi]
+  double gamma = FastAtan2(q, nz);  // in [0, pi]
   const uint32_t last = rays.dirs->res() - 1;
   const double m = (last + 0.5) * kHalfPi / rays.dirs->res();
   const double cm = rays.dirs->rowCos(last), sm = rays.dirs->rowSin(last);

@@ -133,6 +133,9 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   const bool foreign = in != nullptr || skip.patch == kNoPatch;
   // Method C: which open pixels the rays hit in, and which they passed.
   const bool methodC = masks && out && options_.maskMethod == MaskMethod::kC;
+  // A local ray's pixel matters to the methods that mark pixels by rays: B's
+  // mask comes from the centre rays alone.
+  const bool marks = masks && out && options_.maskMethod != MaskMethod::kB;
   MaskBits hitPixels, passedPixels;
   if (methodC) {
     hitPixels = ScratchMask(2);
@@ -169,7 +172,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
         pixel = MaskPixel(len > 0.0f && l.z > 0.0f ? l / len : local, shape_.res);
         if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
       }
-    } else if (masks) {
+    } else if (marks) {
       pixel = MaskPixel(local, shape_.res);
     }
     ++tally.traced;
@@ -200,23 +203,14 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     else
       CastCentres(shooter, skip, out);
   } else if (methodC) {
-    // hitPixels becomes the pixels left to the centre ray: open here, and
-    // with both kinds of ray or none.
-    uint32_t pixels = shape_.pixels();
-    for (uint32_t p = 0; p < pixels; ++p) {
-      bool left = false;
-      if (out->IsOpen(p)) {
-        bool hit = hitPixels.IsOpen(p);
-        if (hit != passedPixels.IsOpen(p)) {
-          if (hit) out->Close(p);
-        } else {
-          left = true;
-        }
-      }
-      if (left)
-        hitPixels.Open(p);
-      else
-        hitPixels.Close(p);
+    // An open pixel whose rays only hit closes; hitPixels becomes the
+    // pixels left to the centre ray: open here, and with both kinds of ray
+    // or none. Word by word (bits past the last pixel are 0 in all three).
+    Span<uint64_t> o = out->words(), h = hitPixels.words(), q = passedPixels.words();
+    for (size_t w = 0; w < o.size(); ++w) {
+      uint64_t open = o[w], hit = h[w], passed = q[w];
+      o[w] = open & ~(hit & ~passed);
+      h[w] = open & ~(hit ^ passed);
     }
     centreWork_ += uint64_t{hitPixels.CountOpen()} * centreStepsPerRay_;
     if (centreMask) {

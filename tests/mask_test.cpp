@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <glm/geometric.hpp>
@@ -202,6 +203,53 @@ TEST(MaskTest, DirectionTablesGiveTheCentresBitForBit) {
       ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << "res " << res << " pixel " << p;
     }
   }
+}
+
+// MaskPixel takes its angles from FastAcos and FastAtan2 and falls back on
+// libm near a row or column edge: the pixel must be libm's everywhere,
+// including directions on and beside the edges and the axes.
+TEST(MaskTest, PixelIsLibmsPixel) {
+  auto reference = [](const glm::vec3& d, uint32_t res) {
+    constexpr double kHalf = 1.5707963267948966, kTwo = 6.283185307179586;
+    float z = d.z < 0.0f ? 0.0f : (d.z > 1.0f ? 1.0f : d.z);
+    double theta = std::acos(static_cast<double>(z));
+    double phi = std::atan2(static_cast<double>(d.y), static_cast<double>(d.x));
+    if (phi < 0.0) phi += kTwo;
+    uint32_t row = std::min(static_cast<uint32_t>(theta / kHalf * res), res - 1);
+    uint32_t col = std::min(static_cast<uint32_t>(phi / kTwo * (4 * res)), 4 * res - 1);
+    return row * 4 * res + col;
+  };
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  uint64_t checked = 0;
+  for (uint32_t res : {1u, 7u, 100u, 250u, 4096u}) {
+    std::vector<glm::vec3> dirs;
+    for (int k = 0; k < 20000; ++k) {
+      glm::vec3 d(unit(rng), unit(rng), std::fabs(unit(rng)));
+      if (glm::length(d) > 0.0f) dirs.push_back(glm::normalize(d));
+    }
+    // On and beside the row and column edges, and along the axes.
+    for (uint32_t e = 0; e <= 4 * res && e < 2000; ++e) {
+      double a = e * 1.5707963267948966 / res, b = e * 6.283185307179586 / (4 * res);
+      for (float s : {-1.0f, 0.0f, 1.0f}) {
+        float th = std::nextafter(static_cast<float>(a), s * 10.0f);
+        float ph = std::nextafter(static_cast<float>(b), s * 10.0f);
+        dirs.push_back(glm::vec3(std::sin(th), 0.0f, std::cos(th)));
+        dirs.push_back(glm::vec3(0.6f * std::cos(ph), 0.6f * std::sin(ph), 0.8f));
+        dirs.push_back(glm::vec3(std::cos(ph), std::sin(ph), 0.0f));
+      }
+    }
+    for (const glm::vec3& d :
+         {glm::vec3(0, 0, 1), glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0), glm::vec3(0, -1, 0),
+          glm::vec3(1, -0.0f, 0), glm::vec3(-1, -0.0f, 0)})
+      dirs.push_back(d);
+    for (const glm::vec3& d : dirs) {
+      ASSERT_EQ(MaskPixel(d, res), reference(d, res))
+          << "res " << res << " d " << d.x << " " << d.y << " " << d.z;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 100000u);
 }
 
 }  // namespace
