@@ -128,13 +128,20 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
     gridLo = std::min(gridLo, grid);
     gridHi = std::max(gridHi, grid);
   }
-  std::fprintf(
-      md,
-      "\n**Targets.** Rays/s ≥ 1.0× Embree (triangles): %s, the grid runs at %.2f× to %.2f× "
-      "of Embree's rate. Memory ≤ 1/4 of Embree's BVH: %s, grid + PatchGeom is %.2f× to %.2f× "
-      "of it (the grid's own arrays alone %.2f× to %.2f×).\n",
-      lo >= 1.0 ? "**met**" : "**not met**", lo, hi, memHi <= 0.25 ? "**met**" : "**not met**",
-      memLo, memHi, gridLo, gridHi);
+  // Issue 19's targets: at least Embree's rate on every row, and the grid
+  // with its ray-test records in at most half of Embree's BVH bytes.
+  if (hi <= 0.0) {  // Embree filtered out: nothing to judge the rate by
+    std::fprintf(md, "\n**Targets.** Rays/s against Embree: not judged (Embree was not run).");
+  } else {
+    std::fprintf(md,
+                 "\n**Targets.** Rays/s ≥ 1.0× Embree (triangles) on every row: %s, the grid "
+                 "runs at %.2f× to %.2f× of Embree's rate.",
+                 lo >= 1.0 ? "**met**" : "**not met**", lo, hi);
+  }
+  std::fprintf(md,
+               " Memory ≤ 0.5× Embree's triangle BVH: %s, grid + PatchGeom is %.2f× to %.2f× "
+               "of it (the grid's own arrays alone %.2f× to %.2f×).\n",
+               memHi <= 0.5 ? "**met**" : "**not met**", memLo, memHi, gridLo, gridHi);
 }
 
 }  // namespace vismask::bench
