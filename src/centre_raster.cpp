@@ -249,14 +249,6 @@ bool BehindOrigin(const PatchGeom& g, const CentreRays& rays) {
   return most < -kClear;  // denom < 0 everywhere: t < 0
 }
 
-// Columns [lo, hi] (wrapping) of the row starting at pixel `base`.
-template <typename F>
-void ForColumns(int lo, int hi, int cols, F&& f) {
-  int span = std::min(hi - lo + 1, cols);
-  int col = ((lo % cols) + cols) % cols;
-  for (int k = 0; k < span; ++k, col = col + 1 == cols ? 0 : col + 1) f(k, col);
-}
-
 // Whether any pixel of the row starting at `base` is open in columns [lo, hi].
 bool AnyOpen(const MaskBits& mask, uint32_t base, int lo, int hi, int cols) {
   if (hi - lo + 1 >= cols) return mask.CountOpen(base, base + cols) > 0;
@@ -290,17 +282,10 @@ uint64_t RasterCentres(Span<const Patch> patches, Span<const PatchGeom> geom, Sk
       if (!RowArcs(v, dirs.rowSin(row), dirs.rowCos(row), cols, colsPerRad, &arc,
                    wantSure ? &sure : nullptr))
         continue;
-      // sure, as offsets from arc.lo (the arc holds it: one is grown, the other shrunk).
-      int sureLo = sure.lo - arc.lo, sureHi = sure.hi - arc.lo;
-      if (sure.lo <= sure.hi) {
-        int shift = ((sureLo % cols) + cols) % cols - sureLo;
-        sureLo += shift;
-        sureHi += shift;
-      }
-      ForColumns(arc.lo, arc.hi, cols, [&](int k, int col) {
+      ForArc(arc, sure, cols, [&](int col, bool surely) {
         uint32_t p = base + static_cast<uint32_t>(col);
         if (!mask->IsOpen(p)) return;
-        if (k < sureLo || k > sureHi) {
+        if (!surely) {
           ++tests;
           float t;
           bool front;
@@ -338,38 +323,42 @@ bool ViewRow(const PolygonView& v, const CentreRays& rays, uint32_t row, PixelAr
                  v.inner >= 0.0 ? sure : nullptr);
 }
 
+Patch BoxFace(const Bounds& box, int axis, int side) {
+  Patch f{};
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+  const float u[4] = {box.lo[a1], box.hi[a1], box.hi[a1], box.lo[a1]};
+  const float v[4] = {box.lo[a2], box.lo[a2], box.hi[a2], box.hi[a2]};
+  for (int k = 0; k < 4; ++k) {
+    f.corner[k][axis] = side == 0 ? box.lo[axis] : box.hi[axis];
+    f.corner[k][a1] = u[k];
+    f.corner[k][a2] = v[k];
+  }
+  f.normal[axis] = side == 0 ? -1.0f : 1.0f;
+  f.numCorners = 4;
+  return f;
+}
+
 uint32_t KeepExits(Span<const Patch> exits, const CentreRays& rays, MaskBits* mask) {
   const MaskDirections& dirs = *rays.dirs;
   const uint32_t res = dirs.res();
   const int rows = static_cast<int>(res), cols = 4 * rows;
-  const double colsPerRad = cols / kTwoPi;
   // A pixel's directions lie within 1.5 rows of its centre's (rows and
   // columns are at most pi / 2R apart), so planes widened by that much keep
   // every pixel any of whose directions can leave.
   const double margin = std::sin(1.5 * kHalfPi / rows) + 1e-6;
   View views[6];
   const uint32_t n = std::min<uint32_t>(static_cast<uint32_t>(exits.size()), 6);
-  for (uint32_t e = 0; e < n; ++e) {
-    Local l;
-    ToLocal(exits[e].corner, exits[e].numCorners, exits[e].normal, rays, &l);
-    View& v = views[e];
-    v.rowLo = 0;
-    v.rowHi = rows - 1;
-    v.colLo = 0;
-    v.colHi = cols - 1;
-    if (!EdgePlanes(l, margin, colsPerRad, &v)) return 0;  // the origin is on an exit: keep all
-  }
+  for (uint32_t e = 0; e < n; ++e)
+    if (!FaceView(exits[e], rays, margin, -1.0, &views[e])) return 0;  // the origin is on an exit
   uint32_t closed = 0;
   uint64_t keep[kMaxCols / 64];
   for (int row = 0; row < rows; ++row) {
     const uint32_t base = static_cast<uint32_t>(row) * static_cast<uint32_t>(cols);
     for (int w = 0; w < (cols + 63) / 64; ++w) keep[w] = 0;
     for (uint32_t e = 0; e < n; ++e) {
-      Arc arc;
-      if (!RowArcs(views[e], dirs.rowSin(row), dirs.rowCos(row), cols, colsPerRad, &arc, nullptr))
-        continue;
-      ForColumns(arc.lo, arc.hi, cols,
-                 [&](int, int col) { keep[col >> 6] |= uint64_t{1} << (col & 63); });
+      Arc arc, none;
+      if (!ViewRow(views[e], rays, static_cast<uint32_t>(row), &arc, &none)) continue;
+      ForArc(arc, none, cols, [&](int col, bool) { keep[col >> 6] |= uint64_t{1} << (col & 63); });
     }
     // mask &= keep over the row's words; bits of other rows are kept.
     uint64_t* words = mask->words().data();

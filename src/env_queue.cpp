@@ -293,24 +293,11 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
   // are looked at, and of those, the ones surely inside it by far more
   // than the rounding of `crosses` are counted without it (the same count:
   // tests/env_test.cpp).
-  Patch face;
   PolygonView view;
   const CentreRays rays{o, f, &maskDirections_};
-  bool framed = false;
-  if (bits && maskDirections_.res() == res) {
-    const int b1 = a1, b2 = a2;
-    const float u[4] = {box_.lo[b1], box_.hi[b1], box_.hi[b1], box_.lo[b1]};
-    const float v[4] = {box_.lo[b2], box_.lo[b2], box_.hi[b2], box_.hi[b2]};
-    for (int k = 0; k < 4; ++k) {
-      face.corner[k][axis] = static_cast<float>(plane);
-      face.corner[k][b1] = u[k];
-      face.corner[k][b2] = v[k];
-    }
-    face.normal = glm::vec3(0.0f);
-    face.normal[axis] = 1.0f;
-    face.numCorners = 4;
-    framed = FaceView(face, rays, 1e-7, 1e-7, &view);
-  }
+  const bool framed =
+      bits && maskDirections_.res() == res &&
+      FaceView(BoxFace(box_, axis, from[axis] < cell_[axis] ? 0 : 1), rays, 1e-7, 1e-7, &view);
   double share = 0.0;
   for (uint32_t row = 0; row < res; ++row) {
     double s0 = std::sin(row * halfPi / res), s1 = std::sin((row + 1) * halfPi / res);
@@ -319,19 +306,11 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
     const uint32_t base = row * cols;
     if (framed) {
       PixelArc may, sure;
-      if (ViewRow(view, rays, row, &may, &sure)) {
-        int span = std::min<int>(may.hi - may.lo + 1, static_cast<int>(cols));
-        int sureLo = sure.lo - may.lo, sureHi = sure.hi - may.lo;  // as offsets in may
-        if (sure.lo <= sure.hi) {
-          int shift = ((sureLo % int(cols)) + int(cols)) % int(cols) - sureLo;
-          sureLo += shift;
-          sureHi += shift;
-        }
-        uint32_t col = static_cast<uint32_t>(((may.lo % int(cols)) + int(cols)) % int(cols));
-        for (int k = 0; k < span; ++k, col = col + 1 == cols ? 0 : col + 1)
-          if (isOpen(base + col) && ((k >= sureLo && k <= sureHi) || crosses(st, ct, col)))
-            ++crossing;
-      }
+      if (ViewRow(view, rays, row, &may, &sure))
+        ForArc(may, sure, static_cast<int>(cols), [&](int col, bool surely) {
+          uint32_t c = static_cast<uint32_t>(col);
+          crossing += isOpen(base + c) && (surely || crosses(st, ct, c));
+        });
     } else {
       for (uint32_t col = 0; col < cols; ++col) {
         uint32_t p = base + col;

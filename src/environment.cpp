@@ -10,6 +10,7 @@
 #include <glm/geometric.hpp>
 #include <unordered_map>
 
+#include "vismask/centre_raster.h"
 #include "vismask/rng.h"
 
 namespace vismask {
@@ -104,18 +105,7 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   for (int a = 0; a < 3; ++a)
     for (int side = 0; side < 2; ++side) {
       if (side == 0 ? cell_[a] == 0 : cell_[a] + 1 == grid.n[a]) continue;
-      Patch& f = exits_[numExits_++];
-      const int a1 = (a + 1) % 3, a2 = (a + 2) % 3;
-      const float u[4] = {box_.lo[a1], box_.hi[a1], box_.hi[a1], box_.lo[a1]};
-      const float v[4] = {box_.lo[a2], box_.lo[a2], box_.hi[a2], box_.hi[a2]};
-      for (int k = 0; k < 4; ++k) {
-        f.corner[k][a] = side == 0 ? box_.lo[a] : box_.hi[a];
-        f.corner[k][a1] = u[k];
-        f.corner[k][a2] = v[k];
-      }
-      f.normal = glm::vec3(0.0f);
-      f.normal[a] = side == 0 ? -1.0f : 1.0f;
-      f.numCorners = 4;
+      exits_[numExits_++] = BoxFace(box_, a, side);
     }
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
                               : MaskShape{};

@@ -115,6 +115,16 @@ TEST(CentreRasterTest, RandomScenesGiveTheWalksBits) {
   }
 }
 
+// A frame about a random normal.
+Frame RandomFrame(std::mt19937& rng) {
+  Frame f;
+  f.n = UnitVector(rng);
+  f.t = glm::normalize(
+      glm::cross(f.n, std::fabs(f.n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)));
+  f.b = glm::cross(f.n, f.t);
+  return f;
+}
+
 // The slab exit of a ray from inside `box`: the axis and side (0: lo) of the
 // face it leaves by.
 void ExitFace(const Bounds& box, const glm::vec3& o, const glm::vec3& d, int* axis, int* side) {
@@ -134,20 +144,8 @@ TEST(CentreRasterTest, KeepExitsKeepsEveryPixelThatCanLeave) {
   const Bounds box{glm::vec3(0.0f, 0.0f, 0.0f), glm::vec3(2.0f, 1.0f, 1.5f)};
   // Exits: +x and -y faces, as an environment with neighbours there has.
   const int exitAxis[2] = {0, 1}, exitSide[2] = {1, 0};
-  Patch exits[2];
-  for (int e = 0; e < 2; ++e) {
-    int a = exitAxis[e], a1 = (a + 1) % 3, a2 = (a + 2) % 3;
-    const float u[4] = {box.lo[a1], box.hi[a1], box.hi[a1], box.lo[a1]};
-    const float v[4] = {box.lo[a2], box.lo[a2], box.hi[a2], box.hi[a2]};
-    for (int k = 0; k < 4; ++k) {
-      exits[e].corner[k][a] = exitSide[e] ? box.hi[a] : box.lo[a];
-      exits[e].corner[k][a1] = u[k];
-      exits[e].corner[k][a2] = v[k];
-    }
-    exits[e].normal = glm::vec3(0.0f);
-    exits[e].normal[a] = exitSide[e] ? 1.0f : -1.0f;
-    exits[e].numCorners = 4;
-  }
+  const Patch exits[2] = {BoxFace(box, exitAxis[0], exitSide[0]),
+                          BoxFace(box, exitAxis[1], exitSide[1])};
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   uint64_t kept = 0, closed = 0, checked = 0;
@@ -159,12 +157,7 @@ TEST(CentreRasterTest, KeepExitsKeepsEveryPixelThatCanLeave) {
     for (int shooter = 0; shooter < 60; ++shooter) {
       // A point inside the box and a random frame.
       glm::vec3 o(0.05f + 1.9f * unit(rng), 0.05f + 0.9f * unit(rng), 0.05f + 1.4f * unit(rng));
-      glm::vec3 n = UnitVector(rng);
-      Frame f;
-      f.n = n;
-      f.t = glm::normalize(
-          glm::cross(n, std::fabs(n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)));
-      f.b = glm::cross(n, f.t);
+      Frame f = RandomFrame(rng);
       CentreRays rays{o, f, &d.dirs};
       mask.SetAllOpen();
       closed += KeepExits(Span<const Patch>(exits, 2), rays, &mask);
@@ -216,12 +209,7 @@ TEST(CentreRasterTest, FaceViewBoundsTheCrossingDirections) {
     }
     for (int shooter = 0; shooter < 80; ++shooter) {
       glm::vec3 o(unit(rng), -0.5f + 2.0f * unit(rng), -0.5f + 2.5f * unit(rng));  // x < 1
-      glm::vec3 n = UnitVector(rng);
-      Frame f;
-      f.n = n;
-      f.t = glm::normalize(
-          glm::cross(n, std::fabs(n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)));
-      f.b = glm::cross(n, f.t);
+      Frame f = RandomFrame(rng);
       CentreRays rays{o, f, &d.dirs};
       PolygonView view;
       if (!FaceView(face, rays, 1e-7, 1e-7, &view)) continue;

@@ -82,6 +82,28 @@ bool FaceView(const Patch& face, const CentreRays& rays, double margin, double i
 bool ViewRow(const PolygonView& v, const CentreRays& rays, uint32_t row, PixelArc* may,
              PixelArc* sure);
 
+// Face `side` (0: lo, 1: hi) of `box` across `axis`, as a rectangle whose
+// corners run lo-lo, hi-lo, hi-hi, lo-hi over the next two axes, facing
+// out of the box.
+Patch BoxFace(const Bounds& box, int axis, int side);
+
+// Calls f(col, sure) for each column of `may` (wrapping on a row of `cols`),
+// `sure` telling whether the column is also one of `sure`'s (which `may`
+// holds, as a row's view gives them).
+template <typename F>
+void ForArc(const PixelArc& may, const PixelArc& sure, int cols, F&& f) {
+  int span = may.hi - may.lo + 1 < cols ? may.hi - may.lo + 1 : cols;
+  int sureLo = sure.lo - may.lo, sureHi = sure.hi - may.lo;  // as offsets in may
+  if (sure.lo <= sure.hi) {
+    int shift = ((sureLo % cols) + cols) % cols - sureLo;
+    sureLo += shift;
+    sureHi += shift;
+  }
+  int col = ((may.lo % cols) + cols) % cols;
+  for (int k = 0; k < span; ++k, col = col + 1 == cols ? 0 : col + 1)
+    f(col, k >= sureLo && k <= sureHi);
+}
+
 // Closes each open pixel whose centre direction cannot pass through any of
 // `exits` (at most 6 rectangles: the faces of the rays' environment that
 // another environment lies beyond), keeping, with a margin, every pixel
