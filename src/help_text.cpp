@@ -157,19 +157,19 @@ local environments and visibility masks:
   --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
                        1 <= R <= 4096 (default 50; not used by R)
   --round-shots K      at most K shots per environment per round (default
-                       with several environments: 64, fewer when 6 packets
+                       with several environments: 256, fewer when 6 packets
                        a shot would fill more than 512 KiB; with one: 1).
                        Given alone (no --round-work), the rounds of before:
                        K shots, no work limit
-  --round-work N       a round ends for an environment once its rays (and
-                       B's and C's centre rays) have done N steps of grid
-                       walking, cells entered plus patches tested: a count
-                       that tracks CPU time but never depends on it, so
-                       rounds are the same whatever the machine, ranks or
-                       transport. Default with several environments: about
-                       16 full shots' worth (16 x (--max-rays, or --rays,
-                       + 4R^2 for B and C) x the cube root of an
-                       environment's grid cells); 0: no limit
+  --round-work N       a round ends for an environment once its shots have
+                       done N units of work: grid steps (cells entered plus
+                       patches tested), plus 32 a ray, 40 a hit and 12288
+                       a shot; a count that tracks CPU time but never
+                       depends on it, so rounds are the same whatever the
+                       machine, ranks or transport. Default with several
+                       environments: about 32 full shots' worth (32 x
+                       (--max-rays, or --rays, x (the cube root of an
+                       environment's grid cells + 72) + 12288)); 0: no limit
   --mask-cache K       KiB per environment for Methods B and C's centre masks
                        of local shooters, kept for their later shots (the
                        mask depends only on the shooter); same output,

@@ -9,6 +9,7 @@
 #include "vismask/options.h"
 #include "vismask/packet.h"
 #include "vismask/partition.h"
+#include "vismask/work.h"
 
 namespace vismask {
 
@@ -54,13 +55,10 @@ bool SetWorldSize(int ranks, Options* o) {
 }
 
 uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs, float gridDensity) {
-  // B's and C's centre rays (one per mask pixel at most) walk like rays.
-  double rays = MostRaysAShot(o);
-  if (o.maskMethod == MaskMethod::kB || o.maskMethod == MaskMethod::kC)
-    rays += 4.0 * o.maskRes * o.maskRes;
   double cells = gridDensity * patches / std::max(1, numEnvs);
   double steps = std::max(1.0, std::cbrt(std::max(cells, 1.0)));
-  return static_cast<uint64_t>(kAutoRoundWorkShots * rays * steps);
+  double shot = MostRaysAShot(o) * (steps + kRayWork + kHitWork) + kShotWork;
+  return static_cast<uint64_t>(kAutoRoundWorkShots * shot);
 }
 
 }  // namespace vismask

@@ -196,8 +196,6 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // Method C: a pixel whose rays all hit closes, one whose rays all passed
   // stays open; only pixels with both, or with no ray, take the centre ray.
   if (masks && out && options_.maskMethod == MaskMethod::kB) {
-    // The round's work counts the centre rays an uncached cast makes.
-    centreWork_ += uint64_t{out->CountOpen()} * centreStepsPerRay_;
     if (centreMask)
       out->And(*centreMask);
     else
@@ -212,7 +210,6 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
       o[w] = open & ~(hit & ~passed);
       h[w] = open & ~(hit ^ passed);
     }
-    centreWork_ += uint64_t{hitPixels.CountOpen()} * centreStepsPerRay_;
     if (centreMask) {
       // Cast only the pixels left whose centre ray is not known yet, into the cache.
       passedPixels.CopyFrom(hitPixels);
@@ -252,12 +249,19 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   // a patch's view costs about four centre rays' walks (measured with
   // callgrind on the experiments' set-up: even at R = 33, 368 patches and
   // about 1 500 open pixels).
+  uint64_t work;
   if (4 * patches_.size() <= cast) {
     stats_.maskRaysByPatch += cast;
     RasterCentres(patches_, geom_, skip, rays, mask);
+    work = 4 * patches_.size() * centreStepsPerRay_;
   } else {
-    centreSteps_ += WalkCentres(grid_, skip, rays, mask);
+    work = WalkCentres(grid_, skip, rays, mask);
+    centreSteps_ += work;
   }
+  // The round's work counts the casts that every --mask-cache makes: a
+  // foreign shooter's, and a local shooter's first (later ones may come
+  // from the cache).
+  if (skip.patch == kNoPatch || shotCount_[skip.patch] == 1) centreWork_ += work;
 }
 
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {

@@ -82,8 +82,9 @@ TEST(EnvTest, PermutedEnvironmentOrderGivesIdenticalBytes) {
 // The centre-mask cache (--mask-cache) only saves centre rays: B and C give
 // the same bytes with it, with it too small for every patch (slots shared),
 // and without it, and it casts fewer rays. Rounds end by work (a small
-// --round-work, so every round is cut by it): the work counts the centre
-// rays an uncached cast makes, so the cache moves no round's end.
+// --round-work, so every round is cut by it): the work counts only the
+// centre casts every cache size makes (a foreign shooter's, a local
+// shooter's first), so the cache moves no round's end.
 TEST(EnvTest, MaskCacheKeepsOutputsAndSavesCentreRays) {
   TempDir dir;
   for (const char* method : {"B", "C"}) {

@@ -13,6 +13,7 @@
 #include "test_util.h"
 #include "vismask/options.h"
 #include "vismask/packet.h"
+#include "vismask/work.h"
 
 namespace vismask {
 namespace {
@@ -136,16 +137,16 @@ TEST(RenderTest, RoundSizeDefaults) {
   const Case cases[] = {
       {{"--envs", "1"}, 1, false, 0},
       // 6 packets a shot of 128 + 4R^2/8 bytes (padded to 8) in 512 KiB:
-      // 63 at the default R = 50, the cap of 64 at R = 20, 17 at R = 100.
+      // 63 at the default R = 50, 266 at R = 20 (so the cap of 256), 17 at R = 100.
       {{"--envs", "2"}, 63, true, 0},
-      {{"--envs", "2", "--mask-res", "20"}, 64, true, 0},
+      {{"--envs", "2", "--mask-res", "20"}, 256, true, 0},
       {{"--envs", "auto:4"}, 63, true, 0},
       {{"--envs", "2", "--round-shots", "8"}, 8, false, 0},
       {{"--envs", "2", "--round-shots", "1"}, 1, false, 0},
-      {{"--envs", "2", "--round-work", "5000"}, 64, false, 5000},
-      {{"--envs", "2", "--round-work", "0"}, 64, false, 0},
+      {{"--envs", "2", "--round-work", "5000"}, 256, false, 5000},
+      {{"--envs", "2", "--round-work", "0"}, 256, false, 0},
       {{"--envs", "2", "--round-work", "7", "--round-shots", "3"}, 3, false, 7},
-      {{"--envs", "1", "--round-work", "9"}, 64, false, 9},
+      {{"--envs", "1", "--round-work", "9"}, 256, false, 9},
       {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
   };
   for (const Case& c : cases) {
@@ -158,15 +159,19 @@ TEST(RenderTest, RoundSizeDefaults) {
     EXPECT_EQ(o.roundWorkAuto, c.autoWork) << c.args.size();
     EXPECT_EQ(o.roundWork, c.work) << c.args.size();
   }
-  // The automatic size: 16 full shots of rays and centre rays, times the
-  // cube root of an environment's grid cells.
+  // The automatic size: 32 full shots, each its rays times (the cube root
+  // of an environment's grid cells, plus a ray's and a hit's work), plus a
+  // shot's work (work.h). Centre rays are not in it.
   Options o;
   o.maxRays = 1000;
-  o.maskRes = 10;  // + 400 centre rays (B)
-  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1400 * 20));
-  EXPECT_EQ(AutoRoundWork(o, 16000.0, 8, 4.0f), uint64_t(16 * 1400 * 20));
-  o.maskMethod = MaskMethod::kR;  // no centre rays
-  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), uint64_t(16 * 1000 * 20));
+  const uint64_t shot = 1000 * (20 + kRayWork + kHitWork) + kShotWork;
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), 32 * shot);
+  EXPECT_EQ(AutoRoundWork(o, 16000.0, 8, 4.0f), 32 * shot);
+  o.maskMethod = MaskMethod::kR;
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), 32 * shot);
+  o.rayAlloc = Options::RayAlloc::kFixed;  // --rays a shot
+  o.rays = 500;
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), 32 * (500 * (20 + kRayWork + kHitWork) + kShotWork));
 }
 
 // Issue 20: the default queue lets every environment make a whole round
@@ -178,11 +183,13 @@ TEST(RenderTest, QueueDefaults) {
     uint32_t queue;
   };
   const uint64_t packet50 = PacketBytes(MaskShapeOf(MaskMethod::kB, 50, Options().maxRays));
+  const uint64_t packet20 = PacketBytes(MaskShapeOf(MaskMethod::kB, 20, Options().maxRays));
   const Case cases[] = {
       {{"--envs", "1"}, 64},
       {{"--envs", "2"}, 2 * 63},
       {{"--envs", "2", "--round-shots", "1"}, 64},
-      {{"--envs", "4x1x4", "--mask-res", "20"}, 16 * 64},
+      {{"--envs", "4x1x4", "--mask-res", "8"}, 16 * 256},
+      {{"--envs", "4x1x4", "--mask-res", "20"}, static_cast<uint32_t>(kAutoQueueBytes / packet20)},
       {{"--envs", "5x5x5"}, static_cast<uint32_t>(kAutoQueueBytes / packet50)},
       {{"--envs", "5x5x5", "--queue", "7"}, 7},
       {{"--envs", "2", "--queue", "64"}, 64},

@@ -20,6 +20,7 @@
 #include "vismask/partition.h"
 #include "vismask/patch.h"
 #include "vismask/span.h"
+#include "vismask/work.h"
 
 namespace vismask {
 
@@ -134,16 +135,18 @@ class Environment {
   // early once the round's work has reached `roundWork` grid steps (0: no
   // limit; workSteps below). Packets for neighbours go to the outbox.
   void RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork = 0);
-  // The work rounds are measured in: the grid steps of the form-factor
-  // rays, plus for Methods B and C centreStepsPerRay() for each centre ray
-  // the method would cast without the centre-mask cache. Counted, never timed, and the same with
-  // any
-  // --mask-cache: the cache saves real centre rays (and their steps), and
-  // the last-occluder hint makes a cast's steps depend on which pixels it
-  // casts, so a cached shot's real steps differ from an uncached one's.
-  uint64_t workSteps() const { return grid_.steps() - centreSteps_ + centreWork_; }
+  // The work rounds are measured in, counted and never timed (work.h): the
+  // grid steps of the form-factor rays, kRayWork a form-factor ray, kHitWork
+  // a hit and kShotWork a shot, plus the work of the centre casts (B and C)
+  // that every --mask-cache makes: a foreign shooter's, and a local
+  // shooter's first. The cache saves a local shooter's later casts, so their
+  // real steps (and those of the last-occluder hint) are left out.
+  uint64_t workSteps() const {
+    return grid_.steps() - centreSteps_ + centreWork_ + kRayWork * stats_.rays +
+           kHitWork * stats_.hits + kShotWork * (stats_.shots + stats_.foreignShots);
+  }
   // A centre ray's work: the integer cube root of the grid's cells (the
-  // cells a ray crosses, about), at least 1.
+  // cells a ray crosses, about), at least 1; a cast by patch counts four a patch.
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
   // The packets this round produced, `packetBytes()` each, in send order.
@@ -372,7 +375,7 @@ class Environment {
   EnergyLedger ledger_;
   EnvStats stats_;
   uint64_t centreSteps_ = 0;  // grid steps of the centre rays really cast
-  uint64_t centreWork_ = 0;   // centre rays an uncached cast would make x centreStepsPerRay_
+  uint64_t centreWork_ = 0;   // the work of the casts every cache size makes (workSteps)
   uint64_t centreStepsPerRay_ = 1;
   double totalArea_ = 0.0;
   double kdArea_ = 0.0;

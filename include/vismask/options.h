@@ -112,8 +112,8 @@ struct Options {
 // Rounds by work (ResolveRounds, AutoRoundWork): the full shots' worth of
 // work an automatic round holds, the most shots it holds, and the outbox
 // bytes an automatic round may fill (fewer shots with large packets).
-constexpr uint32_t kAutoRoundWorkShots = 16;
-constexpr uint32_t kAutoRoundShots = 64;
+constexpr uint32_t kAutoRoundWorkShots = 32;
+constexpr uint32_t kAutoRoundShots = 256;
 constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
 
 constexpr float kAutoPatchDivisions =
@@ -142,11 +142,12 @@ uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes);
 // the options (no --envs, more than one rank, not already auto).
 bool SetWorldSize(int ranks, Options* options);
 
-// The automatic --round-work: kAutoRoundWorkShots full shots (the most
-// rays a shot traces, plus B's and C's centre rays) times the grid steps a
+// The automatic --round-work: kAutoRoundWorkShots full shots, each the
+// most rays a shot traces, every one landing here, times (the grid steps a
 // ray takes in an environment of the scene's estimated `patches` / `numEnvs`
-// patches (about the cube root of its grid cells). From the scene and the
-// options alone, so every rank computes the same.
+// patches, about the cube root of its grid cells, plus kRayWork and
+// kHitWork), plus kShotWork (work.h).
+// From the scene and the options alone, so every rank computes the same.
 uint64_t AutoRoundWork(const Options& options, double patches, int numEnvs, float gridDensity);
 
 // The --help text.

@@ -1,0 +1,24 @@
+// Work: what a round is measured in (Environment::workSteps, rounds by
+// work in options.h). Counted, never timed, so a round ends at the same shot
+// whatever the machine, the ranks or the transport. The unit is a grid
+// step (a cell entered or a patch tested, Grid::steps); beside the walks'
+// steps a round charges, in steps:
+#pragma once
+#include <cstdint>
+
+namespace vismask {
+
+// A form-factor ray, a hit (the ray's landing here: the element tree's
+// descent and the receiver's update) and a shot (local or foreign: its
+// sampler, mask and packets). From each environment's CPU seconds a round
+// regressed on its counts (issue 20; the Cornell box in 2 environments and
+// the building in 16): a ray costs 34 to 67 steps beside its walk and a shot
+// 7 000 to 19 000. The hit term is what made two environments' CPU per unit
+// of work agree: the Cornell box's upper half (--envs auto:2) lands 37% more
+// of its rays than the lower, and with rays and walks alone it took 8% more
+// CPU per unit; with kHitWork the two agree within 1%.
+constexpr uint64_t kRayWork = 32;
+constexpr uint64_t kHitWork = 40;
+constexpr uint64_t kShotWork = 12288;
+
+}  // namespace vismask
