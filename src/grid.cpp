@@ -6,7 +6,6 @@
 #include <limits>
 #include <vector>
 
-#include "grid_blocks.h"
 #include "grid_cells.h"
 
 namespace vismask {
@@ -147,7 +146,6 @@ void Grid::Layout(Arena& arena, const Plan& plan) {
   cellStart_ = arena.Alloc<uint32_t>(cells + 1);
   refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs));
   occupied_ = arena.Alloc<uint64_t>((cells + 63) / 64);
-  blocks_ = arena.Alloc<uint64_t>(gridblocks::BlockWords(plan.res));
   for (int a = 0; a < 3; ++a) {
     float extent = plan.bounds.hi[a] - plan.bounds.lo[a];
     cellSize_[a] = extent / static_cast<float>(plan.res[a]);
@@ -197,25 +195,6 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   for (size_t w = 0; w < occupied_.size(); ++w) occupied[w] = 0;
   for (size_t c = 0; c < cells; ++c)
     if (start[c + 1] > start[c]) occupied[c >> 6] |= uint64_t{1} << (c & 63);
-  gridblocks::MarkBlocks(plan_.res, occupied_, blocks_);
-}
-
-void Grid::StepEveryCell() {
-  for (uint64_t& w : blocks_) w = ~uint64_t{0};
-}
-
-void gridblocks::MarkBlocks(const int res[3], Span<const uint64_t> occupied,
-                            Span<uint64_t> blocks) {
-  for (uint64_t& w : blocks) w = 0;
-  const int bx = BlockRes(res[0]), by = BlockRes(res[1]);
-  size_t c = 0;
-  for (int z = 0; z < res[2]; ++z)
-    for (int y = 0; y < res[1]; ++y)
-      for (int x = 0; x < res[0]; ++x, ++c)
-        if ((occupied[c >> 6] >> (c & 63)) & 1) {
-          size_t b = (static_cast<size_t>(z >> kShift) * by + (y >> kShift)) * bx + (x >> kShift);
-          blocks[b >> 6] |= uint64_t{1} << (b & 63);
-        }
 }
 
 template <bool kAnyHit>
@@ -287,14 +266,12 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   const int stride[3] = {1, res[0], res[0] * res[1]};
   float first[3], delta[3];
   int move[3];
-  int cell[3];
   int index = 0;
   for (int a = 0; a < 3; ++a) {
     float p = d[a] == 0.0f ? o[a] : o[a] + t0 * d[a];
     float f = (p - lo[a]) * invCellSize_[a];
     int c = f >= 0.0f ? (f < static_cast<float>(res[a]) ? static_cast<int>(f) : res[a] - 1) : 0;
     index += c * stride[a];
-    cell[a] = c;
     if (d[a] == 0.0f) {
       first[a] = std::numeric_limits<float>::infinity();
       delta[a] = 0.0f;
@@ -308,17 +285,11 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
     float exit = first[a] + static_cast<float>(up ? res[a] - 1 - c : c) * delta[a];
     if (exit < t1) t1 = exit;
   }
-  gridblocks::Axis axis[3];
-  for (int a = 0; a < 3; ++a)
-    axis[a] = {first[a], delta[a]};
-  // Per axis in registers: the next plane's t, how many were crossed, and
-  // the cell.
+  // Per axis in registers: the next plane's t, and how many were crossed.
   const float fx = first[0], fy = first[1], fz = first[2];
   const float dx = delta[0], dy = delta[1], dz = delta[2];
   float tx = fx, ty = fy, tz = fz;
   float kx = 0.0f, ky = 0.0f, kz = 0.0f;
-  int cx = cell[0], cy = cell[1], cz = cell[2];
-  const int sx = d[0] > 0.0f ? 1 : -1, sy = d[1] > 0.0f ? 1 : -1, sz = d[2] > 0.0f ? 1 : -1;
 
   const uint32_t* start = cellStart_.data();
   const uint32_t* refs = refs_.data();
@@ -329,58 +300,8 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   float bestT = r.tMax;  // every hit is nearer than the ray's end
   bool bestFront = false;
   const uint64_t* occupied = occupied_.data();
-  const uint64_t* blocks = blocks_.data();
-  const int bx = gridblocks::BlockRes(res[0]), by = gridblocks::BlockRes(res[1]);
-  constexpr int kShift = gridblocks::kShift;
-  constexpr int kMask = gridblocks::kBlock - 1;
   uint64_t tests = 0;
-  // Step across the plane that comes first (ties: y before x, z before
-  // both), unless the ray ends, or its best hit is, before that plane.
-  auto step = [&]() {
-    if (tx < ty && tx < tz) {
-      if (!(tx < limit)) return false;
-      index += move[0];
-      cx += sx;
-      kx += 1.0f;
-      tx = fx + kx * dx;
-    } else if (ty < tz) {
-      if (!(ty < limit)) return false;
-      index += move[1];
-      cy += sy;
-      ky += 1.0f;
-      ty = fy + ky * dy;
-    } else {
-      if (!(tz < limit)) return false;
-      index += move[2];
-      cz += sz;
-      kz += 1.0f;
-      tz = fz + kz * dz;
-    }
-    return true;
-  };
   for (;;) {
-    // An empty block is crossed in one jump to the cell where the steps
-    // would leave it (grid_blocks.h), with the same plane counts.
-    uint32_t b = static_cast<uint32_t>(((cz >> kShift) * by + (cy >> kShift)) * bx + (cx >> kShift));
-    if (((blocks[b >> 6] >> (b & 63)) & 1) == 0) {
-      const int left[3] = {sx > 0 ? gridblocks::kBlock - (cx & kMask) : (cx & kMask) + 1,
-                           sy > 0 ? gridblocks::kBlock - (cy & kMask) : (cy & kMask) + 1,
-                           sz > 0 ? gridblocks::kBlock - (cz & kMask) : (cz & kMask) + 1};
-      float k[3] = {kx, ky, kz}, t[3] = {tx, ty, tz};
-      int crossed[3];
-      if (!gridblocks::CrossBlock(axis, left, limit, k, t, crossed)) {
-        while (step()) {
-        }
-        break;  // the ray ends in this block
-      }
-      index += crossed[0] * move[0] + crossed[1] * move[1] + crossed[2] * move[2];
-      cx += crossed[0] * sx;
-      cy += crossed[1] * sy;
-      cz += crossed[2] * sz;
-      kx = k[0], ky = k[1], kz = k[2];
-      tx = t[0], ty = t[1], tz = t[2];
-      continue;
-    }
     // Most cells a ray crosses are empty: one bit in a small bitmap says so,
     // where their offsets (32 times larger, strided by rows and slices) cost
     // a cache miss each in a large grid.
@@ -406,7 +327,24 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
           limit = std::min(t1, t);
         }
       }
-    if (!step()) break;
+    // Step across the plane that comes first (ties: y before x, z before
+    // both), unless the ray ends, or its best hit is, before that plane.
+    if (tx < ty && tx < tz) {
+      if (!(tx < limit)) break;
+      index += move[0];
+      kx += 1.0f;
+      tx = fx + kx * dx;
+    } else if (ty < tz) {
+      if (!(ty < limit)) break;
+      index += move[1];
+      ky += 1.0f;
+      ty = fy + ky * dy;
+    } else {
+      if (!(tz < limit)) break;
+      index += move[2];
+      kz += 1.0f;
+      tz = fz + kz * dz;
+    }
   }
   steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
   if (bestPatch == kNoPatch) return false;

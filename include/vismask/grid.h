@@ -1,9 +1,7 @@
 // Grid: the SEADS-style uniform grid over one environment's patches.
 // Two flat arrays built once at init: cellStart (numCells + 1 offsets) and
 // refs (patch indices, cell by cell), and a bitmap of the cells that hold
-// any patch (so the walk reads an empty cell's bit, not its offsets), and a
-// coarser one of the 4^3-cell blocks that do (the walk jumps across the
-// others, visiting the same cells as stepping would). Rays walk it with a 3D-DDA
+// any patch (so the walk reads an empty cell's bit, not its offsets). Rays walk it with a 3D-DDA
 // (Amanatides & Woo). Intersect finds the closest hit, Occluded stops at the first. The resolution
 // follows the patch count and the extent (Cleary et al.: cells per axis = extent * cbrt(density * N
 // / volume)); a face of the box that walls lie on is placed just inside an outer layer of cells.
@@ -64,20 +62,13 @@ class Grid {
   size_t cellCount() const {
     return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2];
   }
-  size_t bytes() const {
-    return cellStart_.bytes() + refs_.bytes() + occupied_.bytes() + blocks_.bytes();
-  }
+  size_t bytes() const { return cellStart_.bytes() + refs_.bytes() + occupied_.bytes(); }
   // The built arrays, read-only (tests, statistics): cell c holds
   // refs()[cellStart()[c] .. cellStart()[c + 1]), in ascending patch order.
   Span<const uint32_t> cellStart() const { return cellStart_; }
   Span<const uint32_t> refs() const { return refs_; }
   // Bit c of word c / 64: cell c holds at least one reference.
   Span<const uint64_t> occupied() const { return occupied_; }
-  // Bit b of word b / 64: block b (src/grid_blocks.h: 4^3 cells, x fastest)
-  // holds an occupied cell. Walks jump across the other blocks.
-  Span<const uint64_t> blocks() const { return blocks_; }
-  // Tests: mark every block occupied, so that walks step every cell.
-  void StepEveryCell();
 
  private:
   // The DDA walk behind Intersect (kAnyHit false) and Occluded (true).
@@ -93,7 +84,6 @@ class Grid {
   Span<uint32_t> cellStart_;
   Span<uint32_t> refs_;
   Span<uint64_t> occupied_;  // bit c: cell c holds a patch
-  Span<uint64_t> blocks_;    // bit b: block b holds an occupied cell
  public:
   // Work done by the walks so far: cells entered plus patches tested (a
   // deterministic count, the same on every machine).
