@@ -6,6 +6,7 @@ the building."""
 import json
 import math
 import os
+import statistics
 
 from .bench_runs import patch_balance
 from .files import run_json
@@ -67,6 +68,27 @@ class Parallel:
         return text if self.s.mpi else ""
 
 
+def throughput(s, work):
+    """What two processes at once get of this machine's two cores."""
+    path = s.dir("throughput.json")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        t = json.load(f)
+    alone, paired = statistics.median(t["alone"]), statistics.median(t["paired"])
+    speed = alone / paired
+    bound = float(work.rstrip("×"))
+    return ["", "What the second core gives: the same solve (one environment, `" + s.build + "/vismask " +
+            t["command"] + "`) alone and two at once, " + str(len(t["alone"])) + " times each. Alone it took",
+            f"{alone:.2f} CPU s (median), two at once {paired:.2f} CPU s each: a process runs at "
+            f"{100 * speed:.0f}% of its",
+            "speed alone when the other core is busy too (shared caches, memory and the",
+            "machine's other load), so on this machine two ranks reach at most",
+            f"{times(2 * speed)} with perfect balance and free communication; with the default",
+            f"rounds' work bound ({work}), {times(bound * speed)}. The critical CPU bound above is",
+            "measured with both ranks running, so it already includes this."]
+
+
 def section(s):
     """The section's lines."""
     P = Parallel(s)
@@ -125,6 +147,7 @@ did): the same bound in work, counted, so it is the same on every run.""", ""]
           f"Target ≥ {TARGET_SPEEDUP}× on 2 ranks with default options, over pipes and under MPI:",
           f"by CPU-time accounting (the critical CPU bound) {verdict(crit_default)}; by wall clock on",
           f"this shared machine {verdict(speed_default)}."]
+    L += throughput(s, P.work("aloop1", "apipe1"))
     L += oversubscribed(s) + projection(s, P) + efficiency(s)
     return L
 

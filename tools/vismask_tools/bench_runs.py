@@ -49,6 +49,10 @@ class Settings:
         self.bld = (f"render {self.out}/building.obj --patch-size 0.25 --rays 512 --mask-res 20 "
                     f"--stop-unshot {bstop} --width 64 --height 64 --camera {CAMERA_IN_ROOM}")
         self.m = f"render {SCENE} --envs 2 --max-shots {mshots} --width 64 --height 64"
+        # One environment, a fixed number of shots: run alone and two at
+        # once, for what this machine's second core gives (pair_throughput).
+        self.t = (f"render {SCENE} --rays 1024 --mask-res 20 --max-shots {300 if quick else 6000} "
+                  "--width 64 --height 64")
         # Issue 19: the experiments' set-up (vismask_tools/scales.py, full scale).
         self.x = (f"render {SCENE} --envs 2 --patch-size 140 --rays 256 --stop-unshot 0.3 --width 32 --height 32"
                   if quick else
@@ -132,6 +136,8 @@ def parallel(s):
         if not filecmp.cmp(s.dir(a + "/patches.csv"), s.dir(b + "/patches.csv"), shallow=False):
             sys.exit(f"bench: {b}: patches.csv differs from {a}")
 
+    pair_throughput(s)
+
     # 4, 8, 16 environments, each on its own rank (pipe), on 2 cores.
     say(f"oversubscribed: {s.o}")
     for e in OVERSUBSCRIBED:
@@ -153,6 +159,32 @@ def parallel(s):
         s.vismask(f"bldU{i}", s.bld, "--envs", "4x1x4", "--transport", "loop")
         s.vismask(f"bldA{i}", s.bld, "--envs", "auto:16", "--transport", "loop")
     s.vismask("bld1", s.bld, "--envs", "auto:16", "--transport", "loop", "--round-shots", "1")
+
+
+def pair_throughput(s):
+    """The same 1-environment solve alone and two at once, REPS times each:
+    the CPU seconds of each process (os.wait4), in OUT/throughput.json."""
+    say(f"two at once: {s.t}")
+    cmd = [s.bin()] + s.t.split() + ["--quiet", "--out"]
+
+    def start(name):
+        log_file = open(s.dir(name + ".log"), "w")
+        return subprocess.Popen(cmd + [s.dir(name)], stdout=log_file, stderr=subprocess.STDOUT), log_file
+
+    def cpu(proc):
+        _, status, ru = os.wait4(proc[0].pid, 0)
+        proc[1].close()
+        if status != 0:
+            sys.exit(f"bench: {s.t}: exit status {status}")
+        return ru.ru_utime + ru.ru_stime
+
+    alone, paired = [], []
+    for i in range(1, s.reps + 1):
+        alone.append(cpu(start(f"alone{i}")))
+        a, b = start(f"pairA{i}"), start(f"pairB{i}")
+        paired += [cpu(a), cpu(b)]
+    with open(s.dir("throughput.json"), "w") as f:
+        json.dump({"command": s.t, "alone": alone, "paired": paired}, f)
 
 
 def envs_count(e):
