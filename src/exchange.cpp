@@ -22,6 +22,7 @@ void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint
   all = arena.Alloc<EnvReport>(n * envs.perRank);
   envCpu = arena.Alloc<double>(envs.perRank);
   envSteps = arena.Alloc<uint64_t>(envs.perRank);
+  envWork = arena.Alloc<uint64_t>(envs.perRank);
 }
 
 namespace {
@@ -65,6 +66,8 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs
     r.envCpu = i < x->envCpu.size() ? x->envCpu[i] : 0.0;
     r.roundSteps = i < x->envSteps.size() ? x->envSteps[i] : 0;
     r.steps = e->stats().gridSteps;
+    r.roundWork = i < x->envWork.size() ? x->envWork[i] : 0;
+    r.work = e->workSteps();
   }
   x->mine[0].elapsed = elapsed;
   x->mine[0].waited = *waited;
@@ -79,10 +82,13 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs
     if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
     if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
     RankEnvs re = EnvsOfRank(rankEnvs.total, ranks, r);
-    uint64_t rankSteps = 0;
-    for (uint32_t k = 0; k < re.count; ++k)
+    uint64_t rankSteps = 0, rankWork = 0;
+    for (uint32_t k = 0; k < re.count; ++k) {
       rankSteps += x->all[size_t(r) * rankEnvs.perRank + k].roundSteps;
+      rankWork += x->all[size_t(r) * rankEnvs.perRank + k].roundWork;
+    }
     if (rankSteps > tot.rankStepsMax) tot.rankStepsMax = rankSteps;
+    if (rankWork > tot.rankWorkMax) tot.rankWorkMax = rankWork;
   }
   auto report = [&](uint32_t env) -> const EnvReport& {
     int r = RankOfEnv(env, rankEnvs.total, ranks);
@@ -105,6 +111,8 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs
     if (r.envCpu > tot.envCpuMax) tot.envCpuMax = r.envCpu;
     if (r.roundSteps > tot.envStepsMax) tot.envStepsMax = r.roundSteps;
     tot.steps += r.steps;
+    if (r.roundWork > tot.envWorkMax) tot.envWorkMax = r.roundWork;
+    tot.work += r.work;
   }
   for (uint32_t env = 0; env < rankEnvs.total; ++env) {
     const EnvReport& r = report(env);

@@ -173,6 +173,11 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
       static_cast<unsigned long long>(res.gridSteps),
       static_cast<unsigned long long>(res.criticalEnvSteps),
       static_cast<unsigned long long>(res.criticalRankSteps));
+  w.Printf(
+      "    \"work\": %llu,\n    \"critical_env_work\": %llu,\n    \"critical_rank_work\": %llu,\n",
+      static_cast<unsigned long long>(res.work),
+      static_cast<unsigned long long>(res.criticalEnvWork),
+      static_cast<unsigned long long>(res.criticalRankWork));
   w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
   // Sub-patch elements: the pool (roots included), what was used, the
   // leaves drawn, and whether refinement stopped for want of elements.

@@ -141,12 +141,14 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
       if (i < rankEnvs.first || i >= rankEnvs.first + rankEnvs.count) continue;
       double envCpu0 = os::CpuSeconds();
       uint64_t steps0 = envs[i - rankEnvs.first]->stats().gridSteps;
+      uint64_t work0 = envs[i - rankEnvs.first]->workSteps();
       envs[i - rankEnvs.first]->RunRound(
           ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
           AdmittedForwards(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding),
           options.roundWork);
       envCpu[i - rankEnvs.first] = os::CpuSeconds() - envCpu0;
       buffers->envSteps[i - rankEnvs.first] = envs[i - rankEnvs.first]->stats().gridSteps - steps0;
+      buffers->envWork[i - rankEnvs.first] = envs[i - rankEnvs.first]->workSteps() - work0;
     }
     double roundCpu = os::CpuSeconds() - cpu0;
     result.computeSeconds += roundCpu;
@@ -161,6 +163,9 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     result.criticalEnvSeconds += totals.envCpuMax;
     result.criticalEnvSteps += totals.envStepsMax;
     result.criticalRankSteps += totals.rankStepsMax;
+    result.criticalEnvWork += totals.envWorkMax;
+    result.criticalRankWork += totals.rankWorkMax;
+    result.work = totals.work;
     result.gridSteps = totals.steps;
     result.shots = totals.shots;
     result.rays = totals.rays;

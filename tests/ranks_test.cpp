@@ -144,7 +144,7 @@ TEST(RanksTest, SmoothingGivesTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("R", {"2", "3", "4"}, {"2"}, smooth);
 }
 
-// Issue 20: the default rounds, sized by grid steps (--round-work, chosen
+// Issue 20: the default rounds, sized by work (--round-work, chosen
 // at init from the scene), on balanced environments (--envs auto:4): the
 // rounds end at the same shot everywhere, so the bytes are the same on
 // one process, pipes 1/2/4 and mpirun 1/2/4. The rounds hold many shots
@@ -166,6 +166,17 @@ TEST(RanksTest, DefaultWorkRoundsOnBalancedEnvironmentsGiveTheSameBytesEverywher
   };
   EXPECT_GT(number("round_work"), 0.0);
   EXPECT_GT(number("shots"), 4 * 4 * number("rounds")) << "rounds of a few shots: " << json;
+  // The work the rounds are sized by: grid steps plus the charges of
+  // work.h, so more than the steps; on one process a rank's round is all
+  // four environments', and the most any one did is at least the mean.
+  const double work = number("work"), envWork = number("critical_env_work");
+  EXPECT_GT(work, number("grid_steps"));
+  EXPECT_EQ(number("critical_rank_work"), work);
+  EXPECT_GE(4 * envWork, work);
+  EXPECT_LT(envWork, work);
+  // Every round but the last is cut by its work, so the rounds are about
+  // the work over 4 x the round's.
+  EXPECT_GE(number("rounds"), work / (4 * number("round_work")) * 0.5) << json;
   EXPECT_NE(json.find("\"envs_auto\": 4"), std::string::npos);
 }
 

@@ -28,6 +28,8 @@ struct EnvReport {
   double roundCpu;      // CPU seconds of this rank's shots in the last round (first entry)
   double envCpu;        // CPU seconds of this environment's shots in the last round
   uint64_t roundSteps;  // grid steps of this environment's shots in the last round
+  uint64_t roundWork;   // their work (Environment::workSteps), what rounds are sized by
+  uint64_t work;        // work so far
   uint64_t steps;       // grid steps so far (EnvStats::gridSteps)
   uint64_t shots;       // local and foreign
   uint64_t rays;        // form-factor rays traced
@@ -52,6 +54,9 @@ struct RoundTotals {
   uint64_t steps = 0;         // grid steps, all environments, so far
   uint64_t envStepsMax = 0;   // the most grid steps any environment did in the last round
   uint64_t rankStepsMax = 0;  // the most any rank's environments did in it, together
+  uint64_t work = 0;          // the same three in work (Environment::workSteps)
+  uint64_t envWorkMax = 0;
+  uint64_t rankWorkMax = 0;
   uint64_t shots = 0;
   uint64_t rays = 0;
   uint64_t forwardsCreated = 0;
@@ -77,6 +82,7 @@ struct ExchangeBuffers {
   Span<EnvReport> all;      // ranks * perRank entries
   Span<double> envCpu;      // perRank: the solver's CPU seconds of each environment's round
   Span<uint64_t> envSteps;  // perRank: the grid steps of each environment's round
+  Span<uint64_t> envWork;   // perRank: the work of each environment's round
   size_t blockBytes = 0;
   uint32_t packetBytes = 0;
 };

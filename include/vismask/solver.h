@@ -89,6 +89,11 @@ struct SolveResult {
   uint64_t gridSteps = 0;
   uint64_t criticalEnvSteps = 0;
   uint64_t criticalRankSteps = 0;
+  // The same in work (Environment::workSteps: grid steps plus the fixed
+  // charges of work.h), what the rounds are sized by.
+  uint64_t work = 0;
+  uint64_t criticalEnvWork = 0;
+  uint64_t criticalRankWork = 0;
   double biasEstimate = 0.0;  // BiasEstimate of the final totals
   double lossEstimate = 0.0;  // LossEstimate of the final totals
 };

@@ -41,9 +41,9 @@ class Parallel:
         return run_json(self.s.dir(name))
 
     def work(self, base, run):
-        """grid steps of BASE ÷ RUN's critical_rank_steps (counts: no timing)."""
-        return times(self.json(base)["result"]["grid_steps"] /
-                     self.json(run)["result"]["critical_rank_steps"])
+        """work of BASE ÷ RUN's critical_rank_work (counts: no timing)."""
+        return times(self.json(base)["result"]["work"] /
+                     self.json(run)["result"]["critical_rank_work"])
 
     def ratio(self, section, key, base, runs):
         return times(self.s.runs(base).median(section, key) / self.s.runs(runs).median(section, key))
@@ -111,7 +111,7 @@ def section(s):
          f"{json_text(aloop['options']['env_planes'])}), and its 1-rank",
          "baseline is the same two environments in one process (`--envs auto:2",
          "--transport loop`), so all three give the same bytes. The default rounds",
-         f"are sized by work (`--round-work`, chosen at init: {aloop['options']['round_work']} grid steps, "
+         f"are sized by work (`--round-work`, chosen at init: {aloop['options']['round_work']} units of work, "
          f"at most {aloop['options']['round_shots']} shots).",
          f"For comparison, the uniform split `{b}/vismask {s.p}` (planes at x = 278)",
          """on 1 rank (`--transport loop`), `--ranks 2` and `mpirun -np 2`, with the
@@ -127,9 +127,11 @@ run.json's `critical_cpu_seconds`: over the rounds, the sum of the most CPU
 time any rank spent on that round's shots, which is what the solve would take
 with a core per rank and free communication (CPU time does not count the
 time a rank is descheduled, so the machine's other load does not enter it).
-*work bound*: the 1-rank run's `grid_steps` over this run's
-`critical_rank_steps` (the sum over rounds of the most grid steps any rank
-did): the same bound in work, counted, so it is the same on every run.""", ""]
+*work bound*: the 1-rank run's `work` over this run's
+`critical_rank_work` (the sum over rounds of the most work any rank did, in
+the units rounds are sized by: grid steps plus a ray's, a hit's and a shot's
+charge, include/vismask/work.h): the same bound in work, counted, so it is
+the same on every run.""", ""]
     L += table(["run", "solve s", "CPU s", "wait s (rank 0)", "max wait s (any rank)", "critical CPU s",
                 "work bound", "shots", "rounds", "packets", "packets/shot", "bytes/shot"], rows)
     L += ["", "Speedup bound with a core per rank (median critical CPU s of 1 rank ÷ of 2",
@@ -241,7 +243,7 @@ def efficiency(s):
         here, r, cpu, crit, net = runs[(len(runs) - 1) // 2]
         spread = (f" ({100 * runs[0][0]:.0f}–{100 * runs[-1][0]:.0f}%)" if len(runs) > 1 else "")
         rows.append([envs, rounds, "%d" % r["shots"], "%d" % r["rounds"], f"{patch_balance(s, split):.2f}",
-                     f"{100 * r['grid_steps'] / (16 * r['critical_env_steps']):.0f}%", f"{cpu:.2f}",
+                     f"{100 * r['work'] / (16 * r['critical_env_work']):.0f}%", f"{cpu:.2f}",
                      f"{crit:.3f}", f"{net:.3f}", f"{100 * here:.0f}%{spread}",
                      f"{100 * 4 * cpu / (16 * (4 * crit + net)):.0f}%"])
         if name != "bld1":
@@ -259,8 +261,10 @@ any environment spent), plus the network time of the model above (per round""",
          "%d message steps of 100 µs, the bytes at 117 MB/s spread over 16 links)." % STEPS16,
          """Efficiency = CPU of the one-process solve ÷ (16 × (critical CPU + network));
 on a Pi 4 (1/4 of this core's rate, as above) the CPU terms are 4× longer and
-the network the same. *work efficiency*: `grid_steps` ÷ (16 ×
-`critical_env_steps`), the same in counted work with free communication.
+the network the same. *work efficiency*: `work` ÷ (16 ×
+`critical_env_work`), the same in counted work (what the rounds are sized
+by: grid steps plus a ray's, a hit's and a shot's charge) with free
+communication.
 The default runs are repeated (%d times): the row is the run with the median
 efficiency here, with the range of all of them.""" % s.reps, ""]
     L += table(["environments", "round size", "shots", "rounds", "most patches / mean", "work efficiency",

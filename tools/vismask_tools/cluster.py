@@ -191,7 +191,7 @@ def efficiency_runs(c):
         net = r["rounds"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
         rows.append({"label": label, "args": extra, "rounds": r["rounds"], "shots": r["shots"],
                      "cpu": r["compute_cpu_seconds"], "crit": r["critical_env_cpu_seconds"],
-                     "steps": r["grid_steps"], "crit_steps": r["critical_env_steps"], "net": net})
+                     "steps": r["work"], "crit_steps": r["critical_env_work"], "net": net})
     return rows
 
 

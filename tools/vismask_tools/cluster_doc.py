@@ -28,8 +28,8 @@ def efficiency_section(c, add, rows):
         " environment spent) plus a modelled network: %d message steps of %.0f µs a round"
         " (AllGather and two all-to-alls), the bytes at %.0f MB/s spread over 16 links."
         " Efficiency = CPU of the one-process solve ÷ (16 × (critical CPU + network)); on a Pi 4"
-        " (1/4 of this core's rate) the CPU terms are 4× longer. *Work efficiency*: `grid_steps`"
-        " ÷ (16 × `critical_env_steps`), counted, with free communication."
+        " (1/4 of this core's rate) the CPU terms are 4× longer. *Work efficiency*: `work`"
+        " ÷ (16 × `critical_env_work`), counted in what the rounds are sized by, with free communication."
         % (c.building, " ".join(c.eff_args), STEPS16, LATENCY * 1e6, BANDWIDTH / 1e6))
     add("")
     add("| ARGS | shots | rounds | work efficiency | CPU s | critical CPU s | network s | efficiency here | on Pi 4 |")
