@@ -157,8 +157,9 @@ local environments and visibility masks:
   --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
                        1 <= R <= 4096 (default 50; not used by R)
   --round-shots K      at most K shots per environment per round (default
-                       with several environments: 256, fewer when 6 packets
-                       a shot would fill more than 512 KiB; with one: 1).
+                       with several environments or with --round-work: 256,
+                       fewer when 6 packets a shot would fill more than
+                       512 KiB; otherwise 1).
                        Given alone (no --round-work), the rounds of before:
                        K shots, no work limit
   --round-work N       a round ends for an environment once its shots have

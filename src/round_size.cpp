@@ -24,14 +24,14 @@ uint32_t MostRaysAShot(const Options& o) {
 void ResolveRounds(int numEnvs, Options* o) {
   o->roundWorkAuto = false;
   const uint64_t packet = PacketBytes(MaskShapeOf(o->maskMethod, o->maskRes, MostRaysAShot(*o)));
+  // The outbox holds 6 packets a shot: fewer shots a round with big packets.
+  const uint32_t fit = static_cast<uint32_t>(std::max<uint64_t>(
+      1, std::min<uint64_t>(kAutoRoundShots, kAutoRoundOutboxBytes / (6 * packet))));
   if (o->hasRoundWork || o->hasRoundShots || numEnvs <= 1) {
-    if (!o->hasRoundShots) o->roundShots = o->hasRoundWork ? kAutoRoundShots : 1;
+    if (!o->hasRoundShots) o->roundShots = o->hasRoundWork ? fit : 1;
     if (!o->hasRoundWork) o->roundWork = 0;
   } else {
-    // The outbox holds 6 packets a shot: fewer shots a round with big packets.
-    uint64_t shots = kAutoRoundOutboxBytes / (6 * packet);
-    o->roundShots =
-        static_cast<uint32_t>(std::max<uint64_t>(1, std::min<uint64_t>(kAutoRoundShots, shots)));
+    o->roundShots = fit;
     o->roundWorkAuto = true;
   }
   if (!o->hasQueue) o->queue = AutoQueue(numEnvs, o->roundShots, packet);

@@ -143,10 +143,12 @@ TEST(RenderTest, RoundSizeDefaults) {
       {{"--envs", "auto:4"}, 63, true, 0},
       {{"--envs", "2", "--round-shots", "8"}, 8, false, 0},
       {{"--envs", "2", "--round-shots", "1"}, 1, false, 0},
-      {{"--envs", "2", "--round-work", "5000"}, 256, false, 5000},
-      {{"--envs", "2", "--round-work", "0"}, 256, false, 0},
+      // --round-work alone: the automatic shot limit (the outbox's cap too).
+      {{"--envs", "2", "--round-work", "5000"}, 63, false, 5000},
+      {{"--envs", "2", "--round-work", "0"}, 63, false, 0},
+      {{"--envs", "2", "--round-work", "5000", "--mask-res", "20"}, 256, false, 5000},
       {{"--envs", "2", "--round-work", "7", "--round-shots", "3"}, 3, false, 7},
-      {{"--envs", "1", "--round-work", "9"}, 256, false, 9},
+      {{"--envs", "1", "--round-work", "9"}, 63, false, 9},
       {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
   };
   for (const Case& c : cases) {
