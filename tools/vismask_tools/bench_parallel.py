@@ -4,7 +4,6 @@ projection for 16 Raspberry Pi 4 and the parallel efficiency of 16 ranks on
 the building."""
 
 import json
-import math
 import os
 import statistics
 
@@ -187,8 +186,9 @@ def projection(s, P):
     loop = P.json("loop1")["result"]
     rate = (loop["rays"] + loop["mask_rays"]) / median(s.runs(P.l).cpu())  # rays/s of one core here
     pi = rate / 4  # assumption: a Pi 4 core does 1/4 of that
-    # AllGather (recursive doubling) + two all-to-alls (sizes, data)
-    steps = math.log(NODES) / math.log(2) + 2 * (NODES - 1)
+    # The reports' AllGather and the packets' AllToAll: each a message from
+    # every rank to every other (platform/), counted as NODES - 1 steps.
+    steps = 2 * (NODES - 1)
     rows = []
     for label, name in (("by work (default)", "over16"), ("1 shot (before)", "overK16")):
         r = P.json(name)["result"]
@@ -205,8 +205,10 @@ def projection(s, P):
          "Pi are not used (one rank per node); the work is spread evenly over the nodes (the counts above "
          "show it is not: this is a lower bound); Open MPI over TCP on a switched 1 Gbit/s network: "
          f"{LATENCY * 1e6:.0f} µs per message step, {BANDWIDTH / 1e6:.0f} MB/s per link, both directions "
-         "at once; a round costs one AllGather (log2 16 = 4 steps) and two all-to-alls (sizes, then "
-         "packets: 15 steps each), %d message steps in all; bytes are spread evenly over the nodes." % steps,
+         "at once; a round costs the reports' AllGather and the packets' AllToAll, each a message from "
+         "every rank to every other, posted at once (the sizes travel with the data), counted as if "
+         "the 15 went one after another: %d message steps in all; bytes are spread evenly over the "
+         "nodes." % steps,
          ""]
     L += table(["round size", "rays + mask rays", "compute s", "rounds", "latency s", "bytes sent",
                 "transfer s", "projected s", "share of time communicating"], rows)
@@ -217,7 +219,7 @@ paid thousands of times, and rounds sized by work divide it."""]
 
 BUILDING = (("bldU", "4x1x4 (uniform)", "by work", "4x1x4"), ("bldA", "auto:16", "by work", "auto:16"),
             ("bld1", "auto:16", "1 shot", "auto:16"))
-STEPS16 = math.log(16) / math.log(2) + 30  # per round: AllGather + two all-to-alls at 16 ranks
+STEPS16 = 2 * 15  # per round at 16 ranks: the AllGather's and the AllToAll's 15 messages
 
 
 def network_seconds(r):

@@ -19,7 +19,7 @@ COMPARED = ["image.pfm", "patches.csv"]
 MILLION_BEGIN, MILLION_END = "<!-- million: begin -->", "<!-- million: end -->"
 EFF_BEGIN, EFF_END = "<!-- efficiency: begin -->", "<!-- efficiency: end -->"
 LATENCY, BANDWIDTH = 100e-6, 117e6  # per message step; per link, bytes/s (1 Gbit TCP)
-STEPS16 = 4 + 2 * 15                # AllGather + two all-to-alls at 16 ranks
+STEPS16 = 2 * 15                    # per round at 16 ranks: the AllGather's and the AllToAll's 15 messages
 
 
 def log(msg):

@@ -26,7 +26,7 @@ def efficiency_section(c, add, rows):
         " in real time on 2 cores, so their time is the critical path measured per environment"
         " (run.json `critical_env_cpu_seconds`: over the rounds, the sum of the most CPU any"
         " environment spent) plus a modelled network: %d message steps of %.0f µs a round"
-        " (AllGather and two all-to-alls), the bytes at %.0f MB/s spread over 16 links."
+        " (the reports' AllGather and the packets' AllToAll, 15 messages each), the bytes at %.0f MB/s spread over 16 links."
         " Efficiency = CPU of the one-process solve ÷ (16 × (critical CPU + network)); on a Pi 4"
         " (1/4 of this core's rate) the CPU terms are 4× longer. *Work efficiency*: `work`"
         " ÷ (16 × `critical_env_work`), counted in what the rounds are sized by, with free communication."
@@ -180,14 +180,15 @@ def reading(c, add, refs, results):
         " Cornell box are slower than the shaped ones was not explained. A real board per"
         " rank removes the contention; what is left is below.")
     add("")
-    add("**Latency per round** (not emulated here, see above). A round's three collectives are"
-        " dependent: each costs at least one node-to-node latency, and Open MPI's algorithms for"
-        " small messages take about log2 N steps each. On a switched LAN of Pis (ping 0.3–0.5"
-        " ms, one-way about 0.2 ms), 16 nodes cost about 3 × 4 × 0.2 = 2.4 ms per round before"
-        " any byte of mask moves. The Cornell box to --stop-unshot 1e-3 with 16 environments"
-        " takes 14 099 rounds (one process: 283 s of solve, 20 ms per round): 34 s of latency"
-        " against 18 s of shooting per rank if the work divided perfectly by 16. Latency, not"
-        " bandwidth, ends the scaling of small scenes.")
+    add("**Latency per round** (not emulated here, see above). A round has two exchanges, one"
+        " after the other: the reports (AllGather) and the packets (AllToAll). Each is a message"
+        " from every rank to every other, posted at once with MPI_Isend and MPI_Irecv (the"
+        " packets' sizes travel with them), so each costs at least one node-to-node latency"
+        " (on a switched LAN of Pis, ping 0.3–0.5 ms, one way about 0.2 ms) plus the sending of"
+        " 15 messages; the efficiency model above counts the 15 as if one after another. So"
+        " rounds must be few and large: the default rounds are sized by work (issue 20), and"
+        " the rounds of the runs above are in their tables. Latency, not bandwidth, ends the"
+        " scaling of small scenes.")
     add("")
     add("**Mask bytes.** A packet is 4R² bits of mask plus a header (1384 bytes at R = 50;"
         " about 31 kB at R = 250). At 100 Mbit a link moves 12.5 MB/s: at R = 50 the masks of a"
@@ -198,15 +199,16 @@ def reading(c, add, refs, results):
     add("")
     add("**Load imbalance.** The environments are a grid dealt in contiguous blocks"
         " (`--envs auto:N` puts its planes where the patches divide evenly); each round every"
-        " environment shoots until its rays have done `--round-work` grid steps, so ranks do"
-        " about the same work a round. What is left: an environment whose admitted records are"
+        " environment shoots until its shots have done `--round-work` units of counted work"
+        " (grid steps plus a ray's, a hit's and a shot's charge), so ranks do about the same"
+        " work a round. What is left: an environment whose admitted records are"
         " used up and whose queue is empty ends its round short, and the others wait for the"
         " slowest (the spread of *in MPI* between ranks).")
     add("")
     add("**The design change these figures suggest.** Make a round cost one latency and let"
-        " the work hide it: (1) one message per neighbour per round instead of three"
-        " world-wide collectives: masks only travel to grid neighbours, so fold the sizes and"
-        " the report into the packet stream and exchange point-to-point with the ≤ 6"
+        " the work hide it: (1) one message per neighbour per round instead of two world-wide"
+        " exchanges: masks only travel to grid neighbours, so fold the report into the packet"
+        " stream and exchange point-to-point with the ≤ 6"
         " neighbouring environments' ranks (MPI_Neighbor_alltoallv on a graph communicator),"
         " and reduce the stop test every K rounds, not every round; (2) post the exchange"
         " non-blocking and shoot the next local shot while the masks are in flight, so a"
