@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "grid_cells.h"
-#include "patch4.h"
 
 namespace vismask {
 
@@ -295,9 +294,8 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   const uint32_t* start = cellStart_.data();
   const uint32_t* refs = refs_.data();
   const PatchGeom* geom = geom_.data();
-  Ray r = ray;         // tMax shrinks to just past the best hit so far
-  patch4::Ray4 r4(r);  // r, by lane
-  float limit = t1;    // no step into a cell beyond this: the ray's end or the best hit
+  Ray r = ray;       // tMax shrinks to just past the best hit so far
+  float limit = t1;  // no step into a cell beyond this: the ray's end or the best hit
   uint32_t bestPatch = kNoPatch;
   float bestT = r.tMax;  // every hit is nearer than the ray's end
   bool bestFront = false;
@@ -316,50 +314,25 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
         __builtin_prefetch(g);
         __builtin_prefetch(g + sizeof(PatchGeom) - 1);
       }
-      // Four patches a test (patch4.h: each lane bit-identical to
-      // IntersectPatch); a cell's last group repeats its last patch in the
-      // lanes it lacks, which are then ignored.
-      for (uint32_t k = begin; k < end; k += 4) {
-        uint32_t n = std::min(end - k, 4u);
-        uint32_t p[4];
-        const PatchGeom* g[4];
-        for (uint32_t i = 0; i < 4; ++i) {
-          p[i] = refs[n == 4 ? k + i : k + std::min(i, n - 1)];
-          g[i] = geom + p[i];
-        }
-        tests += n;
-        float t[4];
-        unsigned front;
-        unsigned m = patch4::Intersect4(g, r4, t, &front) & (0xfu >> (4 - n));
-        if (m == 0) continue;
-        for (unsigned i = 0; i < 4; ++i)
-          if (p[i] == skip.patch || p[i] == skip.twin) m &= ~(1u << i);
-        if (m == 0) continue;
+      for (uint32_t k = begin; k < end; ++k) {
+        uint32_t p = refs[k];
+        float t;
+        bool front;
+        ++tests;
+        if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
         if (kAnyHit) {
-          // The first hit in ref order, as one test at a time would find it.
-          uint32_t lane = static_cast<uint32_t>(__builtin_ctz(m));
-          if (hit) hit->patch = p[lane];
-          tests -= n - 1 - lane;
+          if (hit) hit->patch = p;
           steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
           return true;
         }
-        // In ref order, as one test at a time: a hit counts while t is below
-        // r.tMax as the lanes before it left it (t <= bestT). On a tie a
-        // front side, then the lower index, so that of two coplanar twins
-        // the ray lands on the one it faces.
-        for (; m != 0; m &= m - 1) {
-          unsigned lane = static_cast<unsigned>(__builtin_ctz(m));
-          float tl = t[lane];
-          bool fl = ((front >> lane) & 1) != 0;
-          if (!(tl < r.tMax)) continue;
-          if (tl < bestT || TieWins(p[lane], fl, bestPatch, bestFront)) {
-            bestPatch = p[lane];
-            bestT = tl;
-            bestFront = fl;
-            r.tMax = std::nextafter(tl, std::numeric_limits<float>::infinity());
-            r4.SetTMax(r.tMax);
-            limit = std::min(t1, tl);
-          }
+        // t <= bestT here. On a tie a front side, then the lower index, so
+        // that of two coplanar twins the ray lands on the one it faces.
+        if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
+          bestPatch = p;
+          bestT = t;
+          bestFront = front;
+          r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+          limit = std::min(t1, t);
         }
       }
     }
