@@ -26,7 +26,6 @@ constexpr double kWallReach = 0.25;  // a wall lies within this many cells of it
 constexpr double kWallCos = 0.9;     // and faces along the axis (within ~25 degrees)
 constexpr size_t kWallShare = 64;    // a face is a wall's when 1/64 of the patches are on it
 constexpr double kWallPast = 8.0;    // pads between a wall and the next cell plane
-constexpr int kAhead = 8;            // cells the prefetching cursor runs ahead of the walk
 
 // Of two hits at the same t, whether patch p (side `front`) beats `best`:
 // a front side beats a back side, then the lower index wins. A total order
@@ -302,34 +301,7 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   bool bestFront = false;
   const uint64_t* occupied = occupied_.data();
   uint64_t tests = 0;
-  // A second cursor runs kAhead cells ahead of the walk along the same
-  // planes (to the grid's exit t1), asking for the offsets of each occupied
-  // cell it enters, so that miss overlaps the walk's work before it.
-  int aIndex = index;
-  float atx = fx, aty = fy, atz = fz, akx = 0.0f, aky = 0.0f, akz = 0.0f;
-  auto ahead = [&]() {
-    if (atx < aty && atx < atz) {
-      if (!(atx < t1)) return;
-      aIndex += move[0];
-      akx += 1.0f;
-      atx = fx + akx * dx;
-    } else if (aty < atz) {
-      if (!(aty < t1)) return;
-      aIndex += move[1];
-      aky += 1.0f;
-      aty = fy + aky * dy;
-    } else {
-      if (!(atz < t1)) return;
-      aIndex += move[2];
-      akz += 1.0f;
-      atz = fz + akz * dz;
-    }
-    if (((occupied[static_cast<uint32_t>(aIndex) >> 6] >> (aIndex & 63)) & 1) != 0)
-      __builtin_prefetch(start + aIndex);
-  };
-  for (int i = 0; i < kAhead; ++i) ahead();
   for (;;) {
-    ahead();
     // Most cells a ray crosses are empty: one bit in a small bitmap says so,
     // where their offsets (32 times larger, strided by rows and slices) cost
     // a cache miss each in a large grid.
