@@ -178,8 +178,8 @@ local environments and visibility masks:
   --queue Q            foreign shooters an environment holds at once; a
                        full queue holds back new ones (default: the
                        environments x the round's shots, so that every
-                       environment can make a whole round, within 1 MiB of
-                       slots an environment, and at least 64)
+                       environment can make a whole round, but at most 64
+                       an environment and 1 MiB of slots; at least 64)
   --ranks N            run on N processes on this host, connected by POSIX
                        pipes (default 1); environments are dealt to ranks in
                        contiguous blocks; N <= the number of environments

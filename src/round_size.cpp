@@ -40,7 +40,7 @@ void ResolveRounds(int numEnvs, Options* o) {
 uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes) {
   // Admission shares the free slots among the environments, so a round of
   // `roundShots` local shots in each needs numEnvs x roundShots of them.
-  const uint64_t want = uint64_t(std::max(numEnvs, 1)) * roundShots;
+  const uint64_t want = uint64_t(std::max(numEnvs, 1)) * std::min(roundShots, kAutoQueueShots);
   const uint64_t fit = kAutoQueueBytes / std::max<uint64_t>(packetBytes, 1);
   return static_cast<uint32_t>(std::max<uint64_t>(kMinAutoQueue, std::min(want, fit)));
 }

@@ -174,7 +174,12 @@ double MeanRelativeError(const std::string& out, double exact) {
 // at any moment, however much is in flight (here most of the power); and
 // the power counted as unshot or in flight never exceeds what was emitted
 // (a shooter queued in three environments counts once). Method B's masks
-// lose power: the mean falls short by the loss the solver states.
+// lose power: the mean falls short by the loss the solver states, once
+// foreign shooters have shot. Rounds of 8 shots, so that they have within
+// the 300 shots: the default rounds make all 300 in one round of local
+// shots, and then B's flight estimate (FlightShare, a share per receiver)
+// counts more than was sent, by about the loss (mean +0.31% here, stated
+// loss 0.31%: LossEstimate states its size, not its sign).
 TEST(StabilityTest, AmbientCountsThePowerInFlight) {
   TempDir dir;
   const double exact = 1.0 / (1.0 - static_cast<double>(0.99f));
@@ -182,13 +187,15 @@ TEST(StabilityTest, AmbientCountsThePowerInFlight) {
     std::string out = dir.File(method);
     auto r = RunMain(Args({"render", "scenes/stiff/box-rho0.99.obj", "--out", out, "--patch-size",
                            "0.34", "--rays", "1024", "--envs", "2x2x2", "--mask-method", method,
-                           "--mask-res", "20", "--max-shots", "300", "--correct-unshot", "on"},
+                           "--mask-res", "20", "--max-shots", "300", "--correct-unshot", "on",
+                           "--round-shots", "8"},
                           Small()));
     ASSERT_EQ(r.code, 0) << r.err;
     std::string json = ReadFile(out + "/run.json");
     double unshot = JsonNumber(json, "unshot_fraction");
     EXPECT_GT(unshot, 0.9) << method << ": most of the power is still to deliver";
     EXPECT_LE(unshot, 1.0) << method << ": power counted in several environments";
+    EXPECT_GT(JsonNumber(json, "foreign_shots"), 0.0) << method;
     double mean = MeanRelativeError(out, exact);
     double loss = JsonNumber(json, "loss_estimate");
     if (std::string(method) == "R") {

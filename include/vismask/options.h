@@ -130,11 +130,17 @@ void ResolveRounds(int numEnvs, Options* options);
 
 // The default --queue: numEnvs x roundShots slots (admission shares the
 // free slots among the environments, so that is what lets each make a
-// whole round), at most kAutoQueueBytes of `packetBytes` slots, at least
-// kMinAutoQueue. The fixed 64 of before held the building's solve in 16
-// environments to 123 rounds; 1024 slots take 19 (issue 20).
+// whole round), but at most kAutoQueueShots an environment and
+// kAutoQueueBytes of `packetBytes` slots, and at least kMinAutoQueue. The
+// fixed 64 of before held the building's solve in 16 environments to 123
+// rounds; 1024 slots take 19 (issue 20). More than 64 an environment made
+// the stiff box in 2x2x2 (Method R, --stop-error 8e-3) take more shots:
+// 44 757 with 512 slots, over 100 000 with 2 048 (admission lets every
+// environment shoot its weak local patches while the strong power waits
+// in the queues).
 constexpr uint64_t kAutoQueueBytes = 1u << 20;
 constexpr uint32_t kMinAutoQueue = 64;
+constexpr uint32_t kAutoQueueShots = 64;
 uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes);
 
 // A run of `ranks` ranks (the MPI world) without --envs: --envs auto with
