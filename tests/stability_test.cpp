@@ -185,10 +185,26 @@ TEST(StabilityTest, AmbientCountsThePowerInFlight) {
   const double exact = 1.0 / (1.0 - static_cast<double>(0.99f));
   for (const char* method : {"R", "B"}) {
     std::string out = dir.File(method);
-    auto r = RunMain(Args({"render", "scenes/stiff/box-rho0.99.obj", "--out", out, "--patch-size",
-                           "0.34", "--rays", "1024", "--envs", "2x2x2", "--mask-method", method,
-                           "--mask-res", "20", "--max-shots", "300", "--correct-unshot", "on",
-                           "--round-shots", "8"},
+    auto r = RunMain(Args({"render",
+                           "scenes/stiff/box-rho0.99.obj",
+                           "--out",
+                           out,
+                           "--patch-size",
+                           "0.34",
+                           "--rays",
+                           "1024",
+                           "--envs",
+                           "2x2x2",
+                           "--mask-method",
+                           method,
+                           "--mask-res",
+                           "20",
+                           "--max-shots",
+                           "300",
+                           "--correct-unshot",
+                           "on",
+                           "--round-shots",
+                           "8"},
                           Small()));
     ASSERT_EQ(r.code, 0) << r.err;
     std::string json = ReadFile(out + "/run.json");
