@@ -101,10 +101,12 @@ void MaskDirections::Layout(Arena& arena, uint32_t res) {
   rowCos_ = arena.Alloc<double>(res);
   colCos_ = arena.Alloc<double>(size_t(4) * res);
   colSin_ = arena.Alloc<double>(size_t(4) * res);
-  // Four z bins a row and two p bins a column: the rows take one step or
-  // two from their bin's first but near the normal, the columns at most one.
-  rowBins_ = res > 0 ? PowerOfTwo(4 * res) : 0;
+  // Eight z bins a row and two p bins a column: at most one edge a bin,
+  // but the rows within 0.06 rad of the normal (0.4% of cosine rays).
+  rowBins_ = res > 0 ? PowerOfTwo(8 * res) : 0;
   colBins_ = res > 0 ? PowerOfTwo(2 * res) : 0;
+  rowScale_ = rowBins_;
+  colScale_ = colBins_;
   rowEdge_ = arena.Alloc<double>(res > 0 ? res + 1 : 0);
   rowBin_ = arena.Alloc<uint32_t>(res > 0 ? rowBins_ + 1 : 0);
   colEdge_ = arena.Alloc<double>(res > 0 ? res + 2 : 0);
@@ -152,33 +154,33 @@ void MaskDirections::Fill() {
 }
 
 uint32_t MaskDirections::Pixel(const glm::vec3& d) const {
-  const float x = d.x, y = d.y;
-  // On an axis: on a column edge.
-  if (x == 0.0f || y == 0.0f) return MaskPixel(d, res_);
-  // The row: from its bin's first, down past the edges above z.
+  const double x = d.x, y = d.y;
   const double z = d.z < 0.0f ? 0.0 : (d.z > 1.0f ? 1.0 : static_cast<double>(d.z));
-  uint32_t row = rowBin_[static_cast<uint32_t>(z * rowBins_)];
-  while (rowEdge_[row + 1] > z) ++row;
-  // The column: the quadrant, then p of (x, y) turned into the first.
+  // The quadrant, and (x, y) turned into the first: (a, b).
   double a, b;
   uint32_t quadrant;
-  if (y > 0.0f) {
-    quadrant = x > 0.0f ? 0 : 1;
-    a = x > 0.0f ? x : y;
-    b = x > 0.0f ? y : -x;
+  if (y > 0.0) {
+    quadrant = x > 0.0 ? 0 : 1;
+    a = x > 0.0 ? x : y;
+    b = x > 0.0 ? y : -x;
   } else {
-    quadrant = x < 0.0f ? 2 : 3;
-    a = x < 0.0f ? -x : -y;
-    b = x < 0.0f ? -y : x;
+    quadrant = x < 0.0 ? 2 : 3;
+    a = x < 0.0 ? -x : -y;
+    b = x < 0.0 ? -y : x;
   }
+  // On an axis (a or b is 0, exactly: floats' product): a column edge.
+  if (a * b == 0.0) return MaskPixel(d, res_);
   const double p = b / (a + b);
-  uint32_t col = colBin_[static_cast<uint32_t>(p * colBins_)];
+  // Each from its bin's first, one edge on at most.
+  uint32_t row = rowBin_[static_cast<uint32_t>(z * rowScale_)];
+  row += rowEdge_[row + 1] > z;
+  uint32_t col = colBin_[static_cast<uint32_t>(p * colScale_)];
   col += colEdge_[col + 1] <= p;
   // Clear of all four edges by the margin: the pixel; else MaskPixel's.
   const bool clear = (rowEdge_[row] - z > kEdgeMargin) & (z - rowEdge_[row + 1] > kEdgeMargin) &
                      (p - colEdge_[col] > kEdgeMargin) & (colEdge_[col + 1] - p > kEdgeMargin);
   if (!clear) return MaskPixel(d, res_);
-  return row * 4 * res_ + quadrant * res_ + col;
+  return (row * 4 + quadrant) * res_ + col;
 }
 
 void MaskBits::SetAllOpen() {

@@ -83,6 +83,7 @@ class MaskDirections {
   Span<double> colEdge_;
   Span<uint32_t> colBin_;
   uint32_t rowBins_ = 0, colBins_ = 0;  // powers of two: z * bins is exact
+  double rowScale_ = 0.0, colScale_ = 0.0;  // the same, as doubles
 };
 
 // A mask over 64-bit words (bit p of word p / 64): `res` rows of a
