@@ -82,7 +82,7 @@ class MaskDirections {
   // [R + 1] = 2. colBin_[b]: the column of p = b / colBins_.
   Span<double> colEdge_;
   Span<uint32_t> colBin_;
-  uint32_t rowBins_ = 0, colBins_ = 0;  // powers of two: z * bins is exact
+  uint32_t rowBins_ = 0, colBins_ = 0;      // powers of two: z * bins is exact
   double rowScale_ = 0.0, colScale_ = 0.0;  // the same, as doubles
 };
 
