@@ -168,8 +168,8 @@ uint32_t MaskDirections::Pixel(const glm::vec3& d) const {
     a = x < 0.0 ? -x : -y;
     b = x < 0.0 ? -y : x;
   }
-  // On an axis (a or b is 0, exactly: floats' product): a column edge.
-  if (a * b == 0.0) return MaskPixel(d, res_);
+  // On an axis (a or b is 0, exactly: floats' product; or NaN): a column edge.
+  if (!(a * b > 0.0)) return MaskPixel(d, res_);
   const double p = b / (a + b);
   // Each from its bin's first, one edge on at most.
   uint32_t row = rowBin_[static_cast<uint32_t>(z * rowScale_)];

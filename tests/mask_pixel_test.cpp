@@ -82,7 +82,7 @@ TEST(MaskPixelTest, EdgesGiveMaskPixel) {
         check(glm::vec3(0.6f * s, 0.8f * s, zn));
         check(glm::vec3(-0.28f * s, -0.96f * s, zn));
         check(glm::vec3(1e-3f, -2e-3f, zn));
-        check(CosineDirection(Ulps(u1, n), 0.3f));
+        if (Ulps(u1, n) >= 0.0f) check(CosineDirection(Ulps(u1, n), 0.3f));
       }
       if (HasFatalFailure()) return;
     }
