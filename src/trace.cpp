@@ -169,11 +169,11 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
         glm::vec3 l(glm::dot(q, sampler.frame.t), glm::dot(q, sampler.frame.b),
                     glm::dot(q, sampler.frame.n));
         float len = glm::length(l);
-        pixel = MaskPixel(len > 0.0f && l.z > 0.0f ? l / len : local, shape_.res);
+        pixel = maskDirections_.Pixel(len > 0.0f && l.z > 0.0f ? l / len : local);
         if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
       }
     } else if (marks) {
-      pixel = MaskPixel(local, shape_.res);
+      pixel = maskDirections_.Pixel(local);
     }
     ++tally.traced;
     Hit hit;

@@ -49,6 +49,8 @@ glm::vec3 MaskPixelCentre(uint32_t pixel, uint32_t res);
 // bit for bit, without the trigonometry per pixel. Methods B and C cast a
 // ray through every open pixel of every shot that has a downstream
 // neighbour, and sin/cos were a fifth of a Method B run's instructions.
+// Pixel is MaskPixel from tables of the row and column edges: the same
+// pixel for every direction (tests/mask_pixel_test.cpp), without the trig.
 class MaskDirections {
  public:
   // Carves the tables for resolution `res` (0: none) from `arena`.
@@ -64,10 +66,24 @@ class MaskDirections {
     return glm::vec3(static_cast<float>(s * colCos_[col]), static_cast<float>(s * colSin_[col]),
                      static_cast<float>(rowCos_[row]));
   }
+  // MaskPixel(d, res()), exactly: by table where d is clear of every edge,
+  // by MaskPixel itself within kEdgeMargin of one. res() > 0.
+  uint32_t Pixel(const glm::vec3& d) const;
 
  private:
   uint32_t res_ = 0;
   Span<double> rowSin_, rowCos_, colCos_, colSin_;
+  // Row edges: cos(k pi/2R), k = 0..R, falling; [0] = 2 and [R] = -1 stop
+  // the search. rowBin_[b]: the row of z just below (b + 1) / rowBins_.
+  Span<double> rowEdge_;
+  Span<uint32_t> rowBin_;
+  // Column edges within a quadrant, in p = b / (a + b) of the quadrant's
+  // (a, b), p_j = sin / (sin + cos) of j pi/2R, rising: [0] = 0, [R] = 1,
+  // [R + 1] = 2. colBin_[b]: the column of p = b / colBins_.
+  Span<double> colEdge_;
+  Span<uint32_t> colBin_;
+  uint32_t rowBins_ = 0, colBins_ = 0;      // powers of two: z * bins is exact
+  double rowScale_ = 0.0, colScale_ = 0.0;  // the same, as doubles
 };
 
 // A mask over 64-bit words (bit p of word p / 64): `res` rows of a
