@@ -12,25 +12,13 @@
 #include <vector>
 
 #include "grid_test_util.h"
+#include "mask_test_util.h"
 #include "vismask/sampling.h"
 
 namespace vismask {
 namespace {
 
 using namespace gridtest;
-
-// Direction tables for one resolution, in their own arena.
-struct Directions {
-  Arena arena{1};
-  MaskDirections dirs;
-  explicit Directions(uint32_t res) {
-    Arena measure = Arena::Measure();
-    dirs.Layout(measure, res);
-    arena = Arena(measure.used());
-    dirs.Layout(arena, res);
-    dirs.Fill();
-  }
-};
 
 // The centre rays of patch `i` of `s`, as Environment::CastCentres forms them.
 CentreRays RaysOf(const Patch& p, const MaskDirections& dirs, float epsilon) {
@@ -50,7 +38,7 @@ struct Compared {
 Compared CompareAll(const TestScene& s, uint32_t res, uint32_t stride, float epsilon) {
   BuiltGrid b;
   BuildGrid(s, 4.0f, &b);
-  Directions d(res);
+  test::MaskTables d(res);
   MaskShape shape{res, 0};
   std::vector<uint64_t> w1(shape.words()), w2(shape.words());
   MaskBits walk(Span<uint64_t>(w1.data(), w1.size()), shape);
@@ -150,7 +138,7 @@ TEST(CentreRasterTest, KeepExitsKeepsEveryPixelThatCanLeave) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   uint64_t kept = 0, closed = 0, checked = 0;
   for (uint32_t res : {5u, 16u, 50u}) {
-    Directions d(res);
+    test::MaskTables d(res);
     MaskShape shape{res, 0};
     std::vector<uint64_t> words(shape.words());
     MaskBits mask(Span<uint64_t>(words.data(), words.size()), shape);
@@ -194,7 +182,7 @@ TEST(CentreRasterTest, FaceViewBoundsTheCrossingDirections) {
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
   uint64_t sure = 0, crossing = 0;
   for (uint32_t res : {8u, 30u}) {
-    Directions d(res);
+    test::MaskTables d(res);
     const uint32_t cols = 4 * res;
     // FlightShare's column table: a rotation per column from half a column.
     std::vector<double> cs(2 * cols);

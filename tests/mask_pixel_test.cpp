@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "vismask/arena.h"
+#include "mask_test_util.h"
 #include "vismask/mask.h"
 #include "vismask/sampling.h"
 
@@ -17,19 +17,6 @@ namespace {
 
 constexpr double kHalfPi = 1.5707963267948966, kTwoPi = 6.283185307179586;
 const uint32_t kResolutions[] = {1, 2, 7, 50, 100, 250, 4096};
-
-// The tables for one resolution, in their own arena.
-struct Tables {
-  Arena arena{1};
-  MaskDirections dirs;
-  explicit Tables(uint32_t res) {
-    Arena measure = Arena::Measure();
-    dirs.Layout(measure, res);
-    arena = Arena(measure.used());
-    dirs.Layout(arena, res);
-    dirs.Fill();
-  }
-};
 
 // Fails the test at the first direction whose pixels differ.
 void ExpectSame(const MaskDirections& dirs, const glm::vec3& d) {
@@ -51,7 +38,7 @@ TEST(MaskPixelTest, RandomDirectionsGiveMaskPixel) {
   std::mt19937 rng(19);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f), signed_(-1.0f, 1.0f);
   for (uint32_t res : kResolutions) {
-    Tables t(res);
+    test::MaskTables t(res);
     for (int k = 0; k < 500000; ++k) {
       ExpectSame(t.dirs, CosineDirection(unit(rng), unit(rng)));
       glm::vec3 d(signed_(rng), signed_(rng), unit(rng));
@@ -68,7 +55,7 @@ TEST(MaskPixelTest, RandomDirectionsGiveMaskPixel) {
 TEST(MaskPixelTest, EdgesGiveMaskPixel) {
   uint64_t checked = 0;
   for (uint32_t res : kResolutions) {
-    Tables t(res);
+    test::MaskTables t(res);
     auto check = [&](const glm::vec3& d) {
       ExpectSame(t.dirs, d);
       ++checked;
