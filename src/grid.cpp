@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <glm/geometric.hpp>
 #include <limits>
 #include <vector>
@@ -34,6 +35,55 @@ constexpr double kWallPast = 8.0;    // pads between a wall and the next cell pl
 // Runs on exact ties only, off the walk's hot path.
 inline bool TieWins(uint32_t p, bool front, uint32_t best, bool bestFront) {
   return front != bestFront ? front : p < best;
+}
+
+// +1 or -1: the sign that makes the normal's first non-zero component
+// positive; 0 for a zero or non-finite normal (which gets no plane record).
+inline float NormalSign(const glm::vec3& n) {
+  if (!(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z))) return 0.0f;
+  for (int a = 0; a < 3; ++a) {
+    if (n[a] > 0.0f) return 1.0f;
+    if (n[a] < 0.0f) return -1.0f;
+  }
+  return 0.0f;
+}
+
+// Calls visit(CellPlane) for every run of two or more consecutive patches of
+// one surface whose normals agree up to sign, bit for bit (CellPlane).
+template <typename Visit>
+void ForEachPlaneRun(Span<const Patch> patches, Span<const PatchGeom> geom, Visit visit) {
+  const size_t n = patches.size();
+  size_t i = 0;
+  while (i < n) {
+    const float sign = NormalSign(geom[i].n);
+    CellPlane run;
+    run.n = sign * geom[i].n;
+    run.dLo = run.dHi = sign * geom[i].d;
+    size_t j = i + 1;
+    if (sign != 0.0f && std::isfinite(run.dLo)) {
+      for (; j < n && patches[j].surface == patches[i].surface; ++j) {
+        const float sj = NormalSign(geom[j].n);
+        const glm::vec3 nj = sj * geom[j].n;
+        const float dj = sj * geom[j].d;
+        if (sj == 0.0f || std::memcmp(&nj, &run.n, sizeof nj) != 0 || !std::isfinite(dj)) break;
+        run.dLo = std::min(run.dLo, dj);
+        run.dHi = std::max(run.dHi, dj);
+      }
+    }
+    if (j - i >= 2) {
+      run.first = static_cast<uint32_t>(i);
+      run.count = static_cast<uint32_t>(j - i);
+      visit(run);
+    }
+    i = j;
+  }
+}
+
+// Whether two records are the same plane and range, bit for bit.
+inline bool SamePlane(const CellPlane& a, const CellPlane& b) {
+  return std::memcmp(&a.n, &b.n, sizeof a.n) == 0 &&
+         std::memcmp(&a.dLo, &b.dLo, sizeof a.dLo) == 0 &&
+         std::memcmp(&a.dHi, &b.dHi, sizeof a.dHi) == 0;
 }
 
 }  // namespace
@@ -128,24 +178,35 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
     plan.bounds.hi[a] = std::nextafter(static_cast<float>(inHi + wallHi * size), HUGE_VALF);
   }
 
-  // Exact reference count, by the same rule Build uses.
+  // Exact reference and occupied-cell counts, by the same rule Build uses.
   CellGeometry cellGeom = CellGeometryOf(plan);
-  uint64_t refs = 0;
+  const size_t cells = static_cast<size_t>(plan.res[0]) * plan.res[1] * plan.res[2];
+  std::vector<uint64_t> touched((cells + 63) / 64, 0);
+  uint64_t refs = 0, occupied = 0;
   for (size_t i = 0; i < n; ++i) {
     MakeShape(patches[i], geom[i], scale, &shape);
-    ForEachCell(cellGeom, shape, [&refs](size_t) { ++refs; });
+    ForEachCell(cellGeom, shape, [&](size_t c) {
+      ++refs;
+      uint64_t bit = uint64_t{1} << (c & 63);
+      occupied += (touched[c >> 6] & bit) == 0;
+      touched[c >> 6] |= bit;
+    });
   }
   plan.refs = refs;
+  plan.occupied = occupied;
+  ForEachPlaneRun(patches, geom, [&plan](const CellPlane&) { ++plan.planes; });
   return plan;
 }
 
 void Grid::Layout(Arena& arena, const Plan& plan) {
   plan_ = plan;
   size_t cells = cellCount();
-  CHECK_MSG(cells < 0xffffffffu && plan.refs <= 0xffffffffu, "grid too large for 32-bit offsets");
+  CHECK_MSG(cells < 0xffffffffu && plan.refs + plan.occupied < 0xffffffffu,
+            "grid too large for 32-bit offsets");
   cellStart_ = arena.Alloc<uint32_t>(cells + 1);
-  refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs));
+  refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs + plan.occupied));
   occupied_ = arena.Alloc<uint64_t>((cells + 63) / 64);
+  planes_ = arena.Alloc<CellPlane>(static_cast<size_t>(plan.planes));
   for (int a = 0; a < 3; ++a) {
     float extent = plan.bounds.hi[a] - plan.bounds.lo[a];
     cellSize_[a] = extent / static_cast<float>(plan.res[a]);
@@ -163,8 +224,17 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   size_t cells = cellCount();
   uint32_t* start = cellStart_.data();
 
-  // Counting sort: count per cell, exclusive prefix sum, fill advancing each
-  // cell's start to its end, then shift the starts back by one cell.
+  // The plane records, in patch order.
+  size_t numPlanes = 0;
+  ForEachPlaneRun(patches, geom, [&](const CellPlane& run) {
+    CHECK(numPlanes < planes_.size());
+    planes_[numPlanes++] = run;
+  });
+  CHECK_MSG(numPlanes == planes_.size(), "grid plan does not match the patches it is built from");
+
+  // Counting sort: count per cell, exclusive prefix sum (a header word
+  // before each occupied cell's patches), fill advancing each cell's start
+  // to its end, then shift the starts back by one cell.
   for (size_t c = 0; c <= cells; ++c) start[c] = 0;
   Shape shape;
   uint64_t total = 0;
@@ -179,9 +249,12 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   uint32_t sum = 0;
   for (size_t c = 0; c < cells; ++c) {
     uint32_t count = start[c];
-    start[c] = sum;
-    sum += count;
+    uint32_t header = count > 0;
+    start[c] = sum + header;
+    sum += count + header;
   }
+  CHECK_MSG(sum == plan_.refs + plan_.occupied,
+            "grid plan does not match the patches it is built from");
   start[cells] = sum;
   uint32_t* refs = refs_.data();
   for (size_t i = 0; i < patches.size(); ++i) {
@@ -193,8 +266,25 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   start[0] = 0;
   uint64_t* occupied = occupied_.data();
   for (size_t w = 0; w < occupied_.size(); ++w) occupied[w] = 0;
-  for (size_t c = 0; c < cells; ++c)
-    if (start[c + 1] > start[c]) occupied[c >> 6] |= uint64_t{1} << (c & 63);
+  // Each occupied cell's header: the plane record all its patches share, if any.
+  const CellPlane* planes = planes_.data();
+  auto recordOf = [&](uint32_t p) -> const CellPlane* {
+    const CellPlane* r = std::upper_bound(
+        planes, planes + numPlanes, p, [](uint32_t q, const CellPlane& c) { return q < c.first; });
+    if (r == planes) return nullptr;
+    --r;
+    return p - r->first < r->count ? r : nullptr;
+  };
+  for (size_t c = 0; c < cells; ++c) {
+    if (start[c + 1] == start[c]) continue;
+    occupied[c >> 6] |= uint64_t{1} << (c & 63);
+    const CellPlane* shared = recordOf(refs[start[c] + 1]);
+    for (uint32_t k = start[c] + 2; k < start[c + 1] && shared; ++k) {
+      const CellPlane* r = recordOf(refs[k]);
+      if (!r || !SamePlane(*r, *shared)) shared = nullptr;
+    }
+    refs[start[c]] = shared ? static_cast<uint32_t>(shared - planes) : kNoPlane;
+  }
 }
 
 template <bool kAnyHit>
@@ -294,6 +384,7 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   const uint32_t* start = cellStart_.data();
   const uint32_t* refs = refs_.data();
   const PatchGeom* geom = geom_.data();
+  const CellPlane* planes = planes_.data();
   Ray r = ray;       // tMax shrinks to just past the best hit so far
   float limit = t1;  // no step into a cell beyond this: the ray's end or the best hit
   uint32_t bestPatch = kNoPatch;
@@ -306,7 +397,25 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
     // where their offsets (32 times larger, strided by rows and slices) cost
     // a cache miss each in a large grid.
     if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0) {
-      uint32_t begin = start[index], end = start[index + 1];
+      uint32_t begin = start[index] + 1, end = start[index + 1];
+      const uint32_t header = refs[begin - 1];
+      if (header != kNoPlane) {
+        // The cell's patches share a plane (CellPlane). Each patch test
+        // divides num = d - n.o by denom = n.dir; if num is never of
+        // denom's sign over the range of d, every t is <= 0 and, with
+        // tMin >= 0, every test below would fail its range check: the
+        // cell is passed without reading a patch. The products and sums
+        // are IntersectPatch's, on the other sign of the normal for some
+        // patches, which negates them exactly; no division is needed.
+        const CellPlane& pl = planes[header];
+        float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
+        float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
+        float numLo = pl.dLo - s, numHi = pl.dHi - s;
+        if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f))) {
+          tests += end - begin;
+          begin = end;
+        }
+      }
       // Ask for every patch of the cell at once: their cache misses overlap
       // instead of coming one test at a time.
       for (uint32_t k = begin; k < end; ++k) {

@@ -69,31 +69,36 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
   grid.Layout(arena, plan);
   EXPECT_EQ(arena.used(), measure.used());
   EXPECT_EQ(grid.bytes(), probe.bytes());
-  EXPECT_EQ(grid.bytes(), (grid.cellCount() + 1 + plan.refs) * sizeof(uint32_t) +
-                              (grid.cellCount() + 63) / 64 * sizeof(uint64_t));
+  EXPECT_EQ(grid.bytes(), (grid.cellCount() + 1 + plan.refs + plan.occupied) * sizeof(uint32_t) +
+                              (grid.cellCount() + 63) / 64 * sizeof(uint64_t) +
+                              plan.planes * sizeof(CellPlane));
   grid.Build(Span<const Patch>(s.patches.data(), 700), Span<const PatchGeom>(s.geom.data(), 700));
   EXPECT_EQ(arena.used(), measure.used());
 
-  // The built arrays hold exactly plan.refs references, sorted within cells,
-  // and every patch is in the cell of its centroid.
+  // The built arrays hold exactly plan.refs references and a header word
+  // per occupied cell, sorted within cells, and every patch is in the cell
+  // of its centroid.
   Span<const uint32_t> start = grid.cellStart();
-  Span<const uint32_t> refs = grid.refs();
   // The occupancy bitmap marks exactly the cells that hold a reference.
-  size_t occupiedCells = 0;
+  size_t occupiedCells = 0, refCount = 0;
   for (size_t c = 0; c < grid.cellCount(); ++c) {
     bool bit = (grid.occupied()[c / 64] >> (c % 64)) & 1;
     ASSERT_EQ(bit, start[c + 1] > start[c]) << "cell " << c;
+    ASSERT_EQ(bit, !grid.CellRefs(c).empty()) << "cell " << c;
     occupiedCells += bit;
+    refCount += grid.CellRefs(c).size();
   }
   EXPECT_GT(occupiedCells, 0u);
   EXPECT_LT(occupiedCells, grid.cellCount());
+  EXPECT_EQ(occupiedCells, plan.occupied);
+  EXPECT_EQ(refCount, plan.refs);
   ASSERT_EQ(start.size(), grid.cellCount() + 1);
   EXPECT_EQ(start[0], 0u);
-  EXPECT_EQ(start[grid.cellCount()], plan.refs);
-  EXPECT_EQ(refs.size(), plan.refs);
+  EXPECT_EQ(start[grid.cellCount()], plan.refs + plan.occupied);
   for (size_t c = 0; c < grid.cellCount(); ++c) {
     ASSERT_LE(start[c], start[c + 1]);
-    for (uint32_t k = start[c] + 1; k < start[c + 1]; ++k) ASSERT_LT(refs[k - 1], refs[k]);
+    Span<const uint32_t> refs = grid.CellRefs(c);
+    for (size_t k = 1; k < refs.size(); ++k) ASSERT_LT(refs[k - 1], refs[k]);
   }
   glm::vec3 cell =
       (plan.bounds.hi - plan.bounds.lo) / glm::vec3(plan.res[0], plan.res[1], plan.res[2]);
@@ -104,7 +109,7 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
                               glm::ivec3(plan.res[0], plan.res[1], plan.res[2]) - 1);
     size_t index = (size_t(c.z) * plan.res[1] + c.y) * plan.res[0] + c.x;
     bool found = false;
-    for (uint32_t k = start[index]; k < start[index + 1]; ++k) found |= refs[k] == i;
+    for (uint32_t r : grid.CellRefs(index)) found |= r == i;
     EXPECT_TRUE(found) << "patch " << i;
   }
 }
@@ -135,7 +140,8 @@ TEST(GridTest, SlantedPatchSkipsCellsItMisses) {
   BuiltGrid b;
   BuildGrid(s, 4.0f, &b);
   size_t count = 0;
-  for (uint32_t r : b.grid.refs()) count += r == big;
+  for (size_t c = 0; c < b.grid.cellCount(); ++c)
+    for (uint32_t r : b.grid.CellRefs(c)) count += r == big;
   size_t boxCells = b.grid.cellCount();  // its box spans (nearly) the whole grid
   EXPECT_GT(count, 0u);
   EXPECT_LT(count * 4, boxCells) << count << " of " << boxCells;
@@ -160,8 +166,6 @@ TEST(GridTest, WallsLieInAnOuterLayer) {
     bool high;  // on the box's upper face
   };
   const Wall walls[5] = {{1, false}, {1, true}, {2, false}, {0, false}, {0, true}};
-  Span<const uint32_t> start = b.grid.cellStart();
-  Span<const uint32_t> refs = b.grid.refs();
   for (int w = 0; w < 5; ++w) {
     int a = walls[w].axis;
     int layer = walls[w].high ? plan.res[a] - 1 : 0;
@@ -176,8 +180,7 @@ TEST(GridTest, WallsLieInAnOuterLayer) {
       int coord[3] = {static_cast<int>(c % plan.res[0]),
                       static_cast<int>(c / plan.res[0] % plan.res[1]),
                       static_cast<int>(c / plan.res[0] / plan.res[1])};
-      for (uint32_t k = start[c]; k < start[c + 1]; ++k) {
-        uint32_t p = refs[k];
+      for (uint32_t p : b.grid.CellRefs(c)) {
         if (p >= static_cast<uint32_t>(w * m * m) && p < static_cast<uint32_t>((w + 1) * m * m)) {
           ASSERT_EQ(coord[a], layer) << "wall " << w << " patch " << p;
         }
@@ -201,12 +204,10 @@ TEST(GridTest, WallsLieInAnOuterLayer) {
   float inner = bl.plan.bounds.hi.x - (bl.plan.bounds.hi.x - bl.plan.bounds.lo.x) / bl.plan.res[0];
   EXPECT_LT(inner, 1.0f);
   EXPECT_GT(inner, 0.98f);
-  Span<const uint32_t> ls = bl.grid.cellStart();
-  Span<const uint32_t> lr = bl.grid.refs();
   for (size_t c = 0; c < bl.grid.cellCount(); ++c) {
-    for (uint32_t k = ls[c]; k < ls[c + 1]; ++k) {
-      if (lr[k] >= static_cast<uint32_t>(4 * m * m) && lr[k] < static_cast<uint32_t>(5 * m * m)) {
-        ASSERT_EQ(static_cast<int>(c % bl.plan.res[0]), bl.plan.res[0] - 1) << "patch " << lr[k];
+    for (uint32_t p : bl.grid.CellRefs(c)) {
+      if (p >= static_cast<uint32_t>(4 * m * m) && p < static_cast<uint32_t>(5 * m * m)) {
+        ASSERT_EQ(static_cast<int>(c % bl.plan.res[0]), bl.plan.res[0] - 1) << "patch " << p;
       }
     }
   }

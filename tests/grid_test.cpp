@@ -65,6 +65,103 @@ TEST(GridTest, CornellBoxMatchesBruteForce) {
   EXPECT_GE(total, 45000);
 }
 
+// Cells whose patches share a plane (CellPlane): a ray that meets the plane
+// behind its origin skips them without reading a patch. The scene has
+// walls of one surface each, a tilted wall whose patches' plane offsets
+// differ by rounding, and that wall's twins (TwinGeom: the normal's other
+// sign) in the same cells. The skip must give brute force's hit, bit for
+// bit, from points on, in front of and behind the planes, with tMin 0 and
+// with tMin < 0 (where a hit behind the origin counts and no cell may be
+// skipped).
+TEST(GridTest, SharedPlanesSkipCellsExactly) {
+  TestScene s = CornellScene(8);
+  for (size_t i = 0; i < s.patches.size(); ++i)
+    s.patches[i].surface = static_cast<uint32_t>(i < 320 ? i / 64 : 5 + i);
+  const size_t tiltFirst = s.patches.size();
+  const int m = 6;
+  const glm::vec3 origin(0.1f, 0.15f, 0.6f), u(0.7f, 0.05f, -0.3f), v(0.02f, 0.6f, 0.13f);
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < m; ++j) {
+      glm::vec3 c[4] = {origin + u * (i / float(m)) + v * (j / float(m)),
+                        origin + u * ((i + 1) / float(m)) + v * (j / float(m)),
+                        origin + u * ((i + 1) / float(m)) + v * ((j + 1) / float(m)),
+                        origin + u * (i / float(m)) + v * ((j + 1) / float(m))};
+      Patch p = MakePatch(c, 4);
+      p.normal = glm::normalize(glm::cross(u, v));  // one normal for the whole surface
+      p.surface = 1000;
+      s.Add(p);
+    }
+  }
+  const size_t tiltEnd = s.patches.size();
+  for (size_t i = tiltFirst; i < tiltEnd; ++i) {  // the twins: a run of their own
+    Patch t = s.patches[i];
+    std::swap(t.corner[1], t.corner[3]);
+    t.normal = -t.normal;
+    s.patches.push_back(t);
+    s.geom.push_back(TwinGeom(s.geom[i]));
+  }
+  BuiltGrid b;
+  BuildGrid(s, 4.0f, &b);
+  Span<const CellPlane> planes = b.grid.planes();
+  ASSERT_EQ(planes.size(), b.plan.planes);
+  ASSERT_EQ(planes.size(), 6u);  // five walls, and the tilted wall with its twins
+
+  // Every record covers its run: the same normal up to sign, every offset in range.
+  bool spread = false;
+  for (const CellPlane& r : planes) {
+    spread |= r.dLo < r.dHi;
+    for (uint32_t p = r.first; p < r.first + r.count; ++p) {
+      const PatchGeom& g = s.geom[p];
+      float sign = g.n == r.n ? 1.0f : -1.0f;
+      ASSERT_EQ(sign * g.n, r.n) << "patch " << p;
+      ASSERT_GE(sign * g.d, r.dLo) << "patch " << p;
+      ASSERT_LE(sign * g.d, r.dHi) << "patch " << p;
+    }
+  }
+  EXPECT_TRUE(spread);  // the tilted wall's offsets round apart
+  // Cells with a plane: every patch in a run with that record; one holds a patch and its twin.
+  size_t withPlane = 0, occupied = 0, twinned = 0;
+  for (size_t c = 0; c < b.grid.cellCount(); ++c) {
+    Span<const uint32_t> refs = b.grid.CellRefs(c);
+    occupied += !refs.empty();
+    uint32_t h = b.grid.CellPlaneOf(c);
+    if (h == Grid::kNoPlane) continue;
+    ++withPlane;
+    ASSERT_LT(h, planes.size());
+    bool orig = false, twin = false;
+    for (uint32_t p : refs) {
+      const PatchGeom& g = s.geom[p];
+      float sign = g.n == planes[h].n ? 1.0f : -1.0f;
+      ASSERT_EQ(sign * g.n, planes[h].n) << "cell " << c << " patch " << p;
+      ASSERT_GE(sign * g.d, planes[h].dLo);
+      ASSERT_LE(sign * g.d, planes[h].dHi);
+      orig |= p >= tiltFirst && p < tiltEnd;
+      twin |= p >= tiltEnd;
+    }
+    twinned += orig && twin;
+  }
+  EXPECT_GT(withPlane * 2, occupied) << withPlane << " of " << occupied;
+  EXPECT_GT(twinned, 0u);
+
+  Checker ck{s, b.grid};
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+  for (int i = 0; i < 6000; ++i) {
+    uint32_t p = static_cast<uint32_t>(rng() % s.patches.size());
+    glm::vec3 n = s.geom[p].n;
+    float offsets[3] = {0.0f, 1e-6f, -1e-6f};
+    glm::vec3 o = PointOnPatch(rng, s.patches[p]) + offsets[i % 3] * n;
+    glm::vec3 d = UnitVector(rng);
+    if (i % 5 == 0) d = glm::normalize(d - glm::dot(d, n) * n + 1e-4f * n);  // grazing
+    float tMin = i % 4 == 0 ? -0.5f : 0.0f;
+    ck.Check(Ray{o, d, tMin, kInf}, i % 2 ? p : kNoPatch, "plane");
+    ck.Check(Ray{o, -d, tMin, 0.3f + u01(rng)}, kNoPatch, "plane-reverse");
+  }
+  CheckRays(s, b, 29, 300, &ck);
+  EXPECT_EQ(ck.failures, 0) << ck.rays << " rays";
+  EXPECT_GT(ck.hits, ck.rays / 3);
+}
+
 TEST(GridTest, FlatScenes) {
   // One axis-aligned quad: the grid must still have thickness.
   TestScene quad;
@@ -281,7 +378,8 @@ TEST(GridTest, EdgeHuggingPatchesMatchBruteForce) {
   ASSERT_TRUE(SamePlan(b.plan, plan));
   // Each target is registered in one cell.
   std::vector<int> cells(s.patches.size(), 0);
-  for (uint32_t r : b.grid.refs()) ++cells[r];
+  for (size_t c = 0; c < b.grid.cellCount(); ++c)
+    for (uint32_t r : b.grid.CellRefs(c)) ++cells[r];
   for (size_t i = 2; i < s.patches.size(); ++i) ASSERT_EQ(cells[i], 1) << "patch " << i;
 
   Checker ck{s, b.grid};
