@@ -49,10 +49,6 @@ class Settings:
         self.bld = (f"render {self.out}/building.obj --patch-size 0.25 --rays 512 --mask-res 20 "
                     f"--stop-unshot {bstop} --width 64 --height 64 --camera {CAMERA_IN_ROOM}")
         self.m = f"render {SCENE} --envs 2 --max-shots {mshots} --width 64 --height 64"
-        # One environment, a fixed number of shots: run alone and two at
-        # once, for what this machine's second core gives (pair_throughput).
-        self.t = (f"render {SCENE} --rays 1024 --mask-res 20 --max-shots {300 if quick else 6000} "
-                  "--width 64 --height 64")
         # Issue 19: the experiments' set-up (vismask_tools/scales.py, full scale).
         self.x = (f"render {SCENE} --envs 2 --patch-size 140 --rays 256 --stop-unshot 0.3 --width 32 --height 32"
                   if quick else
@@ -125,7 +121,7 @@ def parallel(s):
         s.vismask(f"pipe1_{i}", s.p, "--ranks", "2", "--transport", "pipe", "--round-shots", "1")
         s.vismask(f"aloop{i}", s.p0, "--envs", "auto:2", "--transport", "loop")
         s.vismask(f"apipe{i}", s.p0, "--ranks", "2")
-        if s.mpi and i == 1:  # once: a waiting MPI rank spins, so it is slow here
+        if s.mpi:
             s.mpirun(f"mpi2_{i}", s.p, "--transport", "mpi")
             s.mpirun(f"ampi2_{i}", s.p0)
     # The same bytes on every transport and rank count, for each kind of round.
@@ -162,10 +158,12 @@ def parallel(s):
 
 
 def pair_throughput(s):
-    """The same 1-environment solve alone and two at once, REPS times each:
-    the CPU seconds of each process (os.wait4), in OUT/throughput.json."""
-    say(f"two at once: {s.t}")
-    cmd = [s.bin()] + s.t.split() + ["--quiet", "--out"]
+    """The default 2-rank case's 1-rank baseline alone and two at once, REPS
+    times each: the CPU seconds of each process (os.wait4), in
+    OUT/throughput.json."""
+    command = s.p0 + " --envs auto:2 --transport loop"
+    say(f"two at once: {command}")
+    cmd = [s.bin()] + command.split() + ["--quiet", "--out"]
 
     def start(name):
         log_file = open(s.dir(name + ".log"), "w")
@@ -175,7 +173,7 @@ def pair_throughput(s):
         _, status, ru = os.wait4(proc[0].pid, 0)
         proc[1].close()
         if status != 0:
-            sys.exit(f"bench: {s.t}: exit status {status}")
+            sys.exit(f"bench: {command}: exit status {status}")
         return ru.ru_utime + ru.ru_stime
 
     alone, paired = [], []
@@ -184,7 +182,7 @@ def pair_throughput(s):
         a, b = start(f"pairA{i}"), start(f"pairB{i}")
         paired += [cpu(a), cpu(b)]
     with open(s.dir("throughput.json"), "w") as f:
-        json.dump({"command": s.t, "alone": alone, "paired": paired}, f)
+        json.dump({"command": command, "alone": alone, "paired": paired}, f)
 
 
 def envs_count(e):
