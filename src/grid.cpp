@@ -73,8 +73,6 @@ void ForEachPlaneRun(Span<const Patch> patches, Span<const PatchGeom> geom, Visi
     if (j - i >= 2) {
       run.first = static_cast<uint32_t>(i);
       run.count = static_cast<uint32_t>(j - i);
-      const glm::vec3 m = glm::abs(run.n);
-      run.axis = m.x >= m.y && m.x >= m.z ? 0 : m.y >= m.z ? 1 : 2;
       visit(run);
     }
     i = j;
@@ -86,36 +84,6 @@ inline bool SamePlane(const CellPlane& a, const CellPlane& b) {
   return std::memcmp(&a.n, &b.n, sizeof a.n) == 0 &&
          std::memcmp(&a.dLo, &b.dLo, sizeof a.dLo) == 0 &&
          std::memcmp(&a.dHi, &b.dHi, sizeof a.dHi) == 0;
-}
-
-// A cell's share of a plane, as its patches arrive in index order (MakePlan
-// and Build decide alike): the record every patch so far belongs to (one
-// bit for bit the same as the first's), kMixed once one does not, and how
-// many patches (counted up to kCountMax).
-constexpr uint32_t kNoRecord = 0xffffffffu;
-constexpr uint32_t kCountBits = 6, kCountMax = (1u << kCountBits) - 1;
-constexpr uint32_t kUnset = (1u << (32 - kCountBits)) - 1, kMixed = kUnset - 1;
-constexpr uint32_t kEmptyShare = kUnset << kCountBits;
-static_assert(Grid::kSubMax < kCountMax, "the count must tell a cell too full for a table");
-
-inline uint32_t ShareAdd(uint32_t state, uint32_t record, const CellPlane* records) {
-  uint32_t count = state & kCountMax, shared = state >> kCountBits;
-  if (record >= kMixed) record = kMixed;  // no record, or more than the state can name
-  if (count == 0)
-    shared = record;
-  else if (shared != kMixed && (record == kMixed ||
-                                (record != shared && !SamePlane(records[record], records[shared]))))
-    shared = kMixed;
-  return (shared << kCountBits) | (count < kCountMax ? count + 1 : count);
-}
-inline bool ShareHasPlane(uint32_t state) {
-  return (state & kCountMax) > 0 && (state >> kCountBits) < kMixed;
-}
-// A sub-cell table's second header word is reserved by count alone
-// (Build lays the references out before it knows the planes).
-inline bool ShareSubSized(uint32_t state) {
-  uint32_t count = state & kCountMax;
-  return count >= Grid::kSubMin && count <= Grid::kSubMax;
 }
 
 }  // namespace
@@ -210,48 +178,35 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
     plan.bounds.hi[a] = std::nextafter(static_cast<float>(inHi + wallHi * size), HUGE_VALF);
   }
 
-  // Exact counts of references, occupied cells, plane records, cells with
-  // a second header word and sub-cell tables, by the same rules Build uses.
-  // Scratch: a word a cell (at most 8 cells a patch) and the records.
+  // Exact reference and occupied-cell counts, by the same rule Build uses.
   CellGeometry cellGeom = CellGeometryOf(plan);
   const size_t cells = static_cast<size_t>(plan.res[0]) * plan.res[1] * plan.res[2];
-  std::vector<CellPlane> records;
-  ForEachPlaneRun(patches, geom, [&records](const CellPlane& run) { records.push_back(run); });
-  std::vector<uint32_t> share(cells, kEmptyShare);
-  uint64_t refs = 0;
-  size_t run = 0;
+  std::vector<uint64_t> touched((cells + 63) / 64, 0);
+  uint64_t refs = 0, occupied = 0;
   for (size_t i = 0; i < n; ++i) {
-    while (run < records.size() && records[run].first + records[run].count <= i) ++run;
-    uint32_t record = run < records.size() && records[run].first <= i
-                          ? static_cast<uint32_t>(run)
-                          : kNoRecord;
     MakeShape(patches[i], geom[i], scale, &shape);
     ForEachCell(cellGeom, shape, [&](size_t c) {
       ++refs;
-      share[c] = ShareAdd(share[c], record, records.data());
+      uint64_t bit = uint64_t{1} << (c & 63);
+      occupied += (touched[c >> 6] & bit) == 0;
+      touched[c >> 6] |= bit;
     });
   }
   plan.refs = refs;
-  plan.planes = records.size();
-  for (uint32_t state : share) {
-    plan.occupied += (state & kCountMax) > 0;
-    plan.subWords += ShareSubSized(state);
-    plan.subCells += ShareSubSized(state) && ShareHasPlane(state);
-  }
+  plan.occupied = occupied;
+  ForEachPlaneRun(patches, geom, [&plan](const CellPlane&) { ++plan.planes; });
   return plan;
 }
 
 void Grid::Layout(Arena& arena, const Plan& plan) {
   plan_ = plan;
   size_t cells = cellCount();
-  const uint64_t words = plan.refs + plan.occupied + plan.subWords;
-  CHECK_MSG(cells < 0xffffffffu && words < 0xffffffffu && plan.planes < kNoPlane,
+  CHECK_MSG(cells < 0xffffffffu && plan.refs + plan.occupied < 0xffffffffu,
             "grid too large for 32-bit offsets");
   cellStart_ = arena.Alloc<uint32_t>(cells + 1);
-  refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(words));
+  refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs + plan.occupied));
   occupied_ = arena.Alloc<uint64_t>((cells + 63) / 64);
   planes_ = arena.Alloc<CellPlane>(static_cast<size_t>(plan.planes));
-  subMasks_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.subCells) * kSub * kSub);
   for (int a = 0; a < 3; ++a) {
     float extent = plan.bounds.hi[a] - plan.bounds.lo[a];
     cellSize_[a] = extent / static_cast<float>(plan.res[a]);
@@ -278,9 +233,8 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   CHECK_MSG(numPlanes == planes_.size(), "grid plan does not match the patches it is built from");
 
   // Counting sort: count per cell, exclusive prefix sum (a header word
-  // before each occupied cell's patches, two where a sub-cell table may
-  // be), fill advancing each cell's start to its end, then shift the
-  // starts back by one cell.
+  // before each occupied cell's patches), fill advancing each cell's start
+  // to its end, then shift the starts back by one cell.
   for (size_t c = 0; c <= cells; ++c) start[c] = 0;
   Shape shape;
   uint64_t total = 0;
@@ -295,13 +249,11 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   uint32_t sum = 0;
   for (size_t c = 0; c < cells; ++c) {
     uint32_t count = start[c];
-    uint32_t two = count >= kSubMin && count <= kSubMax;
-    uint32_t header = (count > 0) + two;
-    if (count > 0) refs_[sum] = two ? kHasSub : 0;  // the layout, for the headers below
+    uint32_t header = count > 0;
     start[c] = sum + header;
     sum += count + header;
   }
-  CHECK_MSG(sum == plan_.refs + plan_.occupied + plan_.subWords,
+  CHECK_MSG(sum == plan_.refs + plan_.occupied,
             "grid plan does not match the patches it is built from");
   start[cells] = sum;
   uint32_t* refs = refs_.data();
@@ -314,74 +266,24 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   start[0] = 0;
   uint64_t* occupied = occupied_.data();
   for (size_t w = 0; w < occupied_.size(); ++w) occupied[w] = 0;
-  // Each occupied cell's header: the plane record all its patches share, if
-  // any, and the index of its sub-cell table (kNoPlane: none) after it.
+  // Each occupied cell's header: the plane record all its patches share, if any.
   const CellPlane* planes = planes_.data();
-  auto recordOf = [&](uint32_t p) -> uint32_t {
+  auto recordOf = [&](uint32_t p) -> const CellPlane* {
     const CellPlane* r = std::upper_bound(
         planes, planes + numPlanes, p, [](uint32_t q, const CellPlane& c) { return q < c.first; });
-    if (r == planes) return kNoRecord;
+    if (r == planes) return nullptr;
     --r;
-    return p - r->first < r->count ? static_cast<uint32_t>(r - planes) : kNoRecord;
+    return p - r->first < r->count ? r : nullptr;
   };
-  uint64_t tables = 0;
   for (size_t c = 0; c < cells; ++c) {
     if (start[c + 1] == start[c]) continue;
     occupied[c >> 6] |= uint64_t{1} << (c & 63);
-    uint32_t state = kEmptyShare;
-    const uint32_t headers = 1 + (refs[start[c]] >> 31);
-    for (uint32_t k = start[c] + headers; k < start[c + 1]; ++k)
-      state = ShareAdd(state, recordOf(refs[k]), planes);
-    uint32_t plane = ShareHasPlane(state) ? state >> kCountBits : kNoPlane;
-    if (headers == 1) {
-      refs[start[c]] = plane;
-      continue;
+    const CellPlane* shared = recordOf(refs[start[c] + 1]);
+    for (uint32_t k = start[c] + 2; k < start[c + 1] && shared; ++k) {
+      const CellPlane* r = recordOf(refs[k]);
+      if (!r || !SamePlane(*r, *shared)) shared = nullptr;
     }
-    refs[start[c]] = plane | kHasSub;
-    if (plane == kNoPlane) {
-      refs[start[c] + 1] = kNoPlane;
-      continue;
-    }
-    CHECK_MSG(tables < plan_.subCells, "grid plan does not match the patches it is built from");
-    refs[start[c] + 1] = static_cast<uint32_t>(tables);
-    for (int m = 0; m < kSub * kSub; ++m) subMasks_[tables * kSub * kSub + m] = 0;
-    ++tables;
-  }
-  CHECK_MSG(tables == plan_.subCells, "grid plan does not match the patches it is built from");
-
-  // The sub-cell masks: each patch's registration box, across its cell's
-  // plane, widened by a hundredth of a sub-cell and the padding (the walk
-  // finds the sub-cell in float), the outer sub-cells reaching out without end.
-  for (size_t i = 0; i < patches.size(); ++i) {
-    MakeShape(patches[i], geom[i], scale, &shape);
-    const uint32_t index = static_cast<uint32_t>(i);
-    ForEachCell(cellGeom, shape, [&](size_t c) {
-      const uint32_t b = start[c];
-      if ((refs[b] & kHasSub) == 0 || refs[b + 1] == kNoPlane) return;
-      const uint32_t* first = refs + b + 2;
-      const uint32_t* at = std::lower_bound(first, first + (start[c + 1] - b - 2), index);
-      const uint32_t bit = uint32_t{1} << (at - first);
-      const CellPlane& pl = planes[refs[b] & kNoPlane];
-      const int ax[2] = {pl.axis == 0 ? 1 : 0, pl.axis == 2 ? 1 : 2};
-      const int coord[3] = {static_cast<int>(c % plan_.res[0]),
-                            static_cast<int>(c / plan_.res[0] % plan_.res[1]),
-                            static_cast<int>(c / plan_.res[0] / plan_.res[1])};
-      int lo[2], hi[2];
-      for (int k = 0; k < 2; ++k) {
-        const int a = ax[k];
-        const double w = cellGeom.size[a] / kSub;
-        const double origin = cellGeom.lo[a] + coord[a] * cellGeom.size[a];
-        const double margin = 0.01 * w + scale.pad;
-        const double top = kSub - 1;
-        lo[k] = static_cast<int>(
-            std::clamp(std::floor((shape.lo[a] - margin - origin) / w), 0.0, top));
-        hi[k] = static_cast<int>(
-            std::clamp(std::floor((shape.hi[a] + margin - origin) / w), 0.0, top));
-      }
-      uint32_t* masks = subMasks_.data() + size_t{refs[b + 1]} * kSub * kSub;
-      for (int j = lo[1]; j <= hi[1]; ++j)
-        for (int k = lo[0]; k <= hi[0]; ++k) masks[j * kSub + k] |= bit;
-    });
+    refs[start[c]] = shared ? static_cast<uint32_t>(shared - planes) : kNoPlane;
   }
 }
 
@@ -495,11 +397,9 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
     // where their offsets (32 times larger, strided by rows and slices) cost
     // a cache miss each in a large grid.
     if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0) {
-      const uint32_t head = start[index], header = refs[head];
-      uint32_t begin = head + 1 + (header >> 31), end = start[index + 1];
-      uint32_t mask = 0;  // with a sub-cell table: the patches to test, by place in the cell
-      bool masked = false;
-      if ((header & kNoPlane) != kNoPlane) {
+      uint32_t begin = start[index] + 1, end = start[index + 1];
+      const uint32_t header = refs[begin - 1];
+      if (header != kNoPlane) {
         // The cell's patches share a plane (CellPlane). Each patch test
         // divides num = d - n.o by denom = n.dir; if num is never of
         // denom's sign over the range of d, every t is <= 0 and, with
@@ -507,55 +407,31 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
         // cell is passed without reading a patch. The products and sums
         // are IntersectPatch's, on the other sign of the normal for some
         // patches, which negates them exactly; no division is needed.
-        const CellPlane& pl = planes[header & kNoPlane];
+        const CellPlane& pl = planes[header];
         float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
         float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
         float numLo = pl.dLo - s, numHi = pl.dHi - s;
         if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f))) {
           tests += end - begin;
           begin = end;
-        } else if (refs[head + 1] != kNoPlane && (header & kHasSub) != 0) {
-          // A sub-cell table. Every patch's t lies between ta and tb, and
-          // each coordinate of its hit point (IntersectPatch's o + t * d)
-          // between those of the points at ta and tb: only the sub-cells
-          // that stretch reaches can hold a patch the ray hits.
-          float ta = numLo / denom, tb = numHi / denom;
-          if (!(std::fmax(ta, tb) > r.tMin) || !(std::fmin(ta, tb) < r.tMax)) {
-            tests += end - begin;  // every patch's range check fails
-            begin = end;
-          } else {
-            const int ax[2] = {pl.axis == 0 ? 1 : 0, pl.axis == 2 ? 1 : 2};
-            int cell[3] = {index % res[0], index / res[0] % res[1], index / stride[2]};
-            int range[2][2];
-            bool finite = true;
-            for (int k = 0; k < 2; ++k) {
-              const int a = ax[k];
-              float xa = r.o[a] + ta * r.d[a], xb = r.o[a] + tb * r.d[a];
-              float origin = lo[a] + static_cast<float>(cell[a]) * cellSize_[a];
-              float scale = static_cast<float>(kSub) * invCellSize_[a];
-              float fa = (std::fmin(xa, xb) - origin) * scale;
-              float fb = (std::fmax(xa, xb) - origin) * scale;
-              finite &= std::fabs(fa) < 1e6f && std::fabs(fb) < 1e6f;
-              range[k][0] = std::clamp(static_cast<int>(std::floor(finite ? fa : 0.0f)), 0, kSub - 1);
-              range[k][1] = std::clamp(static_cast<int>(std::floor(finite ? fb : 0.0f)), 0, kSub - 1);
-            }
-            if (finite) {
-              const uint32_t* masks = subMasks_.data() + size_t{refs[head + 1]} * kSub * kSub;
-              for (int j = range[1][0]; j <= range[1][1]; ++j)
-                for (int i = range[0][0]; i <= range[0][1]; ++i) mask |= masks[j * kSub + i];
-              masked = true;
-            }
-          }
         }
       }
-      // One patch's test; true when an any-hit walk is done.
-      auto test = [&](uint32_t p) {
+      // Ask for every patch of the cell at once: their cache misses overlap
+      // instead of coming one test at a time.
+      for (uint32_t k = begin; k < end; ++k) {
+        const char* g = reinterpret_cast<const char*>(geom + refs[k]);
+        __builtin_prefetch(g);
+        __builtin_prefetch(g + sizeof(PatchGeom) - 1);
+      }
+      for (uint32_t k = begin; k < end; ++k) {
+        uint32_t p = refs[k];
         float t;
         bool front;
-        if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin)
-          return false;
+        ++tests;
+        if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
         if (kAnyHit) {
           if (hit) hit->patch = p;
+          steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
           return true;
         }
         // t <= bestT here. On a tie a front side, then the lower index, so
@@ -566,40 +442,6 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
           bestFront = front;
           r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
           limit = std::min(t1, t);
-        }
-        return false;
-      };
-      if (masked) {
-        // The patches of the sub-cells, in the cell's order: the first hit is
-        // the one testing them all would find first, and steps() counts as
-        // if they all had been tested (up to that hit).
-        for (uint32_t m = mask; m != 0; m &= m - 1) {
-          const char* g = reinterpret_cast<const char*>(geom + refs[begin + __builtin_ctz(m)]);
-          __builtin_prefetch(g);
-          __builtin_prefetch(g + sizeof(PatchGeom) - 1);
-        }
-        for (uint32_t m = mask; m != 0; m &= m - 1) {
-          const uint32_t k = static_cast<uint32_t>(__builtin_ctz(m));
-          if (test(refs[begin + k])) {
-            steps_ += tests + k + 1 + static_cast<uint64_t>(kx + ky + kz) + 1;
-            return true;
-          }
-        }
-        tests += end - begin;
-      } else {
-        // Ask for every patch of the cell at once: their cache misses overlap
-        // instead of coming one test at a time.
-        for (uint32_t k = begin; k < end; ++k) {
-          const char* g = reinterpret_cast<const char*>(geom + refs[k]);
-          __builtin_prefetch(g);
-          __builtin_prefetch(g + sizeof(PatchGeom) - 1);
-        }
-        for (uint32_t k = begin; k < end; ++k) {
-          ++tests;
-          if (test(refs[k])) {
-            steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
-            return true;
-          }
         }
       }
     }

@@ -69,10 +69,9 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
   grid.Layout(arena, plan);
   EXPECT_EQ(arena.used(), measure.used());
   EXPECT_EQ(grid.bytes(), probe.bytes());
-  EXPECT_EQ(grid.bytes(),
-            (grid.cellCount() + 1 + plan.refs + plan.occupied + plan.subWords) * sizeof(uint32_t) +
-                (grid.cellCount() + 63) / 64 * sizeof(uint64_t) + plan.planes * sizeof(CellPlane) +
-                plan.subCells * Grid::kSub * Grid::kSub * sizeof(uint32_t));
+  EXPECT_EQ(grid.bytes(), (grid.cellCount() + 1 + plan.refs + plan.occupied) * sizeof(uint32_t) +
+                              (grid.cellCount() + 63) / 64 * sizeof(uint64_t) +
+                              plan.planes * sizeof(CellPlane));
   grid.Build(Span<const Patch>(s.patches.data(), 700), Span<const PatchGeom>(s.geom.data(), 700));
   EXPECT_EQ(arena.used(), measure.used());
 
@@ -95,7 +94,7 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
   EXPECT_EQ(refCount, plan.refs);
   ASSERT_EQ(start.size(), grid.cellCount() + 1);
   EXPECT_EQ(start[0], 0u);
-  EXPECT_EQ(start[grid.cellCount()], plan.refs + plan.occupied + plan.subWords);
+  EXPECT_EQ(start[grid.cellCount()], plan.refs + plan.occupied);
   for (size_t c = 0; c < grid.cellCount(); ++c) {
     ASSERT_LE(start[c], start[c + 1]);
     Span<const uint32_t> refs = grid.CellRefs(c);

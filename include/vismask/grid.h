@@ -38,41 +38,24 @@ struct Skip {
 // sign of t is that of d - n.o over n.dir), so with tMin >= 0 the walk
 // passes the cell without reading its patches, and finds what testing them
 // would have found. A ray leaving a wall, or running beside one, does.
-//
-// Such a cell with kSubMin to kSubMax patches also gets a 4 x 4 table of
-// sub-cells across the plane (on the two axes other than the normal's
-// largest): for each, a bit mask of the cell's patches (by their place in
-// the cell's list) whose registration box reaches it, the outer rows and
-// columns reaching out without end. A ray that meets the plane inside the
-// cell tests only the patches of the sub-cells its hit points can fall in
-// (the t of every patch lies between those of the range's ends, and so do
-// the points computed from them), not all of the cell's.
 struct CellPlane {
   glm::vec3 n{0.0f};
   float dLo = 0.0f;
   float dHi = 0.0f;
   uint32_t first = 0;  // the run: patches first .. first + count - 1
   uint32_t count = 0;
-  uint32_t axis = 0;  // the normal's largest component: the sub-cells lie across the others
 };
 
 class Grid {
  public:
-  // A cell's plane (CellPlaneOf) when its patches share no plane record.
-  static constexpr uint32_t kNoPlane = 0x7fffffffu;
-  // The header's top bit: a second header word follows, the cell's sub-cell table.
-  static constexpr uint32_t kHasSub = 0x80000000u;
-  static constexpr int kSub = 4;           // sub-cells a side
-  static constexpr uint32_t kSubMin = 4;   // patches a cell needs for a sub-cell table
-  static constexpr uint32_t kSubMax = 32;  // at most (one bit each in a mask)
+  // A cell's header word when its patches share no plane record.
+  static constexpr uint32_t kNoPlane = 0xffffffffu;
   // What the grid needs, decided at init before any arena exists.
   struct Plan {
     int res[3] = {1, 1, 1};
     uint64_t refs = 0;      // total (cell, patch) references
     uint64_t occupied = 0;  // cells holding a reference (a header word each)
     uint64_t planes = 0;    // CellPlane records: runs of two or more patches
-    uint64_t subWords = 0;  // cells with kSubMin..kSubMax patches: a second header word each
-    uint64_t subCells = 0;  // of those, the ones on one plane: a sub-cell table each
     Bounds bounds;          // padded box the cells cover
   };
   // Plans the grid for `patches` with about `density` cells per patch.
@@ -105,31 +88,19 @@ class Grid {
     return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2];
   }
   size_t bytes() const {
-    return cellStart_.bytes() + refs_.bytes() + occupied_.bytes() + planes_.bytes() +
-           subMasks_.bytes();
+    return cellStart_.bytes() + refs_.bytes() + occupied_.bytes() + planes_.bytes();
   }
   // The built arrays, read-only (tests, statistics): a cell that holds
   // patches takes words cellStart()[c] .. cellStart()[c + 1] - 1 of the
-  // references: its header (the plane index, kNoPlane, with kHasSub when
-  // the sub-cell table's index follows in a second word), then its patches
-  // in ascending order (CellRefs); an empty cell takes none.
+  // references: its header (CellPlaneOf), then its patches in ascending
+  // order (CellRefs); an empty cell takes none.
   Span<const uint32_t> cellStart() const { return cellStart_; }
   Span<const uint32_t> CellRefs(size_t c) const {
     uint32_t b = cellStart_[c], e = cellStart_[c + 1];
-    if (b == e) return Span<const uint32_t>();
-    uint32_t skip = 1 + (refs_[b] >> 31);
-    return Span<const uint32_t>(refs_.data() + b + skip, e - b - skip);
+    return b == e ? Span<const uint32_t>() : Span<const uint32_t>(refs_.data() + b + 1, e - b - 1);
   }
   uint32_t CellPlaneOf(size_t c) const {
-    return cellStart_[c] == cellStart_[c + 1] ? kNoPlane : refs_[cellStart_[c]] & kNoPlane;
-  }
-  // Cell c's sub-cell masks (kSub * kSub, row by row: sub-cell (i, j) at
-  // j * kSub + i, i along the lower of the axes other than CellPlane::axis), or empty.
-  Span<const uint32_t> CellSubMasks(size_t c) const {
-    uint32_t b = cellStart_[c];
-    if (b == cellStart_[c + 1] || (refs_[b] & kHasSub) == 0) return Span<const uint32_t>();
-    return Span<const uint32_t>(subMasks_.data() + size_t{refs_[b + 1]} * kSub * kSub,
-                                kSub * kSub);
+    return cellStart_[c] == cellStart_[c + 1] ? kNoPlane : refs_[cellStart_[c]];
   }
   Span<const CellPlane> planes() const { return planes_; }
   // Bit c of word c / 64: cell c holds at least one reference.
@@ -150,7 +121,6 @@ class Grid {
   Span<uint32_t> refs_;
   Span<uint64_t> occupied_;  // bit c: cell c holds a patch
   Span<CellPlane> planes_;
-  Span<uint32_t> subMasks_;  // kSub * kSub masks a cell with a sub-cell table
 
  public:
   // Work done by the walks so far: cells entered plus patches tested or
