@@ -252,13 +252,13 @@ def efficiency(s):
             runs.append((cpu / (16 * (crit + net)), r, cpu, crit, net))
         runs.sort(key=lambda x: x[0])
         here, r, cpu, crit, net = runs[(len(runs) - 1) // 2]
-        spread = (f" ({100 * runs[0][0]:.0f}–{100 * runs[-1][0]:.0f}%)" if len(runs) > 1 else "")
+        spread = (f" ({100 * runs[0][0]:.1f}–{100 * runs[-1][0]:.1f}%)" if len(runs) > 1 else "")
         rows.append([envs, rounds, "%d" % r["shots"], "%d" % r["rounds"], f"{patch_balance(s, split):.2f}",
                      f"{100 * r['work'] / (16 * r['critical_env_work']):.0f}%", f"{cpu:.2f}",
-                     f"{crit:.3f}", f"{net:.3f}", f"{100 * here:.0f}%{spread}",
+                     f"{crit:.3f}", f"{net:.3f}", f"{100 * here:.1f}%{spread}",
                      f"{100 * 4 * cpu / (16 * (4 * crit + net)):.0f}%"])
         if name != "bld1":
-            met.append("%s %s (%.0f%%)" % (split, "**met**" if here >= TARGET_EFFICIENCY else "**not met**",
+            met.append("%s %s (%.1f%%)" % (split, "**met**" if here >= TARGET_EFFICIENCY else "**not met**",
                                            100 * here))
     L = ["", "### Parallel efficiency: 16 ranks on the building", "",
          f"`{s.build}/vismask {s.bld} --envs E --transport loop` (`tools/gen-building --rooms {s.brooms} "
