@@ -377,7 +377,7 @@ uint32_t KeepExits(Span<const Patch> exits, const CentreRays& rays, MaskBits* ma
         k |= part << b;
         b += run;
       }
-      closed += static_cast<uint32_t>(__builtin_popcountll(words[w] & ~k));
+      closed += PopCount(words[w] & ~k);
       words[w] &= k;
     }
   }

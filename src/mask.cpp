@@ -233,7 +233,7 @@ uint32_t MaskBits::CountOpen(uint32_t begin, uint32_t end) const {
     uint32_t hi = std::min<uint32_t>(64, lo + (end - begin));  // bits [lo, hi) of word w
     uint64_t word = words_[w] >> lo;
     if (hi - lo < 64) word &= (uint64_t(1) << (hi - lo)) - 1;
-    n += static_cast<uint32_t>(__builtin_popcountll(word));
+    n += PopCount(word);
     begin += hi - lo;
   }
   return n;
@@ -241,7 +241,7 @@ uint32_t MaskBits::CountOpen(uint32_t begin, uint32_t end) const {
 
 uint32_t MaskBits::CountOpen() const {
   uint32_t n = 0;
-  for (uint64_t w : words_) n += static_cast<uint32_t>(__builtin_popcountll(w));
+  for (uint64_t w : words_) n += PopCount(w);
   return n;
 }
 

@@ -35,6 +35,28 @@ TEST(MaskTest, RowsRunFromTheNormalAndColumnsFromTheTangent) {
   EXPECT_EQ(MaskPixel(glm::normalize(glm::vec3(-1, 0.001f, 0.2f)), 10) % 40, 19u);  // phi ~ pi
 }
 
+// PopCount counts bits as a loop over them does: empty, full, single and
+// random words (with the builtin where the target has an instruction).
+TEST(MaskTest, PopCountCountsEveryBit) {
+  auto slow = [](uint64_t w) {
+    uint32_t n = 0;
+    for (int b = 0; b < 64; ++b) n += (w >> b) & 1;
+    return n;
+  };
+  EXPECT_EQ(PopCount(0), 0u);
+  EXPECT_EQ(PopCount(~uint64_t{0}), 64u);
+  for (int b = 0; b < 64; ++b) {
+    ASSERT_EQ(PopCount(uint64_t{1} << b), 1u) << b;
+    ASSERT_EQ(PopCount(~(uint64_t{1} << b)), 63u) << b;
+  }
+  std::mt19937_64 rng(17);
+  for (int i = 0; i < 100000; ++i) {
+    uint64_t w = rng() & rng();  // sparser words too
+    if (i % 2) w = rng();
+    ASSERT_EQ(PopCount(w), slow(w)) << w;
+  }
+}
+
 TEST(MaskTest, CountOpenOverARangeCountsItsBits) {
   const uint32_t res = 7;  // 196 pixels: rows of 28 bits straddle words
   std::vector<uint64_t> words(MaskShape{res}.words());

@@ -86,6 +86,20 @@ class MaskDirections {
   double rowScale_ = 0.0, colScale_ = 0.0;  // the same, as doubles
 };
 
+// The set bits of `w`. The builtin where the target has an instruction for
+// it (aarch64, x86-64 with POPCNT); on baseline x86-64 the builtin calls
+// libgcc's __popcountdi2, so the same count comes from sums of halves, inline.
+inline uint32_t PopCount(uint64_t w) {
+#if defined(__POPCNT__) || defined(__aarch64__)
+  return static_cast<uint32_t>(__builtin_popcountll(w));
+#else
+  w = w - ((w >> 1) & 0x5555555555555555ull);
+  w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
+  w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
+  return static_cast<uint32_t>((w * 0x0101010101010101ull) >> 56);
+#endif
+}
+
 // A mask over 64-bit words (bit p of word p / 64): `res` rows of a
 // hemisphere, or (PerRay) one bit per ray.
 class MaskBits {
