@@ -45,6 +45,9 @@ class Settings:
         # uniform split.
         self.p0 = f"render {SCENE} --rays 1024 --mask-res 20 --stop-unshot {stop1} --width 64 --height 64"
         self.p = self.p0 + " --envs 2"
+        # The default case's 1-rank baseline: its two environments in one
+        # process (also what pair_throughput runs alone and two at once).
+        self.p0_one = self.p0 + " --envs auto:2 --transport loop"
         self.o = f"render {SCENE} --rays 1024 --mask-res 20 --stop-unshot {stop2} --width 64 --height 64"
         self.bld = (f"render {self.out}/building.obj --patch-size 0.25 --rays 512 --mask-res 20 "
                     f"--stop-unshot {bstop} --width 64 --height 64 --camera {CAMERA_IN_ROOM}")
@@ -119,7 +122,7 @@ def parallel(s):
         s.vismask(f"pipe{i}", s.p, "--ranks", "2", "--transport", "pipe")
         s.vismask(f"loop1_{i}", s.p, "--transport", "loop", "--round-shots", "1")
         s.vismask(f"pipe1_{i}", s.p, "--ranks", "2", "--transport", "pipe", "--round-shots", "1")
-        s.vismask(f"aloop{i}", s.p0, "--envs", "auto:2", "--transport", "loop")
+        s.vismask(f"aloop{i}", s.p0_one)
         s.vismask(f"apipe{i}", s.p0, "--ranks", "2")
         if s.mpi:
             s.mpirun(f"mpi2_{i}", s.p, "--transport", "mpi")
@@ -161,7 +164,7 @@ def pair_throughput(s):
     """The default 2-rank case's 1-rank baseline alone and two at once, REPS
     times each: the CPU seconds of each process (os.wait4), in
     OUT/throughput.json."""
-    command = s.p0 + " --envs auto:2 --transport loop"
+    command = s.p0_one
     say(f"two at once: {command}")
     cmd = [s.bin()] + command.split() + ["--quiet", "--out"]
 
