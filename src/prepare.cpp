@@ -232,8 +232,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (!s.ok()) return s;
   if (!failed.ok()) return failed;
   if (o.roundWorkAuto)
-    p->roundWork =
-        AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2], EnvOptions().gridDensity);
+    p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2]);
   if (probe) p->side = probe->Side();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);

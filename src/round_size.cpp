@@ -54,8 +54,8 @@ bool SetWorldSize(int ranks, Options* o) {
   return true;
 }
 
-uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs, float gridDensity) {
-  double cells = gridDensity * patches / std::max(1, numEnvs);
+uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs) {
+  double cells = kStepCellsPerPatch * patches / std::max(1, numEnvs);
   double steps = std::max(1.0, std::cbrt(std::max(cells, 1.0)));
   double shot = MostRaysAShot(o) * (steps + kRayWork + kHitWork) + kShotWork;
   return static_cast<uint64_t>(kAutoRoundWorkShots * shot);

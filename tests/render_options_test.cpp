@@ -162,18 +162,19 @@ TEST(RenderTest, RoundSizeDefaults) {
     EXPECT_EQ(o.roundWork, c.work) << c.args.size();
   }
   // The automatic size: 32 full shots, each its rays times (the cube root
-  // of an environment's grid cells, plus a ray's and a hit's work), plus a
-  // shot's work (work.h). Centre rays are not in it.
+  // of kStepCellsPerPatch cells for each of an environment's patches, plus
+  // a ray's and a hit's work), plus a shot's work (work.h). Centre rays are
+  // not in it.
   Options o;
   o.maxRays = 1000;
   const uint64_t shot = 1000 * (20 + kRayWork + kHitWork) + kShotWork;
-  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), 32 * shot);
-  EXPECT_EQ(AutoRoundWork(o, 16000.0, 8, 4.0f), 32 * shot);
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * shot);
+  EXPECT_EQ(AutoRoundWork(o, 16000.0, 8), 32 * shot);
   o.maskMethod = MaskMethod::kR;
-  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), 32 * shot);
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * shot);
   o.rayAlloc = Options::RayAlloc::kFixed;  // --rays a shot
   o.rays = 500;
-  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1, 4.0f), 32 * (500 * (20 + kRayWork + kHitWork) + kShotWork));
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * (500 * (20 + kRayWork + kHitWork) + kShotWork));
 }
 
 // Issue 20: the default queue lets every environment make a whole round

@@ -77,8 +77,12 @@ struct EnvFootprint {
 };
 
 struct EnvOptions {
-  float gridDensity = 4.0f;  // grid cells per patch (Cleary's lambda)
-  float rayEpsilon = 0.0f;   // ray origins lifted this far off the shooter's plane (scene units)
+  // Grid cells per patch (Cleary's lambda). One: on the 130 000-patch box
+  // 1.17-1.24x the rays per second of 4 (median of 6 alternated bench
+  // pairs, docs/BENCHMARKS.md's cell-size table), the same within noise at
+  // 8 000, and 16 B a patch less.
+  float gridDensity = 1.0f;
+  float rayEpsilon = 0.0f;  // ray origins lifted this far off the shooter's plane (scene units)
   // Rays per shot. With rayQuantum == 0 every shot traces `rays` rays.
   // With rayQuantum > 0 (power allocation) a shot of power P (channels
   // summed) traces P / rayQuantum rays, rounded stochastically from the

@@ -151,10 +151,10 @@ bool SetWorldSize(int ranks, Options* options);
 // The automatic --round-work: kAutoRoundWorkShots full shots, each the
 // most rays a shot traces, every one landing here, times (the grid steps a
 // ray takes in an environment of the scene's estimated `patches` / `numEnvs`
-// patches, about the cube root of its grid cells, plus kRayWork and
-// kHitWork), plus kShotWork (work.h).
+// patches, about the cube root of kStepCellsPerPatch cells a patch, plus
+// kRayWork and kHitWork), plus kShotWork (work.h).
 // From the scene and the options alone, so every rank computes the same.
-uint64_t AutoRoundWork(const Options& options, double patches, int numEnvs, float gridDensity);
+uint64_t AutoRoundWork(const Options& options, double patches, int numEnvs);
 
 // The --help text.
 const char* HelpText();

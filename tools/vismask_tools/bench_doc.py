@@ -55,7 +55,7 @@ def rays_section(s):
 Embree gets the same patches twice: as triangles (a quad patch is 2
 triangles, a triangle patch 1) and as Embree quads (1 per patch); rates and
 bytes are per patch unless marked. The grid is built as an environment builds
-it (`Grid::MakePlan` at the default density of 4 cells per patch).
+it (`Grid::MakePlan` at an environment's cells per patch, given below).
 Ray sets: *uniform*, origins uniform in the scene's bounding box and
 directions uniform on the sphere; *cosine*, rays as the solver shoots them
 (256 shooters drawn by index, `ShotKey` streams, `MakePatchSampler` and
