@@ -173,7 +173,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
         if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
       }
     } else if (marks) {
-      pixel = maskDirections_.Pixel(local);
+      pixel = maskDirections_.CosinePixel(u[4], local);
     }
     ++tally.traced;
     Hit hit;

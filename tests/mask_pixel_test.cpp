@@ -1,5 +1,7 @@
 // MaskDirections::Pixel, the tables' MaskPixel (Methods A and C mark a pixel
 // per form-factor ray): the same pixel as MaskPixel for every direction.
+// CosinePixel, the pixel of a form-factor ray from its sample: the same
+// pixel as MaskPixel for every sample.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -97,6 +99,51 @@ TEST(MaskPixelTest, EdgesGiveMaskPixel) {
           check(glm::vec3(b * a, -a, z));
         }
     if (HasFatalFailure()) return;
+  }
+  EXPECT_GT(checked, 2000000u);
+}
+
+// CosinePixel(u2, CosineDirection(u1, u2)) against MaskPixel: random
+// samples, and u1 and u2 on and a few ulps either side of every row and
+// column edge (where 2 pi u2 and the direction's angle fall on either side
+// of an edge if the margin is too small), u1 = 0 (the normal) and tiny.
+TEST(MaskPixelTest, CosinePixelGivesMaskPixel) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  uint64_t checked = 0;
+  for (uint32_t res : kResolutions) {
+    test::MaskTables t(res);
+    auto check = [&](float u1, float u2) {
+      glm::vec3 d = CosineDirection(u1, u2);
+      uint32_t fast = t.dirs.CosinePixel(u2, d), slow = MaskPixel(d, res);
+      ASSERT_EQ(fast, slow) << "res " << res << " u1 " << std::hexfloat << u1 << " u2 " << u2;
+      ++checked;
+    };
+    for (int k = 0; k < 300000; ++k) check(unit(rng), unit(rng));
+    if (HasFatalFailure()) return;
+    for (uint32_t j = 0; j <= 4 * res; ++j) {
+      float u2 = static_cast<float>(static_cast<double>(j) / (4 * res));
+      for (int n = -6; n <= 6; ++n) {
+        float v = Ulps(u2, n);
+        if (!(v >= 0.0f && v < 1.0f)) continue;
+        for (float u1 : {0.0f, 1e-30f, 1e-12f, 1e-6f, 0.3f, 0.9999f, unit(rng)}) check(u1, v);
+        // Further out, near the margin: 1e-6 and 3e-5 of a column.
+        for (double off : {-3e-5, -1e-6, 1e-6, 3e-5}) {
+          float w = static_cast<float>((j + off) / (4 * res));
+          if (w >= 0.0f && w < 1.0f) check(unit(rng), w);
+        }
+      }
+      if (HasFatalFailure()) return;
+    }
+    for (uint32_t k = 0; k <= res; ++k) {
+      double theta = k * kHalfPi / res;
+      float u1 = static_cast<float>(std::sin(theta) * std::sin(theta));
+      for (int n = -6; n <= 6; ++n) {
+        float v = Ulps(u1, n);
+        if (v >= 0.0f && v <= 1.0f) check(v, unit(rng));
+      }
+      if (HasFatalFailure()) return;
+    }
   }
   EXPECT_GT(checked, 2000000u);
 }

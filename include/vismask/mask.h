@@ -69,6 +69,14 @@ class MaskDirections {
   // MaskPixel(d, res()), exactly: by table where d is clear of every edge,
   // by MaskPixel itself within kEdgeMargin of one. res() > 0.
   uint32_t Pixel(const glm::vec3& d) const;
+  // Pixel(d) for d = CosineDirection(u1, u2) (sampling.h), a form-factor
+  // ray's local direction, without the quadrant, the division and the
+  // column tables: the column is that of the angle 2 pi u2 wherever that
+  // angle is clear of the column's edges by kSampleAngleMargin, over ten
+  // times what CosineDirection's float arithmetic moves d's angle from it;
+  // the row is Pixel's, from d.z. Elsewhere, and for d within 1e-6 of the
+  // normal, Pixel(d) itself (tests/mask_pixel_test.cpp).
+  uint32_t CosinePixel(float u2, const glm::vec3& d) const;
 
  private:
   uint32_t res_ = 0;
@@ -84,6 +92,8 @@ class MaskDirections {
   Span<uint32_t> colBin_;
   uint32_t rowBins_ = 0, colBins_ = 0;      // powers of two: z * bins is exact
   double rowScale_ = 0.0, colScale_ = 0.0;  // the same, as doubles
+  // CosinePixel: 4R, and kSampleAngleMargin in columns.
+  double columns_ = 0.0, columnMargin_ = 0.0;
 };
 
 // The set bits of `w`. The builtin where the target has an instruction for
