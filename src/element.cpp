@@ -3,6 +3,8 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 
+#include "vismask/fminmax.h"
+
 namespace vismask {
 
 namespace {
@@ -11,7 +13,7 @@ float Cross2(glm::vec2 a, glm::vec2 b) {
   return a.x * b.y - a.y * b.x;
 }
 float Clamp01(float v) {
-  return std::fmin(std::fmax(v, 0.0f), 1.0f);
+  return FMin(FMax(v, 0.0f), 1.0f);
 }
 
 }  // namespace
@@ -46,7 +48,7 @@ glm::vec2 PatchParam(const Patch& p, const glm::vec3& x) {
   if (std::fabs(k2) < 1e-6f * std::fabs(k1)) {
     t = -k0 / k1;
   } else {
-    float w = std::sqrt(std::fmax(k1 * k1 - 4.0f * k0 * k2, 0.0f));
+    float w = std::sqrt(FMax(k1 * k1 - 4.0f * k0 * k2, 0.0f));
     t = (-k1 - w) / (2.0f * k2);
     if (t < -1e-3f || t > 1.001f) t = (-k1 + w) / (2.0f * k2);
   }

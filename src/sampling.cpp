@@ -3,6 +3,8 @@
 #include <cmath>
 #include <glm/geometric.hpp>
 
+#include "vismask/fminmax.h"
+
 namespace vismask {
 
 PatchSampler MakePatchSampler(const Patch& p) {
@@ -29,15 +31,15 @@ glm::vec3 PatchSampler::Point(float u0, float u1, float u2) const {
   // the plane of the wall that meets it there, and a ray from it could pass
   // out of a closed box between the two (su rounds to 1 for u1 > 1 - 3e-8).
   constexpr float kMargin = 1e-5f;
-  float su = std::fmin(std::fmax(std::sqrt(u1), kMargin), 1.0f - kMargin);
-  u2 = std::fmin(std::fmax(u2, kMargin), 1.0f - kMargin);
+  float su = FMin(FMax(std::sqrt(u1), kMargin), 1.0f - kMargin);
+  u2 = FMin(FMax(u2, kMargin), 1.0f - kMargin);
   return c0 + (su * (1.0f - u2)) * ea + (su * u2) * eb;
 }
 
 glm::vec3 CosineDirection(float u1, float u2) {
   float r = std::sqrt(u1);
   float phi = 6.283185307179586f * u2;
-  float z = std::sqrt(std::fmax(0.0f, 1.0f - u1));
+  float z = std::sqrt(FMax(0.0f, 1.0f - u1));
   return glm::vec3(r * std::cos(phi), r * std::sin(phi), z);
 }
 

@@ -11,6 +11,7 @@
 
 #include "vismask/centre_raster.h"
 #include "vismask/environment.h"
+#include "vismask/fminmax.h"
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
 #include "vismask/sobol.h"
@@ -30,8 +31,8 @@ bool Slabs(const Ray& ray, const Bounds& box, float* t0, float* t1) {
     float inv = 1.0f / ray.d[a];
     float ta = (box.lo[a] - ray.o[a]) * inv, tb = (box.hi[a] - ray.o[a]) * inv;
     if (ta > tb) std::swap(ta, tb);
-    lo = std::fmax(lo, ta);
-    hi = std::fmin(hi, tb);
+    lo = FMax(lo, ta);
+    hi = FMin(hi, tb);
   }
   *t0 = lo;
   *t1 = hi;
@@ -165,7 +166,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
         // ray enters this environment: the centre's view of the same
         // crossing, so off-centre rays are not judged by a parallel ray that
         // crosses elsewhere.
-        glm::vec3 q = ray.o + std::fmax(t0, 0.0f) * ray.d - centre;
+        glm::vec3 q = ray.o + FMax(t0, 0.0f) * ray.d - centre;
         glm::vec3 l(glm::dot(q, sampler.frame.t), glm::dot(q, sampler.frame.b),
                     glm::dot(q, sampler.frame.n));
         float len = glm::length(l);
