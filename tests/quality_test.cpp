@@ -76,6 +76,22 @@ double RmseWithoutLight(const PfmImage& a, const PfmImage& b) {
   return std::sqrt(num / den);
 }
 
+// ReverseBits32 against bit-by-bit reversal: every single bit, and random words.
+TEST(SobolTest, ReverseBitsReversesEveryBit) {
+  auto slow = [](uint32_t x) {
+    uint32_t r = 0;
+    for (int b = 0; b < 32; ++b) r |= ((x >> b) & 1u) << (31 - b);
+    return r;
+  };
+  for (int b = 0; b < 32; ++b) ASSERT_EQ(ReverseBits32(1u << b), 1u << (31 - b)) << b;
+  uint64_t x = 0x9e3779b97f4a7c15ull;
+  for (int k = 0; k < 100000; ++k) {
+    x = x * 6364136223846793005ull + 1442695040888963407ull;
+    const uint32_t w = static_cast<uint32_t>(x >> 32);
+    ASSERT_EQ(ReverseBits32(w), slow(w)) << w;
+  }
+}
+
 TEST(SobolTest, ScrambledPrefixesAreStratified) {
   // Owen scrambling keeps Sobol's nets: the first 2^k rays put exactly one
   // point in each 1/2^a x 1/2^(k-a) box of the direction dimensions (0, 1),
