@@ -145,10 +145,18 @@ Status MpiTransport::Start(const TransportRequest& request) {
   }
   std::string tooMany = RankCountError(size_, "the MPI world size is");
   if (!tooMany.empty()) {
+    // Every rank would say it: rank 0 alone does, and says it here, before
+    // the barrier. The others exit 2 as soon as they are past it, and
+    // mpirun then ends the job: rank 0's line, printed after returning, was
+    // sometimes lost (make stability, 257 ranks on 2 cores).
     finished_ = true;
+    if (rank_ == 0) {
+      std::fprintf(stderr, "%s (mpirun -np)\n", tooMany.c_str());
+      std::fflush(stderr);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
     MPI_Finalize();
-    // Every rank would say it: rank 0 alone does (the others' status is empty).
-    return rank_ == 0 ? Status::Error(tooMany + " (mpirun -np)") : Status::Error("");
+    return Status::Error("");  // said above, by rank 0
   }
   MPI_Comm host;
   if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &host) ==
