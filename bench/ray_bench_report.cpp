@@ -38,7 +38,7 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
   std::fprintf(
       md,
       "Embree %s (Debian's libembree-dev), device `threads=1`; build quality default. "
-      "The grid at %g cells per patch%s. "
+      "Grid cells per patch: %g%s. "
       "%d rays per set, %d repetitions; figures are Mrays/s of CPU time, median (min–max).\n\n",
       RTC_VERSION_STRING, args.density,
       args.density == EnvOptions().gridDensity ? " (an environment's default)" : "", args.rays,

@@ -4,6 +4,7 @@ section 2 (bench_parallel) and section 3 (mask cost), then the hand-written
 bench/analysis.md. Every figure comes from the runs; none is typed in."""
 
 import os
+import statistics
 
 from . import machine
 from .bench_parallel import section as parallel_section
@@ -28,21 +29,28 @@ def head(s, load_before, load_after, seconds):
     return L
 
 
-def density_rows(d, path):
+def density_rows(d, paths):
     """The cell-size table's rows for density d, from vismask_bench --md's
-    file: per patch count, the grid's bytes and bytes a patch (the memory
-    table) and the grid's Mrays/s of each ray set and query (the rays table),
+    files, one a round: per patch count, the grid's bytes and bytes a patch
+    (the memory table) and the grid's Mrays/s of each ray set and query (the
+    rays table: the median of the rounds' medians, and their range),
     ordered by patch count."""
     bytes_, rates = {}, {}
-    with open(path) as f:
-        for line in f:
-            cells = [c.strip() for c in line.rstrip("\n").split("|")[1:-1]]
-            if len(cells) > 8 and line.startswith("| ") and "(" in cells[1] and cells[0][:1].isdigit():
-                patches = cells[1].split("(")[0].strip()
-                bytes_[patches] = [cells[5], cells[7]]
-            elif len(cells) > 3 and cells[1] in ("uniform", "cosine") and cells[2].startswith(("closest", "any")):
-                rates.setdefault(cells[0], []).append(cells[3])
-    return [[d, p] + bytes_.get(p, ["", ""]) + rates[p] for p in sorted(rates, key=int)]
+    for path in paths:
+        with open(path) as f:
+            for line in f:
+                cells = [c.strip() for c in line.rstrip("\n").split("|")[1:-1]]
+                if len(cells) > 8 and line.startswith("| ") and "(" in cells[1] and cells[0][:1].isdigit():
+                    patches = cells[1].split("(")[0].strip()
+                    bytes_[patches] = [cells[5], cells[7]]
+                elif len(cells) > 3 and cells[1] in ("uniform", "cosine") and cells[2].startswith(("closest", "any")):
+                    rates.setdefault(cells[0], {}).setdefault((cells[1], cells[2]), []).append(
+                        float(cells[3].split()[0]))
+
+    def fmt(v):
+        return f"{statistics.median(v):.2f} ({min(v):.2f}–{max(v):.2f})"
+    return [[d, p] + bytes_.get(p, ["", ""]) + [fmt(v) for v in rates[p].values()]
+            for p in sorted(rates, key=int)]
 
 
 def rays_section(s):
@@ -69,8 +77,10 @@ its memory monitor (`rtcSetDeviceMemoryMonitorFunction`) saw the scene's
 commit keep, with the vertex and index arrays shared from the caller and so
 not counted.""", "", rays_md, "", "### Cell size", "",
          f"`{s.build}/vismask_bench --density D --benchmark_filter=vismask --sizes 19.5,4.7 --rays 32768 "
-         "--reps 3`:", "the grid alone, closest hit and any hit, Mrays/s of CPU time.", ""]
-    rows = [r for d in s.dens for r in density_rows(d, s.dir(f"dens{d}.md"))]
+         "--reps 1`:", "the grid alone, closest hit and any hit, Mrays/s of CPU time. The densities run",
+         f"in turn, {s.reps} rounds of them; each figure is the median of the rounds (min–max).", ""]
+    rows = [r for d in s.dens
+            for r in density_rows(d, [s.dir(f"dens{d}.{k}.md") for k in range(s.reps)])]
     return L + table(["cells per patch", "patches", "grid bytes", "B/patch (with PatchGeom)",
                       "uniform closest", "uniform any hit", "cosine closest", "cosine any hit"], rows)
 

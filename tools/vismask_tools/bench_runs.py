@@ -98,10 +98,14 @@ def rays(s):
     if "--sizes" in base:
         i = base.index("--sizes")
         base = base[:i] + base[i + 2:]
-    more = [] if s.quick else ["--sizes", "19.5,4.7", "--rays", "32768", "--reps", "3"]
-    for d in s.dens:
-        bench(s, f"dens{d}", ["--md", s.dir(f"dens{d}.md"), "--density", str(d),
-                              "--benchmark_filter=vismask"] + base + more)
+    more = [] if s.quick else ["--sizes", "19.5,4.7", "--rays", "32768", "--reps", "1"]
+    # The densities in turn, s.reps rounds of them, so that the machine's
+    # drift falls on every density alike (run one after another, the first
+    # and the last density saw different machines).
+    for r in range(s.reps):
+        for d in s.dens:
+            bench(s, f"dens{d}.{r}", ["--md", s.dir(f"dens{d}.{r}.md"), "--density", str(d),
+                                      "--benchmark_filter=vismask"] + base + more)
 
 
 def bench(s, name, args):
