@@ -162,9 +162,17 @@ void MaskDirections::Fill() {
   }
 }
 
+inline uint32_t MaskDirections::RowOf(float dz, bool* clear) const {
+  const double z = dz < 0.0f ? 0.0 : (dz > 1.0f ? 1.0 : static_cast<double>(dz));
+  // From its bin's first row, one edge on at most.
+  uint32_t row = rowBin_[static_cast<uint32_t>(z * rowScale_)];
+  row += rowEdge_[row + 1] > z;
+  *clear = (rowEdge_[row] - z > kEdgeMargin) & (z - rowEdge_[row + 1] > kEdgeMargin);
+  return row;
+}
+
 uint32_t MaskDirections::Pixel(const glm::vec3& d) const {
   const double x = d.x, y = d.y;
-  const double z = d.z < 0.0f ? 0.0 : (d.z > 1.0f ? 1.0 : static_cast<double>(d.z));
   // The quadrant, and (x, y) turned into the first: (a, b).
   double a, b;
   uint32_t quadrant;
@@ -181,27 +189,25 @@ uint32_t MaskDirections::Pixel(const glm::vec3& d) const {
   if (!(a * b > 0.0)) return MaskPixel(d, res_);
   const double p = b / (a + b);
   // Each from its bin's first, one edge on at most.
-  uint32_t row = rowBin_[static_cast<uint32_t>(z * rowScale_)];
-  row += rowEdge_[row + 1] > z;
+  bool rowClear;
+  const uint32_t row = RowOf(d.z, &rowClear);
   uint32_t col = colBin_[static_cast<uint32_t>(p * colScale_)];
   col += colEdge_[col + 1] <= p;
   // Clear of all four edges by the margin: the pixel; else MaskPixel's.
-  const bool clear = (rowEdge_[row] - z > kEdgeMargin) & (z - rowEdge_[row + 1] > kEdgeMargin) &
-                     (p - colEdge_[col] > kEdgeMargin) & (colEdge_[col + 1] - p > kEdgeMargin);
+  const bool clear =
+      rowClear & (p - colEdge_[col] > kEdgeMargin) & (colEdge_[col + 1] - p > kEdgeMargin);
   if (!clear) return MaskPixel(d, res_);
   return (row * 4 + quadrant) * res_ + col;
 }
 
 uint32_t MaskDirections::CosinePixel(float u2, const glm::vec3& d) const {
   if (!(u2 >= 0.0f && u2 < 1.0f)) return Pixel(d);
-  const double z = d.z < 0.0f ? 0.0 : (d.z > 1.0f ? 1.0 : static_cast<double>(d.z));
-  uint32_t row = rowBin_[static_cast<uint32_t>(z * rowScale_)];
-  row += rowEdge_[row + 1] > z;
+  bool rowClear;
+  const uint32_t row = RowOf(d.z, &rowClear);
   const double c = static_cast<double>(u2) * columns_;  // exact: u2 has 24 bits, 4R is small
   const uint32_t col = static_cast<uint32_t>(c);
   const double f = c - col;
-  const bool clear = (rowEdge_[row] - z > kEdgeMargin) & (z - rowEdge_[row + 1] > kEdgeMargin) &
-                     (f > columnMargin_) & (f < 1.0 - columnMargin_) &
+  const bool clear = rowClear & (f > columnMargin_) & (f < 1.0 - columnMargin_) &
                      (std::fabs(d.x) + std::fabs(d.y) > 1e-6f);
   if (!clear) return Pixel(d);
   return row * 4 * res_ + col;

@@ -79,6 +79,11 @@ class MaskDirections {
   uint32_t CosinePixel(float u2, const glm::vec3& d) const;
 
  private:
+  // Pixel's and CosinePixel's row: dz clamped to [0, 1], its row from the
+  // tables, and in *clear whether it lies more than kEdgeMargin inside
+  // both the row's edges (else only MaskPixel decides it).
+  uint32_t RowOf(float dz, bool* clear) const;
+
   uint32_t res_ = 0;
   Span<double> rowSin_, rowCos_, colCos_, colSin_;
   // Row edges: cos(k pi/2R), k = 0..R, falling; [0] = 2 and [R] = -1 stop
