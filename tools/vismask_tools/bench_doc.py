@@ -76,8 +76,8 @@ as Embree's BVH holds its own copy of the triangles. Embree's bytes are what
 its memory monitor (`rtcSetDeviceMemoryMonitorFunction`) saw the scene's
 commit keep, with the vertex and index arrays shared from the caller and so
 not counted.""", "", rays_md, "", "### Cell size", "",
-         f"`{s.build}/vismask_bench --density D --benchmark_filter=vismask --sizes 19.5,4.7 --rays 32768 "
-         "--reps 1`:", "the grid alone, closest hit and any hit, Mrays/s of CPU time. The densities run",
+         f"`{s.build}/vismask_bench --density D --benchmark_filter=vismask {s.densargs}`:".replace(" `", "`"),
+         "the grid alone, closest hit and any hit, Mrays/s of CPU time. The densities run",
          f"in turn, {s.reps} rounds of them; each figure is the median of the rounds (min–max).", ""]
     rows = [r for d in s.dens
             for r in density_rows(d, [s.dir(f"dens{d}.{k}.md") for k in range(s.reps)])]

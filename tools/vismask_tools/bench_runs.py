@@ -39,6 +39,9 @@ class Settings:
         stop1, stop2, mshots, bstop, self.brooms = (("0.3", "0.5", 10, "0.7", "4x4") if quick else
                                                     ("2e-2", "5e-2", 200, "0.55", "8x8"))
         self.dens = [2, 4] if quick else [1, 2, 4, 8]
+        # The cell-size table's sets (quick: rayargs' own), one repetition a
+        # round: the rounds alternate the densities.
+        self.densargs = "" if quick else "--sizes 19.5,4.7 --rays 32768 --reps 1"
         # The Cornell box in 2 environments, to the same unshot threshold:
         # short enough to repeat. p0 is the default 2-rank run's command (no
         # --envs: --ranks 2 and mpirun -np 2 mean --envs auto:2); p the
@@ -98,7 +101,7 @@ def rays(s):
     if "--sizes" in base:
         i = base.index("--sizes")
         base = base[:i] + base[i + 2:]
-    more = [] if s.quick else ["--sizes", "19.5,4.7", "--rays", "32768", "--reps", "1"]
+    more = s.densargs.split()
     # The densities in turn, s.reps rounds of them, so that the machine's
     # drift falls on every density alike (run one after another, the first
     # and the last density saw different machines).
