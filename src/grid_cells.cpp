@@ -86,7 +86,7 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s)
       {{ca - r, cb - r}, {ca + r, cb - r}, {ca + r, cb + r}, {ca - r, cb + r}}};
   int count = 4, cur = 0;
   for (int i = 0; i < 4; ++i) {
-    const glm::vec4& e = g.edge[i];
+    const glm::vec4 e = g.Edge(i);
     if (!std::isfinite(e.w)) continue;  // a triangle's missing fourth edge
     glm::dvec3 ed(e.x, e.y, e.z);
     double ea = glm::dot(ed, u), eb = glm::dot(ed, v);

@@ -17,7 +17,7 @@ PatchGeom MakePatchGeom(const Patch& p) {
     size = std::fmax(size, glm::length(p.corner[(i + 1) % p.numCorners] - p.corner[i]));
   for (int i = 0; i < 4; ++i) {
     if (i >= static_cast<int>(p.numCorners)) {
-      g.edge[i] = glm::vec4(0.0f, 0.0f, 0.0f, -std::numeric_limits<float>::infinity());
+      g.SetEdge(i, glm::vec4(0.0f, 0.0f, 0.0f, -std::numeric_limits<float>::infinity()));
       continue;
     }
     glm::vec3 a = p.corner[i];
@@ -25,7 +25,7 @@ PatchGeom MakePatchGeom(const Patch& p) {
     glm::vec3 inward = glm::normalize(glm::cross(p.normal, b - a));  // points inside for CCW
     float w = glm::dot(inward, a);
     float tol = 1e-5f * size + 4.0f * std::numeric_limits<float>::epsilon() * std::fabs(w);
-    g.edge[i] = glm::vec4(inward, w - tol);
+    g.SetEdge(i, glm::vec4(inward, w - tol));
   }
   return g;
 }

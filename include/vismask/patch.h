@@ -11,6 +11,11 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#elif defined(__aarch64__) && defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
 
 namespace vismask {
 
@@ -34,14 +39,23 @@ struct Hit {
 };
 
 // Ray-test data. A point x on the plane dot(n, x) == d is inside the patch
-// iff dot(edge[i].xyz, x) >= edge[i].w for all four edges (a triangle's
-// fourth edge is (0,0,0,-inf), which always passes). Edge planes are widened
-// by a tiny tolerance so that rays through a shared edge hit at least one of
-// its two patches.
+// iff dot(edge i's normal, x) >= edge i's offset for all four edges (a
+// triangle's fourth edge is (0,0,0,-inf), which always passes). Edge planes
+// are widened by a tiny tolerance so that rays through a shared edge hit at
+// least one of its two patches. The edges are stored component by component
+// (ex[i], ey[i], ez[i], ew[i]), so that one 4-wide test does all four
+// (OutsideEdges).
 struct PatchGeom {
   glm::vec3 n;
   float d;
-  glm::vec4 edge[4];
+  float ex[4], ey[4], ez[4], ew[4];
+  glm::vec4 Edge(int i) const { return glm::vec4(ex[i], ey[i], ez[i], ew[i]); }
+  void SetEdge(int i, const glm::vec4& e) {
+    ex[i] = e.x;
+    ey[i] = e.y;
+    ez[i] = e.z;
+    ew[i] = e.w;
+  }
 };
 static_assert(sizeof(PatchGeom) == 80, "PatchGeom is the grid's hot data");
 
@@ -98,6 +112,38 @@ inline PatchGeom TwinGeom(const PatchGeom& g) {
   return t;
 }
 
+// Whether x fails any of g's four edge tests (dot(edge, x) < offset). The
+// portable form tests all four, then branches once: which edge fails is
+// unpredictable.
+inline bool OutsideEdgesScalar(const PatchGeom& g, const glm::vec3& x) {
+  return (g.ex[0] * x.x + g.ey[0] * x.y + g.ez[0] * x.z < g.ew[0]) |
+         (g.ex[1] * x.x + g.ey[1] * x.y + g.ez[1] * x.z < g.ew[1]) |
+         (g.ex[2] * x.x + g.ey[2] * x.y + g.ez[2] * x.z < g.ew[2]) |
+         (g.ex[3] * x.x + g.ey[3] * x.y + g.ez[3] * x.z < g.ew[3]);
+}
+
+// The same, four lanes at once on x86-64 (SSE2) and aarch64 (NEON): each
+// lane forms the scalar form's products, its two sums in the same order and
+// its ordered less-than (false on a NaN), with no fused multiply-add (the
+// build has -ffp-contract=off), so every path gives the same answer for
+// every input (tests/patch_simd_test.cpp). 32-bit ARM keeps the scalar
+// form: its NEON flushes subnormals to zero.
+inline bool OutsideEdges(const PatchGeom& g, const glm::vec3& x) {
+#if defined(__SSE2__) && !defined(VISMASK_SCALAR)
+  const __m128 s = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(g.ex), _mm_set1_ps(x.x)),
+                                         _mm_mul_ps(_mm_loadu_ps(g.ey), _mm_set1_ps(x.y))),
+                              _mm_mul_ps(_mm_loadu_ps(g.ez), _mm_set1_ps(x.z)));
+  return _mm_movemask_ps(_mm_cmplt_ps(s, _mm_loadu_ps(g.ew))) != 0;
+#elif defined(__aarch64__) && defined(__ARM_NEON) && !defined(VISMASK_SCALAR)
+  const float32x4_t s = vaddq_f32(vaddq_f32(vmulq_f32(vld1q_f32(g.ex), vdupq_n_f32(x.x)),
+                                            vmulq_f32(vld1q_f32(g.ey), vdupq_n_f32(x.y))),
+                                  vmulq_f32(vld1q_f32(g.ez), vdupq_n_f32(x.z)));
+  return vmaxvq_u32(vcltq_f32(s, vld1q_f32(g.ew))) != 0;
+#else
+  return OutsideEdgesScalar(g, x);
+#endif
+}
+
 // Intersects `ray` with one patch. Returns true and sets *t and *front when the
 // ray meets the patch at ray.tMin < t < ray.tMax.
 inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* front) {
@@ -107,13 +153,7 @@ inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* f
   float tt = num / denom;
   if (!(tt > ray.tMin && tt < ray.tMax)) return false;
   glm::vec3 x = ray.o + tt * ray.d;
-  // All four edge tests, then one branch: which edge fails is unpredictable.
-  const glm::vec4* e = g.edge;
-  bool outside = (e[0].x * x.x + e[0].y * x.y + e[0].z * x.z < e[0].w) |
-                 (e[1].x * x.x + e[1].y * x.y + e[1].z * x.z < e[1].w) |
-                 (e[2].x * x.x + e[2].y * x.y + e[2].z * x.z < e[2].w) |
-                 (e[3].x * x.x + e[3].y * x.y + e[3].z * x.z < e[3].w);
-  if (outside) return false;
+  if (OutsideEdges(g, x)) return false;
   *t = tt;
   *front = denom < 0.0f;
   return true;
