@@ -3,12 +3,12 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <glm/geometric.hpp>
 #include <limits>
 #include <random>
 #include <vector>
 
+#include "test_util.h"
 #include "vismask/arena.h"
 #include "vismask/check.h"
 #include "vismask/fminmax.h"
@@ -20,11 +20,7 @@
 namespace vismask {
 namespace {
 
-uint32_t Bits(float x) {
-  uint32_t b;
-  std::memcpy(&b, &x, sizeof b);
-  return b;
-}
+using test::Bits;
 
 // FMax and FMin: x when x > y (x < y), else y, so of two equal values (two
 // zeros of either sign) the second; of a NaN and a number, the number. On

@@ -1,11 +1,11 @@
 #include "grid_test_util.h"
 
 #include <cmath>
-#include <cstring>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <string>
 
+#include "test_util.h"
 #include "vismask/sampling.h"
 
 namespace vismask::gridtest {
@@ -157,12 +157,6 @@ bool BruteIntersect(const TestScene& s, const Ray& ray, uint32_t skip, Hit* hit)
   return best.patch != kNoPatch;
 }
 
-uint32_t Bits(float f) {
-  uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  return u;
-}
-
 void Checker::Check(const Ray& ray, uint32_t skip, const char* kind) {
   Hit want, got;
   bool wantHit = BruteIntersect(scene, ray, skip, &want);
@@ -177,8 +171,8 @@ void Checker::Check(const Ray& ray, uint32_t skip, const char* kind) {
   hits += wantHit;
   bool same = wantHit == gotHit && occluded == wantHit && hinted == wantHit &&
               anyHinted == wantHit &&
-              (!wantHit ||
-               (want.patch == got.patch && Bits(want.t) == Bits(got.t) && want.front == got.front));
+              (!wantHit || (want.patch == got.patch && test::Bits(want.t) == test::Bits(got.t) &&
+                            want.front == got.front));
   if (!same && ++failures <= 5) {
     ADD_FAILURE() << kind << " ray o=(" << ray.o.x << "," << ray.o.y << "," << ray.o.z << ") d=("
                   << ray.d.x << "," << ray.d.y << "," << ray.d.z << ") t=(" << ray.tMin << ","

@@ -77,8 +77,6 @@ void BuildGrid(const TestScene& s, float density, BuiltGrid* b);
 // lower index: grid.h).
 bool BruteIntersect(const TestScene& s, const Ray& ray, uint32_t skip, Hit* hit);
 
-uint32_t Bits(float f);
-
 // Compares grid and brute force on one ray (with its skip); also the query
 // skipping the brute-force hit itself. Counts the disagreements.
 struct Checker {

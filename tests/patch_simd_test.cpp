@@ -5,20 +5,16 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <random>
 
+#include "test_util.h"
 #include "vismask/patch.h"
 
 namespace vismask {
 namespace {
 
-float FromBits(uint32_t b) {
-  float f;
-  std::memcpy(&f, &b, sizeof f);
-  return f;
-}
+using test::FloatFromBits;
 
 // Values where a 4-wide form could part from the scalar one: signed zeros,
 // subnormals, the largest and smallest normals, infinities, NaN, and
@@ -28,9 +24,9 @@ float Special(std::mt19937& rng) {
                                   -0.0f,
                                   1.0f,
                                   -1.0f,
-                                  FromBits(1),  // the least subnormal
-                                  -FromBits(1),
-                                  FromBits(0x007fffff),  // the largest subnormal
+                                  FloatFromBits(1),  // the least subnormal
+                                  -FloatFromBits(1),
+                                  FloatFromBits(0x007fffff),  // the largest subnormal
                                   std::numeric_limits<float>::min(),
                                   std::numeric_limits<float>::max(),
                                   -std::numeric_limits<float>::max(),
@@ -55,7 +51,7 @@ TEST(PatchSimdTest, OutsideEdgesIsTheScalarTestOnEveryInput) {
     const int kind = i % 4;  // plain numbers, special values, random bits, a near tie
     auto value = [&]() {
       if (kind == 1 && rng() % 3 == 0) return Special(rng);
-      if (kind == 2) return FromBits(bits(rng));
+      if (kind == 2) return FloatFromBits(bits(rng));
       return uni(rng);
     };
     for (int e = 0; e < 4; ++e) {

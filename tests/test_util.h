@@ -1,10 +1,25 @@
 // Helpers shared by the tests: temporary directories, files, and running the
 // vismask command line in-process.
 #pragma once
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
 namespace vismask::test {
+
+// A float's bits, and the float of given bits (tests compare results bit
+// for bit and build special values).
+inline uint32_t Bits(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, sizeof u);
+  return u;
+}
+inline float FloatFromBits(uint32_t u) {
+  float f;
+  std::memcpy(&f, &u, sizeof f);
+  return f;
+}
 
 // A fresh empty directory under /tmp, removed (with its contents) on destruction.
 class TempDir {

@@ -129,12 +129,12 @@ inline bool OutsideEdgesScalar(const PatchGeom& g, const glm::vec3& x) {
 // every input (tests/patch_simd_test.cpp). 32-bit ARM keeps the scalar
 // form: its NEON flushes subnormals to zero.
 inline bool OutsideEdges(const PatchGeom& g, const glm::vec3& x) {
-#if defined(__SSE2__) && !defined(VISMASK_SCALAR)
+#if defined(__SSE2__)
   const __m128 s = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(g.ex), _mm_set1_ps(x.x)),
                                          _mm_mul_ps(_mm_loadu_ps(g.ey), _mm_set1_ps(x.y))),
                               _mm_mul_ps(_mm_loadu_ps(g.ez), _mm_set1_ps(x.z)));
   return _mm_movemask_ps(_mm_cmplt_ps(s, _mm_loadu_ps(g.ew))) != 0;
-#elif defined(__aarch64__) && defined(__ARM_NEON) && !defined(VISMASK_SCALAR)
+#elif defined(__aarch64__) && defined(__ARM_NEON)
   const float32x4_t s = vaddq_f32(vaddq_f32(vmulq_f32(vld1q_f32(g.ex), vdupq_n_f32(x.x)),
                                             vmulq_f32(vld1q_f32(g.ey), vdupq_n_f32(x.y))),
                                   vmulq_f32(vld1q_f32(g.ez), vdupq_n_f32(x.z)));
