@@ -58,9 +58,17 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
     CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
     uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
     h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
-    h.sequence = outCount_++;
-    WriteHeader(packet, h);
+    ++outCount_;
     if (!shape_.empty()) mask.Pack(MaskBytes(packet));
+    // The receiver's share of the power in flight, worked out here from the
+    // bytes it will get, so that this round's report can count it (exchange.h).
+    // Its box and cell as it makes its own (Prepare).
+    h.flightShare =
+        options_.maskMethod == MaskMethod::kR
+            ? 0.0f
+            : static_cast<float>(FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet),
+                                             envGrid_.EnvBox(static_cast<int>(h.toEnv)), c));
+    WriteHeader(packet, h);
     ++stats_.packetsSent;
   }
 }
@@ -187,10 +195,8 @@ void Environment::Deliver(const uint8_t* packet) {
     }
   }
   ++slot.received;
-  if (options_.maskMethod != MaskMethod::kR) {  // R books its flight in the ledger
-    const uint8_t* bits = shape_.empty() ? nullptr : MaskBytes(packet);
-    slot.flightShare += static_cast<float>(FlightShare(h, bits));
-  }
+  if (options_.maskMethod != MaskMethod::kR)                 // R books its flight in the ledger
+    slot.flightShare += static_cast<double>(h.flightShare);  // by the sender (Forward)
   double power = h.power[0] + h.power[1] + h.power[2];
   // Method R's open share is of the shot's own rays (bits past them are closed).
   if (shape_.empty())
@@ -230,6 +236,11 @@ void Environment::FlightPower(double power[3]) const {
   for (const Slot& s : slots_)
     if (s.used)
       for (int c = 0; c < 3; ++c) power[c] += s.header.power[c] * s.flightShare;
+  // The packets not yet delivered: their receivers' shares (Forward).
+  for (uint32_t k = 0; k < outCount_; ++k) {
+    PacketHeader h = ReadHeader(OutboxPacket(k));
+    for (int c = 0; c < 3; ++c) power[c] += h.power[c] * h.flightShare;
+  }
 }
 
 // Without a mask, FlightShare looks at directions on a hemisphere of this resolution.
@@ -256,15 +267,21 @@ void Environment::FillFlightCols() {
   }
 }
 
-double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) const {
+double Environment::FlightShareAt(const uint8_t* packet) const {
+  PacketHeader h = ReadHeader(packet);
+  return FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet), box_, cell_);
+}
+
+double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
+                                const int to[3]) const {
   const uint32_t res = FlightRes(), cols = 4 * res;
   int from[3];
   envGrid_.Cell(static_cast<int>(h.fromEnv), from);
   int axis = 0;
   for (int a = 0; a < 3; ++a)
-    if (from[a] != cell_[a]) axis = a;
+    if (from[a] != to[a]) axis = a;
   const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-  const double plane = from[axis] < cell_[axis] ? box_.lo[axis] : box_.hi[axis];
+  const double plane = from[axis] < to[axis] ? box.lo[axis] : box.hi[axis];
   // The centre ray's origin and frame, as Method B casts it.
   Patch shooter = PatchFromHeader(h);
   Frame f = MakePatchSampler(shooter).frame;
@@ -287,7 +304,7 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
     double d2 = lx * f.t[a2] + ly * f.b[a2] + ct * f.n[a2];
     double q1 = o[a1] + t * d1, q2 = o[a2] + t * d2;
     // Half-open, so a direction through an edge enters one box only.
-    return q1 >= box_.lo[a1] && q1 < box_.hi[a1] && q2 >= box_.lo[a2] && q2 < box_.hi[a2];
+    return q1 >= box.lo[a1] && q1 < box.hi[a1] && q2 >= box.lo[a2] && q2 < box.hi[a2];
   };
   // With a mask, the face's view: only the columns that may see the face
   // are looked at, and of those, the ones surely inside it by far more
@@ -297,7 +314,7 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits) cons
   const CentreRays rays{o, f, &maskDirections_};
   const bool framed =
       bits && maskDirections_.res() == res &&
-      FaceView(BoxFace(box_, axis, from[axis] < cell_[axis] ? 0 : 1), rays, 1e-7, 1e-7, &view);
+      FaceView(BoxFace(box, axis, from[axis] < to[axis] ? 0 : 1), rays, 1e-7, 1e-7, &view);
   double share = 0.0;
   for (uint32_t row = 0; row < res; ++row) {
     double s0 = std::sin(row * halfPi / res), s1 = std::sin((row + 1) * halfPi / res);

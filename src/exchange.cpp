@@ -11,7 +11,8 @@ namespace vismask {
 void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t bytesPerPacket,
                              uint32_t packetsPerEnvRound) {
   packetBytes = bytesPerPacket;
-  blockBytes = size_t(envs.perRank) * packetsPerEnvRound * bytesPerPacket;
+  reportBytes = size_t(envs.perRank) * sizeof(EnvReport);
+  blockBytes = reportBytes + size_t(envs.perRank) * packetsPerEnvRound * bytesPerPacket;
   size_t n = static_cast<size_t>(ranks);
   sendBytes = arena.Alloc<uint8_t>(n * blockBytes);
   recvBytes = arena.Alloc<uint8_t>(n * blockBytes);
@@ -39,10 +40,10 @@ void Timed(double* waited, Call&& call) {
   *waited += os::Seconds() - t0;
 }
 
-}  // namespace
-
-RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
-                         ExchangeBuffers* x, double elapsed, double roundCpu, double* waited) {
+// This rank's reports (x->mine): each environment's state now, its outbox
+// counted as in flight and queued (FlightPower, shootable).
+void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, ExchangeBuffers* x,
+                 double elapsed, double roundCpu, double waited) {
   for (uint32_t i = 0; i < rankEnvs.perRank; ++i) x->mine[i] = EnvReport{};
   for (uint32_t i = 0; i < envs.size(); ++i) {
     const Environment* e = envs[i];
@@ -55,7 +56,8 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs
     r.emitted = Sum3(l.emitted);
     r.lost = r.emitted - Sum3(l.absorbed) - Sum3(l.escaped) - r.unshot;
     uint32_t top = e->TopShooter();
-    r.shootable = e->queuedCount() + (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
+    r.shootable = e->queuedCount() + e->outboxCount() +
+                  (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
     r.shots = e->stats().shots + e->stats().foreignShots;
     r.rays = e->stats().rays;
     r.forwardsCreated = e->stats().forwardsCreated;
@@ -70,13 +72,15 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs
     r.work = e->workSteps();
   }
   x->mine[0].elapsed = elapsed;
-  x->mine[0].waited = *waited;
+  x->mine[0].waited = waited;
   x->mine[0].roundCpu = roundCpu;
-  Timed(waited, [&] { t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data()); });
+}
+
+// The totals of the gathered reports (x->all), summed in environment order.
+RoundTotals SumTotals(const RankEnvs& rankEnvs, int ranks, const ExchangeBuffers* x) {
   // Rank r's block holds its environments first; the rest is padding.
   RoundTotals tot;
   tot.elapsed = x->all[0].elapsed;
-  int ranks = t->size();
   for (int r = 0; r < ranks; ++r) {
     const EnvReport& first = x->all[size_t(r) * rankEnvs.perRank];
     if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
@@ -122,15 +126,29 @@ RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs
   return tot;
 }
 
-void ExchangePackets(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
-                     ExchangeBuffers* x, double* waited) {
+}  // namespace
+
+RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
+                         ExchangeBuffers* x, double elapsed, double roundCpu, double* waited) {
+  FillReports(envs, rankEnvs, x, elapsed, roundCpu, *waited);
+  Timed(waited, [&] { t->AllGather(x->mine.data(), x->mine.bytes(), x->all.data()); });
+  return SumTotals(rankEnvs, t->size(), x);
+}
+
+RoundTotals ExchangeRound(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
+                          ExchangeBuffers* x, double elapsed, double roundCpu, double* waited) {
+  FillReports(envs, rankEnvs, x, elapsed, roundCpu, *waited);
   int ranks = t->size(), me = t->rank();
+  std::memcpy(x->all.data() + size_t(me) * rankEnvs.perRank, x->mine.data(), x->reportBytes);
   if (ranks > 1) {
+    // Each block: this rank's reports, then its packets for that rank.
     for (int r = 0; r < ranks; ++r) {
       RankEnvs re = EnvsOfRank(rankEnvs.total, ranks, r);
       uint8_t* block = x->sendBytes.data() + size_t(r) * x->blockBytes;
       size_t used = 0;
       if (r != me) {
+        std::memcpy(block, x->mine.data(), x->reportBytes);
+        used = x->reportBytes;
         for (Environment* src : envs) {
           for (uint32_t k = 0; k < src->outboxCount(); ++k) {
             const uint8_t* packet = src->OutboxPacket(k);
@@ -146,6 +164,12 @@ void ExchangePackets(Span<Environment* const> envs, const RankEnvs& rankEnvs, Tr
       x->recv[r] = Span<uint8_t>(x->recvBytes.data() + size_t(r) * x->blockBytes, x->blockBytes);
     }
     Timed(waited, [&] { t->AllToAll(x->send.data(), x->recv.data(), x->received.data()); });
+    for (int r = 0; r < ranks; ++r) {
+      if (r == me) continue;
+      CHECK(x->received[r] >= x->reportBytes &&
+            (x->received[r] - x->reportBytes) % x->packetBytes == 0);
+      std::memcpy(x->all.data() + size_t(r) * rankEnvs.perRank, x->recv[r].data(), x->reportBytes);
+    }
   }
   for (Environment* dest : envs) {
     for (int r = 0; r < ranks; ++r) {
@@ -157,8 +181,7 @@ void ExchangePackets(Span<Environment* const> envs, const RankEnvs& rankEnvs, Tr
           }
         }
       } else {
-        CHECK(x->received[r] % x->packetBytes == 0);
-        for (size_t off = 0; off < x->received[r]; off += x->packetBytes) {
+        for (size_t off = x->reportBytes; off < x->received[r]; off += x->packetBytes) {
           const uint8_t* packet = x->recv[r].data() + off;
           if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
         }
@@ -166,6 +189,7 @@ void ExchangePackets(Span<Environment* const> envs, const RankEnvs& rankEnvs, Tr
     }
   }
   for (Environment* e : envs) e->ClearOutbox();
+  return SumTotals(rankEnvs, ranks, x);
 }
 
 }  // namespace vismask

@@ -150,6 +150,7 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   uint32_t packetBytes = r->exchange.packetBytes;  // 0 with one environment
   w.Printf("  \"result\": {\n    \"stop_reason\": \"%s\",\n    \"rounds\": %llu,\n",
            StopReasonName(res.reason), static_cast<unsigned long long>(res.rounds));
+  w.Printf("    \"collectives\": %llu,\n", static_cast<unsigned long long>(res.collectives));
   w.Printf("    \"shots\": %llu,\n    \"local_shots\": %llu,\n    \"foreign_shots\": %llu,\n",
            static_cast<unsigned long long>(res.shots), static_cast<unsigned long long>(st.shots),
            static_cast<unsigned long long>(st.foreignShots));

@@ -113,6 +113,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
   uint64_t measuredAt = ~0ull;  // the shot count last measured
   RoundTotals totals =
       GatherTotals(envs, rankEnvs, transport, buffers, 0.0, 0.0, &result.waitSeconds);
+  result.collectives = 1;
   result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
   result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
   result.lossEstimate = LossEstimate(totals);
@@ -152,12 +153,12 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     }
     double roundCpu = os::CpuSeconds() - cpu0;
     result.computeSeconds += roundCpu;
-    ExchangePackets(envs, rankEnvs, transport, buffers, &result.waitSeconds);
     ++result.rounds;
     uint64_t before = result.shots;
     double elapsed = clock();
     totals =
-        GatherTotals(envs, rankEnvs, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
+        ExchangeRound(envs, rankEnvs, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
+    ++result.collectives;
     result.waitSecondsMax = totals.waitedMax;
     result.criticalSeconds += totals.roundCpuMax;
     result.criticalEnvSeconds += totals.envCpuMax;

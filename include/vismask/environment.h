@@ -160,8 +160,12 @@ class Environment {
   }
   void ClearOutbox() { outCount_ = 0; }
   // Takes a packet addressed to this environment. Packets must be delivered
-  // in a fixed order (sender, then sequence) for results to be reproducible.
+  // in a fixed order (sender, then send order) for results to be reproducible.
   void Deliver(const uint8_t* packet);
+  // The share of a packet addressed here that FlightShare gives with this
+  // environment's own box: what its sender must have put in the header
+  // (tests/exchange_test.cpp).
+  double FlightShareAt(const uint8_t* packet) const;
 
   // How many foreign shooters are held.
   uint32_t queuedCount() const { return queued_; }
@@ -170,7 +174,9 @@ class Environment {
   // environments counts each watt once: Method R's ledger().inFlight; for
   // the other methods, each queued shooter's power times the cosine-weighted
   // share of the directions, open in a packet received, whose centre ray
-  // crosses from that packet's sender into this box.
+  // crosses from that packet's sender into this box, and the same for the
+  // packets in the outbox, each with its receiver's share (so the sum is
+  // the same before and after a delivery, up to rounding).
   void FlightPower(double power[3]) const;
 
   // Display radiosity at the lattice vertices: the area-weighted mean, over
@@ -248,7 +254,10 @@ class Environment {
     uint8_t used;
     uint8_t received;
     uint8_t expected;
-    float flightShare;  // of the power, booked here as in flight (FlightShare; in the padding)
+    // Of the power, booked here as in flight: the sum of the packets'
+    // shares (FlightShare), in double as the report sums them from the
+    // outbox before delivery (exchange.h), so both agree to double rounding.
+    double flightShare;
   };
 
   void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
@@ -312,8 +321,12 @@ class Environment {
   int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
   // The cosine-weighted share of h's hemisphere whose centre rays are open
   // in the packet's mask `bits` (null: no mask, all open) and cross the face
-  // from h.fromEnv into this box.
-  double FlightShare(const PacketHeader& h, const uint8_t* bits) const;
+  // from h.fromEnv into the receiver's `box` (at grid cell `to`). Worked out
+  // by the sender (Forward), with the receiver's box as the receiver makes
+  // it (EnvGrid::EnvBox); every environment has the same tables
+  // (maskDirections_, flightCols_).
+  double FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
+                     const int to[3]) const;
   // FlightShare's hemisphere resolution (the mask's, or kNoMaskRes without
   // one) and its table of column directions, made once.
   uint32_t FlightRes() const;

@@ -1,8 +1,9 @@
-// The exchange between rounds: every environment's report gathered from all
-// ranks and summed in environment order (so every rank takes the same
-// decisions whatever the grouping), and the round's packets moved to the
-// ranks of their receivers and delivered in a fixed order. The buffers are
-// carved from the rank's arena at init; nothing here allocates.
+// The exchange between rounds, one collective a round: the round's packets
+// moved to the ranks of their receivers and delivered in a fixed order, and
+// every environment's report, which travels with them, summed in
+// environment order (so every rank takes the same decisions whatever the
+// grouping). The buffers are carved from the rank's arena at init; nothing
+// here allocates.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -35,7 +36,8 @@ struct EnvReport {
   uint64_t rays;        // form-factor rays traced
   uint64_t forwardsCreated;
   uint64_t foreignShots;
-  uint64_t shootable;  // local patches with unshot power (0 or 1: any) plus queued shooters
+  uint64_t shootable;  // local patches with unshot power (0 or 1: any), queued shooters and
+                       // packets in the outbox
   double radiosity;    // sum of b * area, channels summed
   double kdArea;       // sum of kd * area, channels averaged (constant)
   double area;         // (constant)
@@ -67,9 +69,9 @@ struct RoundTotals {
 };
 
 // A rank's exchange buffers, carved from its arena at init: one send and one
-// receive block per rank, each large enough for every packet a rank's
-// environments can send another rank in a round (`packetsPerEnvRound` per
-// environment), and the gathered reports.
+// receive block per rank, each large enough for a rank's reports and every
+// packet its environments can send another rank in a round
+// (`packetsPerEnvRound` per environment), and the gathered reports.
 struct ExchangeBuffers {
   void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
               uint32_t packetsPerEnvRound);
@@ -78,6 +80,7 @@ struct ExchangeBuffers {
   Span<Span<const uint8_t>> send;
   Span<Span<uint8_t>> recv;
   Span<size_t> received;
+  size_t reportBytes = 0;   // a rank's reports (perRank entries), at the start of each block
   Span<EnvReport> mine;     // perRank entries
   Span<EnvReport> all;      // ranks * perRank entries
   Span<double> envCpu;      // perRank: the solver's CPU seconds of each environment's round
@@ -89,13 +92,21 @@ struct ExchangeBuffers {
 
 // Gathers every environment's report (those of `envs` from this rank) and
 // sums them in environment order; the seconds spent in the collective are
-// added to *waited.
+// added to *waited. The solve's first totals, before any round.
 RoundTotals GatherTotals(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
                          ExchangeBuffers* x, double elapsed, double roundCpu, double* waited);
 
-// Moves the round's packets to their receivers and delivers them: for each
-// receiver, senders in environment order and packets in send order.
-void ExchangePackets(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
-                     ExchangeBuffers* x, double* waited);
+// The exchange at the end of a round, in one collective: every rank sends
+// every other rank its environments' reports and the packets for that
+// rank's environments (one AllToAll), then delivers the packets it got (for
+// each receiver, senders in environment order and packets in send order)
+// and sums the reports in environment order. A report is made before its
+// packets are delivered: the outbox's packets count as in flight with the
+// receiver's share their sender worked out (Environment::FlightPower) and
+// as queued shooters, so the totals are those after the delivery, up to the
+// rounding of the sums (and `shootable` is 0 exactly when it would be 0
+// after it). The collective's seconds are added to *waited.
+RoundTotals ExchangeRound(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* t,
+                          ExchangeBuffers* x, double elapsed, double roundCpu, double* waited);
 
 }  // namespace vismask

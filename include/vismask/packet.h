@@ -26,7 +26,7 @@ struct PacketHeader {
   uint32_t sourceEnv;  // where it shot first
   uint32_t fromEnv;    // the sender of this packet
   uint32_t toEnv;      // the receiver
-  uint32_t sequence;   // the sender's packet count this round (ordering)
+  float flightShare;   // the receiver's share of `power` in flight (Environment::FlightShare)
   uint32_t rays;       // the shot's ray count (every environment traces as many)
 };
 static_assert(std::is_trivially_copyable<PacketHeader>::value, "packets are plain bytes");
@@ -39,7 +39,7 @@ inline uint32_t PacketBytes(const MaskShape& shape) {
 }
 
 // The header of a shot of `p` (power, key and ids; the routing fields
-// fromEnv, toEnv and sequence are left 0).
+// fromEnv, toEnv and flightShare are left 0).
 PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey, uint32_t shotIndex,
                         uint32_t sourceEnv, uint32_t rays);
 // The shooter as a foreign environment sees it: corners, normal, area, corner

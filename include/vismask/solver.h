@@ -3,8 +3,9 @@
 //
 // In each round every environment makes up to --round-shots shots on its own
 // (its largest local patch or queued foreign shooter, see environment.h),
-// then the packets are exchanged and delivered in a fixed order (sender
-// environment, then sequence). An environment's state after a round depends
+// then the packets and every environment's report are exchanged in one
+// collective, and the packets delivered in a fixed order (sender
+// environment, then send order). An environment's state after a round depends
 // only on its state before and on what it was delivered, so the result does
 // not depend on the order in which environments run or on how they are
 // grouped onto processes. Stop rules are checked between rounds.
@@ -58,6 +59,10 @@ const char* StopReasonName(StopReason r);
 struct SolveResult {
   StopReason reason = StopReason::kConverged;
   uint64_t rounds = 0;
+  // The collectives every rank of a run of several takes part in: the first
+  // totals' AllGather and one AllToAll a round (exchange.h). What the
+  // network's latency is paid for.
+  uint64_t collectives = 0;
   uint64_t shots = 0;  // local and foreign
   uint64_t rays = 0;   // form-factor rays traced, all environments
   double seconds = 0.0;
@@ -67,7 +72,7 @@ struct SolveResult {
   uint64_t errorMeasurements = 0;
   double errorSeconds = 0.0;
   double relativeRmse = 0.0;
-  // Seconds this rank spent inside the transport's AllToAll and AllGather:
+  // Seconds this rank spent inside the transport's collectives:
   // blocked until the slowest rank arrives, plus the transfer itself. With
   // one rank the loop transport returns at once, so it is about zero.
   double waitSeconds = 0.0;

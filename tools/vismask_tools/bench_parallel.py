@@ -195,14 +195,16 @@ def projection(s, P):
     loop = P.json("loop1")["result"]
     rate = (loop["rays"] + loop["mask_rays"]) / median(s.runs(P.l).cpu())  # rays/s of one core here
     pi = rate / 4  # assumption: a Pi 4 core does 1/4 of that
-    # The reports' AllGather and the packets' AllToAll: each a message from
-    # every rank to every other (platform/), counted as NODES - 1 steps.
-    steps = 2 * (NODES - 1)
+    # Each collective (run.json `collectives`: the first totals' AllGather,
+    # then one AllToAll a round with the packets and the reports) is a
+    # message from every rank to every other (platform/), counted as
+    # NODES - 1 steps.
+    steps = NODES - 1
     rows = []
     for label, name in (("by work (default)", "over16"), ("1 shot (before)", "overK16")):
         r = P.json(name)["result"]
         ry = r["rays"] + r["mask_rays"]
-        comp, lat, x = ry / NODES / pi, r["rounds"] * steps * LATENCY, r["bytes_sent"] / NODES / BANDWIDTH
+        comp, lat, x = ry / NODES / pi, r["collectives"] * steps * LATENCY, r["bytes_sent"] / NODES / BANDWIDTH
         tot = comp + lat + x
         rows.append([label, "%d" % ry, f"{comp:.1f}", r["rounds"], f"{lat:.1f}", r["bytes_sent"],
                      f"{x:.3f}", f"{tot:.1f}", f"{100 * (lat + x) / tot:.0f}%"])
@@ -214,10 +216,11 @@ def projection(s, P):
          "Pi are not used (one rank per node); the work is spread evenly over the nodes (the counts above "
          "show it is not: this is a lower bound); Open MPI over TCP on a switched 1 Gbit/s network: "
          f"{LATENCY * 1e6:.0f} µs per message step, {BANDWIDTH / 1e6:.0f} MB/s per link, both directions "
-         "at once; a round costs the reports' AllGather and the packets' AllToAll, each a message from "
+         "at once; a round costs one AllToAll that carries the packets and every environment's report "
+         "(and the solve one AllGather before the first round: run.json `collectives`), a message from "
          "every rank to every other, posted at once (the sizes travel with the data), counted as if "
-         "the 15 went one after another: %d message steps in all; bytes are spread evenly over the "
-         "nodes." % steps,
+         "the 15 went one after another: %d message steps a collective; bytes are spread evenly over "
+         "the nodes." % steps,
          ""]
     L += table(["round size", "rays + mask rays", "compute s", "rounds", "latency s", "bytes sent",
                 "transfer s", "projected s", "share of time communicating"], rows)
@@ -228,12 +231,12 @@ paid thousands of times, and rounds sized by work divide it."""]
 
 BUILDING = (("bldU", "4x1x4 (uniform)", "by work", "4x1x4"), ("bldA", "auto:16", "by work", "auto:16"),
             ("bld1", "auto:16", "1 shot", "auto:16"))
-STEPS16 = 2 * 15  # per round at 16 ranks: the AllGather's and the AllToAll's 15 messages
+STEPS16 = 15  # per collective at 16 ranks: a message to each of the 15 others
 
 
 def network_seconds(r):
     """The modelled network time of a 16-rank run with these counts."""
-    return r["rounds"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
+    return r["collectives"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
 
 
 def efficiency(s):
@@ -268,8 +271,9 @@ def efficiency(s):
 cannot run in real time on 2 cores, so the time of 16 ranks with a core each
 is taken as the critical path, measured per environment on the one-process
 run (`critical_env_cpu_seconds`: over the rounds, the sum of the most CPU
-any environment spent), plus the network time of the model above (per round""",
-         "%d message steps of 100 µs, the bytes at 117 MB/s spread over 16 links)." % STEPS16,
+any environment spent), plus the network time of the model above (""",
+         "%d message steps of 100 µs for each collective (run.json `collectives`: one a round, and "
+         "the first totals), the bytes at 117 MB/s spread over 16 links)." % STEPS16,
          """Efficiency = CPU of the one-process solve ÷ (16 × (critical CPU + network));
 on a Pi 4 (1/4 of this core's rate, as above) the CPU terms are 4× longer and
 the network the same. *work efficiency*: `work` ÷ (16 ×

@@ -19,7 +19,7 @@ COMPARED = ["image.pfm", "patches.csv"]
 MILLION_BEGIN, MILLION_END = "<!-- million: begin -->", "<!-- million: end -->"
 EFF_BEGIN, EFF_END = "<!-- efficiency: begin -->", "<!-- efficiency: end -->"
 LATENCY, BANDWIDTH = 100e-6, 117e6  # per message step; per link, bytes/s (1 Gbit TCP)
-STEPS16 = 2 * 15                    # per round at 16 ranks: the AllGather's and the AllToAll's 15 messages
+STEPS16 = 15                        # per collective at 16 ranks: a message to each of the 15 others
 
 
 def log(msg):
@@ -188,8 +188,9 @@ def efficiency_runs(c):
             log(err)
             return None
         r = run_json(d)["result"]
-        net = r["rounds"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
+        net = r["collectives"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
         rows.append({"label": label, "args": extra, "rounds": r["rounds"], "shots": r["shots"],
+                     "collectives": r["collectives"],
                      "cpu": r["compute_cpu_seconds"], "crit": r["critical_env_cpu_seconds"],
                      "steps": r["work"], "crit_steps": r["critical_env_work"], "net": net})
     return rows

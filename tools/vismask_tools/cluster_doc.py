@@ -25,20 +25,22 @@ def efficiency_section(c, add, rows):
     add("`build/vismask render %s %s ARGS` on one process. Sixteen ranks cannot run"
         " in real time on 2 cores, so their time is the critical path measured per environment"
         " (run.json `critical_env_cpu_seconds`: over the rounds, the sum of the most CPU any"
-        " environment spent) plus a modelled network: %d message steps of %.0f µs a round"
-        " (the reports' AllGather and the packets' AllToAll, 15 messages each), the bytes at %.0f MB/s spread over 16 links."
+        " environment spent) plus a modelled network: %d message steps of %.0f µs for each collective"
+        " (run.json `collectives`: the first totals' AllGather, then one AllToAll a round that carries the"
+        " round's packets and every environment's report, each a message to every other rank), the bytes at"
+        " %.0f MB/s spread over 16 links."
         " Efficiency = CPU of the one-process solve ÷ (16 × (critical CPU + network)); on a Pi 4"
         " (1/4 of this core's rate) the CPU terms are 4× longer. *Work efficiency*: `work`"
         " ÷ (16 × `critical_env_work`), counted in what the rounds are sized by, with free communication."
         % (c.building, " ".join(c.eff_args), STEPS16, LATENCY * 1e6, BANDWIDTH / 1e6))
     add("")
-    add("| ARGS | shots | rounds | work efficiency | CPU s | critical CPU s | network s | efficiency here | on Pi 4 |")
-    add("|---|---|---|---|---|---|---|---|---|")
+    add("| ARGS | shots | rounds | collectives | work efficiency | CPU s | critical CPU s | network s | efficiency here | on Pi 4 |")
+    add("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         here = r["cpu"] / (16 * (r["crit"] + r["net"]))
         pi = 4 * r["cpu"] / (16 * (4 * r["crit"] + r["net"]))
-        add("| `%s` (%s) | %d | %d | %.0f%% | %.1f | %.2f | %.2f | %.0f%% | %.0f%% |" % (
-            " ".join(r["args"]), r["label"], r["shots"], r["rounds"],
+        add("| `%s` (%s) | %d | %d | %d | %.0f%% | %.1f | %.2f | %.2f | %.0f%% | %.0f%% |" % (
+            " ".join(r["args"]), r["label"], r["shots"], r["rounds"], r["collectives"],
             100 * r["steps"] / (16 * r["crit_steps"]), r["cpu"], r["crit"], r["net"], 100 * here, 100 * pi))
     add("")
     for r in rows[:2]:
@@ -180,10 +182,12 @@ def reading(c, add, refs, results):
         " Cornell box are slower than the shaped ones was not explained. A real board per"
         " rank removes the contention; what is left is below.")
     add("")
-    add("**Latency per round** (not emulated here, see above). A round has two exchanges, one"
-        " after the other: the reports (AllGather) and the packets (AllToAll). Each is a message"
+    add("**Latency per round** (not emulated here, see above). A round has one exchange: an"
+        " AllToAll that carries the round's packets and every environment's report, made before"
+        " its packets are delivered (src/exchange.cpp; the solve adds one AllGather before its"
+        " first round). It is a message"
         " from every rank to every other, posted at once with MPI_Isend and MPI_Irecv (the"
-        " packets' sizes travel with them), so each costs at least one node-to-node latency"
+        " packets' sizes travel with them), so it costs at least one node-to-node latency"
         " (on a switched LAN of Pis, ping 0.3–0.5 ms, one way about 0.2 ms) plus the sending of"
         " 15 messages; the efficiency model above counts the 15 as if one after another. So"
         " rounds must be few and large: the default rounds are sized by work (issue 20), and"
