@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "env_test_util.h"
 #include "test_util.h"
 #include "vismask/environment.h"
 #include "vismask/mesh.h"
@@ -22,41 +23,17 @@ namespace vismask {
 namespace {
 
 // The Cornell box in 2x1x2 environments, as init makes them (one process).
-struct Envs {
-  std::vector<std::unique_ptr<Environment>> owned;
-  std::vector<Environment*> ptrs;
-};
-
-void MakeEnvs(MaskMethod method, uint32_t queue, Envs* out) {
-  Scene scene;
-  ASSERT_TRUE(LoadScene("scenes/cornell.obj", &scene).ok());
+void MakeEnvs(MaskMethod method, uint32_t queue, test::TestEnvs* out) {
   EnvGrid grid;
   grid.n[0] = 2;
   grid.n[2] = 2;
-  grid.box = scene.bounds;
-  Partition part;
-  ASSERT_TRUE(PartitionScene(scene, grid, &part).ok());
   EnvOptions eo;
   eo.rays = 256;
   eo.maskMethod = method;
   eo.maskRes = 12;
   eo.queueCapacity = queue;
   eo.roundShots = 8;  // the outbox holds 6 packets a shot of a round
-  uint32_t nextId = 0;
-  for (uint32_t e = 0; e < 4; ++e) {
-    std::vector<uint32_t> pieces;
-    for (uint32_t i = 0; i < part.scene.polygons.size(); ++i)
-      if (part.env[i] == e) pieces.push_back(i);
-    Mesh mesh;
-    ASSERT_TRUE(MeshScene(part.scene, pieces, 90.0f, 1u << 20, &mesh).ok());
-    for (Patch& p : mesh.patches) p.globalId += nextId;
-    nextId += static_cast<uint32_t>(mesh.patches.size());
-    std::vector<uint32_t> ids(mesh.patches.size());
-    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
-    out->owned.push_back(std::make_unique<Environment>());
-    out->owned.back()->Init(grid, e, mesh, ids, eo);
-    out->ptrs.push_back(out->owned.back().get());
-  }
+  test::MakeTestEnvs("scenes/cornell.obj", grid, 90.0f, eo, out);
 }
 
 void ExpectNearRel(double a, double b, const char* what, int round) {
@@ -72,7 +49,7 @@ TEST(ExchangeTest, RoundTotalsAreThoseAfterDelivery) {
        {MaskMethod::kNone, MaskMethod::kA, MaskMethod::kB, MaskMethod::kC, MaskMethod::kR}) {
     SCOPED_TRACE(MaskMethodName(method));
     const uint32_t queue = 64;
-    Envs envs;
+    test::TestEnvs envs;
     MakeEnvs(method, queue, &envs);
     if (HasFatalFailure()) return;
     Status error;
@@ -82,7 +59,7 @@ TEST(ExchangeTest, RoundTotalsAreThoseAfterDelivery) {
     Arena arena(1 << 20);
     ExchangeBuffers x;
     x.Layout(arena, rankEnvs, 1, envs.ptrs[0]->packetBytes(), 6 * 8);
-    Span<Environment* const> span(envs.ptrs.data(), envs.ptrs.size());
+    Span<Environment* const> span = envs.span();
     double waited = 0.0;
     RoundTotals totals = GatherTotals(span, rankEnvs, loop.get(), &x, 0.0, 0.0, &waited);
     double mostFlight = 0.0;

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <sstream>
 
+#include "env_test_util.h"
 #include "test_util.h"
 #include "vismask/environment.h"
 #include "vismask/mesh.h"
@@ -267,45 +268,25 @@ TEST(StabilityTest, IdleRoundsAreNotConvergence) {
 // reported after a whole rotation of rounds (two here), never convergence.
 // (--queue refuses 0, so this drives Solve directly.)
 TEST(StabilityTest, ASolveThatCannotShootStalls) {
-  Scene scene;
-  ASSERT_TRUE(LoadScene("scenes/stiff/box-rho0.5.obj", &scene).ok());
   EnvGrid grid;
   grid.n[0] = 2;
-  grid.box = scene.bounds;
-  Partition part;
-  ASSERT_TRUE(PartitionScene(scene, grid, &part).ok());
   EnvOptions eo;
   eo.rays = 64;
   eo.queueCapacity = 0;
-  std::vector<std::unique_ptr<Environment>> envs;
-  std::vector<Environment*> ptrs;
-  uint32_t nextId = 0;
-  for (uint32_t e = 0; e < 2; ++e) {
-    std::vector<uint32_t> pieces;
-    for (uint32_t i = 0; i < part.scene.polygons.size(); ++i)
-      if (part.env[i] == e) pieces.push_back(i);
-    Mesh mesh;
-    ASSERT_TRUE(MeshScene(part.scene, pieces, 0.34f, 1u << 20, &mesh).ok());
-    for (Patch& p : mesh.patches) p.globalId += nextId;
-    nextId += static_cast<uint32_t>(mesh.patches.size());
-    std::vector<uint32_t> ids(mesh.patches.size());
-    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
-    envs.push_back(std::make_unique<Environment>());
-    envs.back()->Init(grid, e, mesh, ids, eo);
-    ptrs.push_back(envs.back().get());
-  }
+  test::TestEnvs envs;
+  test::MakeTestEnvs("scenes/stiff/box-rho0.5.obj", grid, 0.34f, eo, &envs);
+  if (HasFatalFailure()) return;
   Status error;
   std::unique_ptr<Transport> loop = MakeTransport(TransportRequest{"loop", 1}, &error);
   ASSERT_TRUE(loop) << error.ToString();
   RankEnvs rankEnvs = EnvsOfRank(2, 1, 0);
   Arena arena(1 << 16);
   ExchangeBuffers buffers;
-  buffers.Layout(arena, rankEnvs, 1, ptrs[0]->packetBytes(), 0);
+  buffers.Layout(arena, rankEnvs, 1, envs.ptrs[0]->packetBytes(), 0);
   SolveOptions so;
   so.queueCapacity = 0;
   so.quiet = true;
-  SolveResult res = Solve(Span<Environment* const>(ptrs.data(), ptrs.size()), rankEnvs, loop.get(),
-                          &buffers, so, nullptr);
+  SolveResult res = Solve(envs.span(), rankEnvs, loop.get(), &buffers, so, nullptr);
   EXPECT_EQ(StopReasonName(res.reason), std::string("stalled"));
   EXPECT_EQ(res.shots, 0u);
   EXPECT_EQ(res.rounds, 2u);
