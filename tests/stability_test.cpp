@@ -12,9 +12,7 @@
 #include "env_test_util.h"
 #include "test_util.h"
 #include "vismask/environment.h"
-#include "vismask/mesh.h"
 #include "vismask/partition.h"
-#include "vismask/scene.h"
 #include "vismask/solver.h"
 #include "vismask/transport.h"
 

@@ -10,11 +10,9 @@ import statistics
 from .bench_runs import patch_balance
 from .files import run_json
 from .markdown import table
+from .network import BANDWIDTH, LATENCY, NODES, STEPS16, latency_seconds, network_seconds, transfer_seconds
 from .stats import median
 
-# The network of the projection and the efficiency: Open MPI over TCP on a
-# switched 1 Gbit/s network.
-NODES, LATENCY, BANDWIDTH = 16, 100e-6, 117e6
 TARGET_SPEEDUP, TARGET_EFFICIENCY = 1.85, 0.7
 
 
@@ -195,16 +193,11 @@ def projection(s, P):
     loop = P.json("loop1")["result"]
     rate = (loop["rays"] + loop["mask_rays"]) / median(s.runs(P.l).cpu())  # rays/s of one core here
     pi = rate / 4  # assumption: a Pi 4 core does 1/4 of that
-    # Each collective (run.json `collectives`: the first totals' AllGather,
-    # then one AllToAll a round with the packets and the reports) is a
-    # message from every rank to every other (platform/), counted as
-    # NODES - 1 steps.
-    steps = NODES - 1
     rows = []
     for label, name in (("by work (default)", "over16"), ("1 shot (before)", "overK16")):
         r = P.json(name)["result"]
         ry = r["rays"] + r["mask_rays"]
-        comp, lat, x = ry / NODES / pi, r["collectives"] * steps * LATENCY, r["bytes_sent"] / NODES / BANDWIDTH
+        comp, lat, x = ry / NODES / pi, latency_seconds(r), transfer_seconds(r)
         tot = comp + lat + x
         rows.append([label, "%d" % ry, f"{comp:.1f}", r["rounds"], f"{lat:.1f}", r["bytes_sent"],
                      f"{x:.3f}", f"{tot:.1f}", f"{100 * (lat + x) / tot:.0f}%"])
@@ -220,7 +213,7 @@ def projection(s, P):
          "(and the solve one AllGather before the first round: run.json `collectives`), a message from "
          "every rank to every other, posted at once (the sizes travel with the data), counted as if "
          "the 15 went one after another: %d message steps a collective; bytes are spread evenly over "
-         "the nodes." % steps,
+         "the nodes." % STEPS16,
          ""]
     L += table(["round size", "rays + mask rays", "compute s", "rounds", "latency s", "bytes sent",
                 "transfer s", "projected s", "share of time communicating"], rows)
@@ -231,12 +224,6 @@ paid thousands of times, and rounds sized by work divide it."""]
 
 BUILDING = (("bldU", "4x1x4 (uniform)", "by work", "4x1x4"), ("bldA", "auto:16", "by work", "auto:16"),
             ("bld1", "auto:16", "1 shot", "auto:16"))
-STEPS16 = 15  # per collective at 16 ranks: a message to each of the 15 others
-
-
-def network_seconds(r):
-    """The modelled network time of a 16-rank run with these counts."""
-    return r["collectives"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
 
 
 def efficiency(s):

@@ -11,6 +11,7 @@ import shlex
 import shutil
 
 from .files import load_json, run_json
+from .network import network_seconds
 from .runner import log as log_line, run as run_cmd
 
 LINKS = ["100mbit", "1gbit"]
@@ -18,8 +19,6 @@ CAMERA_IN_ROOM = "0.5,1.6,0.5,8,1.2,8,0,1,0,70"
 COMPARED = ["image.pfm", "patches.csv"]
 MILLION_BEGIN, MILLION_END = "<!-- million: begin -->", "<!-- million: end -->"
 EFF_BEGIN, EFF_END = "<!-- efficiency: begin -->", "<!-- efficiency: end -->"
-LATENCY, BANDWIDTH = 100e-6, 117e6  # per message step; per link, bytes/s (1 Gbit TCP)
-STEPS16 = 15                        # per collective at 16 ranks: a message to each of the 15 others
 
 
 def log(msg):
@@ -188,7 +187,7 @@ def efficiency_runs(c):
             log(err)
             return None
         r = run_json(d)["result"]
-        net = r["collectives"] * STEPS16 * LATENCY + r["bytes_sent"] / 16 / BANDWIDTH
+        net = network_seconds(r)
         rows.append({"label": label, "args": extra, "rounds": r["rounds"], "shots": r["shots"],
                      "collectives": r["collectives"],
                      "cpu": r["compute_cpu_seconds"], "crit": r["critical_env_cpu_seconds"],

@@ -6,8 +6,8 @@ markers), what limits scaling, and docs/img/cluster-time.png."""
 import os
 import time
 
-from .cluster import (BANDWIDTH, EFF_BEGIN, EFF_END, LATENCY, LINKS, MILLION_BEGIN, MILLION_END,
-                      STEPS16)
+from .cluster import EFF_BEGIN, EFF_END, LINKS, MILLION_BEGIN, MILLION_END
+from .network import BANDWIDTH, LATENCY, STEPS16
 from .files import load_json
 from .machine import commit
 from .markdown import replace_marked
