@@ -103,6 +103,80 @@ TEST(CentreRasterTest, RandomScenesGiveTheWalksBits) {
   }
 }
 
+// Issue 19: after KeepExits, RasterCentres passing the patches the exit
+// cones rule out gives the walk's bits, and passes most of them. The
+// Cornell box with a box of each size inside, cut as environments are: the
+// shooters are the patches whose centres lie in one environment's box, the
+// exits its faces with a neighbour beyond.
+TEST(CentreRasterTest, ExitConesPassOnlyPatchesNoOpenPixelMeets) {
+  TestScene s = CornellScene(10);
+  std::mt19937 rng(21);
+  AddRandomPatches(rng, 150, glm::vec3(0.1f, 0.0f, 0.1f), glm::vec3(0.9f, 0.6f, 0.9f), 0.01f,
+                   0.1f, &s);
+  BuiltGrid b;
+  BuildGrid(s, 4.0f, &b);
+  Span<const Patch> patches(s.patches.data(), s.patches.size());
+  Span<const PatchGeom> geom(s.geom.data(), s.geom.size());
+  struct Env {
+    Bounds box;
+    std::vector<std::pair<int, int>> exits;  // axis, side
+  };
+  const Env envs[] = {
+      {{glm::vec3(0.0f), glm::vec3(0.5f, 1.0f, 1.0f)}, {{0, 1}}},                 // 2x1x1
+      {{glm::vec3(0.5f, 0.0f, 0.0f), glm::vec3(1.0f)}, {{0, 0}}},                 // 2x1x1
+      {{glm::vec3(0.0f), glm::vec3(0.5f)}, {{0, 1}, {1, 1}, {2, 1}}},             // 2x2x2
+      {{glm::vec3(0.3f, 0.0f, 0.0f), glm::vec3(0.7f, 1.0f, 1.0f)}, {{0, 0}, {0, 1}}}};  // 3x1x1
+  uint64_t plainDiffer = 0, pixels = 0, differ = 0, closedByPatch = 0, passed = 0, considered = 0;
+  for (uint32_t res : {10u, 33u}) {
+    test::MaskTables d(res);
+    MaskShape shape{res, 0};
+    std::vector<uint64_t> w1(shape.words()), w2(shape.words());
+    MaskBits walk(Span<uint64_t>(w1.data(), w1.size()), shape);
+    MaskBits raster(Span<uint64_t>(w2.data(), w2.size()), shape);
+    for (const Env& env : envs) {
+      Patch exits[6];
+      uint32_t n = 0;
+      for (auto [axis, side] : env.exits) exits[n++] = BoxFace(env.box, axis, side);
+      const Span<const Patch> faces(exits, n);
+      for (uint32_t i = 0; i < s.patches.size(); i += 5) {
+        CentreRays rays = RaysOf(s.patches[i], d.dirs, 1e-6f);
+        bool inside = true;
+        for (int a = 0; a < 3; ++a)
+          inside &= rays.origin[a] >= env.box.lo[a] && rays.origin[a] <= env.box.hi[a];
+        if (!inside) continue;
+        ExitCones cones;
+        if (!cones.Make(faces, Bounds{glm::vec3(0.0f), glm::vec3(1.0f)}, rays)) continue;
+        walk.SetAllOpen();
+        if (i % 2)
+          for (uint32_t p = 0; p < shape.pixels(); ++p)
+            if (rng() & 1) walk.Close(p);
+        KeepExits(faces, rays, &walk);
+        raster.CopyFrom(walk);
+        const uint32_t open = walk.CountOpen();
+        WalkCentres(b.grid, Skip(i), rays, &walk);
+        std::vector<uint64_t> w3(w2);
+        MaskBits plain(Span<uint64_t>(w3.data(), w3.size()), shape);
+        WalkOutside(b.grid, Skip(i), rays, cones, &raster);
+        RasterCentres(patches, geom, Skip(i), rays, &raster, &cones);
+        RasterCentres(patches, geom, Skip(i), rays, &plain);
+        for (uint32_t p = 0; p < shape.pixels(); ++p) differ += walk.IsOpen(p) != raster.IsOpen(p);
+        for (uint32_t p = 0; p < shape.pixels(); ++p) plainDiffer += walk.IsOpen(p) != plain.IsOpen(p);
+        closedByPatch += open - raster.CountOpen();
+        pixels += shape.pixels();
+        for (const Patch& p : s.patches) {
+          ++considered;
+          passed += !cones.MayMeet(p);
+        }
+      }
+    }
+  }
+  EXPECT_EQ(differ, 0u) << "over " << pixels << " pixels";
+  EXPECT_EQ(plainDiffer, 0u) << "over " << pixels << " pixels";
+  // Not vacuous: the patches close many pixels, and the cones pass most patches.
+  EXPECT_GT(closedByPatch, pixels / 50);
+  EXPECT_GT(passed, considered / 5) << considered;
+}
+
 // A frame about a random normal.
 Frame RandomFrame(std::mt19937& rng) {
   Frame f;
