@@ -261,7 +261,7 @@ bool AnyOpen(const MaskBits& mask, uint32_t base, int lo, int hi, int cols) {
 }  // namespace
 
 uint64_t RasterCentres(Span<const Patch> patches, Span<const PatchGeom> geom, Skip skip,
-                       const CentreRays& rays, MaskBits* mask, const ExitCones* cones) {
+                       const CentreRays& rays, MaskBits* mask) {
   const MaskDirections& dirs = *rays.dirs;
   const uint32_t res = dirs.res();
   const int cols = 4 * static_cast<int>(res);
@@ -270,9 +270,7 @@ uint64_t RasterCentres(Span<const Patch> patches, Span<const PatchGeom> geom, Sk
   uint64_t tests = 0;
   View v;
   for (uint32_t i = 0; i < patches.size() && open > 0; ++i) {
-    if (i == skip.patch || i == skip.twin || (cones && !cones->MayMeet(patches[i])) ||
-        BehindOrigin(geom[i], rays))
-      continue;
+    if (i == skip.patch || i == skip.twin || BehindOrigin(geom[i], rays)) continue;
     if (!PatchView(patches[i], rays, res, &v)) continue;
     const PatchGeom& g = geom[i];
     // Only a view wider than the two columns shrinking takes can hold a sure arc.
@@ -340,20 +338,14 @@ Patch BoxFace(const Bounds& box, int axis, int side) {
   return f;
 }
 
-namespace {
-
-// KeepExits' margin: a pixel's directions lie within 1.5 rows of its
-// centre's (rows and columns are at most pi / 2R apart), so planes widened
-// by that much keep every pixel any of whose directions can leave.
-double ExitMargin(uint32_t res) { return std::sin(1.5 * kHalfPi / res) + 1e-6; }
-
-}  // namespace
-
 uint32_t KeepExits(Span<const Patch> exits, const CentreRays& rays, MaskBits* mask) {
   const MaskDirections& dirs = *rays.dirs;
   const uint32_t res = dirs.res();
   const int rows = static_cast<int>(res), cols = 4 * rows;
-  const double margin = ExitMargin(res);
+  // A pixel's directions lie within 1.5 rows of its centre's (rows and
+  // columns are at most pi / 2R apart), so planes widened by that much keep
+  // every pixel any of whose directions can leave.
+  const double margin = std::sin(1.5 * kHalfPi / rows) + 1e-6;
   View views[6];
   const uint32_t n = std::min<uint32_t>(static_cast<uint32_t>(exits.size()), 6);
   for (uint32_t e = 0; e < n; ++e)
@@ -390,86 +382,6 @@ uint32_t KeepExits(Span<const Patch> exits, const CentreRays& rays, MaskBits* ma
     }
   }
   return closed;
-}
-
-bool ExitCones::Make(Span<const Patch> exits, const Bounds& box, const CentreRays& rays) {
-  faces_ = 0;
-  if (exits.size() > 6) return false;
-  origin_ = glm::dvec3(rays.origin);
-  largest_ = std::max({std::fabs(origin_.x), std::fabs(origin_.y), std::fabs(origin_.z)});
-  for (int a = 0; a < 3; ++a)
-    largest_ = std::max({largest_, std::fabs(double(box.lo[a])), std::fabs(double(box.hi[a]))});
-  for (const Patch& face : exits) {
-    View v;
-    if (!FaceView(face, rays, ExitMargin(rays.dirs->res()), -1.0, &v))
-      return false;  // KeepExits closes nothing
-    glm::dvec3 c[4], mean(0.0);
-    for (int k = 0; k < 4; ++k) {
-      c[k] = glm::dvec3(face.corner[k]) - origin_;
-      mean += c[k];
-    }
-    for (int k = 0; k < 4; ++k) {
-      glm::dvec3 u = glm::cross(c[k], c[(k + 1) % 4]);
-      double len = glm::length(u);
-      if (!(len > 0.0)) return false;
-      u /= len;
-      plane_[faces_][k] = glm::dot(u, mean) >= 0.0 ? u : -u;
-    }
-    ++faces_;
-  }
-  return true;
-}
-
-bool ExitCones::MayMeet(const Patch& p) const {
-  glm::dvec3 corner[4], centre(0.0);
-  for (uint32_t k = 0; k < p.numCorners; ++k) {
-    corner[k] = glm::dvec3(p.corner[k]);
-    centre += corner[k];
-  }
-  centre /= static_cast<double>(p.numCorners);
-  double radius2 = 0.0;
-  for (uint32_t k = 0; k < p.numCorners; ++k) {
-    const glm::dvec3 e = corner[k] - centre;
-    radius2 = std::max(radius2, glm::dot(e, e));
-  }
-  const double radius = std::sqrt(radius2);
-  const glm::dvec3 q = centre - origin_;
-  const double dist = std::sqrt(glm::dot(q, q));
-  // A hit IntersectPatch accepts lies within PatchView's slack of the
-  // patch (largest_: the largest coordinate of the box the patches lie in,
-  // and of the origin), so within radius + slack of the centre: outside a
-  // plane of the cone when the centre is that far outside it. A ray that
-  // Holds is inside every plane of some face, so it cannot hit there.
-  const double slack = 1e-3 * radius + 1e-5 * dist + 256.0 * FLT_EPSILON * largest_;
-  const double reach = radius + slack;
-  for (uint32_t e = 0; e < faces_; ++e) {
-    bool outside = false;
-    for (int k = 0; k < 4 && !outside; ++k) outside = glm::dot(plane_[e][k], q) + reach < 0.0;
-    if (!outside) return true;
-  }
-  return false;
-}
-
-bool ExitCones::Holds(const glm::vec3& d) const {
-  const glm::dvec3 u(d);
-  for (uint32_t e = 0; e < faces_; ++e) {
-    bool in = true;
-    for (int k = 0; k < 4 && in; ++k) in = glm::dot(plane_[e][k], u) > 1e-9;
-    if (in) return true;
-  }
-  return false;
-}
-
-uint64_t WalkOutside(const Grid& grid, Skip skip, const CentreRays& rays, const ExitCones& cones,
-                     MaskBits* mask) {
-  const uint64_t steps0 = grid.steps();
-  uint32_t hint = kNoPatch;
-  for (uint32_t p = 0, pixels = mask->bits(); p < pixels; ++p) {
-    if (!mask->IsOpen(p)) continue;
-    const Ray ray = rays.Of(p);
-    if (!cones.Holds(ray.d) && grid.Occluded(ray, skip, &hint)) mask->Close(p);
-  }
-  return grid.steps() - steps0;
 }
 
 uint64_t WalkCentres(const Grid& grid, Skip skip, const CentreRays& rays, MaskBits* mask) {

@@ -11,7 +11,6 @@
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
-#include <glm/ext/vector_double3.hpp>
 #include <limits>
 
 #include "vismask/grid.h"
@@ -36,25 +35,15 @@ struct CentreRays {
   }
 };
 
-class ExitCones;
-
 // Closes each open pixel of `mask` whose centre ray hits one of `geom`
-// (corners from `patches`), other than the two in `skip`, passing the
-// patches `cones` says cannot hold an open pixel's hit (with KeepExits
-// run on `mask` first). Returns the patch tests made (a deterministic
-// count).
+// (corners from `patches`), other than the two in `skip`. Returns the
+// patch tests made (a deterministic count, the work).
 uint64_t RasterCentres(Span<const Patch> patches, Span<const PatchGeom> geom, Skip skip,
-                       const CentreRays& rays, MaskBits* mask, const ExitCones* cones = nullptr);
+                       const CentreRays& rays, MaskBits* mask);
 
 // The same by walking `grid` once per open pixel (with the last occluder
 // tried first). Returns the grid's steps.
 uint64_t WalkCentres(const Grid& grid, Skip skip, const CentreRays& rays, MaskBits* mask);
-
-class ExitCones;
-// WalkCentres for the open pixels whose centre ray `cones` does not hold,
-// so that RasterCentres with `cones` may follow. Returns the steps.
-uint64_t WalkOutside(const Grid& grid, Skip skip, const CentreRays& rays, const ExitCones& cones,
-                     MaskBits* mask);
 
 // Columns [lo, hi] of one row of the hemisphere, on the unrolled circle:
 // they may run past either end (wrap); empty when lo > hi.
@@ -121,35 +110,5 @@ void ForArc(const PixelArc& may, const PixelArc& sure, int cols, F&& f) {
 // that a direction able to leave through one of them falls in. Returns
 // the pixels closed. The origin must be inside the box the faces bound.
 uint32_t KeepExits(Span<const Patch> exits, const CentreRays& rays, MaskBits* mask);
-
-// Method B's centre mask by patch after KeepExits, culled (issue 19). The
-// cone from the rays' origin through an exit face holds every centre ray
-// that leaves through it; a patch whose bounding sphere, grown by the slack
-// PatchView allows a hit, lies outside one plane of every face's cone
-// cannot hold the hit of a ray inside some cone (MayMeet false), and
-// RasterCentres passes it without its view: a few dot products where a
-// view costs two arcsines, an arccosine and an arctangent per edge. The
-// open pixels whose centre ray is in no cone (KeepExits keeps a margin of
-// them, and more where it joins two pieces of a row's arc) are decided
-// first by the grid (WalkOutside). The same bits as WalkCentres
-// (tests/centre_raster_test.cpp).
-class ExitCones {
- public:
-  // `box` holds the origin and every patch that MayMeet will be asked
-  // about. False when the origin is near an exit's plane (KeepExits then
-  // closes nothing): then nothing may be passed.
-  bool Make(Span<const Patch> exits, const Bounds& box, const CentreRays& rays);
-  // False: no ray that Holds meets `p`.
-  bool MayMeet(const Patch& p) const;
-  // Whether world direction `d` is strictly inside every plane of some
-  // face's cone.
-  bool Holds(const glm::vec3& d) const;
-
- private:
-  glm::dvec3 origin_{0.0};
-  double largest_ = 0.0;
-  uint32_t faces_ = 0;
-  glm::dvec3 plane_[6][4];  // unit, inward: the planes through the origin and each edge
-};
 
 }  // namespace vismask

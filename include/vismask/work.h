@@ -20,11 +20,6 @@ namespace vismask {
 constexpr uint64_t kRayWork = 32;
 constexpr uint64_t kHitWork = 40;
 constexpr uint64_t kShotWork = 12288;
-// Method B's centre mask by patch (Environment::CastCentres): a patch's
-// view and the tests of its pixels, and a patch the exit cones pass
-// (centre_raster.h's ExitCones). A walk's steps are counted as they come.
-constexpr uint64_t kCentreViewWork = 30;
-constexpr uint64_t kCentreCullWork = 1;
 // The grid steps a ray takes, estimated before any grid exists (the
 // automatic round size, options.h): the cube root of this many cells for
 // each of an environment's patches. The steps themselves hardly depend on
