@@ -60,6 +60,10 @@ class Settings:
                   if quick else
                   f"render {SCENE} --envs 2 --camera 278,545,300,278,0,300,0,0,1,76 --patch-size 70 "
                   "--rays 4096 --stop-unshot 1e-2 --width 256 --height 256")
+        # Every default but the image size, in 2 environments: Method B (the
+        # default, R = 50), R and none, whole solves.
+        self.d = (f"render {SCENE} --envs 2 --patch-size 140 --stop-unshot 0.3 --width 32 --height 32"
+                  if quick else f"render {SCENE} --envs 2 --width 128 --height 128")
         self.mpi = (os.access(self.bin("vismask-mpi"), os.X_OK) and shutil.which("mpirun") is not None)
 
     def has(self, part):
@@ -209,9 +213,14 @@ def patch_balance(s, envs):
     return json.loads(p.stdout)["split"]["patch_balance"]
 
 
+# The mask methods timed at the defaults (B is the default).
+DEFAULT_METHODS = ("none", "R", "B")
+
+
 def masks(s):
     """Methods A and B at each R against none, to the same number of shots;
-    none, B and C in the experiments' set-up; callgrind of B at R = 100."""
+    none, B and C in the experiments' set-up; none, R and B at the defaults;
+    callgrind of B at R = 100."""
     say(f"mask cost: {s.m}")
     for i in range(1, s.reps + 1):
         s.vismask(f"none{i}", s.m, "--mask-method", "none")
@@ -222,6 +231,10 @@ def masks(s):
     for i in range(1, s.reps + 1):
         for m in ("none", "B", "C"):
             s.vismask(f"x{m}{i}", s.x, "--mask-method", m, "--mask-res", "100")
+    say(f"mask cost, defaults: {s.d}")
+    for i in range(1, s.reps + 1):
+        for m in DEFAULT_METHODS:
+            s.vismask(f"d{m}{i}", s.d, "--mask-method", m)
     if s.quick or shutil.which("valgrind") is None:
         return None
     # Where Method B's time goes at R = 100: callgrind's instruction counts
