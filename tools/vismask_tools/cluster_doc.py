@@ -146,10 +146,11 @@ def reading(c, add, refs, results):
     add("## What limits scaling")
     add("")
     add("The solver is bulk-synchronous: every round each rank shoots, then all ranks meet in"
-        " one MPI_Alltoall (packet sizes) + MPI_Alltoallv (visibility-mask packets) and one"
-        " MPI_Allgather (each environment's report: unshot power, the stop test). No rank can"
-        " start round r + 1 before the slowest rank has finished round r and its packets have"
-        " crossed the switch. Three things set the time of a round:")
+        " one exchange, an AllToAll (a message from every rank to every other) that carries the"
+        " round's visibility-mask packets and every environment's report (unshot power and"
+        " power in flight, the stop test). No rank can start round r + 1 before the slowest"
+        " rank has finished round r and its packets have crossed the switch. Three things set"
+        " the time of a round:")
     add("")
     for name, title, _, _ in c.scenes:
         rows = [r for r in results[name] if r]
@@ -210,11 +211,11 @@ def reading(c, add, refs, results):
         " slowest (the spread of *in MPI* between ranks).")
     add("")
     add("**The design change these figures suggest.** Make a round cost one latency and let"
-        " the work hide it: (1) one message per neighbour per round instead of two world-wide"
-        " exchanges: masks only travel to grid neighbours, so fold the report into the packet"
-        " stream and exchange point-to-point with the ≤ 6"
+        " the work hide it: (1) one message per neighbour per round instead of one to every"
+        " rank: masks only travel to grid neighbours, so exchange point-to-point with the ≤ 6"
         " neighbouring environments' ranks (MPI_Neighbor_alltoallv on a graph communicator),"
-        " and reduce the stop test every K rounds, not every round; (2) post the exchange"
+        " and sum the reports for the stop test every K rounds, not every round (the report"
+        " already travels with the packets); (2) post the exchange"
         " non-blocking and shoot the next local shot while the masks are in flight, so a"
         " round's time is max(shooting, latency) rather than their sum. (Fewer, larger"
         " rounds sized by counted work are the default since issue 20.)")
