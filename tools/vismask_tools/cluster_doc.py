@@ -226,7 +226,7 @@ def fmt_bytes(b):
     return "%.1f MB" % (b / 1e6) if b >= 1e5 else "%.0f kB" % (b / 1e3)
 
 
-def write_doc(c, refs, results, refused, total, mil=None, efficiency=None):
+def write_doc(c, refs, results, refused, total, mil=None, efficiency=None, load=None):
     L = []
     add = L.append
     add("# vismask on a simulated cluster")
@@ -250,8 +250,10 @@ def write_doc(c, refs, results, refused, total, mil=None, efficiency=None):
             " The per-round latency cost is estimated below from the measured round counts, not"
             " measured. On a stock Debian 12 kernel cluster-sim uses netem (delay, jitter, rate).")
         add("")
-    add("**The machine.** 2 cores, shared with three other engineers' builds and tests while"
-        " these ran (load average 4–10). 16 ranks on 2 cores are 8 ranks per core: every"
+    add("**The machine.** 2 cores, shared with other work (load average over 1, 5 and 15"
+        " minutes: %s)." % ("%s before the runs, %s after" % (load[0], load[1]) if load
+                             else "not recorded by the run this was written from") +
+        " 16 ranks on 2 cores are 8 ranks per core: every"
         " figure includes CPU contention, which a real cluster (one board per rank) does not"
         " have. Open MPI's ranks poll while they wait (`mpi_yield_when_idle` makes them yield,"
         " but they still take turns on the CPU). Compare a shaped row with the loopback row of the"
