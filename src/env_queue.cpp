@@ -18,6 +18,12 @@ namespace vismask {
 
 namespace {
 
+// The stream of a foreign environment's rays for a shot: fresh samples, as
+// in the paper, where every environment makes its own Monte Carlo estimate.
+uint64_t ForeignStream(uint64_t shotKey, uint32_t env) {
+  return Mix64(shotKey ^ (0x9e3779b97f4a7c15ull * (uint64_t(env) + 1)));
+}
+
 }  // namespace
 
 MaskBits Environment::ScratchMask(uint32_t k) const {
@@ -58,9 +64,8 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
     // bytes it will get, so that this round's report can count it (exchange.h).
     // Its box and cell as it makes its own (Prepare).
     h.flightShare =
-        options_.maskMethod == MaskMethod::kR ? 0.0f
-        : options_.maskMethod == MaskMethod::kB && options_.centreRaysRead
-            ? static_cast<float>(ReadShare(h, mask, static_cast<int>(h.toEnv)))
+        options_.maskMethod == MaskMethod::kR
+            ? 0.0f
             : static_cast<float>(FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet),
                                              envGrid_.EnvBox(static_cast<int>(h.toEnv)), c));
     WriteHeader(packet, h);
@@ -97,15 +102,10 @@ void Environment::ShootLocal(uint32_t i) {
     TraceAlive(p, skip, power, key, rays, false, &out);
   } else {
     // B and C: the shooter's centre mask from the cache (cast on a miss).
-    MaskBits centre, known, read;
+    MaskBits centre, known;
     bool cached = CachedCentre(i, &centre, &known);
-    const bool readOnly = options_.maskMethod == MaskMethod::kB && options_.centreRaysRead;
-    if (readOnly) {
-      read = ScratchMask(2);
-      ReadPixels(ShotHeader(p, power, key, shotIndex, index_, rays), &read);
-    }
     Distribute(p, skip, power, key, rays, nullptr, &out, cached ? &centre : nullptr,
-               cached && PartCentres() ? &known : nullptr, readOnly ? &read : nullptr);
+               cached && options_.maskMethod == MaskMethod::kC ? &known : nullptr);
   }
   Forward(ShotHeader(p, power, key, shotIndex, index_, rays), out);
   ++stats_.forwardsCreated;
@@ -130,18 +130,9 @@ void Environment::ShootForeign(uint32_t s) {
   if (options_.maskMethod == MaskMethod::kR)
     TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
                &out);
-  else {
-    MaskBits read;
-    const bool readOnly =
-        forward && options_.maskMethod == MaskMethod::kB && options_.centreRaysRead;
-    if (readOnly) {
-      read = ScratchMask(2);
-      ReadPixels(slot.header, &read);
-    }
+  else
     Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_),
-               slot.header.rays, &in, forward ? &out : nullptr, nullptr, nullptr,
-               readOnly ? &read : nullptr);
-  }
+               slot.header.rays, &in, forward ? &out : nullptr);
   ++stats_.foreignShots;
   if (forward) Forward(slot.header, out);
   slot = Slot();
@@ -212,8 +203,6 @@ void Environment::Deliver(const uint8_t* packet) {
     slot.key = power;
   else if (options_.maskMethod == MaskMethod::kR)
     slot.key = power * mask.CountOpen() / (h.rays > 0 ? h.rays : 1);
-  else if (options_.maskMethod == MaskMethod::kB && options_.centreRaysRead)
-    slot.key = power * slot.flightShare;
   else
     slot.key = power * mask.OpenFraction();
 }

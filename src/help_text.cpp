@@ -171,13 +171,6 @@ local environments and visibility masks:
                        environments: about 32 full shots' worth (32 x
                        (--max-rays, or --rays, x (the cube root of an
                        environment's grid cells + 72) + 12288)); 0: no limit
-  --centre-rays W      all | read (default all): which pixels Method B casts
-                       a centre ray through. all: every open pixel that
-                       leads to a neighbour; read: only those the shot's
-                       rays will read downstream (each environment's rays
-                       are known from the shot's key), the others stay open.
-                       The same light lands; the power booked in flight
-                       (run.json energy, convergence) differs
   --mask-cache K       KiB per environment for Methods B and C's centre masks
                        of local shooters, kept for their later shots (the
                        mask depends only on the shooter); same output,

@@ -370,13 +370,6 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         e.ke = glm::vec3(c[0], c[1], c[2]);
       }
       o->load.emit.push_back(e);
-    } else if (a == "--centre-rays") {
-      if (v == "all")
-        o->centreRaysRead = false;
-      else if (v == "read")
-        o->centreRaysRead = true;
-      else
-        return Bad(a, v, "all or read");
     } else if (a == "--mask-cache") {
       if (!ParseU64(v, &u) || u > (uint64_t{1} << 26))
         return Bad(a, v, "an integer in [0, 2^26] (KiB)");

@@ -299,7 +299,6 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   e.roundShots = o.roundShots;
   e.queueCapacity = o.queue;
   e.maskCacheBytes = uint64_t{o.maskCacheKiB} << 10;
-  e.centreRaysRead = o.centreRaysRead;
   e.elements.perPatch = o.elementsPerPatch;
   e.elements.maxDepth = o.elementDepth;
   e.elements.threshold = o.elementSpread;

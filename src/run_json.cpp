@@ -71,9 +71,9 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf(
-      "    \"mask_res\": %u,\n    \"centre_rays\": \"%s\",\n    \"round_shots\": %u,\n    \"round_work\": %llu,\n    \"queue\": "
+      "    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"round_work\": %llu,\n    \"queue\": "
       "%u,\n",
-      o.maskRes, o.centreRaysRead ? "read" : "all", o.roundShots, static_cast<unsigned long long>(o.roundWork), o.queue);
+      o.maskRes, o.roundShots, static_cast<unsigned long long>(o.roundWork), o.queue);
   // --envs auto:N (null: --envs NXxNYxNZ) and the planes the grid was cut
   // at, per axis from the scene box's low to its high side.
   if (o.envsAuto)

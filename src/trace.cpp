@@ -90,76 +90,7 @@ Ray ShotRay(const PatchSampler& sampler, const float u[5], float lift, glm::vec3
   return ray;
 }
 
-// The pixel of the direction from the shooter's centre to where `ray`
-// (local direction `local`) enters a foreign environment at t0: the
-// centre's view of the same crossing, so off-centre rays are not judged by
-// a parallel ray that crosses elsewhere.
-uint32_t EntryPixel(const Ray& ray, float t0, const glm::vec3& centre, const Frame& frame,
-                    const glm::vec3& local, const MaskDirections& dirs) {
-  glm::vec3 q = ray.o + FMax(t0, 0.0f) * ray.d - centre;
-  glm::vec3 l(glm::dot(q, frame.t), glm::dot(q, frame.b), glm::dot(q, frame.n));
-  float len = glm::length(l);
-  return dirs.Pixel(len > 0.0f && l.z > 0.0f ? l / len : local);
-}
-
-glm::vec3 CentreOf(const Patch& p) {
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < p.numCorners; ++k) centre += p.corner[k];
-  return centre / static_cast<float>(p.numCorners);
-}
-
 }  // namespace
-
-void Environment::ReadPixels(const PacketHeader& h, MaskBits* read) const {
-  read->SetAllClosed();
-  const Patch shooter = PatchFromHeader(h);  // as the receivers make it
-  const PatchSampler sampler = MakePatchSampler(shooter);
-  const glm::vec3 centre = CentreOf(shooter);
-  int source[3];
-  envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
-  for (int e = 0; e < envGrid_.count(); ++e) {
-    if (e == static_cast<int>(index_)) continue;
-    // Downstream of here, however far: beyond this cell on every axis on
-    // which this cell is beyond the source (Downstream, step by step).
-    int c[3];
-    envGrid_.Cell(e, c);
-    bool beyond = true;
-    for (int a = 0; a < 3; ++a)
-      if (cell_[a] != source[a]) beyond &= (c[a] - cell_[a]) * (cell_[a] - source[a]) >= 0;
-    if (!beyond) continue;
-    // Its foreign shot of h, as Distribute traces it there.
-    const Bounds box = envGrid_.EnvBox(e);
-    RayPoints points(options_.sobol, ForeignStream(h.shotKey, static_cast<uint32_t>(e)));
-    for (uint32_t r = 0; r < h.rays; ++r) {
-      float u[5];
-      points.Next(r, u, true);
-      glm::vec3 local;
-      Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
-      float t0, t1;
-      if (!Slabs(ray, box, &t0, &t1)) continue;
-      read->Open(EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_));
-    }
-  }
-}
-
-double Environment::ReadShare(const PacketHeader& h, const MaskBits& mask, int to) const {
-  const Patch shooter = PatchFromHeader(h);
-  const PatchSampler sampler = MakePatchSampler(shooter);
-  const glm::vec3 centre = CentreOf(shooter);
-  const Bounds box = envGrid_.EnvBox(to);
-  RayPoints points(options_.sobol, ForeignStream(h.shotKey, static_cast<uint32_t>(to)));
-  uint32_t open = 0;
-  for (uint32_t r = 0; r < h.rays; ++r) {
-    float u[5];
-    points.Next(r, u, true);
-    glm::vec3 local;
-    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
-    float t0, t1;
-    if (!Slabs(ray, box, &t0, &t1)) continue;
-    open += mask.IsOpen(EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_));
-  }
-  return h.rays > 0 ? static_cast<double>(open) / h.rays : 0.0;
-}
 
 void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally) {
   ++tally->hits;
@@ -198,7 +129,7 @@ bool Environment::LeavesScene(const Ray& ray) const {
 
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out,
-                             MaskBits* centreMask, MaskBits* known, MaskBits* read) {
+                             MaskBits* centreMask, MaskBits* known) {
   const bool masks = shape_.res > 0;
   const bool foreign = in != nullptr || skip.patch == kNoPatch;
   // Method C: which open pixels the rays hit in, and which they passed.
@@ -231,7 +162,15 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
       float t0, t1;
       if (!Slabs(ray, box_, &t0, &t1)) continue;  // never passes through here
       if (masks) {
-        pixel = EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_);
+        // The pixel of the direction from the shooter's centre to where the
+        // ray enters this environment: the centre's view of the same
+        // crossing, so off-centre rays are not judged by a parallel ray that
+        // crosses elsewhere.
+        glm::vec3 q = ray.o + FMax(t0, 0.0f) * ray.d - centre;
+        glm::vec3 l(glm::dot(q, sampler.frame.t), glm::dot(q, sampler.frame.b),
+                    glm::dot(q, sampler.frame.n));
+        float len = glm::length(l);
+        pixel = maskDirections_.Pixel(len > 0.0f && l.z > 0.0f ? l / len : local);
         if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
       }
     } else if (marks) {
@@ -257,26 +196,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // that pass on: about 14% of the power of the closed box in 2x2x2.
   // Method C: a pixel whose rays all hit closes, one whose rays all passed
   // stays open; only pixels with both, or with no ray, take the centre ray.
-  // With --centre-rays read, B decides only the open pixels that some ray
-  // downstream will read (*read); the others stay as they are.
-  if (masks && out && options_.maskMethod == MaskMethod::kB && read) {
-    read->And(*out);
-    MaskBits cast = ScratchMask(3);
-    cast.CopyFrom(*read);
-    if (centreMask) {
-      // Cast the pixels whose centre ray is not known yet, into the cache.
-      cast.AndNot(*known);
-      known->Or(cast);
-      centreMask->AndNot(cast);
-      CastCentres(shooter, skip, &cast, false);  // open: cast and unoccluded
-      centreMask->Or(cast);
-    } else {
-      CastCentres(shooter, skip, &cast, false);
-      centreMask = &cast;
-    }
-    read->AndNot(*centreMask);  // read, and occluded from the centre
-    out->AndNot(*read);
-  } else if (masks && out && options_.maskMethod == MaskMethod::kB) {
+  if (masks && out && options_.maskMethod == MaskMethod::kB) {
     if (centreMask)
       out->And(*centreMask);
     else
@@ -310,7 +230,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   }
 }
 
-void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask, bool keepExits) {
+void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   PatchSampler sampler = MakePatchSampler(shooter);
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
@@ -322,7 +242,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask, b
   // downstream reads its pixel, which closes without a ray.
   bool inside = true;
   for (int a = 0; a < 3; ++a) inside &= centre[a] >= box_.lo[a] && centre[a] <= box_.hi[a];
-  if (inside && numExits_ < 6 && keepExits)
+  if (inside && numExits_ < 6)
     stats_.maskNoExit += KeepExits(Span<const Patch>(exits_, numExits_), rays, mask);
   uint32_t cast = mask->CountOpen();
   stats_.maskRays += cast;
@@ -347,7 +267,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask, b
 
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
   if (cacheTag_.empty()) return false;
-  const bool methodC = PartCentres();
+  const bool methodC = options_.maskMethod == MaskMethod::kC;
   size_t slot = i % cacheTag_.size(), w = shape_.words(), per = methodC ? 2 : 1;
   *centre = MaskBits(cacheWords_.subspan(slot * per * w, w), shape_);
   if (methodC) *known = MaskBits(cacheWords_.subspan((slot * per + 1) * w, w), shape_);

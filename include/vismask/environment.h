@@ -102,9 +102,6 @@ struct EnvOptions {
   // per patch (direct-mapped) while they fit; kept for the patch's later
   // shots, since a local shooter's centre mask depends only on its geometry.
   uint64_t maskCacheBytes = uint64_t{8} << 20;
-  // Method B: centre rays only through the pixels downstream will read
-  // (--centre-rays read, ReadPixels).
-  bool centreRaysRead = false;
   ElementOptions elements;
 };
 
@@ -273,35 +270,16 @@ class Environment {
   // `centre`, when given, is this shooter's slot of the centre-mask cache
   // (CachedCentre): B reads every pixel from it; C reads the pixels set in
   // *known, and casts the others it needs into it.
-  // `read` (--centre-rays read, B): the pixels downstream will read; B
-  // decides only those (ReadPixels).
   void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
                   uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
-                  MaskBits* known = nullptr, MaskBits* read = nullptr);
+                  MaskBits* known = nullptr);
   // Local patch i's slot of the centre-mask cache: false when the cache has
   // no slots. *centre: a pixel is open iff its centre ray from the shooter's
-  // centre hits nothing here. B: every pixel, cast on a miss. C, and B with
-  // --centre-rays read (PartCentres): the pixels set in *known (none after
-  // a miss), which Distribute adds to.
+  // centre hits nothing here. B: every pixel, cast on a miss. C: the pixels
+  // set in *known (none after a miss), which Distribute adds to.
   bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
-  // Whether the cache keeps a mask of known pixels beside each centre mask.
-  bool PartCentres() const {
-    return options_.maskMethod == MaskMethod::kC ||
-           (options_.maskMethod == MaskMethod::kB && options_.centreRaysRead);
-  }
-  // --centre-rays read: opens in *read (closed first) the pixel of every ray
-  // that an environment downstream of this one will trace for the shot `h`
-  // (Distribute's foreign rays: its stream, its box, the pixel of where the
-  // ray enters it seen from the shooter's centre), every one it may reach.
-  void ReadPixels(const PacketHeader& h, MaskBits* read) const;
-  // --centre-rays read: the share of h's rays that environment `to` will
-  // trace through pixels open in `mask` (its rays regenerated here).
-  double ReadShare(const PacketHeader& h, const MaskBits& mask, int to) const;
-  // Casts the centre ray of every pixel open in *mask and closes those that
-  // hit; with `keepExits`, first closes those that lead to no neighbour
-  // (KeepExits: none of the pixels ReadPixels gives, which lie on the way
-  // to another environment, so it passes them).
-  void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask, bool keepExits = true);
+  // Casts the centre ray of every pixel open in *mask and closes those that hit.
+  void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
   // Method R: regenerates the shot's rays from its key, traces those whose
   // bit is set in `alive` (restricted to this box when `foreign`), and
   // clears the bits of the rays it absorbs or lets escape the scene.

@@ -76,10 +76,6 @@ struct Options {
   bool roundWorkAuto = false;
   uint32_t queue = 64;  // --queue Q; without it, AutoQueue (ResolveRounds)
   bool hasQueue = false;
-  // --centre-rays read: Method B casts only the centre rays of the pixels
-  // the shot's rays will read downstream (false: every open pixel that
-  // leads to a neighbour).
-  bool centreRaysRead = false;
   uint32_t maskCacheKiB = 8192;  // --mask-cache: B/C centre masks kept per environment
   std::vector<uint32_t> envOrder;
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
