@@ -89,6 +89,25 @@ def signed_pct(x):
     return f"{x:+.0f}%"
 
 
+# The columns of a table of whole solves by mask method (whole_solves).
+WHOLE_SOLVES = ["method", "solve s", "CPU s", "shots", "rays", "mask rays", "extra (solve s)",
+                "extra (CPU s)"]
+
+
+def whole_solves(runs):
+    """The rows of WHOLE_SOLVES for runs by method (one of them "none", the
+    baseline of the extra columns), and none's median CPU seconds."""
+    nt, nc = runs["none"].median("timings", "solve_seconds"), runs["none"].median_cpu()
+    rows = []
+    for m, x in runs.items():
+        t, c = x.median("timings", "solve_seconds"), x.median_cpu()
+        rows.append([m, x.spread("timings", "solve_seconds"), x.cpu_spread(), x.same("result", "shots"),
+                     x.same("result", "rays"), x.same("result", "mask_rays"),
+                     "–" if m == "none" else signed_pct(100 * (t - nt) / nt),
+                     "–" if m == "none" else signed_pct(100 * (c - nc) / nc)])
+    return rows, nc
+
+
 def masks_section(s, profile):
     none = s.runs(s.names("none"))
     nr, nt = none.same("result", "rays"), none.median("timings", "solve_seconds")
@@ -111,14 +130,7 @@ rays (a foreign environment skips those whose pixel is closed upstream),
     L += ["", f"Target: Method B at R = 100 within 10% of `none`: {met} ({signed_pct(100 * (b100 - nt) / nt)})."]
 
     xs = {m: s.runs(s.names(f"x{m}")) for m in ("none", "B", "C")}
-    xt, xc = xs["none"].median("timings", "solve_seconds"), xs["none"].median_cpu()
-    rows = []
-    for m, x in xs.items():
-        t, c = x.median("timings", "solve_seconds"), x.median_cpu()
-        rows.append([m, x.spread("timings", "solve_seconds"), x.cpu_spread(), x.same("result", "shots"),
-                     x.same("result", "rays"), x.same("result", "mask_rays"),
-                     "–" if m == "none" else signed_pct(100 * (t - xt) / xt),
-                     "–" if m == "none" else signed_pct(100 * (c - xc) / xc)])
+    rows, xc = whole_solves(xs)
     b, c = xs["B"].median_cpu(), xs["C"].median_cpu()
     L += ["", "### In the experiments' set-up (issue 19)", "",
           f"`{s.build}/vismask {s.x} --mask-method none|B|C --mask-res 100`: whole solves",
@@ -128,22 +140,13 @@ user + system time, which the machine's other load affects less than the
 solve's wall clock; *extra* is against `none`. B and C keep each local
 shooter's centre mask for its later shots (`--mask-cache`, default 8192 KiB
 per environment), so *mask rays* counts the centre rays cast.""", ""]
-    L += table(["method", "solve s", "CPU s", "shots", "rays", "mask rays", "extra (solve s)",
-                "extra (CPU s)"], rows)
+    L += table(WHOLE_SOLVES, rows)
     L += ["", "Target (issue 19): B at most +50% over none, and C no more than B:",
           "B %s (%s CPU), C %s (%s, %s B)." % (
               "**met**" if (b - xc) / xc <= 0.5 else "**not met**", signed_pct(100 * (b - xc) / xc),
               "**met**" if c <= b else "**not met**", signed_pct(100 * (c - xc) / xc),
               "at most" if c <= b else "more than")]
-    ds = {m: s.runs(s.names(f"d{m}")) for m in DEFAULT_METHODS}
-    dt, dc = ds["none"].median("timings", "solve_seconds"), ds["none"].median_cpu()
-    rows = []
-    for m, x in ds.items():
-        t, c = x.median("timings", "solve_seconds"), x.median_cpu()
-        rows.append([m, x.spread("timings", "solve_seconds"), x.cpu_spread(), x.same("result", "shots"),
-                     x.same("result", "rays"), x.same("result", "mask_rays"),
-                     "–" if m == "none" else signed_pct(100 * (t - dt) / dt),
-                     "–" if m == "none" else signed_pct(100 * (c - dc) / dc)])
+    rows, _ = whole_solves({m: s.runs(s.names(f"d{m}")) for m in DEFAULT_METHODS})
     L += ["", "### At the defaults", "",
           f"`{s.build}/vismask {s.d} --mask-method none|R|B`: every other option at",
           "its default (Method B is the default, at R = 50), whole solves to the",
@@ -154,8 +157,7 @@ per environment), so *mask rays* counts the centre rays cast.""", ""]
           "cast once a patch (the cache holds every patch's mask), outnumber the",
           "form-factor rays. No target is set on this table: it shows what the",
           "default costs.", ""]
-    L += table(["method", "solve s", "CPU s", "shots", "rays", "mask rays", "extra (solve s)",
-                "extra (CPU s)"], rows)
+    L += table(WHOLE_SOLVES, rows)
     if profile:
         L += ["", "Where the time goes with Method B at R = 100 (callgrind, `--max-shots 20`,",
               "instructions by function, self cost, the top 8):", "", "```", profile, "```"]

@@ -250,10 +250,10 @@ def write_doc(c, refs, results, refused, total, mil=None, efficiency=None, load=
             " The per-round latency cost is estimated below from the measured round counts, not"
             " measured. On a stock Debian 12 kernel cluster-sim uses netem (delay, jitter, rate).")
         add("")
+    loads = ("%s before the runs, %s after" % (load[0], load[1]) if load
+             else "not recorded by the run this was written from")
     add("**The machine.** 2 cores, shared with other work (load average over 1, 5 and 15"
-        " minutes: %s)." % ("%s before the runs, %s after" % (load[0], load[1]) if load
-                             else "not recorded by the run this was written from") +
-        " 16 ranks on 2 cores are 8 ranks per core: every"
+        " minutes: %s). 16 ranks on 2 cores are 8 ranks per core: every" % loads +
         " figure includes CPU contention, which a real cluster (one board per rank) does not"
         " have. Open MPI's ranks poll while they wait (`mpi_yield_when_idle` makes them yield,"
         " but they still take turns on the CPU). Compare a shaped row with the loopback row of the"
