@@ -86,60 +86,6 @@ inline bool SamePlane(const CellPlane& a, const CellPlane& b) {
          std::memcmp(&a.dHi, &b.dHi, sizeof a.dHi) == 0;
 }
 
-// clear[c]: the distance from cell c to the nearest occupied cell, the
-// largest difference of their indices on any axis (capped at 255; 255 in a
-// grid with no occupied cell). The chessboard distance is the length of the
-// shortest path of steps to any of the 26 neighbours, so two raster passes
-// give it exactly: forward, each cell from the 13 neighbours before it;
-// backward, from the 13 after it.
-void ClearDistances(const int res[3], Span<const uint64_t> occupied, Span<uint8_t> clear) {
-  const int nx = res[0], ny = res[1], nz = res[2];
-  const size_t sy = static_cast<size_t>(nx), sz = static_cast<size_t>(nx) * ny;
-  for (size_t c = 0; c < clear.size(); ++c)
-    clear[c] = ((occupied[c >> 6] >> (c & 63)) & 1) != 0 ? 0 : 255;
-  auto pass = [&](int dir) {
-    for (int k = 0; k < nz; ++k) {
-      const int z = dir > 0 ? k : nz - 1 - k;
-      for (int j = 0; j < ny; ++j) {
-        const int y = dir > 0 ? j : ny - 1 - j;
-        for (int i = 0; i < nx; ++i) {
-          const int x = dir > 0 ? i : nx - 1 - i;
-          const size_t c = x + y * sy + z * sz;
-          unsigned best = clear[c];
-          if (best == 0) continue;
-          // The neighbours already passed: a step back on the slowest axis
-          // that changes, any step on the faster ones.
-          for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-              for (int dx = -1; dx <= 1; ++dx) {
-                const int before = dz != 0 ? dz : dy != 0 ? dy : dx;
-                if (before != -dir) continue;
-                const int qx = x + dx, qy = y + dy, qz = z + dz;
-                if (qx < 0 || qy < 0 || qz < 0 || qx >= nx || qy >= ny || qz >= nz) continue;
-                best = std::min(best, clear[qx + qy * sy + qz * sz] + 1u);
-              }
-          clear[c] = static_cast<uint8_t>(std::min(best, 255u));
-        }
-      }
-    }
-  };
-  pass(1);
-  pass(-1);
-}
-
-// How many of an axis's planes, from the k-th on (k <= n <= k + span), a
-// walk crosses before t = until: the planes are crossed at first + j * delta
-// (non-decreasing in j), and the plane k + span is at or beyond until. An
-// axis the ray does not move along (delta 0, first infinite) crosses none.
-inline float PlanesBefore(float first, float delta, float k, float span, float until) {
-  if (!(first < until)) return k;
-  float n = std::floor((until - first) / delta) + 1.0f;  // an estimate, then exact
-  n = std::min(std::max(n, k), k + span);
-  while (n > k && !(first + (n - 1.0f) * delta < until)) n -= 1.0f;
-  while (n < k + span && first + n * delta < until) n += 1.0f;
-  return n;
-}
-
 }  // namespace
 
 Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
@@ -260,7 +206,6 @@ void Grid::Layout(Arena& arena, const Plan& plan) {
   cellStart_ = arena.Alloc<uint32_t>(cells + 1);
   refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs + plan.occupied));
   occupied_ = arena.Alloc<uint64_t>((cells + 63) / 64);
-  clear_ = arena.Alloc<uint8_t>(cells);
   planes_ = arena.Alloc<CellPlane>(static_cast<size_t>(plan.planes));
   for (int a = 0; a < 3; ++a) {
     float extent = plan.bounds.hi[a] - plan.bounds.lo[a];
@@ -340,7 +285,6 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
     }
     refs[start[c]] = shared ? static_cast<uint32_t>(shared - planes) : kNoPlane;
   }
-  ClearDistances(plan_.res, occupied_, clear_);
 }
 
 template <bool kAnyHit>
@@ -447,41 +391,12 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   float bestT = r.tMax;  // every hit is nearer than the ray's end
   bool bestFront = false;
   const uint64_t* occupied = occupied_.data();
-  const uint8_t* clear = clear_.data();
-  const uint32_t jumpClear = jumpClear_;
   uint64_t tests = 0;
   for (;;) {
     // Most cells a ray crosses are empty: one bit in a small bitmap says so,
     // where their offsets (32 times larger, strided by rows and slices) cost
     // a cache miss each in a large grid.
-    if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) == 0) {
-      // Every cell within m = clear - 1 of this one on every axis is empty
-      // too: the walk may cross up to m more planes on each axis without
-      // meeting a patch. It takes every plane nearer than the first it may
-      // not cross (or than its limit) at once: on each axis the planes
-      // whose t, by the formula the steps use, is below that, so it lands
-      // in the cell, and with the counts, that the steps would reach.
-      const uint32_t m = clear[index] - 1u;
-      if (m + 1u > jumpClear) {
-        const float span = static_cast<float>(m);
-        const float leave = std::min(std::min(fx + (kx + span) * dx, fy + (ky + span) * dy),
-                                     fz + (kz + span) * dz);
-        const float until = std::min(leave, limit);
-        const float nx = PlanesBefore(fx, dx, kx, span, until);
-        const float ny = PlanesBefore(fy, dy, ky, span, until);
-        const float nz = PlanesBefore(fz, dz, kz, span, until);
-        index += static_cast<int>(nx - kx) * move[0] + static_cast<int>(ny - ky) * move[1] +
-                 static_cast<int>(nz - kz) * move[2];
-        kx = nx;
-        ky = ny;
-        kz = nz;
-        // Nothing but empty cells before the ray's end: the walk is over.
-        if (!(leave < limit)) break;
-        tx = fx + kx * dx;
-        ty = fy + ky * dy;
-        tz = fz + kz * dz;
-      }
-    } else {
+    if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0) {
       uint32_t begin = start[index] + 1, end = start[index + 1];
       const uint32_t header = refs[begin - 1];
       if (header != kNoPlane) {

@@ -71,7 +71,6 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
   EXPECT_EQ(grid.bytes(), probe.bytes());
   EXPECT_EQ(grid.bytes(), (grid.cellCount() + 1 + plan.refs + plan.occupied) * sizeof(uint32_t) +
                               (grid.cellCount() + 63) / 64 * sizeof(uint64_t) +
-                              grid.cellCount() * sizeof(uint8_t) +
                               plan.planes * sizeof(CellPlane));
   grid.Build(Span<const Patch>(s.patches.data(), 700), Span<const PatchGeom>(s.geom.data(), 700));
   EXPECT_EQ(arena.used(), measure.used());

@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <glm/geometric.hpp>
 #include <random>
 #include <vector>
@@ -432,123 +431,6 @@ TEST(GridTest, LongWalksMatchBruteForce) {
   }
   EXPECT_EQ(ck.failures, 0) << ck.rays << " rays";
   EXPECT_GT(ck.hits, ck.rays / 4);
-}
-
-// Scenes with room to jump: boxes of walls (most cells far from any patch),
-// a few patches in a large grid, and a long scene, at several densities.
-std::vector<std::pair<TestScene, float>> JumpScenes() {
-  std::vector<std::pair<TestScene, float>> scenes;
-  {
-    std::mt19937 rng(5);
-    TestScene s;
-    AddAnchors(&s);
-    AddRandomPatches(rng, 300, glm::vec3(0.2f), glm::vec3(0.8f), 0.002f, 0.05f, &s);
-    scenes.emplace_back(s, 8.0f);
-  }
-  scenes.emplace_back(CornellScene(32), 1.0f);
-  scenes.emplace_back(CornellScene(16), 8.0f);
-  scenes.emplace_back(CornellScene(8), 30.0f);
-  {
-    TestScene s;
-    for (int i = 0; i < 200; ++i)
-      AddAxisQuad(i % 3, (i * 37 % 200) / 200.0f * (i % 3 == 0 ? 300.0f : 1.0f), 0.1f, 0.2f,
-                  0.3f, 0.4f, i % 2 ? 1 : -1, &s);
-    scenes.emplace_back(s, 8.0f);
-  }
-  return scenes;
-}
-
-// clear(): every empty cell's chessboard distance to the nearest occupied
-// cell, against a search of every occupied cell.
-TEST(GridTest, ClearDistancesAreExact) {
-  int checked = 0, far = 0;
-  for (const auto& [s, density] : JumpScenes()) {
-    BuiltGrid b;
-    BuildGrid(s, density, &b);
-    const int* res = b.plan.res;
-    std::vector<int> occ;
-    for (size_t cell = 0; cell < b.grid.cellCount(); ++cell)
-      if ((b.grid.occupied()[cell >> 6] >> (cell & 63)) & 1) occ.push_back(static_cast<int>(cell));
-    ASSERT_FALSE(occ.empty());
-    for (size_t cell = 0; cell < b.grid.cellCount(); ++cell) {
-      const int x = static_cast<int>(cell % res[0]), y = static_cast<int>(cell / res[0] % res[1]),
-                z = static_cast<int>(cell / res[0] / res[1]);
-      int want = 255;
-      for (int o : occ) {
-        const int ox = o % res[0], oy = o / res[0] % res[1], oz = o / res[0] / res[1];
-        want = std::min(want, std::max({std::abs(ox - x), std::abs(oy - y), std::abs(oz - z)}));
-      }
-      ASSERT_EQ(b.grid.clear()[cell], want) << "cell " << x << "," << y << "," << z << " of "
-                                            << res[0] << "x" << res[1] << "x" << res[2];
-      ++checked;
-      far += want > 2;
-    }
-  }
-  EXPECT_GT(checked, 10000);
-  EXPECT_GT(far, checked / 10);  // the walk jumps from such cells
-}
-
-// The walk's jumps across empty cells (Grid::clear) land where its steps
-// would: with them and without, every ray gets the same hit (patch, t to
-// the bit, side) and the same count of work (steps()), which sizes the
-// rounds and so must not depend on them. Rays of every kind through
-// random, Cornell and long scenes, with the jump taken from cells as near
-// as 2 (the smallest jump) and at the default.
-TEST(GridTest, JumpsGiveTheStepsHitsAndCounts) {
-  const std::vector<std::pair<TestScene, float>> scenes = JumpScenes();
-  int rays = 0, hits = 0, differ = 0;
-  for (size_t k = 0; k < scenes.size(); ++k) {
-    const TestScene& s = scenes[k].first;
-    BuiltGrid b;
-    BuildGrid(s, scenes[k].second, &b);
-    // Cells far enough from every patch for a jump from them.
-    size_t far = 0;
-    for (uint8_t c : b.grid.clear()) far += c > 2;
-    EXPECT_GT(far, 0u) << "scene " << k;
-    std::vector<Ray> set;
-    std::vector<uint32_t> from;
-    SolverRays(s, 17 + static_cast<uint32_t>(k), 3000, &set, &from);
-    std::mt19937 rng(29 + static_cast<uint32_t>(k));
-    std::uniform_real_distribution<float> u01(0.0f, 1.0f);
-    const Bounds& bb = b.plan.bounds;
-    for (int i = 0; i < 3000; ++i) {
-      glm::vec3 o = bb.lo + (bb.hi - bb.lo) * glm::vec3(u01(rng), u01(rng), u01(rng));
-      set.push_back(Ray{o, UnitVector(rng), 0.0f, kInf});
-      from.push_back(kNoPatch);
-      // Short rays, and rays ending just past a cell plane.
-      set.push_back(Ray{o, UnitVector(rng), 0.0f, 0.2f * glm::length(bb.hi - bb.lo) * u01(rng)});
-      from.push_back(kNoPatch);
-    }
-    for (uint32_t clear : {2u, Grid::kJumpClear}) {
-      for (size_t r = 0; r < set.size(); ++r) {
-        const Skip skip{from[r], kNoPatch};
-        for (int any = 0; any < 2; ++any) {
-          Hit a, w;
-          b.grid.SetJumpClear(255);
-          const uint64_t s0 = b.grid.steps();
-          const bool ga = any ? b.grid.Occluded(set[r], skip) : b.grid.Intersect(set[r], skip, &a);
-          const uint64_t walked = b.grid.steps() - s0;
-          b.grid.SetJumpClear(clear);
-          const uint64_t s1 = b.grid.steps();
-          const bool gw = any ? b.grid.Occluded(set[r], skip) : b.grid.Intersect(set[r], skip, &w);
-          const uint64_t jumping = b.grid.steps() - s1;
-          ++rays;
-          hits += ga;
-          const bool same = ga == gw && walked == jumping &&
-                            (any || !ga ||
-                             (a.patch == w.patch && std::memcmp(&a.t, &w.t, sizeof a.t) == 0 &&
-                              a.front == w.front));
-          differ += !same;
-          if (!same && differ <= 5)
-            ADD_FAILURE() << "scene " << k << " ray " << r << (any ? " any hit" : " closest")
-                          << ": steps " << walked << " against " << jumping;
-        }
-      }
-    }
-  }
-  EXPECT_EQ(differ, 0) << rays << " rays";
-  EXPECT_GT(hits, rays / 4);
-  EXPECT_GT(rays, 80000);
 }
 
 TEST(GridTest, EdgeCases) {

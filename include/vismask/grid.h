@@ -88,8 +88,7 @@ class Grid {
     return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2];
   }
   size_t bytes() const {
-    return cellStart_.bytes() + refs_.bytes() + occupied_.bytes() + clear_.bytes() +
-           planes_.bytes();
+    return cellStart_.bytes() + refs_.bytes() + occupied_.bytes() + planes_.bytes();
   }
   // The built arrays, read-only (tests, statistics): a cell that holds
   // patches takes words cellStart()[c] .. cellStart()[c + 1] - 1 of the
@@ -106,16 +105,6 @@ class Grid {
   Span<const CellPlane> planes() const { return planes_; }
   // Bit c of word c / 64: cell c holds at least one reference.
   Span<const uint64_t> occupied() const { return occupied_; }
-  // Per cell, its distance in cells to the nearest occupied cell, the
-  // largest difference of their indices on any axis (0: occupied; capped
-  // at 255): every cell nearer than that is empty, and the walk jumps
-  // across them.
-  Span<const uint8_t> clear() const { return clear_; }
-  // The walk jumps from empty cells whose clear() is above `clear` (the
-  // default kJumpClear); 255 turns the jumps off. Either way every walk
-  // gives the same hit and the same steps(): tests compare the two.
-  static constexpr uint32_t kJumpClear = 3;
-  void SetJumpClear(uint32_t clear) { jumpClear_ = clear; }
 
  private:
   // The DDA walk behind Intersect (kAnyHit false) and Occluded (true).
@@ -131,8 +120,6 @@ class Grid {
   Span<uint32_t> cellStart_;
   Span<uint32_t> refs_;
   Span<uint64_t> occupied_;  // bit c: cell c holds a patch
-  Span<uint8_t> clear_;      // clear(): empty cells all round, in cells
-  uint32_t jumpClear_ = kJumpClear;
   Span<CellPlane> planes_;
 
  public:
