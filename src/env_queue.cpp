@@ -16,16 +16,6 @@
 
 namespace vismask {
 
-namespace {
-
-// The stream of a foreign environment's rays for a shot: fresh samples, as
-// in the paper, where every environment makes its own Monte Carlo estimate.
-uint64_t ForeignStream(uint64_t shotKey, uint32_t env) {
-  return Mix64(shotKey ^ (0x9e3779b97f4a7c15ull * (uint64_t(env) + 1)));
-}
-
-}  // namespace
-
 MaskBits Environment::ScratchMask(uint32_t k) const {
   size_t w = shape_.words();
   return MaskBits(scratchWords_.subspan(k * w, w), shape_);
@@ -64,8 +54,9 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
     // bytes it will get, so that this round's report can count it (exchange.h).
     // Its box and cell as it makes its own (Prepare).
     h.flightShare =
-        options_.maskMethod == MaskMethod::kR
-            ? 0.0f
+        options_.maskMethod == MaskMethod::kR ? 0.0f
+        : (h.flags & kReadsOnly)
+            ? static_cast<float>(ReadShare(h, mask, static_cast<int>(h.toEnv)))
             : static_cast<float>(FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet),
                                              envGrid_.EnvBox(static_cast<int>(h.toEnv)), c));
     WriteHeader(packet, h);
@@ -97,17 +88,26 @@ void Environment::ShootLocal(uint32_t i) {
   }
   MaskBits out = ScratchMask(0);
   out.SetAllOpen();
+  PacketHeader shot = ShotHeader(p, power, key, shotIndex, index_, rays);
   if (options_.maskMethod == MaskMethod::kR) {
     for (uint32_t r = rays; r < out.bits(); ++r) out.Close(r);  // bits past the shot's rays
     TraceAlive(p, skip, power, key, rays, false, &out);
   } else {
     // B and C: the shooter's centre mask from the cache (cast on a miss).
-    MaskBits centre, known;
+    MaskBits centre, known, read;
     bool cached = CachedCentre(i, &centre, &known);
-    Distribute(p, skip, power, key, rays, nullptr, &out, cached ? &centre : nullptr,
-               cached && options_.maskMethod == MaskMethod::kC ? &known : nullptr);
+    MaskBits* knownPixels = cached && PartCentres() ? &known : nullptr;
+    const bool readOnly = ReadsOnly(rays);
+    if (readOnly) {
+      shot.flags |= kReadsOnly;
+      ++stats_.readShots;
+      read = ScratchMask(2);
+      ReadPixels(shot, &read);
+    }
+    Distribute(p, skip, power, key, rays, nullptr, &out, cached ? &centre : nullptr, knownPixels,
+               readOnly ? &read : nullptr);
   }
-  Forward(ShotHeader(p, power, key, shotIndex, index_, rays), out);
+  Forward(shot, out);
   ++stats_.forwardsCreated;
   --newForwards_;
 }
@@ -130,9 +130,17 @@ void Environment::ShootForeign(uint32_t s) {
   if (options_.maskMethod == MaskMethod::kR)
     TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
                &out);
-  else
+  else {
+    MaskBits read;
+    const bool readOnly = forward && (slot.header.flags & kReadsOnly);
+    if (readOnly) {
+      read = ScratchMask(2);
+      ReadPixels(slot.header, &read);
+    }
     Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_),
-               slot.header.rays, &in, forward ? &out : nullptr);
+               slot.header.rays, &in, forward ? &out : nullptr, nullptr, nullptr,
+               readOnly ? &read : nullptr);
+  }
   ++stats_.foreignShots;
   if (forward) Forward(slot.header, out);
   slot = Slot();
@@ -203,6 +211,8 @@ void Environment::Deliver(const uint8_t* packet) {
     slot.key = power;
   else if (options_.maskMethod == MaskMethod::kR)
     slot.key = power * mask.CountOpen() / (h.rays > 0 ? h.rays : 1);
+  else if (h.flags & kReadsOnly)
+    slot.key = power * slot.flightShare;  // ReadShare: the share of its rays that pass
   else
     slot.key = power * mask.OpenFraction();
 }

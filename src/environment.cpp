@@ -68,7 +68,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   slots_ = arena.Alloc<Slot>(q);
   slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
   part(&footprint_.queue);
-  size_t scratchMasks = numNeighbours_ == 0 ? 0 : options_.maskMethod == MaskMethod::kC ? 4 : 2;
+  size_t scratchMasks = numNeighbours_ == 0 ? 0 : PartCentres() ? 4 : 2;
   scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
   const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
                                                  options_.maskMethod == MaskMethod::kC);
@@ -79,7 +79,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   flightCols_ = arena.Alloc<double>(flight ? 2 * 4 * size_t(FlightRes()) : 0);
   // The centre-mask cache: a slot per patch while they fit (C: a second
   // mask per slot, the pixels whose centre ray is known).
-  size_t cacheSlots = 0, perSlot = (options_.maskMethod == MaskMethod::kC ? 2 : 1) * shape_.words();
+  size_t cacheSlots = 0, perSlot = (PartCentres() ? 2 : 1) * shape_.words();
   if (centreRays && perSlot > 0)
     cacheSlots = std::min<uint64_t>(numPatches, options_.maskCacheBytes / (8 * perSlot));
   cacheWords_ = arena.Alloc<uint64_t>(cacheSlots * perSlot);
@@ -278,6 +278,7 @@ bool Environment::Build() {
     ++centreStepsPerRay_;
   maskDirections_.Fill();
   FillFlightCols();
+  FillReadCosts();
   for (uint32_t& tag : cacheTag_) tag = kNoPatch;
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);

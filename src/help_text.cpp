@@ -171,6 +171,17 @@ local environments and visibility masks:
                        environments: about 32 full shots' worth (32 x
                        (--max-rays, or --rays, x (the cube root of an
                        environment's grid cells + 72) + 12288)); 0: no limit
+  --centre-rays W      all | read | auto (default auto): which open pixels
+                       Method B casts a centre ray through. all: every one
+                       that leads to a neighbour, each packet's priority and
+                       power in flight from its whole mask; read: only those
+                       the shot's rays will read downstream (each
+                       environment's rays are known from the shot's key), the
+                       priority and power in flight from the receiver's rays
+                       that pass; auto: read for a shot whose rays x
+                       (environments - 1) are at most a quarter of the 4R^2
+                       pixels, else all. The same light lands at the
+                       pixels read; the shots' order may differ
   --mask-cache K       KiB per environment for Methods B and C's centre masks
                        of local shooters, kept for their later shots (the
                        mask depends only on the shooter); same output,

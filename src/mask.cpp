@@ -29,6 +29,18 @@ const char* MaskMethodName(MaskMethod m) {
   return "?";
 }
 
+const char* CentreChoiceName(CentreChoice c) {
+  switch (c) {
+    case CentreChoice::kAll:
+      return "all";
+    case CentreChoice::kRead:
+      return "read";
+    case CentreChoice::kAuto:
+      return "auto";
+  }
+  return "?";
+}
+
 MaskShape MaskShapeOf(MaskMethod m, uint32_t maskRes, uint32_t rays) {
   switch (m) {
     case MaskMethod::kNone:

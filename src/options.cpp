@@ -370,6 +370,15 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         e.ke = glm::vec3(c[0], c[1], c[2]);
       }
       o->load.emit.push_back(e);
+    } else if (a == "--centre-rays") {
+      if (v == "all")
+        o->centreRays = CentreChoice::kAll;
+      else if (v == "read")
+        o->centreRays = CentreChoice::kRead;
+      else if (v == "auto")
+        o->centreRays = CentreChoice::kAuto;
+      else
+        return Bad(a, v, "all, read or auto");
     } else if (a == "--mask-cache") {
       if (!ParseU64(v, &u) || u > (uint64_t{1} << 26))
         return Bad(a, v, "an integer in [0, 2^26] (KiB)");

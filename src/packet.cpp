@@ -11,7 +11,8 @@ PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey,
     for (int a = 0; a < 3; ++a) h.corner[k][a] = p.corner[k][a];
   for (int a = 0; a < 3; ++a) h.normal[a] = p.normal[a];
   h.area = p.area;
-  h.numCorners = p.numCorners;
+  h.numCorners = static_cast<uint16_t>(p.numCorners);
+  h.flags = 0;
   h.shooterId = p.globalId;
   h.shotIndex = shotIndex;
   h.sourceEnv = sourceEnv;

@@ -299,6 +299,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   e.roundShots = o.roundShots;
   e.queueCapacity = o.queue;
   e.maskCacheBytes = uint64_t{o.maskCacheKiB} << 10;
+  e.centreRays = o.centreRays;
   e.elements.perPatch = o.elementsPerPatch;
   e.elements.maxDepth = o.elementDepth;
   e.elements.threshold = o.elementSpread;

@@ -71,9 +71,11 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf(
-      "    \"mask_res\": %u,\n    \"round_shots\": %u,\n    \"round_work\": %llu,\n    \"queue\": "
+      "    \"mask_res\": %u,\n    \"centre_rays\": \"%s\",\n    \"round_shots\": %u,\n    "
+      "\"round_work\": %llu,\n    \"queue\": "
       "%u,\n",
-      o.maskRes, o.roundShots, static_cast<unsigned long long>(o.roundWork), o.queue);
+      o.maskRes, CentreChoiceName(o.centreRays), o.roundShots,
+      static_cast<unsigned long long>(o.roundWork), o.queue);
   // --envs auto:N (null: --envs NXxNYxNZ) and the planes the grid was cut
   // at, per axis from the scene box's low to its high side.
   if (o.envsAuto)
@@ -144,6 +146,8 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     st.maskRays += e.stats.maskRays;
     st.maskRaysByPatch += e.stats.maskRaysByPatch;
     st.maskNoExit += e.stats.maskNoExit;
+    st.readShots += e.stats.readShots;
+    st.readRays += e.stats.readRays;
     st.hits += e.stats.hits;
     st.packetsSent += e.stats.packetsSent;
   }
@@ -160,6 +164,9 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"mask_rays_by_patch\": %llu,\n    \"mask_pixels_no_exit\": %llu,\n",
            static_cast<unsigned long long>(st.maskRaysByPatch),
            static_cast<unsigned long long>(st.maskNoExit));
+  w.Printf("    \"centre_read_shots\": %llu,\n    \"centre_read_rays\": %llu,\n",
+           static_cast<unsigned long long>(st.readShots),
+           static_cast<unsigned long long>(st.readRays));
   w.Printf("    \"packets\": %llu,\n    \"packet_bytes\": %u,\n    \"bytes_sent\": %llu,\n",
            static_cast<unsigned long long>(st.packetsSent), packetBytes,
            static_cast<unsigned long long>(st.packetsSent * packetBytes));

@@ -90,7 +90,135 @@ Ray ShotRay(const PatchSampler& sampler, const float u[5], float lift, glm::vec3
   return ray;
 }
 
+// The pixel of the direction from the shooter's centre to where `ray`
+// (local direction `local`) enters a foreign environment at t0: the
+// centre's view of the same crossing, so off-centre rays are not judged by
+// a parallel ray that crosses elsewhere.
+uint32_t EntryPixel(const Ray& ray, float t0, const glm::vec3& centre, const Frame& frame,
+                    const glm::vec3& local, const MaskDirections& dirs) {
+  glm::vec3 q = ray.o + FMax(t0, 0.0f) * ray.d - centre;
+  glm::vec3 l(glm::dot(q, frame.t), glm::dot(q, frame.b), glm::dot(q, frame.n));
+  float len = glm::length(l);
+  return dirs.Pixel(len > 0.0f && l.z > 0.0f ? l / len : local);
+}
+
+glm::vec3 CentreOf(const Patch& p) {
+  glm::vec3 centre(0.0f);
+  for (uint32_t k = 0; k < p.numCorners; ++k) centre += p.corner[k];
+  return centre / static_cast<float>(p.numCorners);
+}
+
 }  // namespace
+
+// auto's costs, in centre rays cast (a centre ray's walk: about 1 200 to
+// 1 600 instructions, callgrind, the Cornell box in 2 environments at the
+// defaults and at R = 100, 4 096 rays). Regenerating a ray downstream (its
+// sample, ray, box test and entry pixel) costs about half of one (640 to
+// 760); a read pixel takes about half a centre ray a ray of the shot (some
+// rays share pixels, some pixels are known or closed upstream); about 0.4
+// of a mask's pixels take a centre ray where every open one is cast
+// (KeepExits and the closing upstream pass over the rest); and casting a
+// mask patch by patch costs about four centre rays a patch (CastCentres).
+// The source's own cast counts in full, though a local shooter's mask is
+// kept for its later shots: which shots read must not depend on the cache.
+constexpr double kRegenCost = 0.5;
+constexpr double kReadCast = 0.5;
+constexpr double kCastShare = 0.4;
+constexpr double kPatchCast = 4.0;
+
+void Environment::FillReadCosts() {
+  readPerRay_ = 0.0;
+  forwarders_ = 0.0;
+  if (numNeighbours_ == 0) return;
+  const int count = envGrid_.count();
+  double regenerated = 0.0, casting = 0.0;
+  for (int e = 0; e < count; ++e) {
+    // e's neighbours downstream of here (Downstream), and the environments
+    // beyond it (ReadPixels), e itself among them.
+    int c[3];
+    envGrid_.Cell(e, c);
+    int next = 0;
+    double beyond = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const int n = envGrid_.n[a];
+      if (c[a] == cell_[a]) {
+        next += (c[a] > 0) + (c[a] + 1 < n);
+        beyond *= n;
+      } else if (c[a] > cell_[a]) {
+        next += c[a] + 1 < n;
+        beyond *= n - c[a];
+      } else {
+        next += c[a] > 0;
+        beyond *= c[a] + 1;
+      }
+    }
+    if (next == 0) continue;
+    regenerated += (beyond - 1.0) + next;
+    casting += 1.0;
+    forwarders_ += e != static_cast<int>(index_);
+  }
+  readPerRay_ = kRegenCost * regenerated + kReadCast * casting;
+}
+
+bool Environment::ReadsOnly(uint32_t rays) const {
+  if (options_.maskMethod != MaskMethod::kB || numNeighbours_ == 0) return false;
+  if (options_.centreRays != CentreChoice::kAuto) return options_.centreRays == CentreChoice::kRead;
+  // Casting every open pixel, here and in each forwarding environment
+  // downstream, patch by patch where that is cheaper (CastCentres). Not
+  // what the cache already knows: the choice, and so the output, must not
+  // depend on --mask-cache.
+  const double byPatch = kPatchCast * static_cast<double>(patches_.size());
+  const double all = (1.0 + forwarders_) * std::min(kCastShare * shape_.pixels(), byPatch);
+  return rays * readPerRay_ < all;
+}
+
+template <typename Visit>
+void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
+                                    const glm::vec3& centre, Visit visit) const {
+  const Bounds box = envGrid_.EnvBox(env);
+  RayPoints points(options_.sobol, ForeignStream(h.shotKey, static_cast<uint32_t>(env)));
+  for (uint32_t r = 0; r < h.rays; ++r) {
+    float u[5];
+    points.Next(r, u, true);
+    glm::vec3 local;
+    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
+    float t0, t1;
+    if (!Slabs(ray, box, &t0, &t1)) continue;
+    visit(EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_));
+  }
+}
+
+void Environment::ReadPixels(const PacketHeader& h, MaskBits* read) {
+  read->SetAllClosed();
+  const Patch shooter = PatchFromHeader(h);  // as the receivers make it
+  const PatchSampler sampler = MakePatchSampler(shooter);
+  const glm::vec3 centre = CentreOf(shooter);
+  int source[3];
+  envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
+  for (int e = 0; e < envGrid_.count(); ++e) {
+    if (e == static_cast<int>(index_)) continue;
+    // Downstream of here, however far: beyond this cell on every axis on
+    // which this cell is beyond the source (Downstream, step by step).
+    int c[3];
+    envGrid_.Cell(e, c);
+    bool beyond = true;
+    for (int a = 0; a < 3; ++a)
+      if (cell_[a] != source[a]) beyond &= (c[a] - cell_[a]) * (cell_[a] - source[a]) >= 0;
+    if (!beyond) continue;
+    stats_.readRays += h.rays;
+    ForEachEntryPixel(h, e, sampler, centre, [read](uint32_t pixel) { read->Open(pixel); });
+  }
+}
+
+double Environment::ReadShare(const PacketHeader& h, const MaskBits& mask, int to) {
+  const Patch shooter = PatchFromHeader(h);
+  const PatchSampler sampler = MakePatchSampler(shooter);
+  stats_.readRays += h.rays;
+  uint32_t open = 0;
+  ForEachEntryPixel(h, to, sampler, CentreOf(shooter),
+                    [&](uint32_t pixel) { open += mask.IsOpen(pixel); });
+  return h.rays > 0 ? static_cast<double>(open) / h.rays : 0.0;
+}
 
 void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally) {
   ++tally->hits;
@@ -129,7 +257,7 @@ bool Environment::LeavesScene(const Ray& ray) const {
 
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out,
-                             MaskBits* centreMask, MaskBits* known) {
+                             MaskBits* centreMask, MaskBits* known, MaskBits* read) {
   const bool masks = shape_.res > 0;
   const bool foreign = in != nullptr || skip.patch == kNoPatch;
   // Method C: which open pixels the rays hit in, and which they passed.
@@ -162,15 +290,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
       float t0, t1;
       if (!Slabs(ray, box_, &t0, &t1)) continue;  // never passes through here
       if (masks) {
-        // The pixel of the direction from the shooter's centre to where the
-        // ray enters this environment: the centre's view of the same
-        // crossing, so off-centre rays are not judged by a parallel ray that
-        // crosses elsewhere.
-        glm::vec3 q = ray.o + FMax(t0, 0.0f) * ray.d - centre;
-        glm::vec3 l(glm::dot(q, sampler.frame.t), glm::dot(q, sampler.frame.b),
-                    glm::dot(q, sampler.frame.n));
-        float len = glm::length(l);
-        pixel = maskDirections_.Pixel(len > 0.0f && l.z > 0.0f ? l / len : local);
+        pixel = EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_);
         if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
       }
     } else if (marks) {
@@ -196,7 +316,34 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // that pass on: about 14% of the power of the closed box in 2x2x2.
   // Method C: a pixel whose rays all hit closes, one whose rays all passed
   // stays open; only pixels with both, or with no ray, take the centre ray.
-  if (masks && out && options_.maskMethod == MaskMethod::kB) {
+  // B deciding only the open pixels some ray downstream will read (*read,
+  // ReadsOnly; the others stay as they are), or every open pixel with a
+  // cache of known pixels (PartCentres): it casts only the pixels whose
+  // centre ray is not known yet, into the cache. Its bits are CastCentres'
+  // whichever pixels a shot decides, so a pixel means the same to every
+  // shot that reads it from the cache.
+  if (masks && out && options_.maskMethod == MaskMethod::kB && (read || known)) {
+    MaskBits decide = ScratchMask(3);
+    decide.CopyFrom(*out);
+    if (read) decide.And(*read);
+    if (known) {
+      decide.AndNot(*known);
+      known->Or(decide);
+      centreMask->AndNot(decide);
+      CastCentres(shooter, skip, &decide);  // open: cast and unoccluded
+      centreMask->Or(decide);
+    } else {
+      CastCentres(shooter, skip, &decide);
+      centreMask = &decide;
+    }
+    if (read) {
+      read->And(*out);
+      read->AndNot(*centreMask);  // read, open, and occluded from the centre
+      out->AndNot(*read);
+    } else {
+      out->And(*centreMask);
+    }
+  } else if (masks && out && options_.maskMethod == MaskMethod::kB) {
     if (centreMask)
       out->And(*centreMask);
     else
@@ -267,7 +414,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
 
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
   if (cacheTag_.empty()) return false;
-  const bool methodC = options_.maskMethod == MaskMethod::kC;
+  const bool methodC = PartCentres();
   size_t slot = i % cacheTag_.size(), w = shape_.words(), per = methodC ? 2 : 1;
   *centre = MaskBits(cacheWords_.subspan(slot * per * w, w), shape_);
   if (methodC) *known = MaskBits(cacheWords_.subspan((slot * per + 1) * w, w), shape_);

@@ -207,13 +207,39 @@ TEST(AllocTest, EightEnvironmentRenderAllocatesNothingAfterInit) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   CountedRender run("scenes/cornell.obj",
                     "--envs 2x2x2 --mask-method B --mask-res 30 --rays 256 --max-shots 1500 "
-                    "--width 96 --height 96 --patch-size 50");
+                    "--width 96 --height 96 --patch-size 50 --centre-rays all");
   ASSERT_EQ(run.code, 0);
   EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
   // Centre masks by patch (RasterCentres), after closing the pixels that
   // lead to no neighbour (KeepExits).
   EXPECT_GT(JsonField(run.Json(), "mask_rays_by_patch"), 0u);
   EXPECT_GT(JsonField(run.Json(), "mask_pixels_no_exit"), 0u);
+  EXPECT_EQ(JsonField(run.Json(), "centre_read_shots"), 0u);
+}
+
+// Method B's shots that decide only the pixels read downstream (ReadPixels,
+// ReadShare, the cache of known pixels): all of them, and auto's mix.
+TEST(AllocTest, CentreRaysReadAndAutoAllocateNothing) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string how : {"read", "auto"}) {
+    CountedRender run("scenes/cornell.obj",
+                      "--envs 2x2x2 --mask-method B --mask-res 30 --emitted-rays 200000 "
+                      "--max-rays 2048 --max-shots 800 --width 64 --height 64 --patch-size 50 "
+                      "--centre-rays " +
+                          how);
+    ASSERT_EQ(run.code, 0) << how;
+    EXPECT_EQ(run.allocations, 0) << "heap allocations after init, " << how;
+    const std::string json = run.Json();
+    const unsigned long long local = JsonField(json, "local_shots");
+    const unsigned long long read = JsonField(json, "centre_read_shots");
+    EXPECT_GT(JsonField(json, "centre_read_rays"), 0u) << how;
+    if (how == "read") {
+      EXPECT_EQ(read, local);
+    } else {
+      EXPECT_GT(read, 0u);
+      EXPECT_LT(read, local);
+    }
+  }
 }
 
 // Issue 20: balanced environments (--envs auto) and the default rounds

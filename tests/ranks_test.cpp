@@ -81,6 +81,21 @@ const std::vector<std::string> kPowerBase = test::Words(
 TEST(RanksTest, PowerAllocationAndElementsGiveTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("R", {"2", "4"}, {"4"}, kPowerBase);
   ExpectSameBytesEverywhere("B", {"3"}, {"2"}, kPowerBase);
+  // B's shots there go both ways (--centre-rays auto, the default): some
+  // decide only the pixels read downstream, some every open pixel.
+  TempDir dir;
+  std::vector<std::string> b = kPowerBase;
+  b.insert(b.end(), {"--mask-method", "B"});
+  RenderInto(dir, b, "b", {});
+  const std::string json = ReadFile(dir.File("b/run.json"));
+  auto field = [&](const std::string& key) {
+    size_t at = json.find("\"" + key + "\": ");
+    EXPECT_NE(at, std::string::npos) << key;
+    return at == std::string::npos ? 0ull
+                                   : std::strtoull(json.c_str() + at + key.size() + 4, nullptr, 10);
+  };
+  EXPECT_GT(field("centre_read_shots"), 0ull);
+  EXPECT_LT(field("centre_read_shots"), field("local_shots"));
 }
 
 // Two-sided: twins in every environment, both sides of the light emitting.

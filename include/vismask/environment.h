@@ -24,6 +24,8 @@
 
 namespace vismask {
 
+struct PatchSampler;
+
 // Per-channel energy bookkeeping, in W (double). For one environment with no
 // neighbours, emitted == absorbed + escaped + unshot up to rounding; with
 // several, the difference is the power still in flight between environments
@@ -51,6 +53,8 @@ struct EnvStats {
   uint64_t maskRays = 0;         // Method B's and C's centre rays (pixels decided)
   uint64_t maskRaysByPatch = 0;  // those decided patch by patch (RasterCentres)
   uint64_t maskNoExit = 0;       // pixels closed because they lead to no neighbour (KeepExits)
+  uint64_t readShots = 0;        // B's local shots deciding only the pixels read (ReadsOnly)
+  uint64_t readRays = 0;         // rays regenerated for it (ReadPixels, ReadShare)
   uint64_t gridSteps = 0;        // their walks' cells entered and patches tested (Grid::steps)
   uint64_t hits = 0;
   uint64_t packetsSent = 0;
@@ -102,6 +106,8 @@ struct EnvOptions {
   // per patch (direct-mapped) while they fit; kept for the patch's later
   // shots, since a local shooter's centre mask depends only on its geometry.
   uint64_t maskCacheBytes = uint64_t{8} << 20;
+  // Method B: which open pixels take a centre ray (--centre-rays; ReadsOnly).
+  CentreChoice centreRays = CentreChoice::kAuto;
   ElementOptions elements;
 };
 
@@ -140,13 +146,15 @@ class Environment {
   // limit; workSteps below). Packets for neighbours go to the outbox.
   void RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork = 0);
   // The work rounds are measured in, counted and never timed (work.h): the
-  // grid steps of the form-factor rays, kRayWork a form-factor ray, kHitWork
-  // a hit and kShotWork a shot, plus the work of the centre casts (B and C)
+  // grid steps of the form-factor rays, kRayWork a form-factor ray (and a ray
+  // B regenerates, ReadPixels and ReadShare, which costs about as much
+  // beside its walk), kHitWork a hit and kShotWork a shot, plus the work of
+  // the centre casts (B and C)
   // that every --mask-cache makes: a foreign shooter's, and a local
   // shooter's first. The cache saves a local shooter's later casts, so their
   // real steps (and those of the last-occluder hint) are left out.
   uint64_t workSteps() const {
-    return grid_.steps() - centreSteps_ + centreWork_ + kRayWork * stats_.rays +
+    return grid_.steps() - centreSteps_ + centreWork_ + kRayWork * (stats_.rays + stats_.readRays) +
            kHitWork * stats_.hits + kShotWork * (stats_.shots + stats_.foreignShots);
   }
   // A centre ray's work: the integer cube root of the grid's cells (the
@@ -270,15 +278,55 @@ class Environment {
   // `centre`, when given, is this shooter's slot of the centre-mask cache
   // (CachedCentre): B reads every pixel from it; C reads the pixels set in
   // *known, and casts the others it needs into it.
+  // `read` (--centre-rays read, B): the pixels downstream will read; B
+  // decides only those (ReadPixels).
   void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
                   uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
-                  MaskBits* known = nullptr);
+                  MaskBits* known = nullptr, MaskBits* read = nullptr);
   // Local patch i's slot of the centre-mask cache: false when the cache has
   // no slots. *centre: a pixel is open iff its centre ray from the shooter's
-  // centre hits nothing here. B: every pixel, cast on a miss. C: the pixels
-  // set in *known (none after a miss), which Distribute adds to.
+  // centre hits nothing here. B: every pixel, cast on a miss. C, and B with
+  // --centre-rays read (PartCentres): the pixels set in *known (none after
+  // a miss), which Distribute adds to.
   bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
-  // Casts the centre ray of every pixel open in *mask and closes those that hit.
+  // Whether the cache keeps a mask of known pixels beside each centre mask
+  // (C, and B when some shots decide only the pixels read downstream).
+  bool PartCentres() const {
+    return options_.maskMethod == MaskMethod::kC ||
+           (options_.maskMethod == MaskMethod::kB && options_.centreRays != CentreChoice::kAll);
+  }
+  // Method B: whether local patch i's shot of `rays` rays decides only the
+  // pixels its rays will read downstream (ReadPixels), its packets carrying
+  // the share of the receiver's rays that pass (ReadShare) as their power in
+  // flight and priority, rather than every open pixel that leads to a
+  // neighbour. The source decides and says so in the packets' flags, which
+  // every environment downstream follows. auto: whichever costs fewer
+  // centre rays' worth by FillReadCosts' counts.
+  bool ReadsOnly(uint32_t rays) const;
+  // auto's counts for shots from here, in centre rays cast (FillReadCosts):
+  // per ray of a shot, what reading costs (every ray regenerated for each
+  // environment beyond a forwarding one and for each packet's share, and
+  // the read pixels' casts); and the forwarding environments downstream,
+  // each of which casts every open pixel of the mask it passes on.
+  void FillReadCosts();
+  double readPerRay_ = 0.0;
+  double forwarders_ = 0.0;
+  // --centre-rays read: opens in *read (closed first) the pixel of every ray
+  // that an environment downstream of this one will trace for the shot `h`
+  // (Distribute's foreign rays: its stream, its box, the pixel of where the
+  // ray enters it seen from the shooter's centre), every one it may reach.
+  void ReadPixels(const PacketHeader& h, MaskBits* read);
+  // --centre-rays read: the share of h's rays that environment `to` will
+  // trace through pixels open in `mask` (its rays regenerated here).
+  double ReadShare(const PacketHeader& h, const MaskBits& mask, int to);
+  // Calls visit(pixel) with the entry pixel (Distribute's: where the ray
+  // enters the box, seen from the shooter's centre) of every ray of h that
+  // environment `env` traces for it: its stream (ForeignStream), its box.
+  template <typename Visit>
+  void ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
+                         const glm::vec3& centre, Visit visit) const;
+  // Casts the centre ray of every pixel open in *mask and closes those that
+  // hit, after closing those that lead to no neighbour (KeepExits).
   void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
   // Method R: regenerates the shot's rays from its key, traces those whose
   // bit is set in `alive` (restricted to this box when `foreign`), and

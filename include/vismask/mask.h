@@ -25,6 +25,14 @@ enum class MaskMethod : uint8_t {
 };
 const char* MaskMethodName(MaskMethod m);
 
+// Which open pixels Method B casts a centre ray through (--centre-rays).
+enum class CentreChoice : uint8_t {
+  kAll,   // every open pixel that leads to a neighbour
+  kRead,  // only those the shot's rays will read downstream
+  kAuto,  // read for shots whose rays downstream are few against the pixels
+};
+const char* CentreChoiceName(CentreChoice c);
+
 struct MaskShape {
   uint32_t res = 0;   // R; 0 = no hemisphere
   uint32_t rays = 0;  // Method R: one bit per ray of a shot (then res is 0)

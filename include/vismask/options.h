@@ -76,6 +76,8 @@ struct Options {
   bool roundWorkAuto = false;
   uint32_t queue = 64;  // --queue Q; without it, AutoQueue (ResolveRounds)
   bool hasQueue = false;
+  // --centre-rays: which open pixels Method B casts a centre ray through.
+  CentreChoice centreRays = CentreChoice::kAuto;
   uint32_t maskCacheKiB = 8192;  // --mask-cache: B/C centre masks kept per environment
   std::vector<uint32_t> envOrder;
   std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default

@@ -14,13 +14,18 @@
 
 namespace vismask {
 
+// PacketHeader::flags: Method B's shot decides only the pixels its rays
+// read downstream (Environment::ReadsOnly), set by its source.
+constexpr uint16_t kReadsOnly = 1;
+
 struct PacketHeader {
   uint64_t shotKey;    // regenerates the shot's random streams
   double power[3];     // the shooter's unshot power when it shot (W)
   float corner[4][3];  // the shooter's corners (corner[3] == corner[2] for triangles)
   float normal[3];
   float area;
-  uint32_t numCorners;
+  uint16_t numCorners;
+  uint16_t flags;      // kReadsOnly
   uint32_t shooterId;  // global patch id
   uint32_t shotIndex;  // how many times the shooter had shot before
   uint32_t sourceEnv;  // where it shot first

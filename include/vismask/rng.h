@@ -43,6 +43,13 @@ inline uint64_t ShotKey(uint64_t runSeed, uint32_t patchGlobalId, uint32_t shotI
   return Mix64(Mix64(runSeed) ^ ((static_cast<uint64_t>(patchGlobalId) << 32) | shotIndex));
 }
 
+// The stream of a foreign environment's rays for a shot: fresh samples, as
+// in the paper, where every environment makes its own Monte Carlo estimate.
+// Any environment can make another's (--centre-rays read).
+inline uint64_t ForeignStream(uint64_t shotKey, uint32_t env) {
+  return Mix64(shotKey ^ (0x9e3779b97f4a7c15ull * (uint64_t(env) + 1)));
+}
+
 inline Rng ShotRng(uint64_t shotKey) {
   return Rng(Mix64(shotKey), shotKey);
 }
