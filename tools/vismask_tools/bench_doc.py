@@ -8,7 +8,7 @@ import statistics
 
 from . import machine
 from .bench_parallel import section as parallel_section
-from .bench_runs import DEFAULT_METHODS, MASK_RES, PARTS
+from .bench_runs import CENTRE_CHOICES, DEFAULT4_RUNS, DEFAULT_METHODS, MASK_RES, PARTS
 from .markdown import table
 
 
@@ -146,17 +146,30 @@ per environment), so *mask rays* counts the centre rays cast.""", ""]
               "**met**" if (b - xc) / xc <= 0.5 else "**not met**", signed_pct(100 * (b - xc) / xc),
               "**met**" if c <= b else "**not met**", signed_pct(100 * (c - xc) / xc),
               "at most" if c <= b else "more than")]
-    rows, _ = whole_solves({m: s.runs(s.names(f"d{m}")) for m in DEFAULT_METHODS})
+    defaults = {m: s.runs(s.names(f"d{m}")) for m in DEFAULT_METHODS}
+    defaults.update({f"B, --centre-rays {how}": s.runs(s.names(f"d{name}"))
+                     for name, how in CENTRE_CHOICES})
+    rows, _ = whole_solves(defaults)
     L += ["", "### At the defaults", "",
-          f"`{s.build}/vismask {s.d} --mask-method none|R|B`: every other option at",
-          "its default (Method B is the default, at R = 50), whole solves to the",
-          "default unshot threshold. The experiments' set-up above shoots 4 096 rays a",
-          "shot from a few hundred patches an environment; the defaults shoot a few",
-          "hundred rays a shot (`--emitted-rays`) from thousands of patches, so B's",
-          "centre rays, one through each pixel that leads to the other environment,",
-          "cast once a patch (the cache holds every patch's mask), outnumber the",
-          "form-factor rays. No target is set on this table: it shows what the",
-          "default costs.", ""]
+          f"`{s.build}/vismask {s.d} --mask-method none|R|B`, and B with",
+          "`--centre-rays all`: every other option at its default (Method B at",
+          "R = 50, `--centre-rays auto`), whole solves to the default unshot",
+          "threshold. The experiments' set-up above shoots 4 096 rays a shot from a",
+          "few hundred patches an environment; the defaults shoot a few hundred rays",
+          "a shot (`--emitted-rays`) from thousands of patches. Casting a centre ray",
+          "through every pixel that leads to the other environment (`all`; once a",
+          "patch, the cache holding every patch's mask) then outnumbers the",
+          "form-factor rays; `auto` casts, for most shots, only the pixels the other",
+          "environment's rays will read (`centre_read_shots` in run.json). No target",
+          "is set on this table: it shows what the default costs.", ""]
+    L += table(WHOLE_SOLVES, rows)
+    rows, _ = whole_solves({"none" if n == "none" else "B" if n == "B" else
+                            "B, --centre-rays all": s.runs([s.dir(f"d4{n}1")])
+                            for n, _ in DEFAULT4_RUNS})
+    L += ["", f"The same in 2x1x2 environments (`{s.build}/vismask {s.d4}`), one run",
+          "each: a foreign shooter is passed on, and an environment that passes",
+          "one on has no cache for its mask, so `all` casts its open pixels every",
+          "time.", ""]
     L += table(WHOLE_SOLVES, rows)
     if profile:
         L += ["", "Where the time goes with Method B at R = 100 (callgrind, `--max-shots 20`,",

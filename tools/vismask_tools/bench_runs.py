@@ -64,6 +64,7 @@ class Settings:
         # default, R = 50), R and none, whole solves.
         self.d = (f"render {SCENE} --envs 2 --patch-size 140 --stop-unshot 0.3 --width 32 --height 32"
                   if quick else f"render {SCENE} --envs 2 --width 128 --height 128")
+        self.d4 = self.d.replace("--envs 2 ", "--envs 2x1x2 ")
         self.mpi = (os.access(self.bin("vismask-mpi"), os.X_OK) and shutil.which("mpirun") is not None)
 
     def has(self, part):
@@ -215,6 +216,13 @@ def patch_balance(s, envs):
 
 # The mask methods timed at the defaults (B is the default).
 DEFAULT_METHODS = ("none", "R", "B")
+# Method B's centre rays both ways at the defaults (--centre-rays; auto is
+# the default): the run names' suffix and the option's value.
+CENTRE_CHOICES = (("Ball", "all"),)
+# The defaults in 2x1x2 environments, where foreign shooters pass masks on:
+# one run each (Method B casting every open pixel takes about 40 s).
+DEFAULT4_RUNS = (("none", ["--mask-method", "none"]), ("B", []),
+                 ("Ball", ["--centre-rays", "all"]))
 
 
 def masks(s):
@@ -235,6 +243,11 @@ def masks(s):
     for i in range(1, s.reps + 1):
         for m in DEFAULT_METHODS:
             s.vismask(f"d{m}{i}", s.d, "--mask-method", m)
+        for name, how in CENTRE_CHOICES:
+            s.vismask(f"d{name}{i}", s.d, "--centre-rays", how)
+    say(f"mask cost, defaults in 2x1x2 environments: {s.d4}")
+    for name, extra in DEFAULT4_RUNS:
+        s.vismask(f"d4{name}1", s.d4, *extra)
     if s.quick or shutil.which("valgrind") is None:
         return None
     # Where Method B's time goes at R = 100: callgrind's instruction counts
