@@ -164,7 +164,7 @@ per environment), so *mask rays* counts the centre rays cast.""", ""]
           "is set on this table: it shows what the default costs.", ""]
     L += table(WHOLE_SOLVES, rows)
     rows, _ = whole_solves({"none" if n == "none" else "B" if n == "B" else
-                            "B, --centre-rays all": s.runs([s.dir(f"d4{n}1")])
+                            "B, --centre-rays all": s.runs([f"d4{n}1"])
                             for n, _ in DEFAULT4_RUNS})
     L += ["", f"The same in 2x1x2 environments (`{s.build}/vismask {s.d4}`), one run",
           "each: a foreign shooter is passed on, and an environment that passes",
