@@ -68,6 +68,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   slots_ = arena.Alloc<Slot>(q);
   slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
   part(&footprint_.queue);
+  FillReadCosts(numPatches);
   size_t scratchMasks = numNeighbours_ == 0 ? 0 : PartCentres() ? 4 : 2;
   scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
   const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
@@ -278,7 +279,6 @@ bool Environment::Build() {
     ++centreStepsPerRay_;
   maskDirections_.Fill();
   FillFlightCols();
-  FillReadCosts();
   for (uint32_t& tag : cacheTag_) tag = kNoPatch;
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);

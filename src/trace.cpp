@@ -126,10 +126,12 @@ constexpr double kReadCast = 0.5;
 constexpr double kCastShare = 0.4;
 constexpr double kPatchCast = 4.0;
 
-void Environment::FillReadCosts() {
+void Environment::FillReadCosts(uint32_t numPatches) {
   readPerRay_ = 0.0;
-  forwarders_ = 0.0;
-  if (numNeighbours_ == 0) return;
+  allCost_ = 0.0;
+  mayRead_ = false;
+  if (numNeighbours_ == 0 || options_.maskMethod != MaskMethod::kB) return;
+  double forwarders = 0.0;
   const int count = envGrid_.count();
   double regenerated = 0.0, casting = 0.0;
   for (int e = 0; e < count; ++e) {
@@ -155,21 +157,25 @@ void Environment::FillReadCosts() {
     if (next == 0) continue;
     regenerated += (beyond - 1.0) + next;
     casting += 1.0;
-    forwarders_ += e != static_cast<int>(index_);
+    forwarders += e != static_cast<int>(index_);
   }
   readPerRay_ = kRegenCost * regenerated + kReadCast * casting;
+  // Casting every open pixel, here and in each forwarding environment
+  // downstream, patch by patch where that is cheaper (CastCentres). Not
+  // what the cache already knows: the choice, and so the output, must not
+  // depend on --mask-cache.
+  const double byPatch = kPatchCast * static_cast<double>(numPatches);
+  allCost_ = (1.0 + forwarders) * std::min(kCastShare * shape_.pixels(), byPatch);
+  const uint32_t fewest =
+      options_.rayQuantum > 0.0 ? std::max(options_.minRays, 1u) : options_.rays;
+  mayRead_ = options_.centreRays == CentreChoice::kRead ||
+             (options_.centreRays == CentreChoice::kAuto && ReadsOnly(fewest));
 }
 
 bool Environment::ReadsOnly(uint32_t rays) const {
   if (options_.maskMethod != MaskMethod::kB || numNeighbours_ == 0) return false;
   if (options_.centreRays != CentreChoice::kAuto) return options_.centreRays == CentreChoice::kRead;
-  // Casting every open pixel, here and in each forwarding environment
-  // downstream, patch by patch where that is cheaper (CastCentres). Not
-  // what the cache already knows: the choice, and so the output, must not
-  // depend on --mask-cache.
-  const double byPatch = kPatchCast * static_cast<double>(patches_.size());
-  const double all = (1.0 + forwarders_) * std::min(kCastShare * shape_.pixels(), byPatch);
-  return rays * readPerRay_ < all;
+  return rays * readPerRay_ < allCost_;
 }
 
 template <typename Visit>

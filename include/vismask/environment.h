@@ -290,10 +290,11 @@ class Environment {
   // a miss), which Distribute adds to.
   bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
   // Whether the cache keeps a mask of known pixels beside each centre mask
-  // (C, and B when some shots decide only the pixels read downstream).
+  // (C, and B when some local shots may decide only the pixels read
+  // downstream: mayRead_, FillReadCosts). A slot then takes twice the bytes.
   bool PartCentres() const {
     return options_.maskMethod == MaskMethod::kC ||
-           (options_.maskMethod == MaskMethod::kB && options_.centreRays != CentreChoice::kAll);
+           (options_.maskMethod == MaskMethod::kB && mayRead_);
   }
   // Method B: whether local patch i's shot of `rays` rays decides only the
   // pixels its rays will read downstream (ReadPixels), its packets carrying
@@ -303,14 +304,17 @@ class Environment {
   // every environment downstream follows. auto: whichever costs fewer
   // centre rays' worth by FillReadCosts' counts.
   bool ReadsOnly(uint32_t rays) const;
-  // auto's counts for shots from here, in centre rays cast (FillReadCosts):
-  // per ray of a shot, what reading costs (every ray regenerated for each
-  // environment beyond a forwarding one and for each packet's share, and
-  // the read pixels' casts); and the forwarding environments downstream,
-  // each of which casts every open pixel of the mask it passes on.
-  void FillReadCosts();
+  // auto's counts for shots from here, in centre rays cast, from the grid
+  // and the patch count (Layout): per ray of a shot, what reading costs
+  // (every ray regenerated for each environment beyond a forwarding one
+  // and for each packet's share, and the read pixels' casts); what casting
+  // every open pixel costs, here and in each forwarding environment
+  // downstream; and whether any shot from here, of the fewest rays a shot
+  // may have, reads.
+  void FillReadCosts(uint32_t numPatches);
   double readPerRay_ = 0.0;
-  double forwarders_ = 0.0;
+  double allCost_ = 0.0;
+  bool mayRead_ = false;
   // --centre-rays read: opens in *read (closed first) the pixel of every ray
   // that an environment downstream of this one will trace for the shot `h`
   // (Distribute's foreign rays: its stream, its box, the pixel of where the
