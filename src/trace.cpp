@@ -125,6 +125,7 @@ constexpr double kRegenCost = 0.5;
 constexpr double kReadCast = 0.5;
 constexpr double kCastShare = 0.4;
 constexpr double kPatchCast = 4.0;
+constexpr int kReadEnvs = 8;
 
 void Environment::FillReadCosts(uint32_t numPatches) {
   readPerRay_ = 0.0;
@@ -166,6 +167,11 @@ void Environment::FillReadCosts(uint32_t numPatches) {
   // depend on --mask-cache.
   const double byPatch = kPatchCast * static_cast<double>(numPatches);
   allCost_ = (1.0 + forwarders) * std::min(kCastShare * shape_.pixels(), byPatch);
+  // Beyond kReadEnvs environments auto never reads: a read shot's
+  // regeneration grows with every environment beyond every forwarding one
+  // (a 5x5x5 run of 64-ray shots did not finish in minutes), which the
+  // counts above understate.
+  if (options_.centreRays == CentreChoice::kAuto && count > kReadEnvs) allCost_ = 0.0;
   const uint32_t fewest =
       options_.rayQuantum > 0.0 ? std::max(options_.minRays, 1u) : options_.rays;
   mayRead_ = options_.centreRays == CentreChoice::kRead ||
