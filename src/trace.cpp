@@ -132,6 +132,10 @@ void Environment::FillReadCosts(uint32_t numPatches) {
   allCost_ = 0.0;
   mayRead_ = false;
   if (numNeighbours_ == 0 || options_.maskMethod != MaskMethod::kB) return;
+  mayRead_ = options_.centreRays == CentreChoice::kRead;
+  // Beyond kReadEnvs environments auto never reads (below); the counts,
+  // a pass over every environment, are only needed up to there.
+  if (options_.centreRays != CentreChoice::kAuto || envGrid_.count() > kReadEnvs) return;
   double forwarders = 0.0;
   const int count = envGrid_.count();
   double regenerated = 0.0, casting = 0.0;
@@ -171,7 +175,6 @@ void Environment::FillReadCosts(uint32_t numPatches) {
   // regeneration grows with every environment beyond every forwarding one
   // (a 5x5x5 run of 64-ray shots did not finish in minutes), which the
   // counts above understate.
-  if (options_.centreRays == CentreChoice::kAuto && count > kReadEnvs) allCost_ = 0.0;
   const uint32_t fewest =
       options_.rayQuantum > 0.0 ? std::max(options_.minRays, 1u) : options_.rays;
   mayRead_ = options_.centreRays == CentreChoice::kRead ||
