@@ -47,16 +47,17 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
   std::fprintf(
       md,
       "| --patch-size | patches (quads + triangles) | Embree triangles | grid cells | "
-      "grid refs | grid bytes | + PatchGeom (80 B/patch) | **vismask B/patch** | "
+      "grid refs | grid bytes | + PatchGeom (%zu B/patch) | **vismask B/patch** | "
       "Embree tri BVH bytes | **B/patch** (B/triangle) | Embree quad BVH bytes | **B/patch** | "
-      "vismask ÷ Embree tri | build s (grid / tri / quad) |\n");
+      "vismask ÷ Embree tri | build s (grid / tri / quad) |\n",
+      sizeof(PatchGeom));
   std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& cp : cases) {
     const Case& c = *cp;
     size_t n = c.vis.patches.size();
     size_t tris = c.tri.primPatch.size();
     double gridBytes = static_cast<double>(c.vis.grid.bytes());
-    double visBytes = gridBytes + 80.0 * n;
+    double visBytes = gridBytes + static_cast<double>(sizeof(PatchGeom)) * n;
     std::fprintf(md,
                  "| %g | %zu (%zu + %zu) | %zu | %zu | %llu | %.0f | %.0f | **%.1f** | %lld | "
                  "**%.1f** (%.1f) | "
@@ -124,7 +125,7 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
       }
     }
     double n = static_cast<double>(c.vis.patches.size());
-    double mem = (c.vis.grid.bytes() + 80.0 * n) / c.tri.bvhBytes;
+    double mem = (c.vis.grid.bytes() + static_cast<double>(sizeof(PatchGeom)) * n) / c.tri.bvhBytes;
     double grid = static_cast<double>(c.vis.grid.bytes()) / c.tri.bvhBytes;
     memLo = std::min(memLo, mem);
     memHi = std::max(memHi, mem);

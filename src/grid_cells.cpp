@@ -9,8 +9,8 @@ namespace vismask::gridcells {
 namespace {
 
 // Why the padding: IntersectPatch's float edge tests accept points up to a
-// few ulps of the scene magnitude outside its edge planes (kEdgeRel, which a
-// sharp corner amplifies, so it is kept small), and hit points and the DDA's
+// few ulps of the scene magnitude outside its (pushed-out) edges (kEdgeRel,
+// which a sharp corner amplifies, so it is kept small), and hit points and the DDA's
 // cell boundaries are rounded too. Every patch is registered with a further
 // margin of kPadRel * (scene magnitude), about 300 ulps of the largest
 // coordinate, which covers the rest while the ray origin is within kFarRel
@@ -85,12 +85,19 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s)
   double poly[2][kMaxPolyVerts + 1][2] = {
       {{ca - r, cb - r}, {ca + r, cb - r}, {ca + r, cb + r}, {ca - r, cb + r}}};
   int count = 4, cur = 0;
+  glm::dvec3 corner[4];
+  for (int i = 0; i < 4; ++i) corner[i] = GeomCorner(g, i);
   for (int i = 0; i < 4; ++i) {
-    const glm::vec4 e = g.Edge(i);
-    if (!std::isfinite(e.w)) continue;  // a triangle's missing fourth edge
-    glm::dvec3 ed(e.x, e.y, e.z);
+    // The edge's inward plane, through its corners along the normal, moved
+    // out by the rounding of the edge test (edgePad, twice: the test runs
+    // in a projection, whose distances are up to sqrt(3) times shorter).
+    const glm::dvec3 along = corner[(i + 1) & 3] - corner[i];
+    if (!(glm::length(along) > 0.0)) continue;  // a triangle's repeated corner
+    // The corners run counter-clockwise about the plane axis's +1 side.
+    glm::dvec3 ed =
+        glm::normalize(glm::cross(nn * static_cast<double>(g.n[PlaneAxis(g.n)]), along));
     double ea = glm::dot(ed, u), eb = glm::dot(ed, v);
-    double c = static_cast<double>(e.w) - scale.edgePad - glm::dot(ed, p0);
+    double c = glm::dot(ed, corner[i]) - 2.0 * scale.edgePad - glm::dot(ed, p0);
     const double(*in)[2] = poly[cur];
     double(*out)[2] = poly[cur ^ 1];
     int outCount = 0;

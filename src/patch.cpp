@@ -7,27 +7,71 @@
 namespace vismask {
 
 PatchGeom MakePatchGeom(const Patch& p) {
-  PatchGeom g;
-  g.n = p.normal;
-  g.d = glm::dot(p.normal, p.corner[0]);
-  // Tolerance: a relative widening of each edge plane, so shared edges leave
-  // no crack through which a ray could pass between two adjacent patches.
+  PatchGeom g{};
+  const uint32_t nc = p.numCorners < 4 ? p.numCorners : 4;
+  if (nc == 0) return g;
+  // The plane, scaled so that its largest component (the first of equal
+  // ones) is +1 or -1 exactly. A zero or non-finite normal is kept as it
+  // is: no ray hits the patch (IntersectPatch's denom is 0 or NaN).
+  int k = 0;
+  for (int a = 1; a < 3; ++a)
+    if (std::fabs(p.normal[a]) > std::fabs(p.normal[k])) k = a;
+  const float s = std::fabs(p.normal[k]);
+  g.n = s > 0.0f && std::isfinite(s) ? p.normal / s : p.normal;
+  g.d = glm::dot(g.n, p.corner[0]);
+  const int i = (k + 1) % 3, j = (k + 2) % 3;
+
+  // The corners in (i, j), counter-clockwise there: the patch's own order
+  // when its normal points along +k, reversed when along -k.
+  double cu[4], cv[4];
+  for (uint32_t m = 0; m < nc; ++m) {
+    const uint32_t from = p.normal[k] < 0.0f ? nc - 1 - m : m;
+    cu[m] = p.corner[from][i];
+    cv[m] = p.corner[from][j];
+  }
+  // Tolerance: every edge pushed out by delta, so that shared edges leave
+  // no crack through which a ray could pass between two adjacent patches:
+  // 1e-5 of the patch's size, and 8 float steps of its coordinates for the
+  // rounding of the hit point and of the stored corners. A corner moves
+  // along its edges' bisector as far as both edges move by delta (as far
+  // as 45 delta at a needle's tip, less beyond).
   float size = 0.0f;
-  for (uint32_t i = 0; i < p.numCorners; ++i)
-    size = std::fmax(size, glm::length(p.corner[(i + 1) % p.numCorners] - p.corner[i]));
-  for (int i = 0; i < 4; ++i) {
-    if (i >= static_cast<int>(p.numCorners)) {
-      g.SetEdge(i, glm::vec4(0.0f, 0.0f, 0.0f, -std::numeric_limits<float>::infinity()));
-      continue;
-    }
-    glm::vec3 a = p.corner[i];
-    glm::vec3 b = p.corner[(i + 1) % p.numCorners];
-    glm::vec3 inward = glm::normalize(glm::cross(p.normal, b - a));  // points inside for CCW
-    float w = glm::dot(inward, a);
-    float tol = 1e-5f * size + 4.0f * std::numeric_limits<float>::epsilon() * std::fabs(w);
-    g.SetEdge(i, glm::vec4(inward, w - tol));
+  double mag = 0.0;
+  for (uint32_t m = 0; m < nc; ++m) {
+    size = std::fmax(size, glm::length(p.corner[(m + 1) % nc] - p.corner[m]));
+    mag = std::fmax(mag, std::fmax(std::fabs(cu[m]), std::fabs(cv[m])));
+  }
+  const double delta = 1e-5 * size + 8.0 * std::numeric_limits<float>::epsilon() * mag;
+  double out[4][2];  // each edge's outward unit normal, (0, 0) for a point
+  for (uint32_t m = 0; m < nc; ++m) {
+    const uint32_t b = (m + 1) % nc;
+    const double eu = cu[b] - cu[m], ev = cv[b] - cv[m], len = std::sqrt(eu * eu + ev * ev);
+    out[m][0] = len > 0.0 ? ev / len : 0.0;
+    out[m][1] = len > 0.0 ? -eu / len : 0.0;
+  }
+  for (uint32_t m = 0; m < nc; ++m) {
+    const double* a = out[(m + nc - 1) % nc];
+    const double* b = out[m];
+    const double w = delta / std::fmax(1.0 + a[0] * b[0] + a[1] * b[1], 1e-3);
+    g.u[m] = static_cast<float>(cu[m] + w * (a[0] + b[0]));
+    g.v[m] = static_cast<float>(cv[m] + w * (a[1] + b[1]));
+  }
+  for (uint32_t m = nc; m < 4; ++m) {
+    g.u[m] = g.u[nc - 1];
+    g.v[m] = g.v[nc - 1];
   }
   return g;
+}
+
+glm::dvec3 GeomCorner(const PatchGeom& g, int m) {
+  const int k = PlaneAxis(g.n), i = (k + 1) % 3, j = (k + 2) % 3;
+  glm::dvec3 x;
+  x[i] = g.u[m];
+  x[j] = g.v[m];
+  x[k] = (static_cast<double>(g.d) - static_cast<double>(g.n[i]) * x[i] -
+          static_cast<double>(g.n[j]) * x[j]) /
+         static_cast<double>(g.n[k]);
+  return x;
 }
 
 }  // namespace vismask

@@ -148,7 +148,7 @@ TEST(GridTest, SharedPlanesSkipCellsExactly) {
   std::uniform_real_distribution<float> u01(0.0f, 1.0f);
   for (int i = 0; i < 6000; ++i) {
     uint32_t p = static_cast<uint32_t>(rng() % s.patches.size());
-    glm::vec3 n = s.geom[p].n;
+    glm::vec3 n = glm::normalize(s.geom[p].n);
     float offsets[3] = {0.0f, 1e-6f, -1e-6f};
     glm::vec3 o = PointOnPatch(rng, s.patches[p]) + offsets[i % 3] * n;
     glm::vec3 d = UnitVector(rng);

@@ -5,8 +5,10 @@
 
 #include <cmath>
 #include <cstdint>
+#include <glm/geometric.hpp>
 #include <limits>
 #include <random>
+#include <utility>
 
 #include "test_util.h"
 #include "vismask/patch.h"
@@ -47,30 +49,28 @@ TEST(PatchSimdTest, OutsideEdgesIsTheScalarTestOnEveryInput) {
   uint64_t outside = 0, inside = 0;
   for (int i = 0; i < 400000; ++i) {
     PatchGeom g{};
-    glm::vec3 x;
     const int kind = i % 4;  // plain numbers, special values, random bits, a near tie
     auto value = [&]() {
       if (kind == 1 && rng() % 3 == 0) return Special(rng);
       if (kind == 2) return FloatFromBits(bits(rng));
       return uni(rng);
     };
-    for (int e = 0; e < 4; ++e) {
-      g.ex[e] = value();
-      g.ey[e] = value();
-      g.ez[e] = value();
-      g.ew[e] = value();
+    for (int m = 0; m < 4; ++m) {
+      g.u[m] = value();
+      g.v[m] = value();
     }
-    x = glm::vec3(value(), value(), value());
+    float x = value(), y = value();
     if (kind == 3) {
-      // The offset at the scalar sum itself, or an ulp either side: where
-      // the two forms part if one rounded a sum differently.
-      const int e = static_cast<int>(rng() % 4);
-      const float s = g.ex[e] * x.x + g.ey[e] * x.y + g.ez[e] * x.z;
-      const int step = static_cast<int>(rng() % 3) - 1;
-      g.ew[e] = step == 0 ? s : std::nextafter(s, step > 0 ? HUGE_VALF : -HUGE_VALF);
+      // The point at a corner, or an ulp either side of it on each axis:
+      // where the edge function is 0 or about to change sign, and the two
+      // forms part if one rounded a difference or product differently.
+      const int m = static_cast<int>(rng() % 4);
+      const int sx = static_cast<int>(rng() % 3) - 1, sy = static_cast<int>(rng() % 3) - 1;
+      x = sx == 0 ? g.u[m] : std::nextafter(g.u[m], sx > 0 ? HUGE_VALF : -HUGE_VALF);
+      y = sy == 0 ? g.v[m] : std::nextafter(g.v[m], sy > 0 ? HUGE_VALF : -HUGE_VALF);
     }
-    const bool scalar = OutsideEdgesScalar(g, x);
-    ASSERT_EQ(OutsideEdges(g, x), scalar) << "case " << i;
+    const bool scalar = OutsideEdgesScalar(g, x, y);
+    ASSERT_EQ(OutsideEdges(g, x, y), scalar) << "case " << i;
     ++(scalar ? outside : inside);
   }
   // Both answers are exercised.
@@ -78,8 +78,9 @@ TEST(PatchSimdTest, OutsideEdgesIsTheScalarTestOnEveryInput) {
   EXPECT_GT(inside, 10000u);
 }
 
-// A quad's own edge planes: its centre is inside, a point past an edge is
-// outside, and a triangle's missing fourth edge never fails.
+// A quad's own edges: its centre is inside, a point past an edge is
+// outside, and a triangle's repeated corner (an edge of length 0) never
+// fails. The normal along -z stores the corners in the other order.
 TEST(PatchSimdTest, OutsideEdgesOfAPatch) {
   Patch p{};
   p.corner[0] = glm::vec3(0, 0, 0);
@@ -89,15 +90,56 @@ TEST(PatchSimdTest, OutsideEdgesOfAPatch) {
   p.normal = glm::vec3(0, 0, 1);
   p.numCorners = 4;
   PatchGeom g = MakePatchGeom(p);
-  EXPECT_FALSE(OutsideEdges(g, glm::vec3(1.0f, 0.5f, 0.0f)));
-  EXPECT_TRUE(OutsideEdges(g, glm::vec3(2.5f, 0.5f, 0.0f)));
-  EXPECT_TRUE(OutsideEdges(g, glm::vec3(1.0f, -0.5f, 0.0f)));
+  EXPECT_EQ(PlaneAxis(g.n), 2);
+  EXPECT_FALSE(OutsideEdges(g, 1.0f, 0.5f));
+  EXPECT_FALSE(OutsideEdges(g, 2.0f, 1.0f));  // a corner, inside by the tolerance
+  EXPECT_TRUE(OutsideEdges(g, 2.5f, 0.5f));
+  EXPECT_TRUE(OutsideEdges(g, 1.0f, -0.5f));
+  EXPECT_TRUE(OutsideEdges(g, 1.0f, -1e-3f));
   p.corner[3] = p.corner[2];
   p.numCorners = 3;
   g = MakePatchGeom(p);
-  EXPECT_TRUE(std::isinf(g.ew[3]) && g.ew[3] < 0.0f);
-  EXPECT_FALSE(OutsideEdges(g, glm::vec3(1.5f, 0.25f, 0.0f)));
-  EXPECT_TRUE(OutsideEdges(g, glm::vec3(0.5f, 0.75f, 0.0f)));  // past the hypotenuse
+  EXPECT_EQ(g.u[3], g.u[2]);
+  EXPECT_EQ(g.v[3], g.v[2]);
+  EXPECT_FALSE(OutsideEdges(g, 1.5f, 0.25f));
+  EXPECT_TRUE(OutsideEdges(g, 0.5f, 0.75f));  // past the hypotenuse
+  std::swap(p.corner[0], p.corner[2]);        // clockwise seen from +z: facing -z
+  p.corner[3] = p.corner[2];
+  p.normal = glm::vec3(0, 0, -1);
+  g = MakePatchGeom(p);
+  EXPECT_EQ(g.n, glm::vec3(0, 0, -1));
+  EXPECT_FALSE(OutsideEdges(g, 1.5f, 0.25f));
+  EXPECT_TRUE(OutsideEdges(g, 0.5f, 0.75f));
+}
+
+// The plane is scaled so that its largest component is +-1 exactly, and
+// PlaneAxis finds it, also when two components are equally large.
+TEST(PatchSimdTest, PlaneAxisIsTheLargestComponent) {
+  Patch p{};
+  p.corner[0] = glm::vec3(0, 0, 0);
+  p.corner[1] = glm::vec3(1, -1, 0);
+  p.corner[2] = glm::vec3(1, -1, 1);
+  p.corner[3] = glm::vec3(0, 0, 1);
+  p.normal = glm::normalize(glm::vec3(-1, -1, 0));
+  p.numCorners = 4;
+  PatchGeom g = MakePatchGeom(p);
+  EXPECT_EQ(PlaneAxis(g.n), 0);
+  EXPECT_EQ(g.n.x, -1.0f);
+  EXPECT_EQ(g.n.y, -1.0f);
+  EXPECT_FALSE(OutsideEdges(g, -0.5f, 0.5f));  // (y, z) of the middle
+  EXPECT_TRUE(OutsideEdges(g, -0.5f, 1.5f));
+  EXPECT_TRUE(OutsideEdges(g, 0.5f, 0.5f));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> uni(-1.0f, 1.0f);
+  for (int i = 0; i < 10000; ++i) {
+    p.normal = glm::normalize(glm::vec3(uni(rng), uni(rng), uni(rng)));
+    g = MakePatchGeom(p);
+    int k = 0;
+    for (int a = 1; a < 3; ++a)
+      if (std::fabs(p.normal[a]) > std::fabs(p.normal[k])) k = a;
+    ASSERT_EQ(PlaneAxis(g.n), k) << i;
+    ASSERT_EQ(std::fabs(g.n[k]), 1.0f) << i;
+  }
 }
 
 }  // namespace

@@ -3,10 +3,11 @@
 // from which its corners run counter-clockwise).
 //
 // A patch's data is split by who reads it:
-//   PatchGeom   - what a ray test reads (plane and edge planes): 80 bytes, hot.
+//   PatchGeom   - what a ray test reads (plane and projected corners): 48 bytes, hot.
 //   Patch       - geometry and material for sampling, meshing and output.
 //   PatchEnergy - the solver's state in double (radiosity, unshot power).
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
@@ -38,26 +39,22 @@ struct Hit {
   bool front = false;
 };
 
-// Ray-test data. A point x on the plane dot(n, x) == d is inside the patch
-// iff dot(edge i's normal, x) >= edge i's offset for all four edges (a
-// triangle's fourth edge is (0,0,0,-inf), which always passes). Edge planes
-// are widened by a tiny tolerance so that rays through a shared edge hit at
-// least one of its two patches. The edges are stored component by component
-// (ex[i], ey[i], ez[i], ew[i]), so that one 4-wide test does all four
+// Ray-test data, 48 bytes. The plane is dot(n, x) == d, with n scaled so
+// that its largest component, on axis k (PlaneAxis), is exactly +1 or -1:
+// the patch projects onto the coordinates (i, j) = ((k + 1) % 3, (k + 2) % 3)
+// without folding, and is tested there against its corners (u[m], v[m]),
+// stored counter-clockwise in (i, j) (a triangle repeats its last corner, an
+// edge of length 0 that every point passes). The corners are pushed out
+// from the patch by a tiny tolerance (MakePatchGeom), so that rays through
+// a shared edge hit at least one of its two patches. The corners are stored
+// coordinate by coordinate, so that one 4-wide test does all four edges
 // (OutsideEdges).
 struct PatchGeom {
   glm::vec3 n;
   float d;
-  float ex[4], ey[4], ez[4], ew[4];
-  glm::vec4 Edge(int i) const { return glm::vec4(ex[i], ey[i], ez[i], ew[i]); }
-  void SetEdge(int i, const glm::vec4& e) {
-    ex[i] = e.x;
-    ey[i] = e.y;
-    ez[i] = e.z;
-    ew[i] = e.w;
-  }
+  float u[4], v[4];
 };
-static_assert(sizeof(PatchGeom) == 80, "PatchGeom is the grid's hot data");
+static_assert(sizeof(PatchGeom) == 48, "PatchGeom is the grid's hot data");
 
 struct Patch {
   glm::vec3
@@ -99,8 +96,8 @@ inline double UnshotKey(const PatchEnergy& e) {
 PatchGeom MakePatchGeom(const Patch& p);
 
 // The ray-test data of a patch's twin (mesh.h, AddTwins: the same corners,
-// reversed), from the original's: plane negated, the same edge planes. Not
-// MakePatchGeom of the twin, whose edge offsets would round differently.
+// reversed), from the original's: plane negated, the same corners. Not
+// MakePatchGeom of the twin, whose corners would round differently.
 // Negation is exact in IEEE arithmetic, and so is every product and sum
 // IntersectPatch forms from it, so a ray meets both at bit-identical t and
 // point, and both or neither pass the edge tests: one from the front, the
@@ -112,35 +109,48 @@ inline PatchGeom TwinGeom(const PatchGeom& g) {
   return t;
 }
 
-// Whether x fails any of g's four edge tests (dot(edge, x) < offset). The
-// portable form tests all four, then branches once: which edge fails is
-// unpredictable.
-inline bool OutsideEdgesScalar(const PatchGeom& g, const glm::vec3& x) {
-  return (g.ex[0] * x.x + g.ey[0] * x.y + g.ez[0] * x.z < g.ew[0]) |
-         (g.ex[1] * x.x + g.ey[1] * x.y + g.ez[1] * x.z < g.ew[1]) |
-         (g.ex[2] * x.x + g.ey[2] * x.y + g.ez[2] * x.z < g.ew[2]) |
-         (g.ex[3] * x.x + g.ey[3] * x.y + g.ez[3] * x.z < g.ew[3]);
+// The axis k of g's plane: the first component of n that is +1 or -1
+// exactly (the largest, MakePatchGeom; an earlier, smaller one cannot round
+// to 1). 2 when there is none (a degenerate patch, which no ray hits).
+inline int PlaneAxis(const glm::vec3& n) {
+  return std::fabs(n.x) == 1.0f ? 0 : (std::fabs(n.y) == 1.0f ? 1 : 2);
+}
+
+// Whether the point (x, y) of the plane's coordinates (i, j) fails any of
+// g's four edge tests: corners a, b (the next) fail it when
+// (b.u - a.u) * (y - a.v) - (b.v - a.v) * (x - a.u) < 0. The portable form
+// tests all four, then branches once: which edge fails is unpredictable.
+inline bool OutsideEdgesScalar(const PatchGeom& g, float x, float y) {
+  bool out = false;
+  for (int m = 0; m < 4; ++m) {
+    const int b = (m + 1) & 3;
+    out |= (g.u[b] - g.u[m]) * (y - g.v[m]) - (g.v[b] - g.v[m]) * (x - g.u[m]) < 0.0f;
+  }
+  return out;
 }
 
 // The same, four lanes at once on x86-64 (SSE2) and aarch64 (NEON): each
-// lane forms the scalar form's products, its two sums in the same order and
-// its ordered less-than (false on a NaN), with no fused multiply-add (the
-// build has -ffp-contract=off), so every path gives the same answer for
-// every input (tests/patch_simd_test.cpp). 32-bit ARM keeps the scalar
+// lane forms the scalar form's differences and products in the same order
+// and its ordered less-than (false on a NaN), with no fused multiply-add
+// (the build has -ffp-contract=off), so every path gives the same answer
+// for every input (tests/patch_simd_test.cpp). 32-bit ARM keeps the scalar
 // form: its NEON flushes subnormals to zero.
-inline bool OutsideEdges(const PatchGeom& g, const glm::vec3& x) {
+inline bool OutsideEdges(const PatchGeom& g, float x, float y) {
 #if defined(__SSE2__)
-  const __m128 s = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(g.ex), _mm_set1_ps(x.x)),
-                                         _mm_mul_ps(_mm_loadu_ps(g.ey), _mm_set1_ps(x.y))),
-                              _mm_mul_ps(_mm_loadu_ps(g.ez), _mm_set1_ps(x.z)));
-  return _mm_movemask_ps(_mm_cmplt_ps(s, _mm_loadu_ps(g.ew))) != 0;
+  const __m128 u = _mm_loadu_ps(g.u), v = _mm_loadu_ps(g.v);
+  const __m128 un = _mm_shuffle_ps(u, u, _MM_SHUFFLE(0, 3, 2, 1));
+  const __m128 vn = _mm_shuffle_ps(v, v, _MM_SHUFFLE(0, 3, 2, 1));
+  const __m128 e = _mm_sub_ps(_mm_mul_ps(_mm_sub_ps(un, u), _mm_sub_ps(_mm_set1_ps(y), v)),
+                              _mm_mul_ps(_mm_sub_ps(vn, v), _mm_sub_ps(_mm_set1_ps(x), u)));
+  return _mm_movemask_ps(_mm_cmplt_ps(e, _mm_setzero_ps())) != 0;
 #elif defined(__aarch64__) && defined(__ARM_NEON)
-  const float32x4_t s = vaddq_f32(vaddq_f32(vmulq_f32(vld1q_f32(g.ex), vdupq_n_f32(x.x)),
-                                            vmulq_f32(vld1q_f32(g.ey), vdupq_n_f32(x.y))),
-                                  vmulq_f32(vld1q_f32(g.ez), vdupq_n_f32(x.z)));
-  return vmaxvq_u32(vcltq_f32(s, vld1q_f32(g.ew))) != 0;
+  const float32x4_t u = vld1q_f32(g.u), v = vld1q_f32(g.v);
+  const float32x4_t un = vextq_f32(u, u, 1), vn = vextq_f32(v, v, 1);
+  const float32x4_t e = vsubq_f32(vmulq_f32(vsubq_f32(un, u), vsubq_f32(vdupq_n_f32(y), v)),
+                                  vmulq_f32(vsubq_f32(vn, v), vsubq_f32(vdupq_n_f32(x), u)));
+  return vmaxvq_u32(vcltq_f32(e, vdupq_n_f32(0.0f))) != 0;
 #else
-  return OutsideEdgesScalar(g, x);
+  return OutsideEdgesScalar(g, x, y);
 #endif
 }
 
@@ -152,11 +162,17 @@ inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* f
   float num = g.d - (g.n.x * ray.o.x + g.n.y * ray.o.y + g.n.z * ray.o.z);
   float tt = num / denom;
   if (!(tt > ray.tMin && tt < ray.tMax)) return false;
-  glm::vec3 x = ray.o + tt * ray.d;
-  if (OutsideEdges(g, x)) return false;
+  const float x[3] = {ray.o.x + tt * ray.d.x, ray.o.y + tt * ray.d.y, ray.o.z + tt * ray.d.z};
+  const int k = PlaneAxis(g.n);
+  const float xi = k == 2 ? x[0] : x[k + 1], xj = k == 0 ? x[2] : x[k - 1];
+  if (OutsideEdges(g, xi, xj)) return false;
   *t = tt;
   *front = denom < 0.0f;
   return true;
 }
+
+// Corner m of the region g's edge tests accept (corners[m] pushed out),
+// on g's plane, in world coordinates.
+glm::dvec3 GeomCorner(const PatchGeom& g, int m);
 
 }  // namespace vismask

@@ -71,7 +71,8 @@ directions uniform on the sphere; *cosine*, rays as the solver shoots them
 cannot skip it, does not hit it; tMin = 0.001 mm for both.
 
 Bytes: vismask's grid is `cellStart` + `refs` (what `Grid::bytes()`
-reports); its ray-test data (`PatchGeom`, 80 B per patch) is counted with it,
+reports); its ray-test data (`PatchGeom`: the plane and the corners
+projected on it, its size in the table's header) is counted with it,
 as Embree's BVH holds its own copy of the triangles. Embree's bytes are what
 its memory monitor (`rtcSetDeviceMemoryMonitorFunction`) saw the scene's
 commit keep, with the vertex and index arrays shared from the caller and so
