@@ -29,32 +29,44 @@ PatchGeom MakePatchGeom(const Patch& p) {
     cu[m] = p.corner[from][i];
     cv[m] = p.corner[from][j];
   }
-  // Tolerance: every edge pushed out by delta, so that shared edges leave
-  // no crack through which a ray could pass between two adjacent patches:
-  // 1e-5 of the patch's size, and 8 float steps of its coordinates for the
-  // rounding of the hit point and of the stored corners. A corner moves
-  // along its edges' bisector as far as both edges move by delta (as far
-  // as 45 delta at a needle's tip, less beyond).
+  // Tolerance: every edge pushed out by a relative widening (as the 3D edge
+  // planes of before were: 1e-5 of the patch's size and 4 float steps of
+  // the edge line's offset), so that shared edges leave no crack through
+  // which a ray could pass between two adjacent patches. A corner moves to
+  // where its two edges' moved lines meet; where they nearly run along
+  // each other (a straight corner, a needle's tip) it moves along their
+  // bisector as far as the larger push, at most 45 times it.
   float size = 0.0f;
-  double mag = 0.0;
-  for (uint32_t m = 0; m < nc; ++m) {
+  for (uint32_t m = 0; m < nc; ++m)
     size = std::fmax(size, glm::length(p.corner[(m + 1) % nc] - p.corner[m]));
-    mag = std::fmax(mag, std::fmax(std::fabs(cu[m]), std::fabs(cv[m])));
-  }
-  const double delta = 1e-5 * size + 8.0 * std::numeric_limits<float>::epsilon() * mag;
   double out[4][2];  // each edge's outward unit normal, (0, 0) for a point
+  double push[4];
   for (uint32_t m = 0; m < nc; ++m) {
     const uint32_t b = (m + 1) % nc;
     const double eu = cu[b] - cu[m], ev = cv[b] - cv[m], len = std::sqrt(eu * eu + ev * ev);
     out[m][0] = len > 0.0 ? ev / len : 0.0;
     out[m][1] = len > 0.0 ? -eu / len : 0.0;
+    const double w = out[m][0] * cu[m] + out[m][1] * cv[m];
+    push[m] = 1e-5 * size + 4.0 * std::numeric_limits<float>::epsilon() * std::fabs(w);
   }
   for (uint32_t m = 0; m < nc; ++m) {
-    const double* a = out[(m + nc - 1) % nc];
+    const uint32_t prev = (m + nc - 1) % nc;
+    const double* a = out[prev];
     const double* b = out[m];
-    const double w = delta / std::fmax(1.0 + a[0] * b[0] + a[1] * b[1], 1e-3);
-    g.u[m] = static_cast<float>(cu[m] + w * (a[0] + b[0]));
-    g.v[m] = static_cast<float>(cv[m] + w * (a[1] + b[1]));
+    const double det = a[0] * b[1] - a[1] * b[0];
+    double du, dv;
+    const double cosine = a[0] * b[0] + a[1] * b[1];
+    if (std::fabs(det) > 1e-3 &&
+        1.0 + cosine > 1e-3) {  // a . move = push[prev], b . move = push[m]
+      du = (push[prev] * b[1] - push[m] * a[1]) / det;
+      dv = (a[0] * push[m] - b[0] * push[prev]) / det;
+    } else {
+      const double w = std::fmax(push[prev], push[m]) / std::fmax(1.0 + cosine, 1e-3);
+      du = w * (a[0] + b[0]);
+      dv = w * (a[1] + b[1]);
+    }
+    g.u[m] = static_cast<float>(cu[m] + du);
+    g.v[m] = static_cast<float>(cv[m] + dv);
   }
   for (uint32_t m = nc; m < 4; ++m) {
     g.u[m] = g.u[nc - 1];
