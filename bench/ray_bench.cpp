@@ -92,32 +92,6 @@ void RegisterCasts(const std::string& name, int reps, size_t n, Cast cast) {
       ->Unit(benchmark::kMillisecond);
 }
 
-// The same, a block at a time: `cast(i, count)` casts rays i .. i + count
-// - 1 at once (their hits). A block is kBlock rays or fewer, all with one
-// skip (the cosine set's rays run shooter by shooter).
-constexpr size_t kBlock = 64;
-template <typename Cast>
-void RegisterBlocks(const std::string& name, int reps, size_t n, const uint32_t* skip, Cast cast) {
-  benchmark::RegisterBenchmark(
-      name.c_str(),
-      [n, skip, cast](benchmark::State& state) mutable {
-        for (auto _ : state) {
-          uint32_t hits = 0;
-          for (size_t i = 0; i < n;) {
-            size_t count = 1;
-            while (count < kBlock && i + count < n && skip[i + count] == skip[i]) ++count;
-            hits += cast(i, count);
-            i += count;
-          }
-          benchmark::DoNotOptimize(hits);
-        }
-        state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(n));
-      })
-      ->Repetitions(reps)
-      ->ReportAggregatesOnly(false)
-      ->Unit(benchmark::kMillisecond);
-}
-
 }  // namespace
 }  // namespace vismask::bench
 
@@ -175,24 +149,6 @@ int main(int argc, char** argv) {
       });
       reg("vismask_occluded",
           [c, rays, skip](size_t i) { return c->vis.grid.Occluded(rays[i], skip[i]); });
-      auto block = [&](const std::string& name, auto cast) {
-        RegisterBlocks(tag + name, args.reps, set->rays.size(), skip, cast);
-      };
-      block("vismask_intersect_n", [c, rays, skip](size_t i, size_t count) {
-        Hit hit[kBlock];
-        bool found[kBlock];
-        c->vis.grid.IntersectN(rays + i, static_cast<uint32_t>(count), skip[i], hit, found);
-        uint32_t hits = 0;
-        for (size_t k = 0; k < count; ++k) hits += found[k];
-        return hits;
-      });
-      block("vismask_occluded_n", [c, rays, skip](size_t i, size_t count) {
-        bool found[kBlock];
-        c->vis.grid.OccludedN(rays + i, static_cast<uint32_t>(count), skip[i], found);
-        uint32_t hits = 0;
-        for (size_t k = 0; k < count; ++k) hits += found[k];
-        return hits;
-      });
       for (int q = 0; q < 2; ++q) {
         const EmbreeScene* e = q ? &c->quad : &c->tri;
         std::string kind = q ? "embree_quad" : "embree_tri";
@@ -205,31 +161,6 @@ int main(int argc, char** argv) {
         });
         reg(kind + "_occluded",
             [e, rays, ctx](size_t i) mutable { return EmbreeOccluded(e->scene, &ctx, rays[i]); });
-        // Embree's stream of single rays (rtcIntersect1M, rtcOccluded1M),
-        // the blocks the grid gets, told that the rays are incoherent.
-        RTCIntersectContext inc;
-        rtcInitIntersectContext(&inc);
-        inc.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-        block(kind + "_intersect_n", [e, rays, inc](size_t i, size_t count) mutable {
-          RTCRayHit rh[kBlock];
-          for (size_t k = 0; k < count; ++k) {
-            ToEmbree(rays[i + k], &rh[k].ray);
-            rh[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rh[k].hit.primID = RTC_INVALID_GEOMETRY_ID;
-          }
-          rtcIntersect1M(e->scene, &inc, rh, static_cast<unsigned>(count), sizeof(RTCRayHit));
-          uint32_t hits = 0;
-          for (size_t k = 0; k < count; ++k) hits += rh[k].hit.geomID != RTC_INVALID_GEOMETRY_ID;
-          return hits;
-        });
-        block(kind + "_occluded_n", [e, rays, inc](size_t i, size_t count) mutable {
-          RTCRay r[kBlock];
-          for (size_t k = 0; k < count; ++k) ToEmbree(rays[i + k], &r[k]);
-          rtcOccluded1M(e->scene, &inc, r, static_cast<unsigned>(count), sizeof(RTCRay));
-          uint32_t hits = 0;
-          for (size_t k = 0; k < count; ++k) hits += r[k].tfar < 0.0f;
-          return hits;
-        });
       }
     }
   }

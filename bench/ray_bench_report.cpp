@@ -110,43 +110,6 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
       }
     }
   }
-  // The same rays a block at a time, against Embree's best of its two APIs.
-  std::fprintf(md, "\n### Blocks of rays (single thread)\n\n");
-  std::fprintf(md,
-               "The same rays, 64 at a time (fewer where the cosine set's shooter changes), as "
-               "the solver casts a shot's rays: `Grid::IntersectN` / `OccludedN` walk 8 rays by "
-               "turns, a cell each, asking for a cell's offsets, references and patches a turn "
-               "before reading them, so that the cache misses of different rays overlap; each "
-               "ray's answer is the one-by-one call's (tests/grid_test.cpp). Embree gets the "
-               "same blocks as streams of single rays (`rtcIntersect1M` / `rtcOccluded1M`, "
-               "flagged incoherent). *best Embree*: the faster of its two APIs on the row.\n\n");
-  std::fprintf(md,
-               "| patches | rays | query | grid, blocks | grid, one by one | Embree tri, blocks | "
-               "Embree tri, one by one | **grid blocks ÷ best Embree tri** |\n");
-  std::fprintf(md, "|---|---|---|---|---|---|---|---|\n");
-  double bLo = 1e30, bHi = 0.0;
-  for (size_t ci = 0; ci < cases.size(); ++ci) {
-    for (int s = 0; s < 2; ++s) {
-      for (const char* query : {"intersect", "occluded"}) {
-        std::string tag = std::to_string(ci) + "/" + cases[ci]->sets[s].name + "/";
-        Stat vn = StatOf(collector.rates[tag + "vismask_" + query + "_n"]);
-        Stat v = StatOf(collector.rates[tag + "vismask_" + query]);
-        Stat tn = StatOf(collector.rates[tag + "embree_tri_" + query + "_n"]);
-        Stat t = StatOf(collector.rates[tag + "embree_tri_" + query]);
-        const double best = std::max(t.median, tn.median);
-        if (best > 0 && cases[ci]->vis.patches.size() >= 1000) {
-          bLo = std::min(bLo, vn.median / best);
-          bHi = std::max(bHi, vn.median / best);
-        }
-        std::fprintf(md, "| %zu | %s | %s | %s | %s | %s | %s | **%.2f×** |\n",
-                     cases[ci]->vis.patches.size(), cases[ci]->sets[s].name.c_str(),
-                     std::strcmp(query, "intersect") ? "any hit" : "closest", Mrays(vn).c_str(),
-                     Mrays(v).c_str(), Mrays(tn).c_str(), Mrays(t).c_str(),
-                     best > 0 ? vn.median / best : 0.0);
-      }
-    }
-  }
-
   // The targets, judged from the figures above.
   double lo = 1e30, hi = 0.0, memLo = 1e30, memHi = 0.0, gridLo = 1e30, gridHi = 0.0;
   for (size_t ci = 0; ci < cases.size(); ++ci) {
@@ -178,11 +141,6 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
                  "\n**Targets.** Rays/s ≥ 1.0× Embree (triangles) on every row: %s, the grid "
                  "runs at %.2f× to %.2f× of Embree's rate.",
                  lo >= 1.0 ? "**met**" : "**not met**", lo, hi);
-    if (bHi > 0.0)
-      std::fprintf(md,
-                   " In blocks, against Embree's faster API, at about 8 000 patches and more: "
-                   "%s, %.2f× to %.2f×.",
-                   bLo >= 1.0 ? "**met**" : "**not met**", bLo, bHi);
   }
   std::fprintf(md,
                " Memory ≤ 0.5× Embree's triangle BVH: %s, grid + PatchGeom is %.2f× to %.2f× "

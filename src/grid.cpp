@@ -311,32 +311,16 @@ bool Grid::TestAll(const Ray& ray, Skip skip, Hit* hit) const {
   return true;
 }
 
-struct Grid::Cursor {
-  Ray r;        // tMax shrinks to just past the best hit so far
-  float limit;  // no step into a cell beyond this: the ray's end or the best hit
-  float t1;     // where the ray leaves the grid (or ends)
-  // Per axis: the first plane's t and the planes' spacing, the next plane's
-  // t, and how many were crossed; the index step across a plane.
-  float fx, fy, fz, dx, dy, dz;
-  float tx, ty, tz;
-  float kx, ky, kz;
-  int move[3];
-  int index;
-  uint32_t bestPatch;
-  float bestT;  // every hit is nearer than the ray's end
-  bool bestFront;
-  uint64_t tests;
-};
-
-Grid::Entry Grid::Enter(const Ray& ray, Cursor* c) const {
+template <bool kAnyHit>
+bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   DCHECK(cellStart_.data() != nullptr);  // built
-  if (!(ray.tMin < ray.tMax)) return Entry::kMiss;
+  if (!(ray.tMin < ray.tMax)) return false;
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
-  if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return Entry::kMiss;
+  if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return false;
   if (!(std::fabs(o[0]) <= farLimit_ && std::fabs(o[1]) <= farLimit_ &&
         std::fabs(o[2]) <= farLimit_))
-    return Entry::kTestAll;
+    return TestAll<kAnyHit>(ray, skip, hit);
 
   // Clip (tMin, tMax) to the grid box; an axis the ray does not move along
   // must already hold the origin. A direction so small that its inverse
@@ -347,19 +331,20 @@ Grid::Entry Grid::Enter(const Ray& ray, Cursor* c) const {
   float t0 = ray.tMin, t1 = ray.tMax;
   for (int a = 0; a < 3; ++a) {
     if (d[a] == 0.0f) {
-      if (o[a] < lo[a] || o[a] > hi[a]) return Entry::kMiss;
+      if (o[a] < lo[a] || o[a] > hi[a]) return false;
       invD[a] = 0.0f;
       continue;
     }
     invD[a] = 1.0f / d[a];
-    if (!(std::fabs(invD[a]) <= std::numeric_limits<float>::max())) return Entry::kTestAll;
+    if (!(std::fabs(invD[a]) <= std::numeric_limits<float>::max()))
+      return TestAll<kAnyHit>(ray, skip, hit);
     float tNear = (lo[a] - o[a]) * invD[a];
     float tFar = (hi[a] - o[a]) * invD[a];
     if (tNear > tFar) std::swap(tNear, tFar);
     if (tNear > t0) t0 = tNear;
     if (tFar < t1) t1 = tFar;
   }
-  if (!(t0 <= t1)) return Entry::kMiss;
+  if (!(t0 <= t1)) return false;
 
   // Entry cell, and per axis the cell planes ahead: the k-th (k = 0, 1, ...)
   // is crossed at first + k * delta, a product and a sum per step that is
@@ -370,242 +355,121 @@ Grid::Entry Grid::Enter(const Ray& ray, Cursor* c) const {
   const int* res = plan_.res;
   const int stride[3] = {1, res[0], res[0] * res[1]};
   float first[3], delta[3];
+  int move[3];
   int index = 0;
   for (int a = 0; a < 3; ++a) {
     float p = d[a] == 0.0f ? o[a] : o[a] + t0 * d[a];
     float f = (p - lo[a]) * invCellSize_[a];
-    int cell = f >= 0.0f ? (f < static_cast<float>(res[a]) ? static_cast<int>(f) : res[a] - 1) : 0;
-    index += cell * stride[a];
+    int c = f >= 0.0f ? (f < static_cast<float>(res[a]) ? static_cast<int>(f) : res[a] - 1) : 0;
+    index += c * stride[a];
     if (d[a] == 0.0f) {
       first[a] = std::numeric_limits<float>::infinity();
       delta[a] = 0.0f;
-      c->move[a] = 0;
+      move[a] = 0;
       continue;
     }
     bool up = d[a] > 0.0f;
-    first[a] = (lo[a] + static_cast<float>(up ? cell + 1 : cell) * cellSize_[a] - o[a]) * invD[a];
+    first[a] = (lo[a] + static_cast<float>(up ? c + 1 : c) * cellSize_[a] - o[a]) * invD[a];
     delta[a] = cellSize_[a] * std::fabs(invD[a]);
-    c->move[a] = up ? stride[a] : -stride[a];
-    float exit = first[a] + static_cast<float>(up ? res[a] - 1 - cell : cell) * delta[a];
+    move[a] = up ? stride[a] : -stride[a];
+    float exit = first[a] + static_cast<float>(up ? res[a] - 1 - c : c) * delta[a];
     if (exit < t1) t1 = exit;
   }
-  c->r = ray;
-  c->t1 = t1;
-  c->limit = t1;
-  c->fx = c->tx = first[0];
-  c->fy = c->ty = first[1];
-  c->fz = c->tz = first[2];
-  c->dx = delta[0];
-  c->dy = delta[1];
-  c->dz = delta[2];
-  c->kx = c->ky = c->kz = 0.0f;
-  c->index = index;
-  c->bestPatch = kNoPatch;
-  c->bestT = ray.tMax;
-  c->bestFront = false;
-  c->tests = 0;
-  return Entry::kWalk;
-}
+  // Per axis in registers: the next plane's t, and how many were crossed.
+  const float fx = first[0], fy = first[1], fz = first[2];
+  const float dx = delta[0], dy = delta[1], dz = delta[2];
+  float tx = fx, ty = fy, tz = fz;
+  float kx = 0.0f, ky = 0.0f, kz = 0.0f;
 
-template <bool kAnyHit>
-inline bool Grid::TestCell(Cursor* c, Skip skip) const {
-  const uint32_t* refs = refs_.data();
-  const PatchGeom* geom = geom_.data();
-  uint32_t begin = cellStart_[c->index] + 1, end = cellStart_[c->index + 1];
-  const uint32_t header = refs[begin - 1];
-  const Ray& r = c->r;
-  if (header != kNoPlane) {
-    // The cell's patches share a plane (CellPlane). Each patch test
-    // divides num = d - n.o by denom = n.dir; if num is never of
-    // denom's sign over the range of d, every t is <= 0 and, with
-    // tMin >= 0, every test below would fail its range check: the
-    // cell is passed without reading a patch. The products and sums
-    // are IntersectPatch's, on the other sign of the normal for some
-    // patches, which negates them exactly; no division is needed.
-    const CellPlane& pl = planes_[header];
-    float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
-    float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
-    float numLo = pl.dLo - s, numHi = pl.dHi - s;
-    if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f))) {
-      c->tests += end - begin;
-      return false;
-    }
-  }
-  // Ask for every patch of the cell at once: their cache misses overlap
-  // instead of coming one test at a time.
-  for (uint32_t k = begin; k < end; ++k) {
-    const char* g = reinterpret_cast<const char*>(geom + refs[k]);
-    __builtin_prefetch(g);
-    __builtin_prefetch(g + sizeof(PatchGeom) - 1);
-  }
-  for (uint32_t k = begin; k < end; ++k) {
-    uint32_t p = refs[k];
-    float t;
-    bool front;
-    ++c->tests;
-    if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
-    if (kAnyHit) {
-      c->bestPatch = p;
-      return true;
-    }
-    // t <= bestT here. On a tie a front side, then the lower index, so
-    // that of two coplanar twins the ray lands on the one it faces.
-    if (t < c->bestT || TieWins(p, front, c->bestPatch, c->bestFront)) {
-      c->bestPatch = p;
-      c->bestT = t;
-      c->bestFront = front;
-      c->r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
-      c->limit = std::min(c->t1, t);
-    }
-  }
-  return false;
-}
-
-// Step across the plane that comes first (ties: y before x, z before
-// both), unless the ray ends, or its best hit is, before that plane.
-inline bool Grid::Step(Cursor* c) {
-  if (c->tx < c->ty && c->tx < c->tz) {
-    if (!(c->tx < c->limit)) return false;
-    c->index += c->move[0];
-    c->kx += 1.0f;
-    c->tx = c->fx + c->kx * c->dx;
-  } else if (c->ty < c->tz) {
-    if (!(c->ty < c->limit)) return false;
-    c->index += c->move[1];
-    c->ky += 1.0f;
-    c->ty = c->fy + c->ky * c->dy;
-  } else {
-    if (!(c->tz < c->limit)) return false;
-    c->index += c->move[2];
-    c->kz += 1.0f;
-    c->tz = c->fz + c->kz * c->dz;
-  }
-  return true;
-}
-
-template <bool kAnyHit>
-inline bool Grid::Finish(const Cursor& c, Hit* hit) const {
-  steps_ += c.tests + static_cast<uint64_t>(c.kx + c.ky + c.kz) + 1;
-  if (c.bestPatch == kNoPatch) return false;
-  if (kAnyHit) {
-    if (hit) hit->patch = c.bestPatch;
-    return true;
-  }
-  hit->patch = c.bestPatch;
-  hit->t = c.bestT;
-  hit->front = c.bestFront;
-  return true;
-}
-
-template <bool kAnyHit>
-bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
-  Cursor c;
-  switch (Enter(ray, &c)) {
-    case Entry::kMiss:
-      return false;
-    case Entry::kTestAll:
-      return TestAll<kAnyHit>(ray, skip, hit);
-    case Entry::kWalk:
-      break;
-  }
-  // Most cells a ray crosses are empty: one bit in a small bitmap says so,
-  // where their offsets (32 times larger, strided by rows and slices) cost
-  // a cache miss each in a large grid.
-  for (;;) {
-    if (Occupied(c.index) && TestCell<kAnyHit>(&c, skip)) break;
-    if (!Step(&c)) break;
-  }
-  return Finish<kAnyHit>(c, hit);
-}
-
-template <bool kAnyHit>
-void Grid::WalkN(const Ray* rays, uint32_t n, Skip skip, Hit* hits, bool* found) const {
-  // A lane's turn: 0 walks the empty cells to the next occupied one and
-  // asks for its offsets; 1 asks for its references; 2 for its patches;
-  // 3 tests them and steps on. Each request is read a turn (the other
-  // lanes' turns) later.
-  constexpr int kLanes = 8;
-  Cursor lane[kLanes];
-  uint32_t ray[kLanes];
-  uint8_t turn[kLanes];
   const uint32_t* start = cellStart_.data();
   const uint32_t* refs = refs_.data();
   const PatchGeom* geom = geom_.data();
-  uint32_t next = 0;
-  // Starts the next ray that needs a walk in lane l; false when none is left.
-  auto load = [&](int l) {
-    while (next < n) {
-      const uint32_t i = next++;
-      Hit* hit = hits ? &hits[i] : nullptr;
-      switch (Enter(rays[i], &lane[l])) {
-        case Entry::kMiss:
-          found[i] = false;
-          continue;
-        case Entry::kTestAll:
-          found[i] = TestAll<kAnyHit>(rays[i], skip, hit);
-          continue;
-        case Entry::kWalk:
-          break;
+  const CellPlane* planes = planes_.data();
+  Ray r = ray;       // tMax shrinks to just past the best hit so far
+  float limit = t1;  // no step into a cell beyond this: the ray's end or the best hit
+  uint32_t bestPatch = kNoPatch;
+  float bestT = r.tMax;  // every hit is nearer than the ray's end
+  bool bestFront = false;
+  const uint64_t* occupied = occupied_.data();
+  uint64_t tests = 0;
+  for (;;) {
+    // Most cells a ray crosses are empty: one bit in a small bitmap says so,
+    // where their offsets (32 times larger, strided by rows and slices) cost
+    // a cache miss each in a large grid.
+    if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0) {
+      uint32_t begin = start[index] + 1, end = start[index + 1];
+      const uint32_t header = refs[begin - 1];
+      if (header != kNoPlane) {
+        // The cell's patches share a plane (CellPlane). Each patch test
+        // divides num = d - n.o by denom = n.dir; if num is never of
+        // denom's sign over the range of d, every t is <= 0 and, with
+        // tMin >= 0, every test below would fail its range check: the
+        // cell is passed without reading a patch. The products and sums
+        // are IntersectPatch's, on the other sign of the normal for some
+        // patches, which negates them exactly; no division is needed.
+        const CellPlane& pl = planes[header];
+        float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
+        float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
+        float numLo = pl.dLo - s, numHi = pl.dHi - s;
+        if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f))) {
+          tests += end - begin;
+          begin = end;
+        }
       }
-      ray[l] = i;
-      turn[l] = 0;
-      return true;
-    }
-    return false;
-  };
-  int live = 0;
-  while (live < kLanes && load(live)) ++live;
-  int l = 0;
-  while (live > 0) {
-    Cursor& c = lane[l];
-    bool done = false;
-    switch (turn[l]) {
-      case 0:
-        while (!Occupied(c.index)) {
-          if (!Step(&c)) {
-            done = true;
-            break;
-          }
+      // Ask for every patch of the cell at once: their cache misses overlap
+      // instead of coming one test at a time.
+      for (uint32_t k = begin; k < end; ++k) {
+        const char* g = reinterpret_cast<const char*>(geom + refs[k]);
+        __builtin_prefetch(g);
+        __builtin_prefetch(g + sizeof(PatchGeom) - 1);
+      }
+      for (uint32_t k = begin; k < end; ++k) {
+        uint32_t p = refs[k];
+        float t;
+        bool front;
+        ++tests;
+        if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
+        if (kAnyHit) {
+          if (hit) hit->patch = p;
+          steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
+          return true;
         }
-        if (!done) {
-          __builtin_prefetch(start + c.index);
-          turn[l] = 1;
+        // t <= bestT here. On a tie a front side, then the lower index, so
+        // that of two coplanar twins the ray lands on the one it faces.
+        if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
+          bestPatch = p;
+          bestT = t;
+          bestFront = front;
+          r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+          limit = std::min(t1, t);
         }
-        break;
-      case 1:
-        __builtin_prefetch(refs + start[c.index]);
-        turn[l] = 2;
-        break;
-      case 2:
-        for (uint32_t k = start[c.index] + 1, end = start[c.index + 1]; k < end; ++k) {
-          const char* g = reinterpret_cast<const char*>(geom + refs[k]);
-          __builtin_prefetch(g);
-          __builtin_prefetch(g + sizeof(PatchGeom) - 1);
-        }
-        turn[l] = 3;
-        break;
-      default:
-        if (TestCell<kAnyHit>(&c, skip) || !Step(&c))
-          done = true;
-        else
-          turn[l] = 0;
-        break;
-    }
-    if (done) {
-      const uint32_t i = ray[l];
-      found[i] = Finish<kAnyHit>(c, hits ? &hits[i] : nullptr);
-      if (!load(l)) {
-        // The last lane takes this one's place.
-        --live;
-        lane[l] = lane[live];
-        ray[l] = ray[live];
-        turn[l] = turn[live];
-        if (l >= live) l = 0;
-        continue;
       }
     }
-    if (++l >= live) l = 0;
+    // Step across the plane that comes first (ties: y before x, z before
+    // both), unless the ray ends, or its best hit is, before that plane.
+    if (tx < ty && tx < tz) {
+      if (!(tx < limit)) break;
+      index += move[0];
+      kx += 1.0f;
+      tx = fx + kx * dx;
+    } else if (ty < tz) {
+      if (!(ty < limit)) break;
+      index += move[1];
+      ky += 1.0f;
+      ty = fy + ky * dy;
+    } else {
+      if (!(tz < limit)) break;
+      index += move[2];
+      kz += 1.0f;
+      tz = fz + kz * dz;
+    }
   }
+  steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
+  if (bestPatch == kNoPatch) return false;
+  hit->patch = bestPatch;
+  hit->t = bestT;
+  hit->front = bestFront;
+  return true;
 }
 
 bool Grid::Intersect(const Ray& ray, Skip skip, Hit* hit) const {
@@ -614,14 +478,6 @@ bool Grid::Intersect(const Ray& ray, Skip skip, Hit* hit) const {
 
 bool Grid::Occluded(const Ray& ray, Skip skip) const {
   return Walk<true>(ray, skip, nullptr);
-}
-
-void Grid::IntersectN(const Ray* rays, uint32_t n, Skip skip, Hit* hits, bool* found) const {
-  WalkN<false>(rays, n, skip, hits, found);
-}
-
-void Grid::OccludedN(const Ray* rays, uint32_t n, Skip skip, bool* occluded) const {
-  WalkN<true>(rays, n, skip, nullptr, occluded);
 }
 
 bool Grid::Occluded(const Ray& ray, Skip skip, uint32_t* hint) const {

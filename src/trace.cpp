@@ -20,24 +20,6 @@ namespace vismask {
 
 namespace {
 
-// Rays on their way to Grid::IntersectN, a block at a time, each with a
-// tag (its pixel, or its index in the shot). On the stack: a shot
-// allocates nothing.
-struct RayBlock {
-  static constexpr uint32_t kSize = 64;
-  Ray ray[kSize];
-  uint32_t tag[kSize];
-  Hit hit[kSize];
-  bool found[kSize];
-  uint32_t count = 0;
-  // Adds a ray; true when the block is full.
-  bool Add(const Ray& r, uint32_t t) {
-    ray[count] = r;
-    tag[count] = t;
-    return ++count == kSize;
-  }
-};
-
 // The entry and exit parameters of `ray` through `box` (slab test).
 bool Slabs(const Ray& ray, const Bounds& box, float* t0, float* t1) {
   float lo = -std::numeric_limits<float>::infinity(), hi = std::numeric_limits<float>::infinity();
@@ -313,26 +295,6 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
-  // The rays go to the grid a block at a time (IntersectN: each ray's hit
-  // is Intersect's), and land in their order, as one by one.
-  RayBlock block;
-  auto cast = [&]() {
-    grid_.IntersectN(block.ray, block.count, skip, block.hit, block.found);
-    for (uint32_t k = 0; k < block.count; ++k) {
-      const Ray& ray = block.ray[k];
-      const uint32_t pixel = block.tag[k];
-      if (!block.found[k]) {
-        if (methodC) passedPixels.Open(pixel);
-        if (LeavesScene(ray))
-          for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
-        continue;
-      }
-      if (masks && out && options_.maskMethod == MaskMethod::kA) out->Close(pixel);
-      if (methodC) hitPixels.Open(pixel);
-      Land(ray, block.hit[k], share, &tally);
-    }
-    block.count = 0;
-  };
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     points.Next(r, u, true);
@@ -350,9 +312,17 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
       pixel = maskDirections_.CosinePixel(u[4], local);
     }
     ++tally.traced;
-    if (block.Add(ray, pixel)) cast();
+    Hit hit;
+    if (!grid_.Intersect(ray, skip, &hit)) {
+      if (methodC) passedPixels.Open(pixel);
+      if (LeavesScene(ray))
+        for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
+      continue;
+    }
+    if (masks && out && options_.maskMethod == MaskMethod::kA) out->Close(pixel);
+    if (methodC) hitPixels.Open(pixel);
+    Land(ray, hit, share, &tally);
   }
-  if (block.count > 0) cast();
   Book(tally);
 
   // Method B: the mask from the centre alone, one ray through each pixel
@@ -483,26 +453,6 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
   uint64_t entered = 0, left = 0;
-  RayBlock block;
-  auto cast = [&]() {
-    grid_.IntersectN(block.ray, block.count, skip, block.hit, block.found);
-    for (uint32_t k = 0; k < block.count; ++k) {
-      const Ray& ray = block.ray[k];
-      const uint32_t r = block.tag[k];
-      if (!block.found[k]) {
-        if (LeavesScene(ray)) {
-          for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
-          alive->Close(r);
-        } else {
-          ++left;  // on to the neighbour across the face it leaves by
-        }
-        continue;
-      }
-      alive->Close(r);
-      Land(ray, block.hit[k], share, &tally);
-    }
-    block.count = 0;
-  };
   for (uint32_t r = 0; r < rays; ++r) {
     // Sequential draws: every environment draws every ray, so ray r is the
     // same ray everywhere; Sobol' points are drawn by index, live rays only.
@@ -520,9 +470,19 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
       ++entered;
     }
     ++tally.traced;
-    if (block.Add(ray, r)) cast();
+    Hit hit;
+    if (!grid_.Intersect(ray, skip, &hit)) {
+      if (LeavesScene(ray)) {
+        for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
+        alive->Close(r);
+      } else {
+        ++left;  // on to the neighbour across the face it leaves by
+      }
+      continue;
+    }
+    alive->Close(r);
+    Land(ray, hit, share, &tally);
   }
-  if (block.count > 0) cast();
   Book(tally);
   for (int c = 0; c < 3; ++c)
     ledger_.inFlight[c] += (static_cast<double>(left) - static_cast<double>(entered)) * share[c];

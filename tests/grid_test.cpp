@@ -4,8 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
@@ -472,84 +470,6 @@ TEST(GridTest, EdgeCases) {
   // Out of the open front: nothing.
   EXPECT_FALSE(
       b.grid.Occluded(Ray{glm::vec3(0.1f, 0.9f, 0.9f), glm::vec3(0, 0, 1), 0.0f, kInf}, kNoPatch));
-}
-
-// IntersectN and OccludedN walk several rays by turns: every ray's answer
-// is the one-by-one call's, bit for bit, and so is the work counted, for
-// blocks of every size (fewer rays than lanes, more, a lane freed early),
-// with one skip for a block of rays from one patch, and for rays the walk
-// hands to TestAll (origins far away) or answers at once (no direction,
-// an empty interval, missing the grid).
-TEST(GridTest, BlocksOfRaysAreTheRaysOneByOne) {
-  std::mt19937 rng(41);
-  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
-  TestScene cornell = CornellScene(8), random;
-  AddRandomPatches(rng, 1500, glm::vec3(0.0f), glm::vec3(1.0f), 0.005f, 0.3f, &random);
-  const uint32_t blockSizes[] = {1, 3, 8, 9, 64, 257};
-  uint64_t rays = 0, hits = 0, occluded = 0;
-  for (const TestScene* s : {&cornell, &random}) {
-    for (float density : {0.5f, 4.0f}) {
-      BuiltGrid b;
-      BuildGrid(*s, density, &b);
-      // Rays from one patch each (a block shares its skip), then rays from
-      // anywhere, far away and degenerate (skipping nothing).
-      std::vector<Ray> from;
-      std::vector<uint32_t> fromPatch;
-      SolverRays(*s, 43, 600, &from, &fromPatch);
-      std::vector<Ray> any;
-      for (int i = 0; i < 600; ++i) {
-        glm::vec3 o(u01(rng) * 1.4f - 0.2f, u01(rng) * 1.4f - 0.2f, u01(rng) * 1.4f - 0.2f);
-        if (i % 50 == 0) o *= 1e4f;  // beyond the grid's padding: every patch is tested
-        Ray r{o, UnitVector(rng), i % 7 == 0 ? -0.5f : 0.0f, i % 3 == 0 ? 0.2f + u01(rng) : kInf};
-        if (i % 97 == 0) r.d = glm::vec3(0.0f);
-        if (i % 89 == 0) r.tMax = r.tMin;
-        any.push_back(r);
-      }
-      for (uint32_t size : blockSizes) {
-        for (int kind = 0; kind < 2; ++kind) {
-          const std::vector<Ray>& set = kind ? any : from;
-          for (size_t i = 0; i < set.size();) {
-            const Skip skip = kind ? Skip() : Skip(fromPatch[i]);
-            uint32_t n = 1;
-            while (n < size && i + n < set.size() && (kind || fromPatch[i + n] == fromPatch[i]))
-              ++n;
-            Hit got[300], want;
-            bool found[300], blocked[300];
-            const uint64_t before = b.grid.steps();
-            b.grid.IntersectN(&set[i], n, skip, got, found);
-            const uint64_t blockSteps = b.grid.steps() - before;
-            b.grid.OccludedN(&set[i], n, skip, blocked);
-            const uint64_t blockOccludedSteps = b.grid.steps() - before - blockSteps;
-            uint64_t oneSteps = 0, oneOccludedSteps = 0;
-            for (uint32_t k = 0; k < n; ++k) {
-              uint64_t at = b.grid.steps();
-              const bool hit = b.grid.Intersect(set[i + k], skip, &want);
-              oneSteps += b.grid.steps() - at;
-              at = b.grid.steps();
-              const bool occ = b.grid.Occluded(set[i + k], skip);
-              oneOccludedSteps += b.grid.steps() - at;
-              ASSERT_EQ(found[k], hit) << "ray " << i + k << " block " << size;
-              ASSERT_EQ(blocked[k], occ) << "ray " << i + k << " block " << size;
-              if (hit) {
-                ASSERT_EQ(got[k].patch, want.patch) << "ray " << i + k << " block " << size;
-                ASSERT_EQ(std::memcmp(&got[k].t, &want.t, sizeof want.t), 0) << "ray " << i + k;
-                ASSERT_EQ(got[k].front, want.front) << "ray " << i + k;
-              }
-              rays += 1;
-              hits += hit;
-              occluded += occ;
-            }
-            ASSERT_EQ(blockSteps, oneSteps) << "block at " << i << " of " << n;
-            ASSERT_EQ(blockOccludedSteps, oneOccludedSteps) << "block at " << i << " of " << n;
-            i += n;
-          }
-        }
-      }
-    }
-  }
-  EXPECT_EQ(rays, 2u * 2u * 6u * 1200u);
-  EXPECT_GT(hits, rays / 4);
-  EXPECT_EQ(hits, occluded);  // a closest hit is an any hit
 }
 
 }  // namespace

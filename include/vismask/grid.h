@@ -82,14 +82,6 @@ class Grid {
   // answer is Occluded's wherever the walk agrees with testing every patch
   // (tests/grid_test.cpp), because a hit on any patch is a hit.
   bool Occluded(const Ray& ray, Skip skip, uint32_t* hint) const;
-  // Intersect and Occluded for `n` rays at once: found[i] (occluded[i]) and
-  // hits[i] are what Intersect (Occluded) gives for rays[i], bit for bit,
-  // and steps() grows by as much. The walks of several rays run by turns,
-  // a cell each, asking for a cell's offsets, references and patches a
-  // turn before reading them, so that the cache misses of different rays
-  // overlap rather than come one after another.
-  void IntersectN(const Ray* rays, uint32_t n, Skip skip, Hit* hits, bool* found) const;
-  void OccludedN(const Ray* rays, uint32_t n, Skip skip, bool* occluded) const;
 
   const Plan& plan() const { return plan_; }
   size_t cellCount() const {
@@ -115,32 +107,9 @@ class Grid {
   Span<const uint64_t> occupied() const { return occupied_; }
 
  private:
-  // One ray's walk (grid.cpp): its DDA and its best hit so far.
-  struct Cursor;
-  enum class Entry { kWalk, kMiss, kTestAll };
-  // Clips the ray to the grid and sets up its DDA in *c: kMiss when it
-  // misses the grid, kTestAll when its origin is too far away or its
-  // direction too small for the DDA.
-  Entry Enter(const Ray& ray, Cursor* c) const;
-  // Tests the patches of c's cell (an occupied one); true when kAnyHit and
-  // one is hit.
-  template <bool kAnyHit>
-  bool TestCell(Cursor* c, Skip skip) const;
-  // Steps c into the next cell; false when the walk ends.
-  static bool Step(Cursor* c);
-  // Books c's work in steps_ and writes its hit; whether there is one.
-  template <bool kAnyHit>
-  bool Finish(const Cursor& c, Hit* hit) const;
-  bool Occupied(int index) const {
-    return ((occupied_[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0;
-  }
   // The DDA walk behind Intersect (kAnyHit false) and Occluded (true).
   template <bool kAnyHit>
   bool Walk(const Ray& ray, Skip skip, Hit* hit) const;
-  // Walk for n rays by turns (IntersectN, OccludedN); hits may be null
-  // for kAnyHit.
-  template <bool kAnyHit>
-  void WalkN(const Ray* rays, uint32_t n, Skip skip, Hit* hits, bool* found) const;
   // Every patch, for rays whose origin is too far away for the grid's padding.
   template <bool kAnyHit>
   bool TestAll(const Ray& ray, Skip skip, Hit* hit) const;
