@@ -87,15 +87,16 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s)
   int count = 4, cur = 0;
   glm::dvec3 corner[4];
   for (int i = 0; i < 4; ++i) corner[i] = GeomCorner(g, i);
+  // The corners run counter-clockwise about the normal's side where the
+  // plane axis's component is +1.
+  const glm::dvec3 up = nn * static_cast<double>(g.n[PlaneAxis(g.n)]);
   for (int i = 0; i < 4; ++i) {
     // The edge's inward plane, through its corners along the normal, moved
     // out by the rounding of the edge test (edgePad, twice: the test runs
     // in a projection, whose distances are up to sqrt(3) times shorter).
     const glm::dvec3 along = corner[(i + 1) & 3] - corner[i];
     if (!(glm::length(along) > 0.0)) continue;  // a triangle's repeated corner
-    // The corners run counter-clockwise about the plane axis's +1 side.
-    glm::dvec3 ed =
-        glm::normalize(glm::cross(nn * static_cast<double>(g.n[PlaneAxis(g.n)]), along));
+    glm::dvec3 ed = glm::normalize(glm::cross(up, along));
     double ea = glm::dot(ed, u), eb = glm::dot(ed, v);
     double c = glm::dot(ed, corner[i]) - 2.0 * scale.edgePad - glm::dot(ed, p0);
     const double(*in)[2] = poly[cur];

@@ -54,10 +54,10 @@ PatchGeom MakePatchGeom(const Patch& p) {
     const double* a = out[prev];
     const double* b = out[m];
     const double det = a[0] * b[1] - a[1] * b[0];
-    double du, dv;
     const double cosine = a[0] * b[0] + a[1] * b[1];
-    if (std::fabs(det) > 1e-3 &&
-        1.0 + cosine > 1e-3) {  // a . move = push[prev], b . move = push[m]
+    double du, dv;
+    if (std::fabs(det) > 1e-3 && 1.0 + cosine > 1e-3) {
+      // The move with a . move = push[prev] and b . move = push[m].
       du = (push[prev] * b[1] - push[m] * a[1]) / det;
       dv = (a[0] * push[m] - b[0] * push[prev]) / det;
     } else {

@@ -133,8 +133,11 @@ void Environment::FillReadCosts(uint32_t numPatches) {
   mayRead_ = false;
   if (numNeighbours_ == 0 || options_.maskMethod != MaskMethod::kB) return;
   mayRead_ = options_.centreRays == CentreChoice::kRead;
-  // Beyond kReadEnvs environments auto never reads (below); the counts,
-  // a pass over every environment, are only needed up to there.
+  // Beyond kReadEnvs environments auto never reads: a read shot's
+  // regeneration grows with every environment beyond every forwarding one
+  // (a 5x5x5 run of 64-ray shots did not finish in minutes), which the
+  // counts below understate. The counts, a pass over every environment,
+  // are only needed up to there; beyond, they stay 0 and ReadsOnly says no.
   if (options_.centreRays != CentreChoice::kAuto || envGrid_.count() > kReadEnvs) return;
   double forwarders = 0.0;
   const int count = envGrid_.count();
@@ -171,14 +174,10 @@ void Environment::FillReadCosts(uint32_t numPatches) {
   // depend on --mask-cache.
   const double byPatch = kPatchCast * static_cast<double>(numPatches);
   allCost_ = (1.0 + forwarders) * std::min(kCastShare * shape_.pixels(), byPatch);
-  // Beyond kReadEnvs environments auto never reads: a read shot's
-  // regeneration grows with every environment beyond every forwarding one
-  // (a 5x5x5 run of 64-ray shots did not finish in minutes), which the
-  // counts above understate.
+  // Some local shot may read if one of the fewest rays a shot may have would.
   const uint32_t fewest =
       options_.rayQuantum > 0.0 ? std::max(options_.minRays, 1u) : options_.rays;
-  mayRead_ = options_.centreRays == CentreChoice::kRead ||
-             (options_.centreRays == CentreChoice::kAuto && ReadsOnly(fewest));
+  mayRead_ = ReadsOnly(fewest);
 }
 
 bool Environment::ReadsOnly(uint32_t rays) const {
