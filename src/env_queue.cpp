@@ -49,7 +49,9 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
     uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
     h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
     ++outCount_;
-    if (!shape_.empty()) mask.Pack(MaskBytes(packet));
+    // Method R's bits past the shot's rays are closed: only its rays travel.
+    if (!shape_.empty())
+      mask.Pack(MaskBytes(packet), options_.maskMethod == MaskMethod::kR ? h.rays : ~0u);
     // The receiver's share of the power in flight, worked out here from the
     // bytes it will get, so that this round's report can count it (exchange.h).
     // Its box and cell as it makes its own (Prepare).
@@ -90,7 +92,7 @@ void Environment::ShootLocal(uint32_t i) {
   out.SetAllOpen();
   PacketHeader shot = ShotHeader(p, power, key, shotIndex, index_, rays);
   if (options_.maskMethod == MaskMethod::kR) {
-    for (uint32_t r = rays; r < out.bits(); ++r) out.Close(r);  // bits past the shot's rays
+    out.CloseFrom(rays);  // bits past the shot's rays
     TraceAlive(p, skip, power, key, rays, false, &out);
   } else {
     // B and C: the shooter's centre mask from the cache (cast on a miss).
@@ -194,11 +196,12 @@ void Environment::Deliver(const uint8_t* packet) {
   Slot& slot = slots_[s];
   MaskBits mask = SlotMask(static_cast<uint32_t>(s));
   if (!shape_.empty()) {
+    const uint32_t rayBits = options_.maskMethod == MaskMethod::kR ? h.rays : ~0u;
     if (fresh) {
-      mask.Unpack(MaskBytes(packet));
+      mask.Unpack(MaskBytes(packet), rayBits);
     } else {
       MaskBits incoming = ScratchMask(1);
-      incoming.Unpack(MaskBytes(packet));
+      incoming.Unpack(MaskBytes(packet), rayBits);
       mask.And(incoming);
     }
   }

@@ -234,6 +234,13 @@ void MaskBits::SetAllClosed() {
   for (size_t w = 0; w < words_.size(); ++w) words_[w] = 0;
 }
 
+void MaskBits::CloseFrom(uint32_t begin) {
+  size_t w = begin >> 6;
+  if (w >= words_.size()) return;
+  if (begin & 63) words_[w++] &= (uint64_t(1) << (begin & 63)) - 1;
+  for (; w < words_.size(); ++w) words_[w] = 0;
+}
+
 void MaskBits::And(const MaskBits& other) {
   DCHECK(other.words_.size() == words_.size());
   for (size_t w = 0; w < words_.size(); ++w) words_[w] &= other.words_[w];
@@ -287,16 +294,34 @@ uint32_t MaskBits::CountOpen() const {
   return n;
 }
 
-void MaskBits::Pack(uint8_t* out) const {
-  uint32_t bytes = (bits_ + 7) / 8;
-  for (uint32_t b = 0; b < bytes; ++b)
+void MaskBits::Pack(uint8_t* out, uint32_t used) const {
+  const uint32_t bytes = (bits_ + 7) / 8, usedBytes = (std::min(used, bits_) + 7) / 8;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  // The words' bytes are the packet's bytes, lowest first.
+  std::memcpy(out, words_.data(), usedBytes);
+#else
+  for (uint32_t b = 0; b < usedBytes; ++b)
     out[b] = static_cast<uint8_t>(words_[b >> 3] >> (8 * (b & 7)));
+#endif
+  // Bits past `used` are closed: the bytes past them are 0, written, so that
+  // a packet's bytes never depend on what the buffer held before.
+  if (usedBytes < bytes) std::memset(out + usedBytes, 0, bytes - usedBytes);
+  if (usedBytes > 0 && used < bits_ && used % 8) out[usedBytes - 1] &= (1u << (used % 8)) - 1;
 }
 
-void MaskBits::Unpack(const uint8_t* in) {
-  uint32_t bytes = (bits_ + 7) / 8;
+void MaskBits::Unpack(const uint8_t* in, uint32_t used) {
+  const uint32_t usedBytes = (std::min(used, bits_) + 7) / 8;
   for (size_t w = 0; w < words_.size(); ++w) words_[w] = 0;
-  for (uint32_t b = 0; b < bytes; ++b) words_[b >> 3] |= uint64_t(in[b]) << (8 * (b & 7));
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::memcpy(words_.data(), in, usedBytes);
+#else
+  for (uint32_t b = 0; b < usedBytes; ++b) words_[b >> 3] |= uint64_t(in[b]) << (8 * (b & 7));
+#endif
+  if (used < bits_) {
+    // Only the first `used` bits come from the packet; the rest are closed.
+    const uint32_t w = used >> 6;
+    if (w < words_.size() && (used & 63)) words_[w] &= (uint64_t(1) << (used & 63)) - 1;
+  }
 }
 
 }  // namespace vismask

@@ -139,6 +139,8 @@ class MaskBits {
   uint32_t bits() const { return bits_; }
   void SetAllOpen();
   void SetAllClosed();
+  // Closes every pixel from `begin` on (word by word).
+  void CloseFrom(uint32_t begin);
   bool IsOpen(uint32_t p) const { return (words_[p >> 6] >> (p & 63)) & 1u; }
   void Close(uint32_t p) { words_[p >> 6] &= ~(uint64_t(1) << (p & 63)); }
   void Open(uint32_t p) { words_[p >> 6] |= uint64_t(1) << (p & 63); }
@@ -156,8 +158,11 @@ class MaskBits {
   // The open pixels among [begin, end).
   uint32_t CountOpen(uint32_t begin, uint32_t end) const;
   // Packing to and from the packet's ceil(bits / 8) bytes (little-endian).
-  void Pack(uint8_t* out) const;
-  void Unpack(const uint8_t* in);
+  // With `used`, only the first `used` bits travel (Method R: the shot's
+  // rays; the bits past them must be closed): Pack writes 0 past them, and
+  // Unpack reads only their bytes and closes the rest.
+  void Pack(uint8_t* out, uint32_t used = ~0u) const;
+  void Unpack(const uint8_t* in, uint32_t used = ~0u);
   Span<uint64_t> words() const { return words_; }
 
  private:
