@@ -39,7 +39,7 @@ int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
   return count;
 }
 
-void Environment::Forward(PacketHeader h, const MaskBits& mask) {
+void Environment::Forward(PacketHeader h, const MaskBits& mask, const MaskBits* routes) {
   int next[6][3];
   int count = Downstream(h.sourceEnv, next);
   h.fromEnv = index_;
@@ -49,9 +49,16 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask) {
     uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
     h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
     ++outCount_;
-    // Method R's bits past the shot's rays are closed: only its rays travel.
-    if (!shape_.empty())
-      mask.Pack(MaskBytes(packet), options_.maskMethod == MaskMethod::kR ? h.rays : ~0u);
+    // Method R: the rays routed across the face to this neighbour, and only
+    // the shot's rays travel (the bits past them are closed).
+    if (routes) {
+      int face = 0;
+      for (int a = 0; a < 3; ++a)
+        if (c[a] != cell_[a]) face = 2 * a + (c[a] > cell_[a]);
+      routes[face].Pack(MaskBytes(packet), h.rays);
+    } else if (!shape_.empty()) {
+      mask.Pack(MaskBytes(packet));
+    }
     // The receiver's share of the power in flight, worked out here from the
     // bytes it will get, so that this round's report can count it (exchange.h).
     // Its box and cell as it makes its own (Prepare).
@@ -93,7 +100,13 @@ void Environment::ShootLocal(uint32_t i) {
   PacketHeader shot = ShotHeader(p, power, key, shotIndex, index_, rays);
   if (options_.maskMethod == MaskMethod::kR) {
     out.CloseFrom(rays);  // bits past the shot's rays
-    TraceAlive(p, skip, power, key, rays, false, &out);
+    MaskBits routes[6];
+    for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
+    TraceAlive(p, skip, power, key, rays, false, out, routes);
+    Forward(shot, out, routes);
+    ++stats_.forwardsCreated;
+    --newForwards_;
+    return;
   } else {
     // B and C: the shooter's centre mask from the cache (cast on a miss).
     MaskBits centre, known, read;
@@ -123,16 +136,24 @@ void Environment::ShootForeign(uint32_t s) {
   Slot& slot = slots_[s];
   MaskBits in = SlotMask(s);
   MaskBits out = ScratchMask(0);
-  out.CopyFrom(in);
+  if (options_.maskMethod != MaskMethod::kR) out.CopyFrom(in);  // R routes its rays instead
   Patch shooter = PatchFromHeader(slot.header);
   // The outgoing mask only where there is someone downstream to send it to
   // (R's bits are also its input: it always keeps them).
   int next[6][3];
   bool forward = Downstream(slot.header.sourceEnv, next) > 0;
-  if (options_.maskMethod == MaskMethod::kR)
-    TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
-               &out);
-  else {
+  MaskBits routes[6];
+  if (options_.maskMethod == MaskMethod::kR) {
+    for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
+    if (slot.key == std::numeric_limits<double>::infinity()) {
+      // No ray entered: nothing to trace, and empty packets on downstream.
+      for (int f = 0; f < 6; ++f) routes[f].SetAllClosed();
+      ++stats_.emptyPasses;
+    } else {
+      TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
+                 in, routes);
+    }
+  } else {
     MaskBits read;
     const bool readOnly = forward && (slot.header.flags & kReadsOnly);
     if (readOnly) {
@@ -144,35 +165,22 @@ void Environment::ShootForeign(uint32_t s) {
                readOnly ? &read : nullptr);
   }
   ++stats_.foreignShots;
-  if (forward) Forward(slot.header, out);
+  if (forward) Forward(slot.header, out, options_.maskMethod == MaskMethod::kR ? routes : nullptr);
+  slotIndex_.Release(static_cast<int>(s), slot.header.shooterId, slot.header.shotIndex);
+  readyTree_.Set(s, -std::numeric_limits<double>::infinity());
   slot = Slot();
   --queued_;
 }
 
 int Environment::FindSlot(uint32_t shooterId, uint32_t shotIndex) const {
-  for (uint32_t s = 0; s < slots_.size(); ++s)
-    if (slots_[s].used && slots_[s].header.shooterId == shooterId &&
-        slots_[s].header.shotIndex == shotIndex)
-      return static_cast<int>(s);
-  return -1;
+  return slotIndex_.Find(shooterId, shotIndex);
 }
 
 int Environment::BestReadySlot() const {
-  int best = -1;
-  for (uint32_t s = 0; s < slots_.size(); ++s) {
-    const Slot& c = slots_[s];
-    if (!c.used || c.received < c.expected) continue;
-    if (best < 0) {
-      best = static_cast<int>(s);
-      continue;
-    }
-    const Slot& b = slots_[best];
-    if (c.key > b.key || (c.key == b.key && (c.header.shooterId < b.header.shooterId ||
-                                             (c.header.shooterId == b.header.shooterId &&
-                                              c.header.shotIndex < b.header.shotIndex))))
-      best = static_cast<int>(s);
-  }
-  return best;
+  // The largest key, ties to the lower shooter id and shot (readyTree_'s ties).
+  const uint32_t s = readyTree_.Top();
+  if (s == kNoPatch || readyTree_.Key(s) == -std::numeric_limits<double>::infinity()) return -1;
+  return static_cast<int>(s);
 }
 
 void Environment::Deliver(const uint8_t* packet) {
@@ -181,8 +189,7 @@ void Environment::Deliver(const uint8_t* packet) {
   int s = FindSlot(h.shooterId, h.shotIndex);
   bool fresh = s < 0;
   if (fresh) {
-    for (uint32_t k = 0; k < slots_.size() && s < 0; ++k)
-      if (!slots_[k].used) s = static_cast<int>(k);
+    s = slotIndex_.Take(h.shooterId, h.shotIndex);  // the lowest free slot
     CHECK_MSG(s >= 0, "foreign-shooter queue full: the admission rule failed");
     Slot& slot = slots_[s];
     slot = Slot();
@@ -200,9 +207,14 @@ void Environment::Deliver(const uint8_t* packet) {
     if (fresh) {
       mask.Unpack(MaskBytes(packet), rayBits);
     } else {
+      // A hemisphere's pixels pass only where every upstream mask has them
+      // open; R's rays each come from the one neighbour they left for.
       MaskBits incoming = ScratchMask(1);
       incoming.Unpack(MaskBytes(packet), rayBits);
-      mask.And(incoming);
+      if (options_.maskMethod == MaskMethod::kR)
+        mask.Or(incoming);
+      else
+        mask.And(incoming);
     }
   }
   ++slot.received;
@@ -212,12 +224,20 @@ void Environment::Deliver(const uint8_t* packet) {
   // Method R's open share is of the shot's own rays (bits past them are closed).
   if (shape_.empty())
     slot.key = power;
-  else if (options_.maskMethod == MaskMethod::kR)
-    slot.key = power * mask.CountOpen() / (h.rays > 0 ? h.rays : 1);
-  else if (h.flags & kReadsOnly)
+  else if (options_.maskMethod == MaskMethod::kR) {
+    // The share of the shot's rays that entered here. A slot no ray entered
+    // (yet) is only passed on, at once: its neighbours downstream wait for it.
+    const uint32_t entered = mask.CountOpen(0, std::min(h.rays, mask.bits()));
+    slot.key = entered > 0 ? power * entered / (h.rays > 0 ? h.rays : 1)
+                           : std::numeric_limits<double>::infinity();
+  } else if (h.flags & kReadsOnly)
     slot.key = power * slot.flightShare;  // ReadShare: the share of its rays that pass
   else
     slot.key = power * mask.OpenFraction();
+  readyTree_.Set(
+      static_cast<uint32_t>(s),
+      slot.received < slot.expected ? -std::numeric_limits<double>::infinity() : slot.key,
+      (uint64_t(h.shooterId) << 32) | h.shotIndex);
 }
 
 void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <limits>
 #include <unordered_map>
 
 #include "vismask/centre_raster.h"
@@ -66,10 +67,16 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   // Exchange buffers only where there is someone to exchange with.
   uint32_t q = numNeighbours_ > 0 ? options_.queueCapacity : 0;
   slots_ = arena.Alloc<Slot>(q);
+  slotIndex_.Layout(arena, q);
+  readyTree_.Layout(arena, q, true);
   slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
   part(&footprint_.queue);
   FillReadCosts(numPatches);
-  size_t scratchMasks = numNeighbours_ == 0 ? 0 : PartCentres() ? 4 : 2;
+  // Out and incoming; C's hit and passed, or B's read and decide; R's six route masks.
+  size_t scratchMasks = numNeighbours_ == 0                     ? 0
+                        : options_.maskMethod == MaskMethod::kR ? 8
+                        : PartCentres()                         ? 4
+                                                                : 2;
   scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
   const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
                                                  options_.maskMethod == MaskMethod::kC);
@@ -320,6 +327,8 @@ void Environment::Reset() {
   }
   nextElement_ = static_cast<uint32_t>(patches_.size());
   for (Slot& s : slots_) s = Slot();
+  slotIndex_.Clear();
+  readyTree_.Clear(-std::numeric_limits<double>::infinity());
   queued_ = 0;
   outCount_ = 0;
 }

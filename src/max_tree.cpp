@@ -2,11 +2,12 @@
 
 namespace vismask {
 
-void MaxTree::Layout(Arena& arena, uint32_t n) {
+void MaxTree::Layout(Arena& arena, uint32_t n, bool ties) {
   n_ = n;
   leaves_ = 1;
   while (leaves_ < n) leaves_ <<= 1;
   key_ = arena.Alloc<double>(n);
+  tie_ = arena.Alloc<uint64_t>(ties ? n : 0);
   node_ = arena.Alloc<uint32_t>(leaves_ < 2 ? 2 : leaves_);
 }
 
@@ -15,11 +16,13 @@ uint32_t MaxTree::Winner(uint32_t a, uint32_t b) const {
   if (b == kNoPatch) return a;
   if (key_[b] > key_[a]) return b;
   if (key_[a] > key_[b]) return a;
+  if (!tie_.empty() && tie_[a] != tie_[b]) return tie_[a] < tie_[b] ? a : b;
   return a < b ? a : b;
 }
 
-void MaxTree::Clear() {
-  for (uint32_t i = 0; i < n_; ++i) key_[i] = 0.0;
+void MaxTree::Clear(double key) {
+  for (uint32_t i = 0; i < n_; ++i) key_[i] = key;
+  for (uint64_t& t : tie_) t = 0;
   if (leaves_ == 1) {
     node_[1] = n_ == 1 ? 0 : kNoPatch;
     return;

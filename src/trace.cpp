@@ -252,7 +252,7 @@ void Environment::Book(const ShotTally& tally) {
   stats_.hits += tally.hits;
 }
 
-bool Environment::LeavesScene(const Ray& ray) const {
+int Environment::ExitFace(const Ray& ray) const {
   // The face through which the ray leaves this box: the nearest far plane.
   float best = std::numeric_limits<float>::infinity();
   int axis = 0, step = 0;
@@ -266,7 +266,8 @@ bool Environment::LeavesScene(const Ray& ray) const {
     }
   }
   int next = cell_[axis] + step;
-  return next < 0 || next >= envGrid_.n[axis];
+  if (next < 0 || next >= envGrid_.n[axis]) return -1;
+  return 2 * axis + (step > 0);
 }
 
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
@@ -444,45 +445,57 @@ bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
 }
 
 void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power[3],
-                             uint64_t shotKey, uint32_t rays, bool foreign, MaskBits* alive) {
-  DCHECK(alive->bits() >= rays);
+                             uint64_t shotKey, uint32_t rays, bool foreign, const MaskBits& alive,
+                             MaskBits* routes) {
+  DCHECK(alive.bits() >= rays);
+  for (int f = 0; f < 6; ++f) routes[f].SetAllClosed();
   PatchSampler sampler = MakePatchSampler(shooter);
   RayPoints points(options_.sobol, shotKey);
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
-  uint64_t entered = 0, left = 0;
-  for (uint32_t r = 0; r < rays; ++r) {
-    // Sequential draws: every environment draws every ray, so ray r is the
-    // same ray everywhere; Sobol' points are drawn by index, live rays only.
-    float u[5];
-    if (!points.randomAccess()) points.Next(r, u);
-    if (!alive->IsOpen(r)) continue;  // absorbed or escaped upstream
-    if (points.randomAccess()) points.Next(r, u);
+  uint64_t left = 0;
+  auto trace = [&](uint32_t r, const float u[5]) {
     glm::vec3 local;
     Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
-    if (foreign) {
-      // Every environment the ray crossed before this one is upstream, and
-      // its bit is the AND of theirs: a hit here is the ray's first.
-      float t0, t1;
-      if (!Slabs(ray, box_, &t0, &t1)) continue;
-      ++entered;
-    }
     ++tally.traced;
     Hit hit;
-    if (!grid_.Intersect(ray, skip, &hit)) {
-      if (LeavesScene(ray)) {
-        for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
-        alive->Close(r);
-      } else {
-        ++left;  // on to the neighbour across the face it leaves by
-      }
-      continue;
+    if (grid_.Intersect(ray, skip, &hit)) {
+      Land(ray, hit, share, &tally);
+      return;
     }
-    alive->Close(r);
-    Land(ray, hit, share, &tally);
+    int face = ExitFace(ray);
+    if (face < 0) {
+      for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
+    } else {
+      routes[face].Open(r);  // on to the neighbour across the face it leaves by
+      ++left;
+    }
+  };
+  if (points.randomAccess()) {
+    // Sobol' points by index: the live rays only, word by word, in ray order.
+    Span<uint64_t> words = alive.words();
+    for (size_t w = 0; w < words.size(); ++w)
+      for (uint64_t bits = words[w]; bits != 0; bits &= bits - 1) {
+        const uint32_t r = static_cast<uint32_t>(64 * w) + CountTrailingZeros(bits);
+        float u[5];
+        points.Next(r, u);
+        trace(r, u);
+      }
+  } else {
+    // Sequential draws: every environment draws every ray, so that ray r is
+    // the same ray everywhere.
+    for (uint32_t r = 0; r < rays; ++r) {
+      float u[5];
+      points.Next(r, u);
+      if (alive.IsOpen(r)) trace(r, u);
+    }
   }
   Book(tally);
+  // A foreign environment gets only the rays that enter its box (every
+  // environment before it on a ray's way routed it on), so every ray it
+  // traces came in; the sum over environments is the power still on its way.
+  const uint64_t entered = foreign ? tally.traced : 0;
   for (int c = 0; c < 3; ++c)
     ledger_.inFlight[c] += (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
 }

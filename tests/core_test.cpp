@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <glm/geometric.hpp>
 #include <limits>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "vismask/patch.h"
 #include "vismask/rng.h"
 #include "vismask/sampling.h"
+#include "vismask/slot_index.h"
 
 namespace vismask {
 namespace {
@@ -122,6 +124,77 @@ TEST(MaxTreeTest, AgreesWithLinearScan) {
       for (uint32_t j = 1; j < n; ++j)
         if (keys[j] > keys[best]) best = j;
       ASSERT_EQ(t.Top(), best) << "n=" << n << " step=" << step;
+    }
+  }
+}
+
+// With ties, equal keys go to the lower tie value, then the lower index:
+// the foreign queue's order (largest key, then lower shooter id and shot).
+TEST(MaxTreeTest, TiesGoToTheLowerTieValue) {
+  const uint32_t n = 37;
+  Arena measure = Arena::Measure();
+  MaxTree probe;
+  probe.Layout(measure, n, true);
+  Arena arena(measure.used());
+  MaxTree t;
+  t.Layout(arena, n, true);
+  const double none = -std::numeric_limits<double>::infinity();
+  t.Clear(none);
+  std::vector<double> keys(n, none);
+  std::vector<uint64_t> ties(n, 0);
+  std::mt19937 rng(5);
+  for (int step = 0; step < 20000; ++step) {
+    uint32_t i = rng() % n;
+    int kind = static_cast<int>(rng() % 8);
+    double k = kind == 0   ? none
+               : kind == 1 ? std::numeric_limits<double>::infinity()
+                           : static_cast<double>(rng() % 4);  // many ties
+    uint64_t tie = rng() % 6;
+    t.Set(i, k, tie);
+    keys[i] = k;
+    ties[i] = tie;
+    uint32_t best = 0;
+    for (uint32_t j = 1; j < n; ++j)
+      if (keys[j] > keys[best] || (keys[j] == keys[best] && ties[j] < ties[best])) best = j;
+    ASSERT_EQ(t.Top(), best) << "step=" << step;
+  }
+}
+
+// SlotIndex against a map: Find, Take (the lowest free slot) and Release
+// in random order, the table kept full to its capacity at times.
+TEST(SlotIndexTest, AgreesWithAMap) {
+  for (uint32_t slots : {1u, 5u, 64u, 576u}) {
+    Arena measure = Arena::Measure();
+    SlotIndex probe;
+    probe.Layout(measure, slots);
+    Arena arena(measure.used());
+    SlotIndex index;
+    index.Layout(arena, slots);
+    index.Clear();
+    std::map<std::pair<uint32_t, uint32_t>, int> held;
+    std::vector<bool> taken(slots, false);
+    std::mt19937 rng(slots);
+    for (int step = 0; step < 30000; ++step) {
+      // Few shooters and shots, so keys collide and probe runs form.
+      uint32_t shooter = rng() % (2 * slots + 3), shot = rng() % 3;
+      auto key = std::make_pair(shooter, shot);
+      auto it = held.find(key);
+      ASSERT_EQ(index.Find(shooter, shot), it == held.end() ? -1 : it->second) << step;
+      if (it != held.end() && rng() % 2) {
+        index.Release(it->second, shooter, shot);
+        taken[it->second] = false;
+        held.erase(it);
+      } else if (it == held.end()) {
+        int lowest = -1;
+        for (uint32_t s = 0; s < slots && lowest < 0; ++s)
+          if (!taken[s]) lowest = static_cast<int>(s);
+        int s = index.Take(shooter, shot);
+        ASSERT_EQ(s, lowest) << step;
+        if (s >= 0) {
+          taken[s] = true;
+          held[key] = s;
+        }
+      }
     }
   }
 }

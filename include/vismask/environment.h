@@ -19,6 +19,7 @@
 #include "vismask/packet.h"
 #include "vismask/partition.h"
 #include "vismask/patch.h"
+#include "vismask/slot_index.h"
 #include "vismask/span.h"
 #include "vismask/work.h"
 
@@ -49,6 +50,7 @@ struct EnergyLedger {
 struct EnvStats {
   uint64_t shots = 0;            // local shots
   uint64_t foreignShots = 0;     // queued foreign shooters distributed here
+  uint64_t emptyPasses = 0;      // of those, Method R's that no ray entered: only passed on
   uint64_t rays = 0;             // form-factor rays traced
   uint64_t maskRays = 0;         // Method B's and C's centre rays (pixels decided)
   uint64_t maskRaysByPatch = 0;  // those decided patch by patch (RasterCentres)
@@ -155,7 +157,9 @@ class Environment {
   // real steps (and those of the last-occluder hint) are left out.
   uint64_t workSteps() const {
     return grid_.steps() - centreSteps_ + centreWork_ + kRayWork * (stats_.rays + stats_.readRays) +
-           kHitWork * stats_.hits + kShotWork * (stats_.shots + stats_.foreignShots);
+           kHitWork * stats_.hits +
+           kShotWork * (stats_.shots + stats_.foreignShots - stats_.emptyPasses) +
+           kPassWork * stats_.emptyPasses;
   }
   // A centre ray's work: the integer cube root of the grid's cells (the
   // cells a ray crosses, about), at least 1; a cast by patch counts four a patch.
@@ -332,11 +336,16 @@ class Environment {
   // Casts the centre ray of every pixel open in *mask and closes those that
   // hit, after closing those that lead to no neighbour (KeepExits).
   void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
-  // Method R: regenerates the shot's rays from its key, traces those whose
-  // bit is set in `alive` (restricted to this box when `foreign`), and
-  // clears the bits of the rays it absorbs or lets escape the scene.
+  // Method R: regenerates the shot's rays from its key and traces those
+  // whose bit is set in `alive` (a foreign shot: the rays that entered this
+  // box). A ray that leaves the box for a neighbour is routed: its bit is
+  // set in routes[ExitFace], the packet for the neighbour across that face
+  // (the six route masks are cleared first); rays absorbed here or escaping
+  // the scene end.
   void TraceAlive(const Patch& shooter, Skip skip, const double power[3], uint64_t shotKey,
-                  uint32_t rays, bool foreign, MaskBits* alive);
+                  uint32_t rays, bool foreign, const MaskBits& alive, MaskBits* routes);
+  // Method R's route masks, one a face of the box (2 * axis + (step > 0)).
+  MaskBits RouteMask(int face) const { return ScratchMask(2 + static_cast<uint32_t>(face)); }
   // How many rays a local shot of `power` traces and what share of the
   // power it carries (1 unless the shot is partial).
   uint32_t ShotRays(const double power[3], uint64_t shotKey, double* fraction) const;
@@ -363,11 +372,15 @@ class Environment {
   // Splits leaf `e` of patch `j` (reached from the root by the children
   // `path[0..depth)`) if its quarters differ beyond noise.
   void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
-  // True if a ray that leaves this environment's box leaves the scene.
-  bool LeavesScene(const Ray& ray) const;
+  // The face by which a ray from inside leaves this environment's box (the
+  // nearest far plane: 2 * axis + (step > 0)), or -1 if beyond it lies no
+  // environment: the ray leaves the scene.
+  int ExitFace(const Ray& ray) const;
+  bool LeavesScene(const Ray& ray) const { return ExitFace(ray) < 0; }
   // Sends the shooter's packet header and `mask` to the neighbours downstream from
-  // the source environment.
-  void Forward(PacketHeader header, const MaskBits& mask);
+  // the source environment; Method R sends each neighbour its face's route
+  // mask (`routes`, TraceAlive) instead.
+  void Forward(PacketHeader header, const MaskBits& mask, const MaskBits* routes = nullptr);
   // The grid cells downstream of this environment for a shooter from
   // `sourceEnv` (at most 6, into `next`), and how many there are.
   int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
@@ -432,6 +445,8 @@ class Environment {
   MaxTree tree_;
   // Exchange state: empty for an environment without neighbours.
   Span<Slot> slots_;
+  SlotIndex slotIndex_;          // which slot holds a shot, which are free
+  MaxTree readyTree_;            // the ready slots by key (-inf: not ready or free)
   Span<uint64_t> slotWords_;     // slot s's mask: words [s * shape_.words(), ...)
   Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
   Span<uint64_t> cacheWords_;    // B, C: cached centre masks of local shooters, slot by slot

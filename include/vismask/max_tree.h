@@ -1,6 +1,8 @@
 // MaxTree: which patch has the most unshot power, in O(1), kept current in
 // O(log n) per change. A tournament tree over a fixed key array, carved from
 // the arena; ties go to the lower index, so the choice is deterministic.
+// With ties (Layout's `ties`), equal keys go to the lower tie value first
+// (the foreign queue: the lower shooter id and shot, whatever the slot).
 #pragma once
 #include <cstdint>
 
@@ -12,10 +14,16 @@ namespace vismask {
 
 class MaxTree {
  public:
-  // Carves room for `n` keys (also from a measuring arena).
-  void Layout(Arena& arena, uint32_t n);
-  // Sets every key to 0.
-  void Clear();
+  // Carves room for `n` keys, and with `ties` their tie values (also from a
+  // measuring arena).
+  void Layout(Arena& arena, uint32_t n, bool ties = false);
+  // Sets every key to `key` (and every tie value to 0).
+  void Clear(double key = 0.0);
+  // Sets key `i` and its tie value (trees laid out with ties).
+  void Set(uint32_t i, double key, uint64_t tie) {
+    tie_[i] = tie;
+    Set(i, key);
+  }
   // Sets key `i` and replays its path to the root.
   void Set(uint32_t i, double key);
   // Raises key `i` to `key` (>= its current key): climbs only while `i` wins,
@@ -30,6 +38,7 @@ class MaxTree {
   uint32_t n_ = 0;
   uint32_t leaves_ = 1;  // power of two >= n
   Span<double> key_;
+  Span<uint64_t> tie_;   // empty: ties by index alone
   Span<uint32_t> node_;  // node_[1..leaves_-1]; leaves are implicit
 };
 
