@@ -114,6 +114,7 @@ int Main(int argc, const char* const* argv) {
   so.roundShots = r->options.roundShots;
   so.roundWork = r->options.roundWork;
   so.queueCapacity = r->options.queue;
+  so.routed = r->options.maskMethod == MaskMethod::kR;
   so.order = Span<const uint32_t>(r->options.envOrder.data(), r->options.envOrder.size());
   so.stopUnshot = r->options.stopUnshot;
   so.maxShots = r->options.maxShots;

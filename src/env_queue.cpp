@@ -45,16 +45,18 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask, const MaskBits* 
   h.fromEnv = index_;
   for (int k = 0; k < count; ++k) {
     const int* c = next[k];
+    // Method R: the rays routed across the face to this neighbour, none if
+    // no ray goes there (it never hears of the shot); only the shot's rays
+    // travel (the bits past them are closed).
+    int face = 0;
+    for (int a = 0; a < 3; ++a)
+      if (c[a] != cell_[a]) face = 2 * a + (c[a] > cell_[a]);
+    if (routes && routes[face].CountOpen(0, h.rays) == 0) continue;
     CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
     uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
     h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
     ++outCount_;
-    // Method R: the rays routed across the face to this neighbour, and only
-    // the shot's rays travel (the bits past them are closed).
     if (routes) {
-      int face = 0;
-      for (int a = 0; a < 3; ++a)
-        if (c[a] != cell_[a]) face = 2 * a + (c[a] > cell_[a]);
       routes[face].Pack(MaskBytes(packet), h.rays);
     } else if (!shape_.empty()) {
       mask.Pack(MaskBytes(packet));
@@ -145,14 +147,8 @@ void Environment::ShootForeign(uint32_t s) {
   MaskBits routes[6];
   if (options_.maskMethod == MaskMethod::kR) {
     for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
-    if (slot.key == std::numeric_limits<double>::infinity()) {
-      // No ray entered: nothing to trace, and empty packets on downstream.
-      for (int f = 0; f < 6; ++f) routes[f].SetAllClosed();
-      ++stats_.emptyPasses;
-    } else {
-      TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
-                 in, routes);
-    }
+    TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
+               in, routes);
   } else {
     MaskBits read;
     const bool readOnly = forward && (slot.header.flags & kReadsOnly);
@@ -195,9 +191,13 @@ void Environment::Deliver(const uint8_t* packet) {
     slot = Slot();
     slot.header = h;
     slot.used = 1;
+    // A hemisphere mask waits for every upstream neighbour's. R's packets
+    // come only from neighbours that send rays here, each ready at once;
+    // those of one round for one shot go into one slot (Or, below).
     int source[3];
     envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
     for (int a = 0; a < 3; ++a) slot.expected += cell_[a] != source[a];
+    if (options_.maskMethod == MaskMethod::kR) slot.expected = 1;
     ++queued_;
   }
   Slot& slot = slots_[s];

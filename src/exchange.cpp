@@ -56,6 +56,7 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
     r.emitted = Sum3(l.emitted);
     r.lost = r.emitted - Sum3(l.absorbed) - Sum3(l.escaped) - r.unshot;
     uint32_t top = e->TopShooter();
+    r.held = uint64_t(e->queuedCount()) + e->outboxCount();
     r.shootable = e->queuedCount() + e->outboxCount() +
                   (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
     r.shots = e->stats().shots + e->stats().foreignShots;
@@ -105,6 +106,7 @@ RoundTotals SumTotals(const RankEnvs& rankEnvs, int ranks, const ExchangeBuffers
     tot.flight += r.flight;
     tot.lost += r.lost;
     tot.shootable += r.shootable;
+    tot.held += r.held;
     tot.emitted += r.emitted;
     tot.shots += r.shots;
     tot.rays += r.rays;

@@ -145,7 +145,8 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
       uint64_t work0 = envs[i - rankEnvs.first]->workSteps();
       envs[i - rankEnvs.first]->RunRound(
           ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
-          AdmittedForwards(result.rounds, i, n, options.queueCapacity, totals.maxOutstanding),
+          AdmittedForwards(result.rounds, i, n, options.queueCapacity,
+                           options.routed ? totals.held : totals.maxOutstanding),
           options.roundWork);
       envCpu[i - rankEnvs.first] = os::CpuSeconds() - envCpu0;
       buffers->envSteps[i - rankEnvs.first] = envs[i - rankEnvs.first]->stats().gridSteps - steps0;

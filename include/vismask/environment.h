@@ -50,7 +50,6 @@ struct EnergyLedger {
 struct EnvStats {
   uint64_t shots = 0;            // local shots
   uint64_t foreignShots = 0;     // queued foreign shooters distributed here
-  uint64_t emptyPasses = 0;      // of those, Method R's that no ray entered: only passed on
   uint64_t rays = 0;             // form-factor rays traced
   uint64_t maskRays = 0;         // Method B's and C's centre rays (pixels decided)
   uint64_t maskRaysByPatch = 0;  // those decided patch by patch (RasterCentres)
@@ -157,9 +156,7 @@ class Environment {
   // real steps (and those of the last-occluder hint) are left out.
   uint64_t workSteps() const {
     return grid_.steps() - centreSteps_ + centreWork_ + kRayWork * (stats_.rays + stats_.readRays) +
-           kHitWork * stats_.hits +
-           kShotWork * (stats_.shots + stats_.foreignShots - stats_.emptyPasses) +
-           kPassWork * stats_.emptyPasses;
+           kHitWork * stats_.hits + kShotWork * (stats_.shots + stats_.foreignShots);
   }
   // A centre ray's work: the integer cube root of the grid's cells (the
   // cells a ray crosses, about), at least 1; a cast by patch counts four a patch.

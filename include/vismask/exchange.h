@@ -36,6 +36,7 @@ struct EnvReport {
   uint64_t rays;        // form-factor rays traced
   uint64_t forwardsCreated;
   uint64_t foreignShots;
+  uint64_t held;       // foreign shooters queued and packets in the outbox
   uint64_t shootable;  // local patches with unshot power (0 or 1: any), queued shooters and
                        // packets in the outbox
   double radiosity;    // sum of b * area, channels summed
@@ -63,6 +64,9 @@ struct RoundTotals {
   uint64_t rays = 0;
   uint64_t forwardsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
+  // Queued shooters and outbox packets, all environments: a bound on the
+  // shots whose rays are still on their way (Method R, SolveOptions::routed).
+  uint64_t held = 0;
   double radiosity = 0.0;
   double kdArea = 0.0;
   double area = 0.0;

@@ -27,14 +27,12 @@ class SlotIndex {
   void Release(int slot, uint32_t shooter, uint32_t shot);
 
  private:
-  static uint64_t Key(uint32_t shooter, uint32_t shot) {
-    return (uint64_t(shooter) << 32) | shot;
-  }
+  static uint64_t Key(uint32_t shooter, uint32_t shot) { return (uint64_t(shooter) << 32) | shot; }
   uint32_t Home(uint64_t key) const;
-  uint32_t mask_ = 0;          // table size - 1 (a power of two)
-  Span<uint64_t> keys_;        // the table: the key of each entry
-  Span<int32_t> entries_;      // its slot, -1 where empty
-  Span<uint64_t> freeBits_;    // bit s set: slot s free
+  uint32_t mask_ = 0;        // table size - 1 (a power of two)
+  Span<uint64_t> keys_;      // the table: the key of each entry
+  Span<int32_t> entries_;    // its slot, -1 where empty
+  Span<uint64_t> freeBits_;  // bit s set: slot s free
   uint32_t slots_ = 0;
 };
 

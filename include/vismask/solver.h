@@ -41,6 +41,10 @@ struct SolveOptions {
   uint64_t roundWork =
       0;  // a round ends for an environment after this many grid steps; 0: no limit
   uint32_t queueCapacity = 64;  // foreign shooters an environment can hold
+  // Method R: a shot's packets go only where its rays go, so an environment
+  // may never hear of it, and the queue's bound is the shots still on their
+  // way (RoundTotals::held) rather than each environment's own count.
+  bool routed = false;
   bool quiet = false;           // no progress line on stderr
   Span<const uint32_t> order;   // the order environments run in a round (empty: 0..n-1)
   ErrorProbe* probe = nullptr;  // measures after the last round, and

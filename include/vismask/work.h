@@ -20,9 +20,6 @@ namespace vismask {
 constexpr uint64_t kRayWork = 32;
 constexpr uint64_t kHitWork = 40;
 constexpr uint64_t kShotWork = 12288;
-// A foreign shooter that no ray entered (Method R) is only passed on: its
-// slot and its empty packets, no sampler and no rays.
-constexpr uint64_t kPassWork = 512;
 // The grid steps a ray takes, estimated before any grid exists (the
 // automatic round size, options.h): the cube root of this many cells for
 // each of an environment's patches. The steps themselves hardly depend on
