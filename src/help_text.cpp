@@ -145,17 +145,21 @@ local environments and visibility masks:
                        evenly, so every slab holds about as many; still a
                        grid. The default when --envs is not given and the
                        run has more than one rank
-  --mask-method M      none | A | B | C | R (default B): how a shooter's
-                       visibility mask is filled. A: from the form-factor rays
-                       that hit (cheap, leaks light where no ray hit); B: one
-                       ray from the shooter's centre per open pixel (exact at
-                       its resolution); C: pixels the rays only hit close,
-                       only passed stay open, B's ray for the rest; R: one bit
-                       per ray of the shot (--rays or --max-rays bits), every ray absorbed
-                       in exactly one environment; none: no mask (light
+  --mask-method M      R | B | C | A | none (default R): what a shooter
+                       sends on to its neighbours. R: one bit per ray of
+                       the shot (--rays or --max-rays bits), each ray routed
+                       to the neighbour it leaves for and absorbed in exactly
+                       one environment; a neighbour no ray reaches never
+                       hears of the shot. B: a hemisphere mask with one ray
+                       from the shooter's centre per open pixel (exact at its
+                       resolution; the paper's Method B); C: pixels the rays
+                       only hit close, only passed stay open, B's ray for the
+                       rest; A: from the form-factor rays that hit (cheap,
+                       leaks light where no ray hit); none: no mask (light
                        passes occluders)
-  --mask-res R         mask resolution: R rows (theta) x 4R columns (phi),
-                       1 <= R <= 4096 (default 50; not used by R)
+  --mask-res R         hemisphere mask resolution (A, B, C): R rows (theta) x
+                       4R columns (phi), 1 <= R <= 4096 (default 50); given
+                       without --mask-method it selects B
   --round-shots K      at most K shots per environment per round (default
                        with several environments or with --round-work: 256,
                        fewer when 6 packets a shot would fill more than

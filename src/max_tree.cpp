@@ -8,7 +8,7 @@ void MaxTree::Layout(Arena& arena, uint32_t n, bool ties) {
   while (leaves_ < n) leaves_ <<= 1;
   key_ = arena.Alloc<double>(n);
   tie_ = arena.Alloc<uint64_t>(ties ? n : 0);
-  node_ = arena.Alloc<uint32_t>(leaves_ < 2 ? 2 : leaves_);
+  node_ = arena.Alloc<uint32_t>(n == 0 ? 0 : leaves_ < 2 ? 2 : leaves_);
 }
 
 uint32_t MaxTree::Winner(uint32_t a, uint32_t b) const {
@@ -23,6 +23,7 @@ uint32_t MaxTree::Winner(uint32_t a, uint32_t b) const {
 void MaxTree::Clear(double key) {
   for (uint32_t i = 0; i < n_; ++i) key_[i] = key;
   for (uint64_t& t : tie_) t = 0;
+  if (n_ == 0) return;
   if (leaves_ == 1) {
     node_[1] = n_ == 1 ? 0 : kNoPatch;
     return;

@@ -261,6 +261,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         return Bad(a, v, "NX[xNY[xNZ]] (each 1..64), auto or auto:N");
       }
     } else if (a == "--mask-method") {
+      o->hasMaskMethod = true;
       if (v == "none")
         o->maskMethod = MaskMethod::kNone;
       else if (v == "A")
@@ -276,6 +277,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--mask-res") {
       if (!ParseU64(v, &u) || u < 1 || u > 4096) return Bad(a, v, "an integer in [1, 4096]");
       o->maskRes = static_cast<uint32_t>(u);
+      o->hasMaskRes = true;
     } else if (a == "--round-shots") {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000) return Bad(a, v, "an integer in [1, 1e6]");
       o->roundShots = static_cast<uint32_t>(u);
@@ -402,6 +404,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     return Status::Error("vismask: --error-every: needs --reference REF.pfm to measure against");
   // --rays N alone keeps its meaning: N rays every shot.
   if (!o->hasRayAlloc && o->hasRays) o->rayAlloc = Options::RayAlloc::kFixed;
+  // A resolution is a hemisphere mask's: given alone, it selects Method B.
+  if (!o->hasMaskMethod && o->hasMaskRes) o->maskMethod = MaskMethod::kB;
   if (o->rayAlloc == Options::RayAlloc::kPower && o->hasRays)
     return Status::Error(
         "vismask: --rays: sets every shot's rays under --ray-alloc fixed; with "

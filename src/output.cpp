@@ -244,6 +244,7 @@ int WriteOutputs(RunState* r, const SolveResult& res) {
     s.stats = e.stats();
     ErrorSums(*r, e, &s);
     s.arenaBytes = e.arenaCapacity();
+    s.work = e.workSteps();
     s.patches = e.patches().size();
     s.vertices = e.vertices().size();
     s.gridCells = e.grid().cellCount();

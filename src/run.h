@@ -58,6 +58,7 @@ struct EnvSummary {
   double bArea[3];        // sum of b * area, as written (with the correction when on)
   double ambientArea[3];  // sum of kd * ambient * area
   uint64_t arenaBytes;
+  uint64_t work;  // Environment::workSteps at the end
   uint64_t patches;
   uint64_t vertices;
   uint64_t gridCells;

@@ -186,6 +186,18 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
       static_cast<unsigned long long>(res.work),
       static_cast<unsigned long long>(res.criticalEnvWork),
       static_cast<unsigned long long>(res.criticalRankWork));
+  // Per environment, in environment order: where the shots, rays and work
+  // went (the busiest environment bounds the critical path).
+  auto perEnv = [&](const char* name, auto field) {
+    w.Printf("    \"%s\": [", name);
+    for (size_t i = 0; i < r->summary.size(); ++i)
+      w.Printf("%s%llu", i ? ", " : "", static_cast<unsigned long long>(field(r->summary[i])));
+    w.Printf("],\n");
+  };
+  perEnv("environment_local_shots", [](const EnvSummary& e) { return e.stats.shots; });
+  perEnv("environment_foreign_shots", [](const EnvSummary& e) { return e.stats.foreignShots; });
+  perEnv("environment_rays", [](const EnvSummary& e) { return e.stats.rays; });
+  perEnv("environment_work", [](const EnvSummary& e) { return e.work; });
   w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
   // Sub-patch elements: the pool (roots included), what was used, the
   // leaves drawn, and whether refinement stopped for want of elements.

@@ -136,19 +136,21 @@ TEST(RenderTest, RoundSizeDefaults) {
   };
   const Case cases[] = {
       {{"--envs", "1"}, 1, false, 0},
-      // 6 packets a shot of 128 + 4R^2/8 bytes (padded to 8) in 512 KiB:
-      // 63 at the default R = 50, 266 at R = 20 (so the cap of 256), 17 at R = 100.
-      {{"--envs", "2"}, 63, true, 0},
+      // 6 packets a shot in 512 KiB: Method R's (the default) 128 + 8192/8
+      // bytes, 75; B's (--mask-res alone selects it) 128 + 4R^2/8 bytes
+      // (padded to 8), 266 at R = 20 (so the cap of 256), 17 at R = 100.
+      {{"--envs", "2"}, 75, true, 0},
       {{"--envs", "2", "--mask-res", "20"}, 256, true, 0},
-      {{"--envs", "auto:4"}, 63, true, 0},
+      {{"--envs", "auto:4"}, 75, true, 0},
       {{"--envs", "2", "--round-shots", "8"}, 8, false, 0},
       {{"--envs", "2", "--round-shots", "1"}, 1, false, 0},
       // --round-work alone: the automatic shot limit (the outbox's cap too).
-      {{"--envs", "2", "--round-work", "5000"}, 63, false, 5000},
-      {{"--envs", "2", "--round-work", "0"}, 63, false, 0},
+      {{"--envs", "2", "--round-work", "5000"}, 75, false, 5000},
+      {{"--envs", "2", "--round-work", "0"}, 75, false, 0},
       {{"--envs", "2", "--round-work", "5000", "--mask-res", "20"}, 256, false, 5000},
       {{"--envs", "2", "--round-work", "7", "--round-shots", "3"}, 3, false, 7},
-      {{"--envs", "1", "--round-work", "9"}, 63, false, 9},
+      {{"--envs", "1", "--round-work", "9"}, 75, false, 9},
+      {{"--envs", "2", "--mask-method", "B"}, 63, true, 0},
       {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
   };
   for (const Case& c : cases) {
@@ -177,6 +179,31 @@ TEST(RenderTest, RoundSizeDefaults) {
   EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * (500 * (20 + kRayWork + kHitWork) + kShotWork));
 }
 
+// Method R is the default; --mask-res names a hemisphere mask's resolution,
+// so given alone it selects Method B; an explicit method wins.
+TEST(RenderTest, MaskMethodDefaults) {
+  struct Case {
+    std::vector<const char*> args;
+    MaskMethod method;
+  };
+  const Case cases[] = {
+      {{}, MaskMethod::kR},
+      {{"--envs", "2"}, MaskMethod::kR},
+      {{"--mask-res", "20"}, MaskMethod::kB},
+      {{"--mask-res", "20", "--mask-method", "A"}, MaskMethod::kA},
+      {{"--mask-method", "C", "--mask-res", "20"}, MaskMethod::kC},
+      {{"--mask-method", "B"}, MaskMethod::kB},
+  };
+  for (const Case& c : cases) {
+    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    Options o;
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    ASSERT_TRUE(s.ok()) << s.ToString();
+    EXPECT_EQ(static_cast<int>(o.maskMethod), static_cast<int>(c.method)) << c.args.size();
+  }
+}
+
 // Issue 20: the default queue lets every environment make a whole round
 // (admission shares the free slots among them): environments x round
 // shots, at most 64 an environment and within 1 MiB of slots, at least the
@@ -186,14 +213,18 @@ TEST(RenderTest, QueueDefaults) {
     std::vector<const char*> args;
     uint32_t queue;
   };
+  const uint64_t packetR = PacketBytes(MaskShapeOf(MaskMethod::kR, 50, Options().maxRays));
   const uint64_t packet50 = PacketBytes(MaskShapeOf(MaskMethod::kB, 50, Options().maxRays));
   const Case cases[] = {
       {{"--envs", "1"}, 64},
-      {{"--envs", "2"}, 2 * 63},
+      {{"--envs", "2"}, 2 * 64},  // R's 75 shots a round, at most 64 an environment
+      {{"--envs", "2", "--mask-method", "B"}, 2 * 63},
       {{"--envs", "2", "--round-shots", "1"}, 64},
       {{"--envs", "4x1x4", "--mask-res", "8"}, 16 * 64},  // at most 64 an environment
       {{"--envs", "4x1x4", "--mask-res", "20"}, 16 * 64},
-      {{"--envs", "5x5x5"}, static_cast<uint32_t>(kAutoQueueBytes / packet50)},
+      {{"--envs", "5x5x5"}, static_cast<uint32_t>(kAutoQueueBytes / packetR)},
+      {{"--envs", "5x5x5", "--mask-method", "B"},
+       static_cast<uint32_t>(kAutoQueueBytes / packet50)},
       {{"--envs", "5x5x5", "--queue", "7"}, 7},
       {{"--envs", "2", "--queue", "64"}, 64},
   };

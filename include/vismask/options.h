@@ -60,7 +60,11 @@ struct Options {
   bool hasEnvs = false;  // --envs given (else --ranks N > 1 or an MPI world > 1 means auto:N)
   bool envsAuto = false;
   int envsAutoCount = 0;
-  MaskMethod maskMethod = MaskMethod::kB;
+  // R by default: every ray absorbed in exactly one environment, and its
+  // packets go only where its rays go. --mask-res alone selects B.
+  MaskMethod maskMethod = MaskMethod::kR;
+  bool hasMaskMethod = false;
+  bool hasMaskRes = false;
   uint32_t maskRes = 50;
   // Round size (ResolveRounds). --round-shots K: at most K shots per
   // environment per round; --round-work N: a round ends for an environment
