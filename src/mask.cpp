@@ -234,6 +234,11 @@ void MaskBits::SetAllClosed() {
   for (size_t w = 0; w < words_.size(); ++w) words_[w] = 0;
 }
 
+void MaskBits::ClosePrefix(uint32_t end) {
+  const size_t words = std::min<size_t>(words_.size(), (size_t(end) + 63) / 64);
+  for (size_t w = 0; w < words; ++w) words_[w] = 0;
+}
+
 void MaskBits::CloseFrom(uint32_t begin) {
   size_t w = begin >> 6;
   if (w >= words_.size()) return;

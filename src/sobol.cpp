@@ -89,6 +89,15 @@ void ShotSampler::Point(uint32_t ray, float out[kSobolDims]) const {
   Emit(state, out);
 }
 
+void ShotSampler::Seek(uint32_t ray, float out[kSobolDims]) {
+  uint32_t diff = (ray ^ (ray >> 1)) ^ (next_ ^ (next_ >> 1));
+  for (int k = 0; diff != 0; diff >>= 1, ++k)
+    if (diff & 1u)
+      for (int d = 0; d < kSobolDims; ++d) state_[d] ^= kReversed.v[d][k];
+  next_ = ray;
+  Next(out);
+}
+
 void ShotSampler::Start() {
   next_ = 0;
   for (int d = 0; d < kSobolDims; ++d) state_[d] = 0;

@@ -48,7 +48,8 @@ class RayPoints {
   RayPoints(bool sobol, uint64_t stream)
       : sobol_(sobol), qmc_(Mix64(stream ^ 0xd1b54a32d192ed03ull)), rng_(ShotRng(stream)) {}
   // Ray r; with Sobol', `sequential` promises r is the previous call's + 1
-  // (starting at 0), which walks the points one XOR at a time.
+  // (starting at 0), which walks the points one XOR at a time; otherwise
+  // the point is reached from the last one drawn (ShotSampler::Seek).
   void Next(uint32_t r, float u[5], bool sequential = false) {
     if (!sobol_) {
       for (int k = 0; k < 5; ++k) u[k] = rng_.NextFloat();
@@ -58,7 +59,7 @@ class RayPoints {
     if (sequential)
       qmc_.Next(p);
     else
-      qmc_.Point(r, p);
+      qmc_.Seek(r, p);
     u[0] = p[4];
     u[1] = p[2];
     u[2] = p[3];
@@ -448,7 +449,8 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
                              uint64_t shotKey, uint32_t rays, bool foreign, const MaskBits& alive,
                              MaskBits* routes) {
   DCHECK(alive.bits() >= rays);
-  for (int f = 0; f < 6; ++f) routes[f].SetAllClosed();
+  // Only the shot's rays are read from the routes (Forward packs them alone).
+  for (int f = 0; f < 6; ++f) routes[f].ClosePrefix(rays);
   PatchSampler sampler = MakePatchSampler(shooter);
   RayPoints points(options_.sobol, shotKey);
   double share[3];

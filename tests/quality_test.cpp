@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -131,6 +132,24 @@ TEST(SobolTest, SequentialAndRandomAccessAgreeAndSeedsDiffer) {
     for (float v : p) ASSERT_TRUE(v >= 0.0f && v < 1.0f);
   }
   EXPECT_LT(same, 5) << "two shots' scrambles are nearly the same";
+  // Seek reaches any point from the last one drawn, forwards or back, with
+  // the same bits, and Next goes on from there.
+  ShotSampler d(7);
+  d.Start();
+  std::mt19937 rng(3);
+  uint32_t r = 0;
+  for (int step = 0; step < 3000; ++step) {
+    float p[kSobolDims], q[kSobolDims];
+    if (step % 3 == 2) {
+      d.Next(q);
+      ++r;
+    } else {
+      r = step % 5 == 0 ? rng() % 9000 : r + 1 + rng() % 40;
+      d.Seek(r, q);
+    }
+    a.Point(r, p);
+    ASSERT_EQ(std::memcmp(p, q, sizeof p), 0) << "step " << step << " ray " << r;
+  }
 }
 
 // The measure of noise: at a fixed ray budget, two seeds of the

@@ -147,6 +147,8 @@ class MaskBits {
   void SetAllClosed();
   // Closes every pixel from `begin` on (word by word).
   void CloseFrom(uint32_t begin);
+  // Closes the words that hold pixels [0, end): at least those pixels.
+  void ClosePrefix(uint32_t end);
   bool IsOpen(uint32_t p) const { return (words_[p >> 6] >> (p & 63)) & 1u; }
   void Close(uint32_t p) { words_[p >> 6] &= ~(uint64_t(1) << (p & 63)); }
   void Open(uint32_t p) { words_[p >> 6] |= uint64_t(1) << (p & 63); }

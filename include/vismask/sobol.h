@@ -48,6 +48,10 @@ class ShotSampler {
   // Sequential access: Start() then Next() gives points 0, 1, 2, ...
   void Start();
   void Next(float out[kSobolDims]);
+  // Point `ray`, reached from the sequential state by the columns where the
+  // two points' Gray codes differ (rays taken in increasing order cost a few
+  // XORs each); the same bits as Point(ray). Next() then gives ray + 1.
+  void Seek(uint32_t ray, float out[kSobolDims]);
 
  private:
   void Emit(const uint32_t state[kSobolDims], float out[kSobolDims]) const;
