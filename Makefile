@@ -128,7 +128,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments cluster-experiments cluster-million bench fuzz fuzz-deps fuzz-report stability
+.PHONY: all deps demo test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments parallel cluster-experiments cluster-million bench fuzz fuzz-deps fuzz-report stability
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -310,6 +310,16 @@ experiments: deps
 	@tools/install-deps --reference
 	$(MAKE) $(BUILD)/vismask
 	VISMASK_BIN=$(BUILD)/vismask tools/experiments
+
+# docs/PARALLEL.md: does splitting pay? Each split run (Cornell --ranks 2,
+# the pillared room in 3x1x3, the building in 4x1x4, Cornell in 5x5x5)
+# against one environment in one process with default options, side by
+# side, with each run's error against a Cycles ground truth (tools/parallel;
+# about 15 minutes on 2 cores; QUICK=1: the tool's own check, no document).
+parallel: deps
+	@tools/install-deps --reference
+	$(MAKE) $(BUILD)/vismask
+	VISMASK_BIN=$(BUILD)/vismask tools/parallel $(if $(filter 1,$(QUICK)),--quick)
 
 # make test-cross (after make CROSS=aarch64-linux-gnu-; CROSS defaults to
 # that): the unit tests under qemu-user, then one pipe-transport Cornell

@@ -86,6 +86,7 @@ RoundTotals SumTotals(const RankEnvs& rankEnvs, int ranks, const ExchangeBuffers
     const EnvReport& first = x->all[size_t(r) * rankEnvs.perRank];
     if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
     if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
+    tot.roundCpuSum += first.roundCpu;
     RankEnvs re = EnvsOfRank(rankEnvs.total, ranks, r);
     uint64_t rankSteps = 0, rankWork = 0;
     for (uint32_t k = 0; k < re.count; ++k) {

@@ -175,6 +175,7 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
       "    \"compute_cpu_seconds\": %.6f,\n    \"critical_cpu_seconds\": %.6f,\n",
       res.waitSeconds, res.waitSecondsMax, res.computeSeconds, res.criticalSeconds);
   w.Printf("    \"critical_env_cpu_seconds\": %.6f,\n", res.criticalEnvSeconds);
+  w.Printf("    \"total_cpu_seconds\": %.6f,\n", res.totalComputeSeconds);
   w.Printf(
       "    \"grid_steps\": %llu,\n    \"critical_env_steps\": %llu,\n    \"critical_rank_steps\": "
       "%llu,\n",

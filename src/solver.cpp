@@ -162,6 +162,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     ++result.collectives;
     result.waitSecondsMax = totals.waitedMax;
     result.criticalSeconds += totals.roundCpuMax;
+    result.totalComputeSeconds += totals.roundCpuSum;
     result.criticalEnvSeconds += totals.envCpuMax;
     result.criticalEnvSteps += totals.envStepsMax;
     result.criticalRankSteps += totals.rankStepsMax;

@@ -53,6 +53,7 @@ struct RoundTotals {
   double elapsed = 0.0;       // rank 0's clock
   double waitedMax = 0.0;     // the most any rank has waited
   double roundCpuMax = 0.0;   // the most CPU any rank used for the last round's shots
+  double roundCpuSum = 0.0;   // the CPU all ranks used for them together
   double envCpuMax = 0.0;     // the most CPU any environment used for them
   uint64_t steps = 0;         // grid steps, all environments, so far
   uint64_t envStepsMax = 0;   // the most grid steps any environment did in the last round

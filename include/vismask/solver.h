@@ -86,6 +86,8 @@ struct SolveResult {
   // solve would take with a core per rank and free communication.
   double computeSeconds = 0.0;
   double criticalSeconds = 0.0;
+  // Every rank's CPU seconds of shots, summed: what the split costs in all.
+  double totalComputeSeconds = 0.0;
   // The same with one environment per rank: over rounds, the sum of the
   // most CPU any one environment's shots used (measured per environment,
   // so a one-process run gives the critical path of a rank per environment).
