@@ -168,13 +168,15 @@ local environments and visibility masks:
                        K shots, no work limit
   --round-work N       a round ends for an environment once its shots have
                        done N units of work: grid steps (cells entered plus
-                       patches tested), plus 32 a ray, 40 a hit and 12288
-                       a shot; a count that tracks CPU time but never
+                       patches tested), plus, with Method R, 10 a ray, 9 a
+                       hit and 41 a shot (with A, B, C and none: 32, 40 and
+                       12288); a count that tracks CPU time but never
                        depends on it, so rounds are the same whatever the
                        machine, ranks or transport. Default with several
                        environments: about 32 full shots' worth (32 x
                        (--max-rays, or --rays, x (the cube root of an
-                       environment's grid cells + 72) + 12288)); 0: no limit
+                       environment's grid cells + a ray's and a hit's work)
+                       + a shot's)); 0: no limit
   --centre-rays W      all | read | auto (default auto): which open pixels
                        Method B casts a centre ray through. all: every one
                        that leads to a neighbour, each packet's priority and

@@ -57,7 +57,8 @@ bool SetWorldSize(int ranks, Options* o) {
 uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs) {
   double cells = kStepCellsPerPatch * patches / std::max(1, numEnvs);
   double steps = std::max(1.0, std::cbrt(std::max(cells, 1.0)));
-  double shot = MostRaysAShot(o) * (steps + kRayWork + kHitWork) + kShotWork;
+  const WorkCosts& w = WorkCostsOf(o.maskMethod);
+  double shot = MostRaysAShot(o) * (steps + w.ray + w.hit) + w.shot;
   return static_cast<uint64_t>(kAutoRoundWorkShots * shot);
 }
 

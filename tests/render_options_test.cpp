@@ -169,14 +169,17 @@ TEST(RenderTest, RoundSizeDefaults) {
   // not in it.
   Options o;
   o.maxRays = 1000;
-  const uint64_t shot = 1000 * (20 + kRayWork + kHitWork) + kShotWork;
+  o.maskMethod = MaskMethod::kB;
+  const WorkCosts& b = kMaskWork;
+  const uint64_t shot = 1000 * (20 + b.ray + b.hit) + b.shot;
   EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * shot);
   EXPECT_EQ(AutoRoundWork(o, 16000.0, 8), 32 * shot);
-  o.maskMethod = MaskMethod::kR;
-  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * shot);
+  o.maskMethod = MaskMethod::kR;  // R's own costs
+  const WorkCosts& r = kRayBitsWork;
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * (1000 * (20 + r.ray + r.hit) + r.shot));
   o.rayAlloc = Options::RayAlloc::kFixed;  // --rays a shot
   o.rays = 500;
-  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * (500 * (20 + kRayWork + kHitWork) + kShotWork));
+  EXPECT_EQ(AutoRoundWork(o, 2000.0, 1), 32 * (500 * (20 + r.ray + r.hit) + r.shot));
 }
 
 // Method R is the default; --mask-res names a hemisphere mask's resolution,

@@ -147,16 +147,17 @@ class Environment {
   // limit; workSteps below). Packets for neighbours go to the outbox.
   void RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork = 0);
   // The work rounds are measured in, counted and never timed (work.h): the
-  // grid steps of the form-factor rays, kRayWork a form-factor ray (and a ray
+  // grid steps of the form-factor rays, WorkCosts' ray a form-factor ray (and a ray
   // B regenerates, ReadPixels and ReadShare, which costs about as much
-  // beside its walk), kHitWork a hit and kShotWork a shot, plus the work of
+  // beside its walk), a hit's and a shot's (by mask method), plus the work of
   // the centre casts (B and C)
   // that every --mask-cache makes: a foreign shooter's, and a local
   // shooter's first. The cache saves a local shooter's later casts, so their
   // real steps (and those of the last-occluder hint) are left out.
   uint64_t workSteps() const {
-    return grid_.steps() - centreSteps_ + centreWork_ + kRayWork * (stats_.rays + stats_.readRays) +
-           kHitWork * stats_.hits + kShotWork * (stats_.shots + stats_.foreignShots);
+    const WorkCosts& w = WorkCostsOf(options_.maskMethod);
+    return grid_.steps() - centreSteps_ + centreWork_ + w.ray * (stats_.rays + stats_.readRays) +
+           w.hit * stats_.hits + w.shot * (stats_.shots + stats_.foreignShots);
   }
   // A centre ray's work: the integer cube root of the grid's cells (the
   // cells a ray crosses, about), at least 1; a cast by patch counts four a patch.

@@ -158,7 +158,7 @@ bool SetWorldSize(int ranks, Options* options);
 // most rays a shot traces, every one landing here, times (the grid steps a
 // ray takes in an environment of the scene's estimated `patches` / `numEnvs`
 // patches, about the cube root of kStepCellsPerPatch cells a patch, plus
-// kRayWork and kHitWork), plus kShotWork (work.h).
+// a ray's and a hit's work), plus a shot's (WorkCostsOf the mask method, work.h).
 // From the scene and the options alone, so every rank computes the same.
 uint64_t AutoRoundWork(const Options& options, double patches, int numEnvs);
 
