@@ -212,7 +212,7 @@ void Environment::Deliver(const uint8_t* packet) {
       MaskBits incoming = ScratchMask(1);
       incoming.Unpack(MaskBytes(packet), rayBits);
       if (options_.maskMethod == MaskMethod::kR)
-        mask.Or(incoming);
+        mask.OrPrefix(incoming, rayBits);
       else
         mask.And(incoming);
     }

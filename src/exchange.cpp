@@ -9,7 +9,7 @@
 namespace vismask {
 
 void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t bytesPerPacket,
-                             uint32_t packetsPerEnvRound) {
+                             uint32_t packetsPerEnvRound, uint32_t outboxPackets) {
   packetBytes = bytesPerPacket;
   reportBytes = size_t(envs.perRank) * sizeof(EnvReport);
   blockBytes = reportBytes + size_t(envs.perRank) * packetsPerEnvRound * bytesPerPacket;
@@ -24,6 +24,10 @@ void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint
   envCpu = arena.Alloc<double>(envs.perRank);
   envSteps = arena.Alloc<uint64_t>(envs.perRank);
   envWork = arena.Alloc<uint64_t>(envs.perRank);
+  // A rank delivers its own environments' outboxes and a block from each other rank.
+  arrived = arena.Alloc<const uint8_t*>(size_t(envs.perRank) * outboxPackets +
+                                        (n - 1) * envs.perRank * size_t(packetsPerEnvRound));
+  bucket = arena.Alloc<uint32_t>(size_t(envs.perRank) + 1);
 }
 
 namespace {
@@ -174,23 +178,41 @@ RoundTotals ExchangeRound(Span<Environment* const> envs, const RankEnvs& rankEnv
       std::memcpy(x->all.data() + size_t(r) * rankEnvs.perRank, x->recv[r].data(), x->reportBytes);
     }
   }
-  for (Environment* dest : envs) {
+  // Every packet for this rank's environments in sender order (ranks hold
+  // contiguous blocks of environments, so rank order then the packets'
+  // order), counted by receiver, then placed: a counting sort, so each
+  // receiver gets its packets in the order a pass over them all would.
+  const uint32_t first = rankEnvs.first, local = static_cast<uint32_t>(envs.size());
+  for (uint32_t d = 0; d <= local; ++d) x->bucket[d] = 0;
+  auto visit = [&](auto&& take) {
     for (int r = 0; r < ranks; ++r) {
       if (r == me) {
-        for (Environment* src : envs) {
-          for (uint32_t k = 0; k < src->outboxCount(); ++k) {
-            const uint8_t* packet = src->OutboxPacket(k);
-            if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
-          }
-        }
+        for (Environment* src : envs)
+          for (uint32_t k = 0; k < src->outboxCount(); ++k) take(src->OutboxPacket(k));
       } else {
-        for (size_t off = x->reportBytes; off < x->received[r]; off += x->packetBytes) {
-          const uint8_t* packet = x->recv[r].data() + off;
-          if (ReadHeader(packet).toEnv == dest->index()) dest->Deliver(packet);
-        }
+        for (size_t off = x->reportBytes; off < x->received[r]; off += x->packetBytes)
+          take(x->recv[r].data() + off);
       }
     }
-  }
+  };
+  auto receiver = [&](const uint8_t* packet) {
+    const uint32_t to = ReadHeader(packet).toEnv;
+    return to >= first && to < first + local ? to - first : local;  // local: not ours
+  };
+  visit([&](const uint8_t* packet) {
+    const uint32_t d = receiver(packet);
+    if (d < local) ++x->bucket[d + 1];
+  });
+  for (uint32_t d = 0; d < local; ++d) x->bucket[d + 1] += x->bucket[d];
+  CHECK(x->bucket[local] <= x->arrived.size());
+  visit([&](const uint8_t* packet) {
+    const uint32_t d = receiver(packet);
+    if (d < local) x->arrived[x->bucket[d]++] = packet;
+  });
+  // bucket[d] is now the end of d's packets, which start at bucket[d - 1].
+  for (uint32_t d = 0; d < local; ++d)
+    for (uint32_t k = d == 0 ? 0 : x->bucket[d - 1]; k < x->bucket[d]; ++k)
+      envs[d]->Deliver(x->arrived[k]);
   for (Environment* e : envs) e->ClearOutbox();
   return SumTotals(rankEnvs, ranks, x);
 }

@@ -300,7 +300,7 @@ uint32_t MaskBits::CountOpen() const {
 }
 
 void MaskBits::Pack(uint8_t* out, uint32_t used) const {
-  const uint32_t bytes = (bits_ + 7) / 8, usedBytes = (std::min(used, bits_) + 7) / 8;
+  const uint32_t usedBytes = (std::min(used, bits_) + 7) / 8;
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
   // The words' bytes are the packet's bytes, lowest first.
   std::memcpy(out, words_.data(), usedBytes);
@@ -308,25 +308,33 @@ void MaskBits::Pack(uint8_t* out, uint32_t used) const {
   for (uint32_t b = 0; b < usedBytes; ++b)
     out[b] = static_cast<uint8_t>(words_[b >> 3] >> (8 * (b & 7)));
 #endif
-  // Bits past `used` are closed: the bytes past them are 0, written, so that
-  // a packet's bytes never depend on what the buffer held before.
-  if (usedBytes < bytes) std::memset(out + usedBytes, 0, bytes - usedBytes);
+  // The bits past `used` in its last byte are 0; the bytes past it are left
+  // as they were (no receiver reads them: Unpack with the same `used`).
   if (usedBytes > 0 && used < bits_ && used % 8) out[usedBytes - 1] &= (1u << (used % 8)) - 1;
 }
 
 void MaskBits::Unpack(const uint8_t* in, uint32_t used) {
   const uint32_t usedBytes = (std::min(used, bits_) + 7) / 8;
-  for (size_t w = 0; w < words_.size(); ++w) words_[w] = 0;
+  // The words that hold the used bits start at 0 (the rest are left alone).
+  const size_t usedWords =
+      std::min<size_t>(words_.size(), (size_t(std::min(used, bits_)) + 63) / 64);
+  for (size_t w = 0; w < usedWords; ++w) words_[w] = 0;
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
   std::memcpy(words_.data(), in, usedBytes);
 #else
   for (uint32_t b = 0; b < usedBytes; ++b) words_[b >> 3] |= uint64_t(in[b]) << (8 * (b & 7));
 #endif
   if (used < bits_) {
-    // Only the first `used` bits come from the packet; the rest are closed.
+    // Only the first `used` bits come from the packet; the rest of their
+    // last word is closed.
     const uint32_t w = used >> 6;
     if (w < words_.size() && (used & 63)) words_[w] &= (uint64_t(1) << (used & 63)) - 1;
   }
+}
+
+void MaskBits::OrPrefix(const MaskBits& other, uint32_t used) {
+  const size_t words = std::min<size_t>(words_.size(), (size_t(used) + 63) / 64);
+  for (size_t w = 0; w < words; ++w) words_[w] |= other.words_[w];
 }
 
 }  // namespace vismask

@@ -175,7 +175,8 @@ struct RunState {
     // sends another rank at most --round-shots packets a round for each of
     // that rank's environments it neighbours (at most 6 and perRank).
     exchange.Layout(arena, rankEnvs, ranks, packetBytes,
-                    ranks > 1 ? std::min<uint32_t>(6, rankEnvs.perRank) * options.roundShots : 0);
+                    ranks > 1 ? std::min<uint32_t>(6, rankEnvs.perRank) * options.roundShots : 0,
+                    packetBytes > 0 ? 6 * options.roundShots : 0);
     part(&rankExchangeBytes);
     fb.Layout(arena, options.width, options.height, options.aa);
     part(&rankImageBytes);

@@ -475,9 +475,11 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
     }
   };
   if (points.randomAccess()) {
-    // Sobol' points by index: the live rays only, word by word, in ray order.
+    // Sobol' points by index: the live rays only, word by word, in ray order
+    // (only the words of the shot's rays: Unpack leaves the others alone).
     Span<uint64_t> words = alive.words();
-    for (size_t w = 0; w < words.size(); ++w)
+    const size_t used = std::min<size_t>(words.size(), (size_t(rays) + 63) / 64);
+    for (size_t w = 0; w < used; ++w)
       for (uint64_t bits = words[w]; bits != 0; bits &= bits - 1) {
         const uint32_t r = static_cast<uint32_t>(64 * w) + CountTrailingZeros(bits);
         float u[5];

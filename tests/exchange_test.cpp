@@ -56,7 +56,7 @@ TEST(ExchangeTest, RoundTotalsAreThoseAfterDelivery) {
     RankEnvs rankEnvs = EnvsOfRank(4, 1, 0);
     Arena arena(1 << 20);
     ExchangeBuffers x;
-    x.Layout(arena, rankEnvs, 1, envs.ptrs[0]->packetBytes(), 6 * 8);
+    x.Layout(arena, rankEnvs, 1, envs.ptrs[0]->packetBytes(), 6 * 8, 6 * 8);
     Span<Environment* const> span = envs.span();
     double waited = 0.0;
     RoundTotals totals = GatherTotals(span, rankEnvs, loop.get(), &x, 0.0, 0.0, &waited);

@@ -34,7 +34,7 @@ void WriteTwoRooms(const std::string& dir, bool window, double kd) {
   std::ostringstream obj;
   obj << "mtllib rooms.mtl\n";
   int n = 0;
-  auto quad = [&](const char* mtl, const double (&q)[4][3]) {
+  auto quad = [&](const char* mtl, const double(&q)[4][3]) {
     obj << "usemtl " << mtl << "\n";
     for (auto& v : q) obj << "v " << v[0] << " " << v[1] << " " << v[2] << "\n";
     obj << "f " << n + 1 << " " << n + 2 << " " << n + 3 << " " << n + 4 << "\n";
@@ -79,22 +79,26 @@ void WriteTwoRooms(const std::string& dir, bool window, double kd) {
       strip(0.4, 0.6, 0.6, 1.0);
     }
     // The light under the ceiling, facing down.
-    double light[4][3] = {{x0 + 0.4, 0.99, 0.4}, {x0 + 0.6, 0.99, 0.4}, {x0 + 0.6, 0.99, 0.6},
-                          {x0 + 0.4, 0.99, 0.6}};
+    double light[4][3] = {
+        {x0 + 0.4, 0.99, 0.4}, {x0 + 0.6, 0.99, 0.4}, {x0 + 0.6, 0.99, 0.6}, {x0 + 0.4, 0.99, 0.6}};
     quad("light", light);
   }
   test::WriteFile(dir + "/rooms.obj", obj.str());
   std::ostringstream mtl;
-  mtl << "newmtl wall\nKd " << kd << " " << kd << " " << kd << "\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n";
+  mtl << "newmtl wall\nKd " << kd << " " << kd << " " << kd
+      << "\nnewmtl light\nKd 0 0 0\nKe 5 5 5\n";
   test::WriteFile(dir + "/rooms.mtl", mtl.str());
 }
 
 std::string Render(const TempDir& dir, const std::string& name, bool window, double kd,
                    const std::vector<std::string>& extra) {
   WriteTwoRooms(dir.path(), window, kd);
-  std::vector<std::string> args = {"render",        dir.File("rooms.obj"), "--envs", "2x1x1",
-                                   "--emitted-rays", "200000",             "--width", "16",
-                                   "--height",       "16",                 "--quiet", "--out",
+  std::vector<std::string> args = {"render",         dir.File("rooms.obj"),
+                                   "--envs",         "2x1x1",
+                                   "--emitted-rays", "200000",
+                                   "--width",        "16",
+                                   "--height",       "16",
+                                   "--quiet",        "--out",
                                    dir.File(name)};
   args.insert(args.end(), extra.begin(), extra.end());
   auto r = RunMain(args);

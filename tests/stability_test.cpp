@@ -280,7 +280,7 @@ TEST(StabilityTest, ASolveThatCannotShootStalls) {
   RankEnvs rankEnvs = EnvsOfRank(2, 1, 0);
   Arena arena(1 << 16);
   ExchangeBuffers buffers;
-  buffers.Layout(arena, rankEnvs, 1, envs.ptrs[0]->packetBytes(), 0);
+  buffers.Layout(arena, rankEnvs, 1, envs.ptrs[0]->packetBytes(), 0, 6 * 256);
   SolveOptions so;
   so.queueCapacity = 0;
   so.quiet = true;

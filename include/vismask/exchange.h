@@ -78,8 +78,11 @@ struct RoundTotals {
 // packet its environments can send another rank in a round
 // (`packetsPerEnvRound` per environment), and the gathered reports.
 struct ExchangeBuffers {
+  // packetsPerEnvRound: the most packets an environment sends another
+  // rank's environments in a round; outboxPackets: the most one's outbox
+  // holds (delivered in this rank).
   void Layout(Arena& arena, const RankEnvs& envs, int ranks, uint32_t packetBytes,
-              uint32_t packetsPerEnvRound);
+              uint32_t packetsPerEnvRound, uint32_t outboxPackets);
   Span<uint8_t> sendBytes;  // ranks blocks of `blockBytes`
   Span<uint8_t> recvBytes;
   Span<Span<const uint8_t>> send;
@@ -91,6 +94,10 @@ struct ExchangeBuffers {
   Span<double> envCpu;      // perRank: the solver's CPU seconds of each environment's round
   Span<uint64_t> envSteps;  // perRank: the grid steps of each environment's round
   Span<uint64_t> envWork;   // perRank: the work of each environment's round
+  // Delivery: the round's packets for this rank's environments, bucketed by
+  // receiver in one pass (each bucket in sender and send order).
+  Span<const uint8_t*> arrived;  // every packet this rank can get in a round
+  Span<uint32_t> bucket;         // perRank + 1 starts into `arrived`
   size_t blockBytes = 0;
   uint32_t packetBytes = 0;
 };

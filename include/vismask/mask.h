@@ -167,10 +167,14 @@ class MaskBits {
   uint32_t CountOpen(uint32_t begin, uint32_t end) const;
   // Packing to and from the packet's ceil(bits / 8) bytes (little-endian).
   // With `used`, only the first `used` bits travel (Method R: the shot's
-  // rays; the bits past them must be closed): Pack writes 0 past them, and
-  // Unpack reads only their bytes and closes the rest.
+  // rays): Pack writes their bytes (0 past `used` in the last) and leaves
+  // the rest of `out` as it was; Unpack reads only their bytes into the
+  // words that hold them and leaves later words as they were, so a caller
+  // reads only the first `used` bits (OrPrefix, CountOpen(0, used)).
   void Pack(uint8_t* out, uint32_t used = ~0u) const;
   void Unpack(const uint8_t* in, uint32_t used = ~0u);
+  // Or over the words that hold pixels [0, used).
+  void OrPrefix(const MaskBits& other, uint32_t used);
   Span<uint64_t> words() const { return words_; }
 
  private:
