@@ -111,6 +111,13 @@ def section(s):
     crit_default = [P.crit(P.al, P.ap)] + ([P.crit(P.al, P.am2)] if s.mpi else [])
     speed_default = [P.speed(P.al, P.ap)] + ([P.speed(P.al, P.am2)] if s.mpi else [])
     L = ["", "## 2. The parallel solve", "",
+         "**Every speedup in this section is self-relative**: a split run against the same",
+         "split run on one rank, which shows what the transports and the rounds cost, not",
+         "whether splitting pays. Against the run a user would otherwise make, one",
+         "environment in one process with default options, at equal error, see",
+         "docs/PARALLEL.md (`make parallel`). These runs give `--mask-res`, which selects",
+         "Method B (the default before issue 39; the default is now R).",
+         "",
          f"The default 2-rank run, `{b}/vismask {s.p0} --ranks 2` and",
          f"`mpirun -np 2 --oversubscribe {b}/vismask-mpi {s.p0}`: with no `--envs`,",
          "more than one rank means `--envs auto:2` (balanced planes, per axis",
@@ -250,7 +257,11 @@ def efficiency(s):
         if name != "bld1":
             met.append("%s %s (%.1f%%)" % (split, "**met**" if here >= TARGET_EFFICIENCY else "**not met**",
                                            100 * here))
-    L = ["", "### Parallel efficiency: 16 ranks on the building", "",
+    L = ["", "### Parallel efficiency: 16 ranks on the building (self-relative)", "",
+         "The efficiency below is the split run's own (its one-process CPU over 16 times its",
+         "critical path) at a stop rule that leaves 55% of the power unshot: it says how evenly",
+         "the rounds keep 16 boards busy. Against one environment in one process at",
+         "`--stop-unshot 1e-2` see docs/PARALLEL.md and docs/CLUSTER.md.", "",
          f"`{s.build}/vismask {s.bld} --envs E --transport loop` (`tools/gen-building --rooms {s.brooms} "
          "--floors 2`), 16 environments on one process: the",
          """uniform 4x1x4 grid and `--envs auto:16` with the default rounds, and
