@@ -141,7 +141,7 @@ void Environment::ShootForeign(uint32_t s) {
   if (options_.maskMethod != MaskMethod::kR) out.CopyFrom(in);  // R routes its rays instead
   Patch shooter = PatchFromHeader(slot.header);
   // The outgoing mask only where there is someone downstream to send it to
-  // (R's bits are also its input: it always keeps them).
+  // (R sends its route masks instead, TraceAlive).
   int next[6][3];
   bool forward = Downstream(slot.header.sourceEnv, next) > 0;
   MaskBits routes[6];
