@@ -153,8 +153,8 @@ per environment), so *mask rays* counts the centre rays cast.""", ""]
     rows, _ = whole_solves(defaults)
     L += ["", "### At the defaults", "",
           f"`{s.build}/vismask {s.d} --mask-method none|R|B`, and B with",
-          "`--centre-rays all`: every other option at its default (Method B at",
-          "R = 50, `--centre-rays auto`), whole solves to the default unshot",
+          "`--centre-rays all`: every other option at its default (R is the",
+          "default method since issue 39; B at R = 50, `--centre-rays auto`), whole solves to the default unshot",
           "threshold. The experiments' set-up above shoots 4 096 rays a shot from a",
           "few hundred patches an environment; the defaults shoot a few hundred rays",
           "a shot (`--emitted-rays`) from thousands of patches. Casting a centre ray",
@@ -164,9 +164,8 @@ per environment), so *mask rays* counts the centre rays cast.""", ""]
           "environment's rays will read (`centre_read_shots` in run.json). No target",
           "is set on this table: it shows what the default costs.", ""]
     L += table(WHOLE_SOLVES, rows)
-    rows, _ = whole_solves({"none" if n == "none" else "B" if n == "B" else
-                            "B, --centre-rays all": s.runs([f"d4{n}1"])
-                            for n, _ in DEFAULT4_RUNS})
+    names = {"none": "none", "R": "R (the default)", "B": "B", "Ball": "B, --centre-rays all"}
+    rows, _ = whole_solves({names[n]: s.runs([f"d4{n}1"]) for n, _ in DEFAULT4_RUNS})
     L += ["", f"The same in 2x1x2 environments (`{s.build}/vismask {s.d4}`), one run",
           "each: a foreign shooter is passed on, and an environment that passes",
           "one on has no cache for its mask, so `all` casts its open pixels every",
