@@ -52,13 +52,55 @@ InFile::~InFile() {
   if (fd_ >= 0) close(fd_);
 }
 
+namespace {
+
+// What a file that is not a regular file is, for messages.
+const char* KindOf(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+}  // namespace
+
 bool InFile::Open(const char* path, std::string* why) {
   if (fd_ >= 0) close(fd_);
+  fd_ = -1;
+  kind_ = nullptr;
+  // Non-blocking, so that opening a FIFO without a writer returns at once;
+  // then only a regular file is kept (a device such as /dev/zero or a FIFO
+  // would be read without end).
+  int fd;
   do {
-    fd_ = open(path, O_RDONLY | O_CLOEXEC);
-  } while (fd_ < 0 && errno == EINTR);
-  if (fd_ < 0) *why = std::strerror(errno);
-  return fd_ >= 0;
+    fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  } while (fd < 0 && errno == EINTR);
+  if (fd < 0) {
+    *why = std::strerror(errno);
+    return false;
+  }
+  struct stat st;
+  if (fstat(fd, &st) != 0) {
+    *why = std::strerror(errno);
+    close(fd);
+    return false;
+  }
+  if (!S_ISREG(st.st_mode)) {
+    kind_ = KindOf(st.st_mode);
+    *why = std::string("not a regular file (") + kind_ + ")";
+    close(fd);
+    return false;
+  }
+  const int flags = fcntl(fd, F_GETFL);
+  if (flags < 0 || fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+    *why = std::strerror(errno);
+    close(fd);
+    return false;
+  }
+  fd_ = fd;
+  return true;
 }
 
 int64_t InFile::Read(void* buf, size_t n, std::string* why) {

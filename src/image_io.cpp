@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <istream>
 #include <limits>
 #include <streambuf>
@@ -182,14 +181,15 @@ ImageError CompareImages(Span<const float> a, Span<const float> b, Span<const ui
 namespace {
 
 // Reads the whole file at `path` into *bytes; an error message, empty on
-// success. Only regular files: a device (/dev/zero) or a FIFO would be read
-// until memory runs out.
+// success. Only regular files (InFile::Open): a device (/dev/zero) or a FIFO
+// would be read until memory runs out, or never answer.
 std::string ReadBytes(const std::string& path, std::string* bytes) {
   os::InFile in;
   std::string why;
-  if (!in.Open(path.c_str(), &why)) return "cannot open";
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return "cannot read: not a regular file";
+  if (!in.Open(path.c_str(), &why)) {
+    if (in.kind()) return std::string("cannot read: not a regular file (") + in.kind() + ")";
+    return "cannot open";
+  }
   const int64_t size = in.Size();
   if (size < 0) return "cannot read";
   if (static_cast<uint64_t>(size) > std::numeric_limits<size_t>::max() / 2)

@@ -86,7 +86,7 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
   if (!loadedMtls_.insert(path).second) return Status::Ok();
   std::string text;
   std::string err = readMtl_(path, &text);
-  if (!err.empty()) return Status::At(objPath, objLine, err + " MTL file '" + path + "'");
+  if (!err.empty()) return Status::At(objPath, objLine, "MTL file '" + path + "': " + err);
   TextLines lines(text);
   std::vector<Material>& materials = *materials_;
   bool haveMaterial = false;

@@ -98,8 +98,13 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       numEmitters * 256;
   // Every rank prints the loader's warnings, as LoadScene did.
   for (const std::string& w : info.warnings) os::PrintErr("%s\n", w.c_str());
-  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine,
-                           &p->textures);
+  // The textures are decoded within what the budget leaves beside what
+  // init holds already (at least a byte: a budget already spent refuses any).
+  const uint64_t heldNow = p->held + kInitBaseBytes;
+  const uint64_t textureBudget =
+      p->budget == 0 ? 0 : (p->budget > heldNow ? p->budget - heldNow : 1);
+  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine, &p->textures,
+                           textureBudget);
   if (!s.ok()) return s;
   for (const TextureImage& t : p->textures.images)
     p->textureBytes += uint64_t{t.width} * t.height * 4;

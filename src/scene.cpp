@@ -142,8 +142,10 @@ Status ParseObj(const std::string& objPath, LineSource& lines, const ObjCounts* 
     tally->Add(objPath, materials->size(), p);
     visit(p);
   });
+  // A read error ended the lines early: it comes first (what the loader
+  // made of the lines before it is beside the point).
+  if (!lines.error().empty()) return Status::At(objPath, lines.errorLine(), lines.error());
   if (!s.ok()) return s;
-  if (!lines.error().empty()) return Status::At(objPath, 0, lines.error() + " file");
   s = loader.ApplyEmit();
   if (!s.ok()) return s;
   s = tally->Check(objPath, *materials, perfect);
@@ -219,7 +221,7 @@ bool ClosedFacingIn(const std::vector<Polygon>& polys) {
 Status LoadScene(const std::string& objPath, Scene* scene, const LoadOptions& options) {
   std::string text;
   std::string err = objload::ReadText(objPath, &text);
-  if (!err.empty()) return Status::At(objPath, 0, err + " file");
+  if (!err.empty()) return Status::At(objPath, 0, err);
   return LoadSceneFromText(objPath, text, objload::ReadText, scene, nullptr, options);
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <glm/geometric.hpp>
 #include <limits>
@@ -128,31 +129,76 @@ Texture TextureImage::View() const {
   return t;
 }
 
-Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image) {
+namespace {
+
+// A decoder's message with every byte that is not printable ASCII escaped
+// (\xNN): stb_image names an unknown PNG chunk by its four bytes, which
+// come from the file (a terminal escape, say).
+std::string EscapedReason(const char* reason) {
+  std::string out;
+  for (const char* c = reason; *c != '\0' && out.size() < 200; ++c) {
+    const unsigned char b = static_cast<unsigned char>(*c);
+    if (b >= 0x20 && b < 0x7f && b != '\\') {
+      out += static_cast<char>(b);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", b);
+      out += hex;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
+                   uint64_t budget) {
   auto fail = [&](const std::string& why) {
     return ErrorAt(where, "cannot read texture '" + path + "': " + why);
   };
+  // Only a regular file (not /dev/zero, not a FIFO), of a size stb_image
+  // takes, read whole only once its size is known.
   os::InFile in;
   std::string why;
-  if (!in.Open(path.c_str(), &why)) return fail("cannot open");
-  std::string bytes;
-  char buf[1 << 16];
-  for (;;) {
-    const int64_t n = in.Read(buf, sizeof buf, &why);
-    if (n < 0) return fail("read error");
-    if (n == 0) break;
-    bytes.append(buf, static_cast<size_t>(n));
+  if (!in.Open(path.c_str(), &why)) {
+    if (in.kind()) return fail(std::string("not a regular file (") + in.kind() + ")");
+    return fail("cannot open");
   }
-  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
-    return fail("file too large");
+  const int64_t size = in.Size();
+  if (size < 0) return fail("cannot read its size");
+  if (size > std::numeric_limits<int>::max())
+    return fail(std::to_string(size) + " bytes, more than the " +
+                std::to_string(std::numeric_limits<int>::max()) + " a texture file may have");
+  auto overBudget = [&](uint64_t need, const std::string& what) {
+    return fail(what + " needs " + std::to_string(need) + " bytes, more than the " +
+                std::to_string(budget) + " --mem-budget leaves it at init");
+  };
+  if (budget > 0 && static_cast<uint64_t>(size) > budget)
+    return overBudget(static_cast<uint64_t>(size), "reading it");
+  std::string bytes(static_cast<size_t>(size), '\0');
+  const int64_t got = size > 0 ? in.Read(&bytes[0], bytes.size(), &why) : 0;
+  if (got < 0) return fail("read error (" + why + ")");
+  if (got != size) return fail("the file changed while it was read");
   int w = 0, h = 0, comp = 0;
-  stbi_uc* data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
-                                        static_cast<int>(bytes.size()), &w, &h, &comp, 3);
-  if (!data) {
-    std::string why = stbi_failure_reason() ? stbi_failure_reason() : "decoder failed";
-    if (why == "unknown image type") why = "not a PNG, JPEG, BMP or TGA image";
-    return fail(why);
-  }
+  auto decodeError = [&]() {
+    std::string reason =
+        stbi_failure_reason() ? EscapedReason(stbi_failure_reason()) : "decoder failed";
+    if (reason == "unknown image type") reason = "not a PNG, JPEG, BMP or TGA image";
+    return fail(reason);
+  };
+  const stbi_uc* encoded = reinterpret_cast<const stbi_uc*>(bytes.data());
+  // The size first, from the header alone: the decoded bytes are judged
+  // against the budget before any is made.
+  if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp))
+    return decodeError();
+  const uint64_t need = static_cast<uint64_t>(size) + kTextureDecodeBytesPerTexel *
+                                                          static_cast<uint64_t>(w) *
+                                                          static_cast<uint64_t>(h);
+  if (budget > 0 && need > budget)
+    return overBudget(need,
+                      "decoding its " + std::to_string(w) + "x" + std::to_string(h) + " texels");
+  stbi_uc* data = stbi_load_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp, 3);
+  if (!data) return decodeError();
   TextureImage img;
   img.path = path;
   img.width = static_cast<uint32_t>(w);
@@ -257,7 +303,7 @@ Status LoadSceneTextures(const Scene& scene, SceneTextures* out) {
 
 Status LoadMaterialTextures(const std::string& objPath, const std::vector<Material>& materials,
                             const std::vector<uint8_t>& used, const std::vector<int>& noUvLineOf,
-                            SceneTextures* out) {
+                            SceneTextures* out, uint64_t budget) {
   SceneTextures r;
   const size_t nm = materials.size();
   r.ofMaterial.assign(nm, kNoTexture);
@@ -273,8 +319,9 @@ Status LoadMaterialTextures(const std::string& objPath, const std::vector<Materi
     auto it = byPath.find(mat.mapKd);
     if (it == byPath.end()) {
       TextureImage img;
-      Status s = ReadTexture(mat.mapKd, mat.mapKdWhere, &img);
+      Status s = ReadTexture(mat.mapKd, mat.mapKdWhere, &img, budget);
       if (!s.ok()) return s;
+      if (budget > 0) budget -= std::min(budget - 1, static_cast<uint64_t>(img.rgb.size()));
       it = byPath.emplace(mat.mapKd, static_cast<uint32_t>(r.images.size())).first;
       r.images.push_back(std::move(img));
     }

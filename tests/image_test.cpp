@@ -1,6 +1,7 @@
 // Output stage: PNG encoding inside its reserved scratch, PFM layout, tone
 // mapping, and the order-independent depth test used for compositing.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstring>
 #include <filesystem>
@@ -116,18 +117,23 @@ TEST(ImageTest, ImageFuzzSeedsReadOrAreRefusedWithTheName) {
   EXPECT_EQ(pgm.pixels[1], 255);
 }
 
-// A device or a directory is refused by its name, before anything is read
-// (/dev/zero would be read until memory runs out).
+// A device, a FIFO or a directory is refused by its kind, before anything
+// is read (/dev/zero would be read until memory runs out; opening a FIFO
+// waited for a writer forever, issue 42).
 TEST(ImageTest, ImageReadersTakeOnlyRegularFiles) {
   test::TempDir dir;
   PfmImage pfm;
   PgmImage pgm;
-  for (const std::string& path : {std::string("/dev/zero"), dir.path()}) {
+  ASSERT_EQ(mkfifo(dir.File("fifo").c_str(), 0600), 0);
+  const std::pair<std::string, std::string> cases[] = {{"/dev/zero", "a character device"},
+                                                       {dir.path(), "a directory"},
+                                                       {dir.File("fifo"), "a FIFO"}};
+  for (const auto& [path, kind] : cases) {
     Status s = ReadPfm(path, &pfm);
     EXPECT_FALSE(s.ok()) << path;
-    EXPECT_EQ(s.ToString(), path + ": cannot read: not a regular file");
+    EXPECT_EQ(s.ToString(), path + ": cannot read: not a regular file (" + kind + ")");
     s = ReadPgm(path, &pgm);
-    EXPECT_EQ(s.ToString(), path + ": cannot read: not a regular file");
+    EXPECT_EQ(s.ToString(), path + ": cannot read: not a regular file (" + kind + ")");
   }
   EXPECT_EQ(ReadPfm(dir.File("none.pfm"), &pfm).ToString(), dir.File("none.pfm") + ": cannot open");
 }

@@ -84,8 +84,8 @@ void InstallSignalCleanup();
 // signal N while waiting for rank PEER" (under mpirun, the rank that died).
 void NoteWaiting(int self, int peer);
 
-// A file opened for reading (the loaders at init: OBJ, MTL, PFM, PGM,
-// textures, a .glb's header). Read fills `buf` with up to n bytes, fewer
+// A regular file opened for reading (the loaders at init: OBJ, MTL, PFM,
+// PGM, textures, a .glb's header). Read fills `buf` with up to n bytes, fewer
 // only at the end of the file: the count, 0 at the end, -1 on an error
 // (*why: strerror's text). Closed on destruction.
 class InFile {
@@ -95,14 +95,21 @@ class InFile {
   InFile(const InFile&) = delete;
   InFile& operator=(const InFile&) = delete;
 
+  // Opens `path`, which must be a regular file: a device (/dev/zero), a
+  // FIFO (never waited for), a directory or a socket is refused, *why
+  // "not a regular file (a FIFO)" and kind() naming it.
   bool Open(const char* path, std::string* why);
   int64_t Read(void* buf, size_t n, std::string* why);
   // The file's size in bytes, -1 on an error.
   int64_t Size() const;
   bool isOpen() const { return fd_ >= 0; }
+  // After Open refused a file that is not a regular one: what it is ("a
+  // FIFO", "a character device", ...); null otherwise.
+  const char* kind() const { return kind_; }
 
  private:
   int fd_ = -1;
+  const char* kind_ = nullptr;
 };
 
 // An output file written under a temporary name ("NAME.tmp.PID", unique to

@@ -1,0 +1,209 @@
+// Hostile use, part 3 (issue 42): unbounded reads, budgets checked too late,
+// outputs opened through symbolic links, the commit and its leftovers. Each
+// case here once hung, ran out of memory, wrote where it should not, or
+// exited 0 having written nothing.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "test_util.h"
+#include "vismask/os.h"
+#include "vismask/texture.h"
+
+namespace vismask {
+namespace {
+
+using test::ReadFile;
+using test::TempDir;
+using test::VismaskBin;
+using test::WriteFile;
+
+// scenes/textured copied into `dir`, its MTL's first map_Kd naming `map`.
+std::string TexturedRoom(const TempDir& dir, const std::string& map) {
+  for (const char* f : {"room.obj", "checker.png", "stripes.png"})
+    std::filesystem::copy_file(std::string("scenes/textured/") + f, dir.File(f));
+  std::string mtl = ReadFile("scenes/textured/room.mtl");
+  const std::string from = "map_Kd checker.png";
+  mtl.replace(mtl.find(from), from.size(), "map_Kd " + map);
+  WriteFile(dir.File("room.mtl"), mtl);
+  return dir.File("room.obj");
+}
+
+// The line of `room.mtl` in `dir` that holds `text`.
+int LineOf(const std::string& file, const std::string& text) {
+  const std::string all = ReadFile(file);
+  int line = 1;
+  for (size_t i = 0; i < all.find(text); ++i) line += all[i] == '\n';
+  return line;
+}
+
+// A render of `obj` run as its own process (under a time limit, and a
+// memory limit where the sanitizers allow one): exit status and stderr.
+int RenderShell(const TempDir& dir, const std::string& obj, const std::string& extra,
+                std::string* err, int seconds = 30) {
+  std::string limit = "ulimit -v 3000000; ";
+#if defined(__SANITIZE_ADDRESS__)
+  limit = "";
+#endif
+  const std::string cmd = "sh -c '" + limit + "exec " + VismaskBin() + " render " + obj +
+                          " --width 16 --height 16 --max-shots 50 --quiet " + extra + " --out " +
+                          dir.File("out") + "'";
+  err->clear();
+  return test::ShellOutput(cmd, seconds, err);
+}
+
+// Item 1: a texture that is a device, a link to one, or a FIFO was read
+// until memory ran out, or forever. It is refused at once by its kind, at
+// its map_Kd line, before any output exists.
+TEST(Hardening3Test, TextureThatIsADeviceOrAFifoIsRefusedByItsKind) {
+  struct Case {
+    std::string map, kind;
+  };
+  TempDir fifoDir;
+  ASSERT_EQ(mkfifo(fifoDir.File("fifo.png").c_str(), 0600), 0);
+  for (const Case& c : {Case{"/dev/zero", "a character device"}, Case{"zero.png", "a character device"},
+                        Case{fifoDir.File("fifo.png"), "a FIFO"}, Case{"sub", "a directory"}}) {
+    TempDir dir;
+    const std::string obj = TexturedRoom(dir, c.map);
+    std::filesystem::create_symlink("/dev/zero", dir.File("zero.png"));
+    std::filesystem::create_directory(dir.File("sub"));
+    std::string err;
+    const double t0 = os::Seconds();
+    EXPECT_EQ(RenderShell(dir, obj, "", &err), 2) << c.map << "\n" << err;
+    EXPECT_LT(os::Seconds() - t0, 10.0) << c.map;
+    const std::string path = c.map[0] == '/' ? c.map : dir.File(c.map);
+    const std::string where = dir.File("room.mtl") + ":" +
+                              std::to_string(LineOf(dir.File("room.mtl"), "map_Kd " + c.map));
+    EXPECT_NE(err.find(where + ": cannot read texture '" + path + "': not a regular file (" +
+                       c.kind + ")"),
+              std::string::npos)
+        << err;
+    EXPECT_FALSE(test::FileExists(dir.File("out"))) << c.map;
+  }
+}
+
+// A PNG of w x h one-bit grey texels, all zero (a few kilobytes for many
+// megatexels), written with zlib.
+void WriteBlankPng(const std::string& path, uint32_t w, uint32_t h) {
+  const size_t row = 1 + (w + 7) / 8;
+  std::vector<unsigned char> raw(row * h, 0);
+  uLongf zn = compressBound(raw.size());
+  std::vector<unsigned char> z(zn);
+  ASSERT_EQ(compress2(z.data(), &zn, raw.data(), raw.size(), 9), Z_OK);
+  z.resize(zn);
+  std::string png("\x89PNG\r\n\x1a\n", 8);
+  auto be32 = [](std::string* s, uint32_t v) {
+    for (int k = 3; k >= 0; --k) s->push_back(static_cast<char>((v >> (8 * k)) & 0xff));
+  };
+  auto chunk = [&](const char* type, const std::string& data) {
+    be32(&png, static_cast<uint32_t>(data.size()));
+    std::string body = std::string(type, 4) + data;
+    png += body;
+    be32(&png, static_cast<uint32_t>(
+                   crc32(0, reinterpret_cast<const Bytef*>(body.data()), body.size())));
+  };
+  std::string ihdr;
+  be32(&ihdr, w);
+  be32(&ihdr, h);
+  ihdr += std::string("\x01\x00\x00\x00\x00", 5);  // depth 1, grey, deflate, no filter, no interlace
+  chunk("IHDR", ihdr);
+  chunk("IDAT", std::string(z.begin(), z.end()));
+  chunk("IEND", "");
+  WriteFile(path, png);
+}
+
+// Item 2: a small PNG of 12000 x 12000 texels was decoded whole (over
+// 400 MB) before --mem-budget refused the run. Its size is read from the
+// header and judged first: refused at once, naming the texels and bytes.
+TEST(Hardening3Test, TextureDecodingIsJudgedAgainstTheBudgetBeforeItIsDone) {
+  TempDir dir;
+  const std::string obj = TexturedRoom(dir, "big.png");
+  WriteBlankPng(dir.File("big.png"), 12000, 12000);
+  ASSERT_LT(ReadFile(dir.File("big.png")).size(), 100000u);
+  std::string err;
+  // 200 MB: far below the 432 MB of RGB texels alone.
+  EXPECT_EQ(RenderShell(dir, obj, "--mem-budget 200M", &err), 2) << err;
+  const uint64_t need = ReadFile(dir.File("big.png")).size() +
+                        kTextureDecodeBytesPerTexel * uint64_t{12000} * 12000;
+  EXPECT_NE(err.find("cannot read texture '" + dir.File("big.png") +
+                     "': decoding its 12000x12000 texels needs " + std::to_string(need) +
+                     " bytes, more than the "),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(test::FileExists(dir.File("out")));
+  // The same texture is decoded under a budget that holds it (the file is
+  // a valid image: what refused it above was the budget alone).
+  TextureImage image;
+  Status s = ReadTexture(dir.File("big.png"), "m.mtl:1", &image, need);
+  EXPECT_TRUE(s.ok()) << s.ToString();
+  EXPECT_EQ(image.width, 12000u);
+  s = ReadTexture(dir.File("big.png"), "m.mtl:1", &image, need - 1);
+  EXPECT_FALSE(s.ok());
+}
+
+// One lit triangle, to which the cases below add.
+const char kTriangle[] =
+    "mtllib t.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+// Item 2: a 300 MB comment line was held whole (exit 0 under a 100 MB
+// budget), and 1 GB of NUL bytes was read as one line. The line buffer is
+// bounded (a longer line is refused at its number) and a binary file is
+// refused by its first kilobyte.
+TEST(Hardening3Test, SceneLinesAreBoundedAndBinaryFilesRefusedAtOnce) {
+  TempDir dir;
+  WriteFile(dir.File("t.mtl"), "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+  // A comment line of 3 MB (the bound, not the size, is what is tested).
+  {
+    FILE* f = std::fopen(dir.File("long.obj").c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(kTriangle, f);
+    const std::string block(size_t{1} << 20, '#');
+    for (int i = 0; i < 3; ++i) std::fwrite(block.data(), 1, block.size(), f);
+    std::fputs("\n", f);
+    std::fclose(f);
+  }
+  std::string err;
+  EXPECT_EQ(RenderShell(dir, dir.File("long.obj"), "--mem-budget 100M", &err), 2) << err;
+  EXPECT_NE(err.find(dir.File("long.obj") + ":7: line longer than 1048576 bytes"),
+            std::string::npos)
+      << err;
+  EXPECT_FALSE(test::FileExists(dir.File("out")));
+  // A sparse gigabyte of NUL bytes: refused by its first kilobyte, at once.
+  {
+    FILE* f = std::fopen(dir.File("zeros.obj").c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fclose(f);
+    std::filesystem::resize_file(dir.File("zeros.obj"), uintmax_t{1} << 30);
+  }
+  const double t0 = os::Seconds();
+  EXPECT_EQ(RenderShell(dir, dir.File("zeros.obj"), "", &err), 2) << err;
+  EXPECT_LT(os::Seconds() - t0, 5.0);
+  EXPECT_NE(err.find(dir.File("zeros.obj") + ":1: not a text file (a NUL byte at byte 1)"),
+            std::string::npos)
+      << err;
+  // A NUL later on the first kilobyte names its line; an MTL file too.
+  WriteFile(dir.File("nul.obj"), std::string(kTriangle) + std::string("# \0 x\n", 6));
+  EXPECT_EQ(RenderShell(dir, dir.File("nul.obj"), "", &err), 2) << err;
+  EXPECT_NE(err.find(dir.File("nul.obj") + ":7: not a text file (a NUL byte at byte " +
+                     std::to_string(std::string(kTriangle).size() + 3) + ")"),
+            std::string::npos)
+      << err;
+  WriteFile(dir.File("t.mtl"), std::string("newmtl light\0", 13));
+  WriteFile(dir.File("ok.obj"), kTriangle);
+  EXPECT_EQ(RenderShell(dir, dir.File("ok.obj"), "", &err), 2) << err;
+  EXPECT_NE(err.find(dir.File("ok.obj") + ":1: MTL file '" + dir.File("t.mtl") +
+                     "': not a text file (a NUL byte at byte 13)"),
+            std::string::npos)
+      << err;
+}
+
+}  // namespace
+}  // namespace vismask
