@@ -136,12 +136,31 @@ bool OutFile::Open(const char* path, char* why) {
   }
   struct stat st;
   if (::lstat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-    if (why) std::snprintf(why, kWhyBytes, "'%s' exists and is not a regular file", path);
+    if (why)
+      std::snprintf(why, kWhyBytes, "'%s' exists and is %s", path,
+                    S_ISLNK(st.st_mode) ? "a symbolic link (an output is never written through one)"
+                                        : "not a regular file");
     return false;
   }
   std::strcpy(path_, path);
   std::snprintf(tmpPath_, sizeof tmpPath_, "%s.tmp.%ld", path, static_cast<long>(::getpid()));
-  fd_ = ::open(tmpPath_, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  // Created new, never through a symbolic link: a name planted in its
+  // place (the pid is easy to guess) must not redirect the output.
+  constexpr int kCreate = O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC;
+  fd_ = ::open(tmpPath_, kCreate, 0666);
+  if (fd_ < 0 && errno == EEXIST) {
+    // A regular file of that name is a leftover (a killed run that had
+    // this pid): removed, and the file made anew. Anything else, a
+    // symbolic link above all, is refused and left alone.
+    if (::lstat(tmpPath_, &st) == 0 && !S_ISREG(st.st_mode)) {
+      if (why)
+        std::snprintf(why, kWhyBytes, "'%s' exists and is %s: refused", tmpPath_,
+                      S_ISLNK(st.st_mode) ? "a symbolic link" : "not a regular file");
+      return false;
+    }
+    ::unlink(tmpPath_);
+    fd_ = ::open(tmpPath_, kCreate, 0666);
+  }
   if (fd_ < 0) {
     SetWhy(why, "cannot open", tmpPath_);
     return false;
@@ -276,9 +295,22 @@ DirLock::~DirLock() {
 bool DirLock::Acquire(const char* dir, char* why) {
   char path[kMaxPath + 16];
   std::snprintf(path, sizeof path, "%s/.vismask.lock", dir);
-  int fd = ::open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  inUse_ = false;
+  // Never through a symbolic link (the pid would be written into whatever
+  // it names), and only into a regular file (not a FIFO or a device).
+  int fd = ::open(path, O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0666);
+  if (fd < 0 && errno == ELOOP) {
+    if (why) std::snprintf(why, kWhyBytes, "the lock file '%s' is a symbolic link: refused", path);
+    return false;
+  }
   if (fd < 0) {
     SetWhy(why, "cannot open the lock file", path);
+    return false;
+  }
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    if (why) std::snprintf(why, kWhyBytes, "the lock file '%s' is not a regular file", path);
+    ::close(fd);
     return false;
   }
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
@@ -287,6 +319,7 @@ bool DirLock::Acquire(const char* dir, char* why) {
     ssize_t got = ::pread(fd, pid, sizeof pid - 1, 0);
     ::close(fd);
     if (err == EWOULDBLOCK) {
+      inUse_ = true;
       if (why)
         std::snprintf(why, kWhyBytes, "'%s' is in use by another vismask run (pid %s)", dir,
                       got > 0 ? pid : "unknown");

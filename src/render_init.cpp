@@ -246,7 +246,10 @@ int Init(RunState* r) {
   }
   if (!r->outLock.Acquire(o.outDir.c_str(), why)) {
     os::PrintErr("vismask: --out: %s\n", why);
-    return kExitUsage;
+    // Another run's directory is a usage error; a lock file that cannot
+    // be made (read-only, a directory or a link in its place) is an output
+    // that cannot be written.
+    return r->outLock.inUse() ? kExitUsage : kExitOutput;
   }
   for (int f = 0; f < kNumOutputs; ++f) {
     std::string path = o.outDir + "/" + kOutputNames[f];

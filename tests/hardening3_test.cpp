@@ -69,8 +69,9 @@ TEST(Hardening3Test, TextureThatIsADeviceOrAFifoIsRefusedByItsKind) {
   };
   TempDir fifoDir;
   ASSERT_EQ(mkfifo(fifoDir.File("fifo.png").c_str(), 0600), 0);
-  for (const Case& c : {Case{"/dev/zero", "a character device"}, Case{"zero.png", "a character device"},
-                        Case{fifoDir.File("fifo.png"), "a FIFO"}, Case{"sub", "a directory"}}) {
+  for (const Case& c :
+       {Case{"/dev/zero", "a character device"}, Case{"zero.png", "a character device"},
+        Case{fifoDir.File("fifo.png"), "a FIFO"}, Case{"sub", "a directory"}}) {
     TempDir dir;
     const std::string obj = TexturedRoom(dir, c.map);
     std::filesystem::create_symlink("/dev/zero", dir.File("zero.png"));
@@ -107,13 +108,14 @@ void WriteBlankPng(const std::string& path, uint32_t w, uint32_t h) {
     be32(&png, static_cast<uint32_t>(data.size()));
     std::string body = std::string(type, 4) + data;
     png += body;
-    be32(&png, static_cast<uint32_t>(
-                   crc32(0, reinterpret_cast<const Bytef*>(body.data()), body.size())));
+    be32(&png,
+         static_cast<uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(body.data()), body.size())));
   };
   std::string ihdr;
   be32(&ihdr, w);
   be32(&ihdr, h);
-  ihdr += std::string("\x01\x00\x00\x00\x00", 5);  // depth 1, grey, deflate, no filter, no interlace
+  ihdr +=
+      std::string("\x01\x00\x00\x00\x00", 5);  // depth 1, grey, deflate, no filter, no interlace
   chunk("IHDR", ihdr);
   chunk("IDAT", std::string(z.begin(), z.end()));
   chunk("IEND", "");
@@ -131,8 +133,8 @@ TEST(Hardening3Test, TextureDecodingIsJudgedAgainstTheBudgetBeforeItIsDone) {
   std::string err;
   // 200 MB: far below the 432 MB of RGB texels alone.
   EXPECT_EQ(RenderShell(dir, obj, "--mem-budget 200M", &err), 2) << err;
-  const uint64_t need = ReadFile(dir.File("big.png")).size() +
-                        kTextureDecodeBytesPerTexel * uint64_t{12000} * 12000;
+  const uint64_t need =
+      ReadFile(dir.File("big.png")).size() + kTextureDecodeBytesPerTexel * uint64_t{12000} * 12000;
   EXPECT_NE(err.find("cannot read texture '" + dir.File("big.png") +
                      "': decoding its 12000x12000 texels needs " + std::to_string(need) +
                      " bytes, more than the "),
@@ -150,8 +152,7 @@ TEST(Hardening3Test, TextureDecodingIsJudgedAgainstTheBudgetBeforeItIsDone) {
 }
 
 // One lit triangle, to which the cases below add.
-const char kTriangle[] =
-    "mtllib t.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+const char kTriangle[] = "mtllib t.mtl\nusemtl light\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
 
 // Item 2: a 300 MB comment line was held whole (exit 0 under a 100 MB
 // budget), and 1 GB of NUL bytes was read as one line. The line buffer is
@@ -203,6 +204,86 @@ TEST(Hardening3Test, SceneLinesAreBoundedAndBinaryFilesRefusedAtOnce) {
                      "': not a text file (a NUL byte at byte 13)"),
             std::string::npos)
       << err;
+}
+
+// A small render into `out`, in this process (so that the temporary names
+// carry this process's pid).
+test::RunResult SmallRender(const std::string& out, const std::string& extra = "") {
+  return test::RunMain(
+      test::Words("render scenes/cornell.obj --width 16 --height 16 --max-shots "
+                  "50 --quiet --out " +
+                  out + (extra.empty() ? "" : " " + extra)));
+}
+
+// Item 6: the lock and the temporary files were opened through symbolic
+// links: a link planted as .vismask.lock got the pid written into its
+// target, and one planted as image.pfm.tmp.PID got the image, image.pfm
+// becoming a link. Both are refused (exit 1: an output that cannot be
+// written), their targets untouched.
+TEST(Hardening3Test, SymbolicLinksPlantedInTheOutputFolderAreNeverFollowed) {
+  TempDir dir;
+  const std::string out = dir.File("out"), target = dir.File("target");
+  WriteFile(target, "precious");
+  std::filesystem::create_directory(out);
+  std::filesystem::create_symlink(target, out + "/.vismask.lock");
+  auto r = SmallRender(out);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("the lock file '" + out + "/.vismask.lock' is a symbolic link: refused"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(ReadFile(target), "precious");
+  EXPECT_FALSE(test::FileExists(out + "/image.pfm"));
+  std::filesystem::remove(out + "/.vismask.lock");
+  // A temporary name planted as a link (this process's pid: RunMain runs
+  // in it): refused, not followed, not removed.
+  const std::string tmp = out + "/image.pfm.tmp." + std::to_string(getpid());
+  std::filesystem::create_symlink(target, tmp);
+  r = SmallRender(out);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("'" + tmp + "' exists and is a symbolic link: refused"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(ReadFile(target), "precious");
+  EXPECT_TRUE(std::filesystem::is_symlink(tmp));
+  EXPECT_FALSE(test::FileExists(out + "/image.pfm"));
+  // The final name as a link is refused too.
+  std::filesystem::remove(tmp);
+  std::filesystem::create_symlink(target, out + "/image.pfm");
+  r = SmallRender(out);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("image.pfm' exists and is a symbolic link"), std::string::npos) << r.err;
+  EXPECT_EQ(ReadFile(target), "precious");
+  // A regular file left under the temporary name (a killed run that had
+  // this pid) is replaced, not appended to or written through.
+  std::filesystem::remove(out + "/image.pfm");
+  WriteFile(tmp, "leftover");
+  std::filesystem::create_hard_link(tmp, dir.File("hardlink"));
+  r = SmallRender(out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(ReadFile(dir.File("hardlink")), "leftover");
+  EXPECT_EQ(ReadFile(out + "/image.pfm").substr(0, 9), "PF\n16 16\n");
+  EXPECT_FALSE(std::filesystem::is_symlink(out + "/image.pfm"));
+  EXPECT_FALSE(test::FileExists(tmp));
+}
+
+// Item 10: a lock file that cannot be used (a directory or a FIFO in its
+// place) ended the run with 2, the status of bad input; it is an output
+// that cannot be written: 1, as the README says for outputs. A folder in
+// use by another run stays 2 (SecondRunIntoTheSameDirectoryIsRefused).
+TEST(Hardening3Test, AnUnusableLockFileIsAnOutputError) {
+  TempDir dir;
+  const std::string out = dir.File("out");
+  std::filesystem::create_directories(out + "/.vismask.lock");
+  auto r = SmallRender(out);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("vismask: --out: "), std::string::npos) << r.err;
+  std::filesystem::remove(out + "/.vismask.lock");
+  ASSERT_EQ(mkfifo((out + "/.vismask.lock").c_str(), 0600), 0);
+  r = SmallRender(out);
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("the lock file '" + out + "/.vismask.lock' is not a regular file"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(test::FileExists(out + "/image.pfm"));
 }
 
 }  // namespace

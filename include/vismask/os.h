@@ -124,9 +124,12 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Opens the temporary file for writing. False (with *why, kWhyBytes) on
-  // failure, which includes a final name that exists and is not a regular
-  // file (it could not be replaced at the end of the run).
+  // Opens the temporary file for writing, created anew (O_EXCL) and never
+  // through a symbolic link (O_NOFOLLOW): a regular file already of that
+  // name is a leftover, removed first; a symbolic link or anything else
+  // there is refused. False (with *why, kWhyBytes) on failure, which
+  // includes a final name that exists and is not a regular file (a
+  // symbolic link, or what could not be replaced at the end of the run).
   bool Open(const char* path, char* why);
   // Writes all bytes. False on failure (remembered: the commit then fails
   // with the reason).
@@ -169,11 +172,17 @@ class DirLock {
   DirLock(const DirLock&) = delete;
   DirLock& operator=(const DirLock&) = delete;
   // False (with *why, naming the holder's pid when known) if another
-  // process holds the lock or the lock file cannot be made.
+  // process holds the lock (inUse()) or the lock file cannot be made: it
+  // is opened without following a symbolic link, and must be a regular
+  // file.
   bool Acquire(const char* dir, char* why);
+  // After a failed Acquire: whether another process holds the lock (else
+  // the lock file could not be made or used).
+  bool inUse() const { return inUse_; }
 
  private:
   int fd_ = -1;
+  bool inUse_ = false;
 };
 
 }  // namespace vismask::os
