@@ -5,7 +5,9 @@
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
+#include <climits>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -168,12 +170,21 @@ bool OutFile::Open(const char* path, char* why) {
   tempSlot_ = ClaimTempSlot(tmpPath_);
   InstallSignalCleanup();
   writeErrno_ = 0;
+  bytes_ = 0;
+  crc_ = static_cast<uint32_t>(::crc32(0L, Z_NULL, 0));
   return true;
 }
 
 bool OutFile::Write(const void* data, size_t n) {
   if (fd_ < 0 || writeErrno_ != 0) return false;
   const char* s = static_cast<const char*>(data);
+  bytes_ += n;
+  for (size_t done = 0; done < n;) {
+    const size_t part = n - done < UINT_MAX ? n - done : UINT_MAX;
+    crc_ = static_cast<uint32_t>(
+        ::crc32(crc_, reinterpret_cast<const Bytef*>(s + done), static_cast<uInt>(part)));
+    done += part;
+  }
   while (n > 0) {
     ssize_t w = ::write(fd_, s, n);
     if (w < 0) {
@@ -193,6 +204,9 @@ bool OutFile::Close(char* why) {
     return false;
   }
   int failed = writeErrno_;
+  // On the disk before any rename makes it an output (a power cut after
+  // the commit must not leave an empty or short file under the final name).
+  if (failed == 0 && ::fsync(fd_) != 0) failed = errno;
   if (::close(fd_) != 0 && failed == 0) failed = errno;
   fd_ = -1;
   // CommitAll (the only caller) renames or removes it before a signal is handled.
@@ -219,7 +233,93 @@ void OutFile::Discard() {
   ReleaseTempSlot(&tempSlot_);
 }
 
-bool CommitAll(OutFile* const* files, int n, char* why) {
+namespace {
+
+constexpr char kJournalName[] = ".vismask.commit";
+constexpr char kJournalHead[] = "vismask commit 1\n";
+constexpr size_t kJournalBytes = 64 * 1024;
+
+// The directory part of `path` into dir (kMaxPath): "." when it has none.
+void DirOf(const char* path, char* dir) {
+  const char* slash = std::strrchr(path, '/');
+  if (slash == nullptr) {
+    std::snprintf(dir, kMaxPath, ".");
+  } else if (slash == path) {
+    std::snprintf(dir, kMaxPath, "/");
+  } else {
+    std::snprintf(dir, kMaxPath, "%.*s", static_cast<int>(slash - path), path);
+  }
+}
+
+// fsync on a directory: its entries (renames, unlinks) on the disk.
+bool SyncDir(const char* dir) {
+  int fd = ::open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return false;
+  bool ok = ::fsync(fd) == 0;
+  ::close(fd);
+  return ok;
+}
+
+// Writes all of `n` bytes to fd; false on an error.
+bool WriteAll(int fd, const char* s, size_t n) {
+  while (n > 0) {
+    ssize_t w = ::write(fd, s, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    s += w;
+    n -= static_cast<size_t>(w);
+  }
+  return true;
+}
+
+// The commit's journal, DIR/.vismask.commit: which temporary file becomes
+// which output (and the previous output's second name), written and made
+// durable before the first rename and removed after the last. A run killed
+// between the two leaves it, and FinishInterruptedCommit completes the
+// renames. Entries are NUL-separated: "tmp\0final\0old\0" after the head.
+bool WriteJournal(const char* dir, OutFile* const* files, const char (*old)[kMaxPath + 24], int n,
+                  char* journal, char* why) {
+  char buf[kJournalBytes];
+  size_t len = 0;
+  auto add = [&](const char* text, size_t size) {
+    if (len + size > sizeof buf) return false;
+    std::memcpy(buf + len, text, size);
+    len += size;
+    return true;
+  };
+  bool fits = add(kJournalHead, sizeof kJournalHead - 1);
+  for (int i = 0; i < n && fits; ++i)
+    fits = add(files[i]->tmpPath(), std::strlen(files[i]->tmpPath()) + 1) &&
+           add(files[i]->path(), std::strlen(files[i]->path()) + 1) &&
+           add(old[i], std::strlen(old[i]) + 1);
+  if (!fits) {
+    if (why)
+      std::snprintf(why, kWhyBytes, "the commit's journal would exceed %zu bytes", sizeof buf);
+    return false;
+  }
+  std::snprintf(journal, kMaxPath + 32, "%s/%s", dir, kJournalName);
+  char tmp[kMaxPath + 64];
+  std::snprintf(tmp, sizeof tmp, "%s.tmp.%ld", journal, static_cast<long>(::getpid()));
+  ::unlink(tmp);
+  int fd = ::open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    SetWhy(why, "cannot create the commit's journal", tmp);
+    return false;
+  }
+  bool ok = WriteAll(fd, buf, len) && ::fsync(fd) == 0;
+  ok = ::close(fd) == 0 && ok;
+  if (!ok || ::rename(tmp, journal) != 0 || !SyncDir(dir)) {
+    SetWhy(why, "cannot write the commit's journal", journal);
+    ::unlink(tmp);
+    ::unlink(journal);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool CommitAll(OutFile* const* files, int n, char* why, const char* journalDir) {
   CommitGuard guard;
   bool ok = true;
   for (int i = 0; i < n; ++i) {
@@ -242,10 +342,20 @@ bool CommitAll(OutFile* const* files, int n, char* why) {
   }
   char old[kMax][kMaxPath + 24];
   bool kept[kMax] = {};
-  int renamed = 0;
-  for (int i = 0; i < n && ok; ++i) {
+  for (int i = 0; i < n; ++i)
     std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i]->path_,
                   static_cast<long>(::getpid()));
+  // Every temporary file is on the disk (Close synced it); the journal
+  // then says what the renames are, so that a kill or a power cut during
+  // them can be finished (FinishInterruptedCommit) instead of leaving some
+  // outputs new and the others old.
+  char journal[kMaxPath + 32] = "";
+  if (journalDir != nullptr && !WriteJournal(journalDir, files, old, n, journal, why)) {
+    for (int i = 0; i < n; ++i) ::unlink(files[i]->tmpPath_);
+    return false;
+  }
+  int renamed = 0;
+  for (int i = 0; i < n && ok; ++i) {
     ::unlink(old[i]);
     if (::link(files[i]->path_, old[i]) == 0) {
       kept[i] = true;
@@ -273,7 +383,79 @@ bool CommitAll(OutFile* const* files, int n, char* why) {
     if (!ok && i >= renamed) ::unlink(files[i]->tmpPath_);
     if (kept[i]) ::unlink(old[i]);  // a no-op after the rename back
   }
+  // The renames on the disk (every directory an output is in), then the
+  // journal gone: the commit is done.
+  char synced[kMaxPath] = "";
+  for (int i = 0; i < n; ++i) {
+    char dir[kMaxPath];
+    DirOf(files[i]->path_, dir);
+    if (std::strcmp(dir, synced) == 0) continue;
+    SyncDir(dir);
+    std::memcpy(synced, dir, sizeof dir);
+  }
+  if (journal[0] != '\0') {
+    ::unlink(journal);
+    SyncDir(journalDir);
+  }
   return ok;
+}
+
+bool CommitAll(OutFile* const* files, int n, char* why) {
+  return CommitAll(files, n, why, nullptr);
+}
+
+int FinishInterruptedCommit(const char* dir, int* renamed, char* why) {
+  *renamed = 0;
+  char journal[kMaxPath + 32];
+  std::snprintf(journal, sizeof journal, "%s/%s", dir, kJournalName);
+  int fd = ::open(journal, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0 && errno == ENOENT) return 0;
+  if (fd < 0) {
+    SetWhy(why, "cannot read the commit's journal", journal);
+    return -1;
+  }
+  static char buf[kJournalBytes + 1];  // init only, one thread
+  struct stat st;
+  ssize_t len = -1;
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+      st.st_size <= static_cast<off_t>(kJournalBytes))
+    len = ::pread(fd, buf, kJournalBytes, 0);
+  ::close(fd);
+  const size_t head = sizeof kJournalHead - 1;
+  if (len < static_cast<ssize_t>(head) || std::memcmp(buf, kJournalHead, head) != 0) {
+    if (why) std::snprintf(why, kWhyBytes, "'%s' is not a commit journal of vismask", journal);
+    return -1;
+  }
+  buf[len] = '\0';
+  // Entries: only outputs in `dir` itself or .glb files (--export), each
+  // with its temporary name as OutFile makes it ("FINAL.tmp.PID").
+  int count = 0;
+  for (size_t at = head; at < static_cast<size_t>(len);) {
+    const char* tmp = buf + at;
+    const char* final = tmp + std::strlen(tmp) + 1;
+    if (final >= buf + len) break;
+    const char* old = final + std::strlen(final) + 1;
+    if (old >= buf + len) break;
+    at = static_cast<size_t>(old + std::strlen(old) + 1 - buf);
+    const size_t fl = std::strlen(final);
+    char fdir[kMaxPath];
+    DirOf(final, fdir);
+    const bool inDir = std::strcmp(fdir, dir) == 0;
+    const bool glb = fl > 4 && std::strcmp(final + fl - 4, ".glb") == 0;
+    if (!(inDir || glb) || std::strncmp(tmp, final, fl) != 0 ||
+        std::strncmp(tmp + fl, ".tmp.", 5) != 0 || std::strncmp(old, final, fl) != 0 ||
+        std::strncmp(old + fl, ".old.", 5) != 0)
+      continue;
+    struct stat t;
+    if (::lstat(tmp, &t) == 0 && S_ISREG(t.st_mode) && ::rename(tmp, final) == 0) ++count;
+    ::unlink(old);
+    if (!inDir) SyncDir(fdir);
+  }
+  SyncDir(dir);
+  ::unlink(journal);
+  SyncDir(dir);
+  *renamed = count;
+  return 1;
 }
 
 bool CommitAll(OutFile* files, int n, char* why) {

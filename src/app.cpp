@@ -58,8 +58,7 @@ int Compare(const Options& o) {
   if (!o.exclude.empty())
     n +=
         std::snprintf(line + n, sizeof line - size_t(n), "excluded_pixels %zu\n", e.excludedPixels);
-  os::WriteOut(line, static_cast<size_t>(n));
-  return kExitOk;
+  return WriteStdout(line, static_cast<size_t>(n)) ? kExitOk : kExitOutput;
 }
 
 }  // namespace run
@@ -74,10 +73,10 @@ int Main(int argc, const char* const* argv) {
   if (!s.ok()) return Fail(s);
   if (r->options.help) {
     const char* text = r->options.command == "view" ? ViewHelpText() : HelpText();
-    os::WriteOut(text, std::strlen(text));
-    return kExitOk;
+    return WriteStdout(text, std::strlen(text)) ? kExitOk : kExitOutput;
   }
   if (r->options.command == "compare") return Compare(r->options);
+  if (r->options.command == "verify") return Verify(r->options);
   if (r->options.command == "footprint") return Footprint(r->options);
   if (r->options.command == "view") return View(r->options);
   // The pipe transport forks here: every rank carries on from this point.

@@ -17,6 +17,9 @@ usage:
                                          relative RMSE and max abs error of A
                                          against B (pixels where MASK.pgm is
                                          nonzero left out)
+  vismask verify OUT_DIR                 whether OUT_DIR holds one run's
+                                         complete outputs, as its run.json
+                                         lists them (exit 0; 1 if not)
   vismask view OUT_DIR [--glb NAME.glb] [--port P]
                                          serve the solved mesh (render
                                          --export) in the viewer page on

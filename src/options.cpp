@@ -66,6 +66,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     if (mask) o->exclude = args[4];
     return Status::Ok();
   }
+  if (args[0] == "verify") {
+    if (args.size() != 2 || args[1].empty() || args[1].rfind("--", 0) == 0)
+      return Status::Error("vismask: verify: usage: vismask verify OUT_DIR");
+    o->command = "verify";
+    o->verifyDir = args[1];
+    return Status::Ok();
+  }
   if (args[0] == "view") {
     o->command = "view";
     for (i = 1; i < args.size(); ++i) {

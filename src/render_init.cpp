@@ -251,6 +251,19 @@ int Init(RunState* r) {
     // that cannot be written.
     return r->outLock.inUse() ? kExitUsage : kExitOutput;
   }
+  // A commit that a killed run left half done is finished first: the folder
+  // then holds that run's whole set, as its run.json lists it.
+  int renamed = 0;
+  const int finished = os::FinishInterruptedCommit(o.outDir.c_str(), &renamed, why);
+  if (finished < 0) {
+    os::PrintErr("vismask: --out: %s\n", why);
+    return kExitOutput;
+  }
+  if (finished > 0)
+    os::PrintErr(
+        "vismask: warning: --out: finished the commit an interrupted run left in '%s' (%d "
+        "file%s renamed)\n",
+        o.outDir.c_str(), renamed, renamed == 1 ? "" : "s");
   for (int f = 0; f < kNumOutputs; ++f) {
     std::string path = o.outDir + "/" + kOutputNames[f];
     if (!r->files[f].Open(path.c_str(), why)) {

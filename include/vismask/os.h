@@ -22,7 +22,10 @@ double CpuSeconds();
 
 // Writes all of `s` to standard error / standard output (no buffering).
 void WriteErr(const char* s, size_t n);
-void WriteOut(const char* s, size_t n);
+// False (with *why, kWhyBytes, naming standard output) if the write failed
+// (/dev/full, a closed pipe) or standard output was closed when vismask
+// started (GuardStandardDescriptors): a result that reached nobody.
+bool WriteOut(const char* s, size_t n, char* why = nullptr);
 // printf-style to stderr; lines longer than 1 KiB are cut.
 void PrintErr(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
 
@@ -139,15 +142,23 @@ class OutFile {
   void Discard();
   bool isOpen() const { return fd_ >= 0; }
   const char* path() const { return path_; }
+  const char* tmpPath() const { return tmpPath_; }
+  // What Write has been given since Open: its byte count and CRC-32 (as
+  // zlib and gzip compute it), for the commit record in run.json.
+  uint64_t bytes() const { return bytes_; }
+  uint32_t crc32() const { return crc_; }
 
  private:
-  friend bool CommitAll(OutFile* const* files, int n, char* why);
-  // Closes; false (with *why) if a write or the close failed.
+  friend bool CommitAll(OutFile* const* files, int n, char* why, const char* journalDir);
+  // Syncs and closes; false (with *why) if a write, the sync or the close
+  // failed.
   bool Close(char* why);
 
   int fd_ = -1;
   int tempSlot_ = -1;   // the temporary name's entry in the signal handler's table
   int writeErrno_ = 0;  // errno of the first failed write, 0 if none
+  uint64_t bytes_ = 0;
+  uint32_t crc_ = 0;
   char path_[kMaxPath] = {};
   char tmpPath_[kMaxPath + 24] = {};
 };
@@ -156,10 +167,25 @@ class OutFile {
 // or, on failure (with *why), every final name holds what it held before
 // (files that existed are restored, new ones removed) and no temporary file
 // is left. Files are renamed in array order: put the one that marks a run
-// complete (run.json) last.
+// complete (run.json) last. Each file is synced before the renames, and
+// the directories after them.
 bool CommitAll(OutFile* files, int n, char* why);
 // The same for files that are not in one array (at most 16).
 bool CommitAll(OutFile* const* files, int n, char* why);
+// The same, with a journal: before the first rename, `journalDir`/
+// .vismask.commit (written under a temporary name, synced, renamed, the
+// directory synced) lists each temporary file and its final name; it is
+// removed once every rename is on the disk. A kill or a power cut between
+// the two leaves it, and FinishInterruptedCommit then completes the commit:
+// the folder holds the whole old set or, once finished, the whole new one.
+bool CommitAll(OutFile* const* files, int n, char* why, const char* journalDir);
+// Completes a commit that a killed run left in `dir` (its journal): renames
+// the temporary files it lists that are still there to their final names
+// (only outputs in `dir` and .glb files, each as FINAL.tmp.PID), removes
+// their second names (FINAL.old.PID) and the journal. Returns 0 if there was
+// no journal, 1 when it finished one (*renamed: the files it renamed), -1 on
+// an error (*why). Call with the directory's lock held.
+int FinishInterruptedCommit(const char* dir, int* renamed, char* why);
 
 // An exclusive lock on an output directory, held until destruction or the
 // process's end (flock on DIR/.vismask.lock, which holds the holder's pid).
