@@ -1,7 +1,9 @@
 // POSIX implementation of include/vismask/os.h's files and directories:
 // InFile, OutFile and their all-or-nothing commit, DirLock, MakeDirs.
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -9,6 +11,7 @@
 
 #include <climits>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -128,6 +131,52 @@ int64_t InFile::Size() const {
 
 OutFile::~OutFile() {
   Discard();
+}
+
+namespace {
+
+// Whether process `pid` exists (one we may not signal exists too).
+bool Alive(long pid) {
+  return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+}
+
+}  // namespace
+
+int RemoveStaleTemporaries(const char* path, char* first, size_t firstSize) {
+  char dir[kMaxPath];
+  const char* slash = std::strrchr(path, '/');
+  const char* base = slash ? slash + 1 : path;
+  if (slash == nullptr)
+    std::snprintf(dir, sizeof dir, ".");
+  else
+    std::snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : static_cast<int>(slash - path),
+                  path);
+  DIR* d = ::opendir(dir);
+  if (d == nullptr) return 0;
+  const size_t baseLen = std::strlen(base);
+  int removed = 0;
+  while (const struct dirent* e = ::readdir(d)) {
+    // BASE.tmp.PID (a temporary file) or BASE.old.PID (a second name the
+    // commit keeps), PID all digits, not this process and not alive.
+    const char* name = e->d_name;
+    if (std::strncmp(name, base, baseLen) != 0) continue;
+    const char* rest = name + baseLen;
+    if (std::strncmp(rest, ".tmp.", 5) != 0 && std::strncmp(rest, ".old.", 5) != 0) continue;
+    const char* digits = rest + 5;
+    if (*digits == '\0' || std::strspn(digits, "0123456789") != std::strlen(digits) ||
+        std::strlen(digits) > 9)
+      continue;
+    const long pid = std::strtol(digits, nullptr, 10);
+    if (pid <= 0 || pid == static_cast<long>(::getpid()) || Alive(pid)) continue;
+    char full[kMaxPath + 256];
+    std::snprintf(full, sizeof full, "%s/%s", dir, name);
+    struct stat st;
+    if (::lstat(full, &st) != 0 || S_ISDIR(st.st_mode)) continue;
+    if (::unlink(full) != 0) continue;
+    if (removed++ == 0 && first != nullptr) std::snprintf(first, firstSize, "%s", full);
+  }
+  ::closedir(d);
+  return removed;
 }
 
 bool OutFile::Open(const char* path, char* why) {

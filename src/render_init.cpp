@@ -264,6 +264,21 @@ int Init(RunState* r) {
         "vismask: warning: --out: finished the commit an interrupted run left in '%s' (%d "
         "file%s renamed)\n",
         o.outDir.c_str(), renamed, renamed == 1 ? "" : "s");
+  // Temporary files of runs that were killed (SIGKILL, a power cut): they
+  // never look complete, but pile up. Those whose pid is gone are removed,
+  // with one line.
+  int stale = 0;
+  char staleFirst[os::kMaxPath + 256] = "";
+  auto removeStale = [&](const std::string& path) {
+    stale += os::RemoveStaleTemporaries(path.c_str(), stale == 0 ? staleFirst : nullptr,
+                                        sizeof staleFirst);
+  };
+  for (int f = 0; f < kNumOutputs; ++f) removeStale(o.outDir + "/" + kOutputNames[f]);
+  removeStale(o.outDir + "/.vismask.commit");
+  if (!o.exportPath.empty()) removeStale(o.exportPath);
+  if (stale > 0)
+    os::PrintErr("vismask: warning: removed %d temporary file%s that killed runs left (%s%s)\n",
+                 stale, stale == 1 ? "" : "s", staleFirst, stale > 1 ? ", ..." : "");
   for (int f = 0; f < kNumOutputs; ++f) {
     std::string path = o.outDir + "/" + kOutputNames[f];
     if (!r->files[f].Open(path.c_str(), why)) {

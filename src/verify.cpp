@@ -175,8 +175,8 @@ int Verify(const Options& o) {
   char line[2048];
   const int n = std::snprintf(line, sizeof line, "%s: complete: %zu outputs and run.json\n",
                               dir.c_str(), listed.size());
-  if (!WriteStdout(line, static_cast<size_t>(n) < sizeof line ? static_cast<size_t>(n)
-                                                               : sizeof line - 1))
+  if (!WriteStdout(line,
+                   static_cast<size_t>(n) < sizeof line ? static_cast<size_t>(n) : sizeof line - 1))
     return kExitOutput;
   return kExitOk;
 }

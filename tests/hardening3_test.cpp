@@ -376,5 +376,81 @@ TEST(Hardening3Test, AKillAtAnyStepOfTheCommitLeavesTheOldSetOrTheNew) {
   EXPECT_GT(sawNew, 0);
 }
 
+// A pid no process has: a child that has exited and been reaped.
+long DeadPid() {
+  pid_t child = fork();
+  if (child == 0) _exit(0);
+  int status = 0;
+  waitpid(child, &status, 0);
+  return static_cast<long>(child);
+}
+
+// Item 5: the .tmp.PID files of a killed run were never removed, and a
+// moved --export folder kept x.glb.tmp.PID. A run removes those (and the
+// commit's .old.PID names) whose pid is not alive, and says so; a live
+// pid's are left alone.
+TEST(Hardening3Test, TemporariesOfKilledRunsAreRemovedWithOneLine) {
+  TempDir dir;
+  const std::string out = dir.File("out");
+  std::filesystem::create_directories(out);
+  std::filesystem::create_directories(dir.File("exp"));
+  const std::string dead = std::to_string(DeadPid());
+  const std::vector<std::string> stale = {
+      out + "/image.png.tmp." + dead, out + "/run.json.tmp." + dead,
+      out + "/patches.csv.old." + dead, out + "/.vismask.commit.tmp." + dead,
+      dir.File("exp/x.glb.tmp." + dead)};
+  for (const std::string& f : stale) WriteFile(f, "half");
+  // pid 1 is alive: its files may be a live run's.
+  const std::string live = out + "/image.pfm.tmp.1";
+  WriteFile(live, "live");
+  // Not ours to judge: other names, and a directory.
+  WriteFile(out + "/image.png.tmp.x", "mine");
+  std::filesystem::create_directories(out + "/image.png.tmp.12");
+  auto r = SmallRender(out, "--export " + dir.File("exp/x.glb"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const std::string& f : stale) EXPECT_FALSE(test::FileExists(f)) << f;
+  EXPECT_EQ(ReadFile(live), "live");
+  EXPECT_EQ(ReadFile(out + "/image.png.tmp.x"), "mine");
+  EXPECT_TRUE(std::filesystem::is_directory(out + "/image.png.tmp.12"));
+  EXPECT_NE(r.err.find("vismask: warning: removed 5 temporary files that killed runs left ("),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(test::FileExists(dir.File("exp/x.glb")));
+  // Nothing left: no line.
+  r = SmallRender(out);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("removed"), std::string::npos) << r.err;
+}
+
+// Item 8: results written to a full disk or a closed standard output were
+// lost with exit 0. Exit 1, naming standard output.
+TEST(Hardening3Test, AResultThatCannotReachStandardOutputIsExit1) {
+  TempDir dir;
+  ASSERT_EQ(SmallRender(dir.File("out")).code, 0);
+  const std::string pfm = dir.File("out/image.pfm");
+  const std::string bin = VismaskBin();
+  const std::string commands[] = {
+      bin + " compare " + pfm + " " + pfm,
+      bin + " footprint scenes/cornell.obj --json",
+      bin + " footprint scenes/cornell.obj",
+      bin + " verify " + dir.File("out"),
+      bin + " --help",
+  };
+  for (const std::string& c : commands) {
+    for (const char* redirect : {" > /dev/full", " >&-"}) {
+      std::string err;
+      EXPECT_EQ(test::ShellOutput("sh -c '" + c + redirect + "'", 60, &err), 1) << c << redirect;
+      EXPECT_NE(err.find(std::string("vismask: cannot write to standard output: ") +
+                         (redirect[3] == '/' ? "No space left on device" : "it is closed")),
+                std::string::npos)
+          << c << redirect << "\n"
+          << err;
+    }
+    // And to a pipe that takes it: 0.
+    std::string said;
+    EXPECT_EQ(test::ShellOutput(c, 60, &said), 0) << c;
+  }
+}
+
 }  // namespace
 }  // namespace vismask

@@ -163,6 +163,13 @@ class OutFile {
   char tmpPath_[kMaxPath + 24] = {};
 };
 
+// Removes what runs that were killed left beside the output `path`:
+// PATH.tmp.PID and PATH.old.PID (regular files or links, never
+// directories) whose PID is not a live process and not this one. Returns
+// how many it removed; the first one's path into `first` (firstSize bytes)
+// when not null. Init only (it reads the directory).
+int RemoveStaleTemporaries(const char* path, char* first, size_t firstSize);
+
 // Commits `n` open files as one: every final name then holds the new file,
 // or, on failure (with *why), every final name holds what it held before
 // (files that existed are restored, new ones removed) and no temporary file
