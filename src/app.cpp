@@ -49,6 +49,10 @@ int Compare(const Options& o) {
                                 ", the images are " + std::to_string(a.width) + "x" +
                                 std::to_string(a.height)));
   }
+  if (!mask.pixels.empty() &&
+      std::all_of(mask.pixels.begin(), mask.pixels.end(), [](uint8_t m) { return m != 0; }))
+    return Fail(Status::Error("vismask: --exclude: " + o.exclude +
+                              ": every pixel is excluded: nothing is left to compare"));
   ImageError e = CompareImages(Span<const float>(a.pixels.data(), a.pixels.size()),
                                Span<const float>(b.pixels.data(), b.pixels.size()),
                                Span<const uint8_t>(mask.pixels.data(), mask.pixels.size()));

@@ -71,7 +71,7 @@ render options:
                        against an even spread above X (default 20)
   --seed S             random seed, unsigned 64-bit (default 1)
   --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
-                       (default 1e-3)
+                       (default 1e-3); 0 needs another stop as well
   --max-shots N        stop after N shots (default: no limit)
   --max-seconds T      stop after T seconds of solving (default: no limit;
                        a time limit makes the result depend on speed)

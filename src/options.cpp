@@ -419,6 +419,14 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   if (!o->exclude.empty() && o->reference.empty())
     return Status::Error(
         "vismask: --exclude: needs --reference REF.pfm (the mask applies to its error)");
+  // Unshot power reaches 0 only when every queue drains, which a scene
+  // that reflects never does: --stop-unshot 0 needs another stop.
+  if (o->stopUnshot == 0.0 && o->maxShots == 0 && o->maxSeconds == 0.0 && o->rayBudget == 0 &&
+      o->stopError == 0.0)
+    return Status::Error(
+        "vismask: --stop-unshot 0: would stop only when every queue drains, which a scene "
+        "that reflects never does; give --max-shots, --max-seconds, --ray-budget or "
+        "--stop-error too, or a fraction above 0");
   // --ranks N > 1 without --envs: --envs auto, one balanced environment a
   // rank (under mpirun, SetWorldSize does the same with the world's size).
   if (!o->hasEnvs && o->ranks > 1) o->envsAuto = true;

@@ -452,5 +452,67 @@ TEST(Hardening3Test, AResultThatCannotReachStandardOutputIsExit1) {
   }
 }
 
+// A w x h PFM of one colour, little-endian, with `scale` and `tail` after.
+std::string Pfm(int w, int h, float v, const std::string& scale = "-1",
+                const std::string& tail = "") {
+  std::string s = "PF\n" + std::to_string(w) + " " + std::to_string(h) + "\n" + scale + "\n";
+  for (int i = 0; i < w * h * 3; ++i) s.append(reinterpret_cast<const char*>(&v), 4);
+  return s + tail;
+}
+
+// Item 12: compare with every pixel excluded printed relative_rmse 0; a
+// PFM with bytes after its pixels, or a scale other than -1 or 1, was
+// read; --stop-unshot 0 with no other stop ran for ever (the ledger's
+// unshot power, a running double sum, can stay a rounding above 0).
+TEST(Hardening3Test, CompareAndStopEdgeCasesAreRefusedOrStated) {
+  TempDir dir;
+  WriteFile(dir.File("a.pfm"), Pfm(2, 2, 0.5f));
+  WriteFile(dir.File("b.pfm"), Pfm(2, 2, 0.25f));
+  WriteFile(dir.File("all.pgm"), std::string("P5\n2 2\n255\n") + std::string(4, '\xff'));
+  WriteFile(dir.File("one.pgm"), std::string("P5\n2 2\n255\n\xff\0\0\0", 15));
+  auto r = test::RunMain(
+      {"compare", dir.File("a.pfm"), dir.File("b.pfm"), "--exclude", dir.File("all.pgm")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("every pixel is excluded: nothing is left to compare"), std::string::npos)
+      << r.err;
+  r = test::RunMain(
+      {"compare", dir.File("a.pfm"), dir.File("b.pfm"), "--exclude", dir.File("one.pgm")});
+  EXPECT_EQ(r.code, 0) << r.err;
+  // Bytes after the pixels, and scales that are not the byte order alone.
+  WriteFile(dir.File("tail.pfm"), Pfm(2, 2, 0.5f, "-1", "garbage"));
+  r = test::RunMain({"compare", dir.File("tail.pfm"), dir.File("a.pfm")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(dir.File("tail.pfm") + ": 7 bytes after the pixels (the header says 2 x 2)"),
+            std::string::npos)
+      << r.err;
+  for (const char* scale : {"-2", "-0.5", "3"}) {
+    WriteFile(dir.File("scale.pfm"), Pfm(2, 2, 0.5f, scale));
+    r = test::RunMain({"compare", dir.File("scale.pfm"), dir.File("a.pfm")});
+    EXPECT_EQ(r.code, 2) << scale;
+    EXPECT_NE(r.err.find(": only 1 (big-endian) and -1 (little-endian) are read"),
+              std::string::npos)
+        << scale << ": " << r.err;
+  }
+  WriteFile(dir.File("one.pfm"), Pfm(2, 2, 0.5f, "-1.0"));
+  EXPECT_EQ(test::RunMain({"compare", dir.File("one.pfm"), dir.File("a.pfm")}).code, 0);
+  // --stop-unshot 0 alone is refused (the ledger's rounding can keep the
+  // unshot fraction above 0 for ever); with another stop it is taken.
+  r = test::RunMain(
+      test::Words("render scenes/cornell.obj --stop-unshot 0 --quiet --out " + dir.File("out")));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("vismask: --stop-unshot 0: would stop only when every queue drains"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(test::FileExists(dir.File("out")));
+  for (const char* other :
+       {"--max-shots 20", "--max-seconds 0.5", "--ray-budget 100000", "--stop-error 0.5"}) {
+    r = test::RunMain(
+        test::Words("render scenes/cornell.obj --width 8 --height 8 --stop-unshot 0 --quiet "
+                    "--out " +
+                    dir.File("out") + " " + other));
+    EXPECT_EQ(r.code, 0) << other << ": " << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace vismask
