@@ -149,7 +149,13 @@ Status ParseObj(const std::string& objPath, LineSource& lines, const ObjCounts* 
   s = loader.ApplyEmit();
   if (!s.ok()) return s;
   s = tally->Check(objPath, *materials, perfect);
-  if (!s.ok()) return s;
+  if (!s.ok()) {
+    // "no emitter" because the emitting faces were dropped: said at the face.
+    std::vector<uint8_t> used = tally->used;
+    used.resize(materials->size(), 0);
+    Status dropped = loader.DroppedEmitters(used);
+    return dropped.ok() ? s : dropped;
+  }
   std::vector<uint8_t> used = tally->used;
   used.resize(materials->size(), 0);
   *warnings = loader.Warnings(used);

@@ -109,9 +109,9 @@ std::string NotDiffuse(const Finish& f);
 // Parses "a b c" (or one number) leniently, for keys only read to warn.
 bool LenientFloats(const Tokens& t, size_t count, double* out);
 
-// The lines of a text, one at a time, split as std::getline does: at '\n',
-// the last line kept even without one, no empty line after a final '\n'; a
-// leading UTF-8 byte-order mark dropped.
+// The lines of a text, one at a time: split at LF, CR LF or a lone CR (old
+// Mac files), the last line kept even without one, no empty line after a
+// final line end; a leading UTF-8 byte-order mark dropped.
 class LineSource {
  public:
   virtual ~LineSource() = default;
@@ -153,7 +153,8 @@ class FileLines : public LineSource {
   std::unique_ptr<char[]> buf_;
   size_t begin_ = 0, end_ = 0;
   bool first_ = true, eof_ = false;
-  int lines_ = 0;  // lines returned so far
+  bool pendingCr_ = false;  // the last line ended at a CR that ended the buffer
+  int lines_ = 0;           // lines returned so far
   int errorLine_ = 0;
   std::string error_;
 };
@@ -187,6 +188,10 @@ class Loader {
   // The warnings, one line per kind, in the order they first arose and the
   // aggregate ones after. `used`: per material, whether a polygon uses it.
   std::vector<std::string> Warnings(const std::vector<uint8_t>& used) const;
+  // When no polygon of an emitting material is left (`used`) but faces of
+  // one were dropped (no area, or edges that cross): the error at the first
+  // such face, which "no emitter" would hide. Ok otherwise.
+  Status DroppedEmitters(const std::vector<uint8_t>& used) const;
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
@@ -213,6 +218,8 @@ class Loader {
   std::string notMtlWhere_;               // "file:line" of the first
   std::string path_;                      // the OBJ
   FaceTally triangulated_, cornersRemoved_, degenerate_, selfIntersecting_;
+  // Per material: the first face of it dropped whole, and why.
+  std::map<uint32_t, std::pair<int, const char*>> droppedFace_;
   std::vector<std::string> replacedKe_;  // "name (Ke r g b)" of each --emit that replaced one
   std::string replacedWhere_;
 };

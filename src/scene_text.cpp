@@ -265,12 +265,22 @@ TextLines::TextLines(const std::string& text) : text_(text) {
 
 bool TextLines::Next(std::string* line) {
   if (pos_ >= text_.size()) return false;
-  size_t end = text_.find('\n', pos_);
+  size_t end = text_.find_first_of("\r\n", pos_);
   if (end == std::string::npos) end = text_.size();
   line->assign(text_, pos_, end - pos_);
-  pos_ = end + 1;
+  // A line ends at LF, CR LF or a lone CR (old Mac files).
+  pos_ = end + (end + 1 < text_.size() && text_[end] == '\r' && text_[end + 1] == '\n' ? 2 : 1);
   return true;
 }
+
+namespace {
+// The first CR or LF in [p, p + n), or null.
+const char* FindLineEnd(const char* p, size_t n) {
+  for (const char* e = p + n; p < e; ++p)
+    if (*p == '\n' || *p == '\r') return p;
+  return nullptr;
+}
+}  // namespace
 
 namespace {
 constexpr size_t kLineBuffer = size_t{1} << 16;
@@ -286,6 +296,7 @@ std::string FileLines::Open(const std::string& path) {
   first_ = true;
   eof_ = false;
   lines_ = 0;
+  pendingCr_ = false;
   errorLine_ = 0;
   error_.clear();
   return "";
@@ -315,6 +326,9 @@ bool FileLines::Next(std::string* line) {
       begin_ = 0;
       if (n < 0) return Fail("cannot read (" + why + ")", 0);
       if (end_ < kLineBuffer) eof_ = true;
+      // The LF of a CR LF whose CR ended the last buffer.
+      if (pendingCr_ && end_ > 0 && buf_[0] == '\n') begin_ = 1;
+      pendingCr_ = false;
       if (first_ && end_ > 0) {
         first_ = false;
         // A binary file (1 GB of NUL bytes) is refused by its first
@@ -323,7 +337,8 @@ bool FileLines::Next(std::string* line) {
         if (!err.empty()) {
           const char* nul = static_cast<const char*>(std::memchr(buf_.get(), '\0', end_));
           int at = 1;
-          for (const char* c = buf_.get(); c < nul; ++c) at += *c == '\n';
+          for (const char* c = buf_.get(); c < nul; ++c)
+            at += *c == '\n' || (*c == '\r' && c[1] != '\n');
           return Fail(err, at);
         }
         // A UTF-8 byte-order mark at the start is not text (split reads of
@@ -336,9 +351,9 @@ bool FileLines::Next(std::string* line) {
       }
     }
     const char* start = buf_.get() + begin_;
-    const void* nl = std::memchr(start, '\n', end_ - begin_);
-    const size_t n =
-        nl != nullptr ? static_cast<size_t>(static_cast<const char*>(nl) - start) : end_ - begin_;
+    // A line ends at LF, CR LF or a lone CR (old Mac files).
+    const char* nl = FindLineEnd(start, end_ - begin_);
+    const size_t n = nl != nullptr ? static_cast<size_t>(nl - start) : end_ - begin_;
     // The line's bytes are bounded: a longer line (a 300 MB comment) is
     // refused with its number instead of being held.
     if (line->size() + n > kMaxLineBytes) {
@@ -350,6 +365,12 @@ bool FileLines::Next(std::string* line) {
     line->append(start, n);
     if (nl != nullptr) {
       begin_ += n + 1;
+      if (*nl == '\r') {
+        if (begin_ < end_ && buf_[begin_] == '\n')
+          ++begin_;
+        else if (begin_ == end_)
+          pendingCr_ = true;  // its LF, if any, comes with the next read
+      }
       ++lines_;
       return true;
     }

@@ -514,5 +514,103 @@ TEST(Hardening3Test, CompareAndStopEdgeCasesAreRefusedOrStated) {
   }
 }
 
+// Item 13: messages that misled or harmed.
+TEST(Hardening3Test, MessagesNameWhatHappened) {
+  TempDir dir;
+  auto render = [&](const std::string& obj) {
+    return test::RunMain({"render", obj, "--width", "8", "--height", "8", "--max-shots", "50",
+                          "--quiet", "--out", dir.File("out")});
+  };
+  // The only emitting face dropped as degenerate: said at that face, not
+  // "no emitter" with the warning about the face never shown.
+  WriteFile(dir.File("d.mtl"),
+            "newmtl light\nKd 0.5 0.5 0.5\nKe 1 1 1\nnewmtl white\nKd 0.5 0.5 0.5\n");
+  WriteFile(dir.File("d.obj"),
+            "mtllib d.mtl\nv 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nusemtl light\nf 1 2 3\n"
+            "usemtl white\nf 1 2 4\n");
+  auto r = render(dir.File("d.obj"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(dir.File("d.obj") +
+                       ":7: no emitter left: this face of emitting material 'light' has no area "
+                       "and was dropped"),
+            std::string::npos)
+      << r.err;
+  // CR-only line ends (old Mac files) are line ends: the Cornell box reads
+  // as it does with LF, and so do its patches.
+  std::string obj = ReadFile("scenes/cornell.obj"), mtl = ReadFile("scenes/cornell.mtl");
+  for (std::string* t : {&obj, &mtl})
+    for (char& c : *t)
+      if (c == '\n') c = '\r';
+  WriteFile(dir.File("cornell.obj"), obj);
+  WriteFile(dir.File("cornell.mtl"), mtl);
+  r = render(dir.File("cornell.obj"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string crPatches = ReadFile(dir.File("out/patches.csv"));
+  r = render("scenes/cornell.obj");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(crPatches, ReadFile(dir.File("out/patches.csv")));
+  // A CR LF split by the reader's 64 KiB buffer is one line end: the line
+  // of a later error is counted right.
+  std::string padded;
+  int lines = 0;
+  while (padded.size() < 65535 - 8) {
+    padded += "# pad\r\n";
+    ++lines;
+  }
+  padded += std::string(65535 - padded.size(), '#') + "\r\n";  // the CR is byte 65535
+  ++lines;
+  padded += "# after\r\nbogus\r\n";
+  lines += 2;
+  WriteFile(dir.File("split.obj"), padded);
+  r = render(dir.File("split.obj"));
+  EXPECT_NE(r.err.find(dir.File("split.obj") + ":" + std::to_string(lines) +
+                       ": unknown statement 'bogus'"),
+            std::string::npos)
+      << r.err.substr(0, 300);
+  // A texture decoder's message quotes no raw byte of the file: a PNG chunk
+  // named ESC [ 2 J cleared the terminal.
+  {
+    std::string png("\x89PNG\r\n\x1a\n", 8);
+    auto be32 = [&](uint32_t v) {
+      for (int k = 3; k >= 0; --k) png.push_back(static_cast<char>((v >> (8 * k)) & 0xff));
+    };
+    auto chunk = [&](const std::string& type, const std::string& data) {
+      be32(static_cast<uint32_t>(data.size()));
+      const std::string body = type + data;
+      png += body;
+      be32(static_cast<uint32_t>(
+          crc32(0, reinterpret_cast<const Bytef*>(body.data()), body.size())));
+    };
+    chunk("IHDR", std::string("\0\0\0\2\0\0\0\2\x08\x02\0\0\0", 13));
+    chunk("\x1b[2J", "");
+    WriteFile(dir.File("esc.png"), png);
+    TextureImage image;
+    Status st = ReadTexture(dir.File("esc.png"), "m.mtl:1", &image);
+    ASSERT_FALSE(st.ok());
+    EXPECT_EQ(st.ToString().find('\x1b'), std::string::npos) << st.ToString();
+    EXPECT_NE(st.ToString().find("\\x1b[2J"), std::string::npos) << st.ToString();
+  }
+  // Whole sentences: the file first, then what went wrong with it.
+  WriteFile(dir.File("m.obj"), "mtllib none.mtl\n");
+  r = render(dir.File("m.obj"));
+  EXPECT_NE(r.err.find(dir.File("m.obj") + ":1: MTL file '" + dir.File("none.mtl") +
+                       "': cannot open (No such file or directory)"),
+            std::string::npos)
+      << r.err;
+  {
+    FILE* f = std::fopen(dir.File("huge.obj").c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fclose(f);
+    std::filesystem::resize_file(dir.File("huge.obj"), (uintmax_t{4} << 30) + 1);
+  }
+  r = render(dir.File("huge.obj"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find(dir.File("huge.obj") +
+                       ": cannot read: it has 4294967297 bytes, more than the 4294967296 a "
+                       "scene file may have\n"),
+            std::string::npos)
+      << r.err;
+}
+
 }  // namespace
 }  // namespace vismask
