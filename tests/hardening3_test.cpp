@@ -612,5 +612,45 @@ TEST(Hardening3Test, MessagesNameWhatHappened) {
       << r.err;
 }
 
+// Whether the file at `path` is valid JSON in valid UTF-8 (python3's
+// strict reading); true when there is no python3 to ask.
+bool IsValidJson(const std::string& path) {
+  if (std::system("command -v /usr/bin/python3 > /dev/null") != 0) return true;
+  const std::string check =
+      "/usr/bin/python3 -c 'import json,sys; "
+      "json.loads(open(sys.argv[1],\"rb\").read().decode(\"utf-8\"))' " +
+      path + " 2> /dev/null";
+  return std::system(check.c_str()) == 0;
+}
+
+// Item 9: a path with bytes that are not UTF-8 (\xff\xfe) was written raw
+// into run.json, which was then not JSON. Such bytes are \u00XX.
+TEST(Hardening3Test, RunJsonIsValidJsonWhateverBytesPathsHold) {
+  TempDir dir;
+  const std::string odd = dir.File("sc\xff\xfe");
+  std::filesystem::create_directories(odd);
+  std::filesystem::copy_file("scenes/cornell.obj", odd + "/cornell.obj");
+  std::filesystem::copy_file("scenes/cornell.mtl", odd + "/cornell.mtl");
+  const std::string out = dir.File("out\xff"), glb = dir.File("x\xfe\xc3\xa9.glb");
+  auto r = test::RunMain({"render", odd + "/cornell.obj", "--width", "8", "--height", "8",
+                          "--max-shots", "50", "--quiet", "--out", out, "--export", glb});
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::filesystem::copy_file(out + "/run.json", dir.File("run.json"));
+  const std::string json = ReadFile(dir.File("run.json"));
+  EXPECT_TRUE(IsValidJson(dir.File("run.json"))) << json.substr(0, 300);
+  EXPECT_NE(json.find("sc\\u00ff\\u00fe/cornell.obj\""), std::string::npos) << json.substr(0, 300);
+  EXPECT_NE(json.find("out\\u00ff\""), std::string::npos);
+  // Valid UTF-8 (é) stays as it is; the stray byte before it does not.
+  EXPECT_NE(json.find("x\\u00fe\xc3\xa9.glb\""), std::string::npos) << json.substr(0, 600);
+  // The commit record names the .glb so that verify finds it again.
+  std::string said;
+  EXPECT_EQ(test::ShellOutput(VismaskBin() + " verify '" + out + "'", 30, &said), 0) << said;
+  // footprint --json too.
+  const std::string cmd =
+      VismaskBin() + " footprint '" + odd + "/cornell.obj' --json > " + dir.File("fp.json");
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  EXPECT_TRUE(IsValidJson(dir.File("fp.json"))) << ReadFile(dir.File("fp.json")).substr(0, 200);
+}
+
 }  // namespace
 }  // namespace vismask
