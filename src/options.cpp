@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -405,6 +406,21 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     return Status::Error(
         "vismask: --view and --camera: give one or the other (--view frames the "
         "bounding box from a side, --camera places the camera itself)");
+  if (o->hasCamera) {
+    // Each pixel must span an angle float rays can tell apart: below 2^-20
+    // radians (8 float steps of a unit direction) neighbouring pixels see
+    // the same thing, and the projection overflows to a black image.
+    const double pixel = o->camera.fovyDeg * 3.14159265358979 / 180.0 / o->height;
+    if (pixel < std::ldexp(1.0, -20)) {
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "vismask: --camera: a field of view of %g degrees over %d pixels gives each "
+                    "pixel %.3g radians, below the %.3g (2^-20) that float rays can tell apart; "
+                    "widen the field of view",
+                    static_cast<double>(o->camera.fovyDeg), o->height, pixel, std::ldexp(1.0, -20));
+      return Status::Error(text);
+    }
+  }
   if (o->errorEvery > 0 && o->reference.empty())
     return Status::Error("vismask: --error-every: needs --reference REF.pfm to measure against");
   // --rays N alone keeps its meaning: N rays every shot.

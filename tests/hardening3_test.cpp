@@ -8,6 +8,7 @@
 #include <unistd.h>
 #include <zlib.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -650,6 +651,43 @@ TEST(Hardening3Test, RunJsonIsValidJsonWhateverBytesPathsHold) {
       VismaskBin() + " footprint '" + odd + "/cornell.obj' --json > " + dir.File("fp.json");
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   EXPECT_TRUE(IsValidJson(dir.File("fp.json"))) << ReadFile(dir.File("fp.json")).substr(0, 200);
+}
+
+// Item 11: a 1 x 1 or 2 x 2 image of the lit Cornell box was called black
+// (the pixel's kept fragments stood for its colour, not for its front-facing
+// share); a field of view of 1e-8 degrees rendered black with exit 0.
+TEST(Hardening3Test, TheBlackImageWarningLooksAtTheImageAndTinyFieldsOfViewAreRefused) {
+  TempDir dir;
+  for (const char* size : {"1", "2", "3"}) {
+    auto r = test::RunMain({"render", "scenes/cornell.obj", "--width", size, "--height", size,
+                            "--max-shots", "300", "--quiet", "--out", dir.File("out")});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("the image is black"), std::string::npos) << size << ": " << r.err;
+  }
+  const std::string camera = "278,273,-800,278,273,0,0,1,0,";
+  auto r = test::RunMain({"render", "scenes/cornell.obj", "--width", "64", "--height", "64",
+                          "--camera", camera + "1e-8", "--quiet", "--out", dir.File("tiny")});
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("vismask: --camera: a field of view of 1e-08 degrees over 64 pixels gives "
+                       "each pixel"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(test::FileExists(dir.File("tiny")));
+  // Just above the bound (2^-20 radians a pixel): taken, and the lit back
+  // wall fills the image.
+  const double fov = std::ldexp(1.0, -20) * 64 * 180.0 / 3.14159265358979 * 1.01;
+  char deg[32];
+  std::snprintf(deg, sizeof deg, "%.6g", fov);
+  r = test::RunMain({"render", "scenes/cornell.obj", "--width", "64", "--height", "64",
+                     "--max-shots", "300", "--camera", camera + deg, "--quiet", "--out",
+                     dir.File("narrow")});
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("the image is black"), std::string::npos) << r.err;
+  // One step below it: refused.
+  std::snprintf(deg, sizeof deg, "%.6g", fov / 1.01 * 0.99);
+  r = test::RunMain({"render", "scenes/cornell.obj", "--width", "64", "--height", "64", "--camera",
+                     camera + deg, "--quiet", "--out", dir.File("narrower")});
+  EXPECT_EQ(r.code, 2) << deg;
 }
 
 }  // namespace
