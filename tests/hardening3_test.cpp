@@ -9,6 +9,7 @@
 #include <zlib.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -688,6 +689,86 @@ TEST(Hardening3Test, TheBlackImageWarningLooksAtTheImageAndTinyFieldsOfViewAreRe
   r = test::RunMain({"render", "scenes/cornell.obj", "--width", "64", "--height", "64", "--camera",
                      camera + deg, "--quiet", "--out", dir.File("narrower")});
   EXPECT_EQ(r.code, 2) << deg;
+}
+
+// Item 7: `vismask view` served what symbolic links in OUT_DIR point at
+// (/etc/passwd, /etc), listed directories, answered any Host (DNS
+// rebinding) and dropped the connection on /out/%00. Now: only regular
+// files whose real path is inside OUT_DIR or the viewer folder, no
+// listings, 403 for another Host, 400 for a bad path.
+TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
+  if (std::system("command -v python3 > /dev/null") != 0) GTEST_SKIP() << "no python3";
+  TempDir dir;
+  const std::string out = dir.File("out");
+  std::filesystem::create_directories(out);
+  // A file with a binary glTF 2.0 header of its own length (all view checks).
+  std::string glb("glTF\x02\x00\x00\x00\x20\x00\x00\x00", 12);
+  glb += std::string(20, ' ');
+  WriteFile(out + "/m.glb", glb);
+  WriteFile(out + "/run.json", "{}\n");
+  WriteFile(dir.File("secret.txt"), "secret");
+  std::filesystem::create_symlink(dir.File("secret.txt"), out + "/pw.txt");
+  std::filesystem::create_directory_symlink(dir.path(), out + "/up");
+  std::filesystem::create_directories(out + "/sub");
+  WriteFile(out + "/sub/in.txt", "inside");
+  std::filesystem::create_symlink(out + "/run.json", out + "/alias.json");  // inside: served
+  const std::string log = dir.File("view.out");
+  // serve.py as `vismask view` execs it (view itself also wants the
+  // three.js files of 'make viewer', which this does not need).
+  const std::string start = "python3 viewer/serve.py --viewer viewer --out " + out +
+                            " --glb m.glb --run > " + log + " 2> " + dir.File("view.err") +
+                            " & echo $!";
+  FILE* p = popen(start.c_str(), "r");
+  ASSERT_NE(p, nullptr);
+  int pid = -1;
+  ASSERT_EQ(std::fscanf(p, "%d", &pid), 1);
+  pclose(p);
+  std::string url;
+  for (int i = 0; i < 600 && url.empty(); ++i) {
+    const std::string text = ReadFile(log);
+    if (text.find('\n') != std::string::npos) url = text.substr(0, text.find('\n'));
+    usleep(50000);
+  }
+  ASSERT_FALSE(url.empty()) << ReadFile(dir.File("view.err"));
+  const std::string origin = url.substr(0, url.find('/', 7));
+  const std::string port = origin.substr(origin.rfind(':') + 1);
+  // The status of GET `path` with Host `host` (raw: no client rewrites it).
+  auto status = [&](const std::string& path, const std::string& host) {
+    const std::string py =
+        "import socket,sys\n"
+        "s=socket.create_connection(('127.0.0.1'," +
+        port +
+        "))\n"
+        "s.sendall(('GET '+sys.argv[1]+' HTTP/1.0\\r\\nHost: '+sys.argv[2]+'\\r\\n\\r\\n')"
+        ".encode('latin-1'))\n"
+        "d=b''\n"
+        "while True:\n"
+        "  c=s.recv(65536)\n"
+        "  if not c: break\n"
+        "  d+=c\n"
+        "print(d.split(b' ')[1].decode() if d else 'closed')\n";
+    WriteFile(dir.File("get.py"), py);
+    std::string said;
+    test::ShellOutput("python3 " + dir.File("get.py") + " '" + path + "' '" + host + "'", 20,
+                      &said);
+    return said.substr(0, said.find('\n'));
+  };
+  const std::string local = "127.0.0.1:" + port;
+  EXPECT_EQ(status("/out/run.json", local), "200");
+  EXPECT_EQ(status("/out/m.glb", "localhost:" + port), "200");
+  EXPECT_EQ(status("/out/sub/in.txt", "[::1]:" + port), "200");
+  EXPECT_EQ(status("/out/alias.json", local), "200");
+  EXPECT_EQ(status("/", local), "200");  // the page
+  EXPECT_EQ(status("/out/pw.txt", local), "404");
+  EXPECT_EQ(status("/out/up/secret.txt", local), "404");
+  EXPECT_EQ(status("/out/up/", local), "404");
+  EXPECT_EQ(status("/out/", local), "404");
+  EXPECT_EQ(status("/out/sub/", local), "404");
+  EXPECT_EQ(status("/out/run.json", "evil.example:" + port), "403");
+  EXPECT_EQ(status("/out/run.json", "127.0.0.1"), "403");
+  EXPECT_EQ(status("/out/%00", local), "400");
+  EXPECT_EQ(status("/out/%ff", local), "400");
+  kill(pid, SIGTERM);
 }
 
 }  // namespace
