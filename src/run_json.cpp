@@ -91,21 +91,7 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   JsonString(&w, o.scene.c_str());
   w.Printf(",\n  \"out\": ");
   JsonString(&w, o.outDir.c_str());
-  // The commit record: every other output of this run, its size and CRC-32
-  // (all are written by now; run.json is renamed last), so that a reader
-  // (vismask verify) can tell a complete set from a mixed one.
-  w.Printf(",\n  \"outputs\": [");
-  int listed = 0;
-  auto record = [&](const char* name, const os::OutFile& f) {
-    w.Printf("%s\n    {\"file\": ", listed++ ? "," : "");
-    JsonString(&w, name);
-    w.Printf(", \"bytes\": %llu, \"crc32\": \"%08x\"}", static_cast<unsigned long long>(f.bytes()),
-             static_cast<unsigned>(f.crc32()));
-  };
-  for (int f = 0; f < kNumOutputs; ++f)
-    if (f != kRunJson) record(kOutputNames[f], r->files[f]);
-  if (r->exportFile.isOpen()) record(o.exportPath.c_str(), r->exportFile);
-  w.Printf("\n  ],\n  \"options\": {\n");
+  w.Printf(",\n  \"options\": {\n");
   w.Printf("    \"patch_size\": %.9g,\n    \"rays\": %u,\n    \"seed\": %llu,\n", r->patchSize,
            RayCap(o), static_cast<unsigned long long>(o.seed));
   w.Printf(
@@ -376,7 +362,22 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("],\n");
   w.Printf("    \"peak_rss_explained\": %.4f,\n",
            peak > 0 ? static_cast<double>(arenas + files) / static_cast<double>(peak) : 0.0);
-  w.Printf("    \"peak_rss_bytes\": %llu\n  }\n}\n", static_cast<unsigned long long>(peak));
+  w.Printf("    \"peak_rss_bytes\": %llu\n  }", static_cast<unsigned long long>(peak));
+  // The commit record: every other output of this run, its size and CRC-32
+  // (all are written by now; run.json is renamed last), so that a reader
+  // (vismask verify) can tell a complete set from a mixed one.
+  w.Printf(",\n  \"outputs\": [");
+  int listed = 0;
+  auto record = [&](const char* name, const os::OutFile& f) {
+    w.Printf("%s\n    {\"file\": ", listed++ ? "," : "");
+    JsonString(&w, name);
+    w.Printf(", \"bytes\": %llu, \"crc32\": \"%08x\"}", static_cast<unsigned long long>(f.bytes()),
+             static_cast<unsigned>(f.crc32()));
+  };
+  for (int f = 0; f < kNumOutputs; ++f)
+    if (f != kRunJson) record(kOutputNames[f], r->files[f]);
+  if (r->exportFile.isOpen()) record(o.exportPath.c_str(), r->exportFile);
+  w.Printf("\n  ]\n}\n");
   w.Flush();
 }
 

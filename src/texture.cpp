@@ -179,6 +179,22 @@ Status ReadTexture(const std::string& path, const std::string& where, TextureIma
   const int64_t got = size > 0 ? in.Read(&bytes[0], bytes.size(), &why) : 0;
   if (got < 0) return fail("read error (" + why + ")");
   if (got != size) return fail("the file changed while it was read");
+  return DecodeTexture(bytes, path, where, image, budget);
+}
+
+Status DecodeTexture(const std::string& bytes, const std::string& path, const std::string& where,
+                     TextureImage* image, uint64_t budget) {
+  auto fail = [&](const std::string& why) {
+    return ErrorAt(where, "cannot read texture '" + path + "': " + why);
+  };
+  auto overBudget = [&](uint64_t need, const std::string& what) {
+    return fail(what + " needs " + std::to_string(need) + " bytes, more than the " +
+                std::to_string(budget) + " --mem-budget leaves it at init");
+  };
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
+    return fail(std::to_string(bytes.size()) + " bytes, more than the " +
+                std::to_string(std::numeric_limits<int>::max()) + " a texture file may have");
+  const uint64_t size = bytes.size();
   int w = 0, h = 0, comp = 0;
   auto decodeError = [&]() {
     std::string reason =
@@ -191,9 +207,8 @@ Status ReadTexture(const std::string& path, const std::string& where, TextureIma
   // against the budget before any is made.
   if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp))
     return decodeError();
-  const uint64_t need = static_cast<uint64_t>(size) + kTextureDecodeBytesPerTexel *
-                                                          static_cast<uint64_t>(w) *
-                                                          static_cast<uint64_t>(h);
+  const uint64_t need =
+      size + kTextureDecodeBytesPerTexel * static_cast<uint64_t>(w) * static_cast<uint64_t>(h);
   if (budget > 0 && need > budget)
     return overBudget(need,
                       "decoding its " + std::to_string(w) + "x" + std::to_string(h) + " texels");

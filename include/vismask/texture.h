@@ -70,6 +70,11 @@ constexpr uint64_t kTextureDecodeBytesPerTexel = 18;
 // messages quote no raw byte of the file (\xNN).
 Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
                    uint64_t budget = 0);
+// ReadTexture's decoding of a file's `bytes` (in memory; `path` names it in
+// messages): the dimensions judged against `budget` first, then decoded.
+// The texture fuzz target's entry (tests/fuzz/texture_fuzz.cpp).
+Status DecodeTexture(const std::string& bytes, const std::string& path, const std::string& where,
+                     TextureImage* image, uint64_t budget = 0);
 
 // The affine map x -> uv = (dot(u.xyz, x) + u.w, dot(v.xyz, x) + v.w) on a
 // polygon's plane, fitted to its corners' uv (least squares; exact for a
