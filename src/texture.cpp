@@ -149,6 +149,54 @@ std::string EscapedReason(const char* reason) {
   return out;
 }
 
+// stb_image 2.27 (Debian 12's) writes past its Huffman arrays when a JPEG
+// DHT table declares more than 256 codes (their sum over the 16 lengths):
+// such a file is refused here, before the decoder sees it. Walks the
+// marker segments (and the entropy-coded data after each SOS) of a JPEG;
+// "" if every DHT table is well-formed or `b` is no JPEG.
+std::string BadJpegHuffman(const unsigned char* b, size_t n) {
+  if (n < 2 || b[0] != 0xff || b[1] != 0xd8) return "";
+  size_t at = 2;
+  while (at + 4 <= n) {
+    if (b[at] != 0xff) return "";  // not a marker: stb_image reports it
+    const unsigned char m = b[at + 1];
+    if (m == 0xff) {  // fill byte
+      ++at;
+      continue;
+    }
+    if (m == 0xd9) return "";                                  // EOI
+    if (m == 0x01 || (m >= 0xd0 && m <= 0xd7) || m == 0xd8) {  // no length
+      at += 2;
+      continue;
+    }
+    const size_t len = (size_t{b[at + 2]} << 8) | b[at + 3];
+    if (len < 2 || at + 2 + len > n) return "";  // cut short: stb_image reports it
+    if (m == 0xc4) {
+      size_t t = at + 4;
+      const size_t end = at + 2 + len;
+      while (t < end) {
+        if (t + 17 > end) return "a Huffman table (DHT) cut short";
+        size_t codes = 0;
+        for (int k = 1; k <= 16; ++k) codes += b[t + k];
+        if (codes > 256)
+          return "a Huffman table (DHT) of " + std::to_string(codes) +
+                 " codes, more than the 256 JPEG allows";
+        if (t + 17 + codes > end) return "a Huffman table (DHT) cut short";
+        t += 17 + codes;
+      }
+    }
+    at += 2 + len;
+    if (m == 0xda) {
+      // Entropy-coded data: up to the next marker that is not a stuffed
+      // 0xff00 or a restart marker.
+      while (at + 1 < n &&
+             !(b[at] == 0xff && b[at + 1] != 0x00 && !(b[at + 1] >= 0xd0 && b[at + 1] <= 0xd7)))
+        ++at;
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
@@ -203,6 +251,8 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
     return fail(reason);
   };
   const stbi_uc* encoded = reinterpret_cast<const stbi_uc*>(bytes.data());
+  const std::string corrupt = BadJpegHuffman(encoded, bytes.size());
+  if (!corrupt.empty()) return fail("corrupt JPEG: " + corrupt);
   // The size first, from the header alone: the decoded bytes are judged
   // against the budget before any is made.
   if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp))

@@ -771,5 +771,22 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
   kill(pid, SIGTERM);
 }
 
+
+// The texture fuzz target's first find: a JPEG whose Huffman table declares
+// more than 256 codes made stb_image 2.27 write past its arrays. It is
+// refused before the decoder sees it.
+TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
+  TextureImage image;
+  Status s = ReadTexture("tests/data/dht-overflow.jpg", "m.mtl:2", &image);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.ToString().find("m.mtl:2: cannot read texture 'tests/data/dht-overflow.jpg': "
+                              "corrupt JPEG: a Huffman table (DHT) of "),
+            std::string::npos)
+      << s.ToString();
+  EXPECT_NE(s.ToString().find(" codes, more than the 256 JPEG allows"), std::string::npos);
+  // The committed JPEG, whose tables are sound, still reads.
+  EXPECT_TRUE(ReadTexture("tests/data/flat-8x4.jpg", "m.mtl:2", &image).ok());
+}
+
 }  // namespace
 }  // namespace vismask
