@@ -771,7 +771,6 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
   kill(pid, SIGTERM);
 }
 
-
 // The texture fuzz target's first find: a JPEG whose Huffman table declares
 // more than 256 codes made stb_image 2.27 write past its arrays. It is
 // refused before the decoder sees it.
