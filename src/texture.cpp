@@ -170,21 +170,24 @@ std::string BadJpegHuffman(const unsigned char* b, size_t n) {
       continue;
     }
     const size_t len = (size_t{b[at + 2]} << 8) | b[at + 3];
-    if (len < 2 || at + 2 + len > n) return "";  // cut short: stb_image reports it
+    if (len < 2) return "";  // stb_image reports it
     if (m == 0xc4) {
-      size_t t = at + 4;
+      // stb_image reads each table's 16 counts and then its codes as they
+      // come, a byte past the file's end read as 0: so are they here, in a
+      // segment cut short as in a whole one.
+      auto byte = [&](size_t i) -> size_t { return i < n ? b[i] : 0; };
       const size_t end = at + 2 + len;
-      while (t < end) {
-        if (t + 17 > end) return "a Huffman table (DHT) cut short";
+      for (size_t t = at + 4; t < end;) {
         size_t codes = 0;
-        for (int k = 1; k <= 16; ++k) codes += b[t + k];
+        for (size_t k = 1; k <= 16; ++k) codes += byte(t + k);
         if (codes > 256)
           return "a Huffman table (DHT) of " + std::to_string(codes) +
                  " codes, more than the 256 JPEG allows";
-        if (t + 17 + codes > end) return "a Huffman table (DHT) cut short";
         t += 17 + codes;
+        if (t > n) break;
       }
     }
+    if (at + 2 + len > n) return "";  // cut short: stb_image reports it
     at += 2 + len;
     if (m == 0xda) {
       // Entropy-coded data: up to the next marker that is not a stuffed

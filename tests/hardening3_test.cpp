@@ -776,13 +776,18 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
 // refused before the decoder sees it.
 TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   TextureImage image;
-  Status s = ReadTexture("tests/data/dht-overflow.jpg", "m.mtl:2", &image);
-  ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.ToString().find("m.mtl:2: cannot read texture 'tests/data/dht-overflow.jpg': "
-                              "corrupt JPEG: a Huffman table (DHT) of "),
-            std::string::npos)
-      << s.ToString();
-  EXPECT_NE(s.ToString().find(" codes, more than the 256 JPEG allows"), std::string::npos);
+  // The second: its DHT segment runs past the file's end (stb_image reads
+  // the missing bytes as 0 and overflows first).
+  for (const std::string name : {"dht-overflow.jpg", "dht-overflow-cut.jpg"}) {
+    const std::string path = "tests/data/" + name;
+    Status s = ReadTexture(path, "m.mtl:2", &image);
+    ASSERT_FALSE(s.ok()) << name;
+    EXPECT_NE(s.ToString().find("m.mtl:2: cannot read texture '" + path +
+                                "': corrupt JPEG: a Huffman table (DHT) of "),
+              std::string::npos)
+        << s.ToString();
+    EXPECT_NE(s.ToString().find(" codes, more than the 256 JPEG allows"), std::string::npos);
+  }
   // The committed JPEG, whose tables are sound, still reads.
   EXPECT_TRUE(ReadTexture("tests/data/flat-8x4.jpg", "m.mtl:2", &image).ok());
 }
