@@ -152,43 +152,34 @@ std::string EscapedReason(const char* reason) {
 // stb_image 2.27 (Debian 12's) writes past its Huffman arrays when a JPEG
 // DHT table declares more than 256 codes (their sum over the 16 lengths):
 // such a file is refused here, before the decoder sees it. Walks the
-// marker segments (and the entropy-coded data after each SOS) of a JPEG;
-// "" if every DHT table is well-formed or `b` is no JPEG.
+// segments as stb_image does (bytes between segments skipped up to the next
+// 0xff, fill bytes, the entropy-coded data after each SOS up to the next
+// marker, a byte past the end read as 0); "" if every DHT table it finds is
+// well-formed or `b` is no JPEG.
 std::string BadJpegHuffman(const unsigned char* b, size_t n) {
   if (n < 2 || b[0] != 0xff || b[1] != 0xd8) return "";
+  auto byte = [&](size_t i) -> size_t { return i < n ? b[i] : 0; };
   size_t at = 2;
-  while (at + 4 <= n) {
-    if (b[at] != 0xff) return "";  // not a marker: stb_image reports it
-    const unsigned char m = b[at + 1];
-    if (m == 0xff) {  // fill byte
-      ++at;
-      continue;
-    }
-    if (m == 0xd9) return "";                                  // EOI
-    if (m == 0x01 || (m >= 0xd0 && m <= 0xd7) || m == 0xd8) {  // no length
-      at += 2;
-      continue;
-    }
-    const size_t len = (size_t{b[at + 2]} << 8) | b[at + 3];
-    if (len < 2) return "";  // stb_image reports it
+  for (;;) {
+    while (at < n && b[at] != 0xff) ++at;
+    while (at < n && b[at] == 0xff) ++at;
+    if (at >= n) return "";
+    const unsigned char m = b[at++];
+    if (m == 0xd9) return "";                                          // EOI
+    if (m == 0x00 || m == 0x01 || (m >= 0xd0 && m <= 0xd8)) continue;  // no length
+    const size_t len = (byte(at) << 8) | byte(at + 1);
     if (m == 0xc4) {
-      // stb_image reads each table's 16 counts and then its codes as they
-      // come, a byte past the file's end read as 0: so are they here, in a
-      // segment cut short as in a whole one.
-      auto byte = [&](size_t i) -> size_t { return i < n ? b[i] : 0; };
-      const size_t end = at + 2 + len;
-      for (size_t t = at + 4; t < end;) {
+      for (size_t t = at + 2; t < at + len && t < n;) {
         size_t codes = 0;
         for (size_t k = 1; k <= 16; ++k) codes += byte(t + k);
         if (codes > 256)
           return "a Huffman table (DHT) of " + std::to_string(codes) +
                  " codes, more than the 256 JPEG allows";
         t += 17 + codes;
-        if (t > n) break;
       }
     }
-    if (at + 2 + len > n) return "";  // cut short: stb_image reports it
-    at += 2 + len;
+    if (len < 2 || at + len > n) return "";  // stb_image stops there
+    at += len;
     if (m == 0xda) {
       // Entropy-coded data: up to the next marker that is not a stuffed
       // 0xff00 or a restart marker.
@@ -197,7 +188,6 @@ std::string BadJpegHuffman(const unsigned char* b, size_t n) {
         ++at;
     }
   }
-  return "";
 }
 
 }  // namespace
