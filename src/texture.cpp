@@ -157,9 +157,12 @@ std::string EscapedReason(const char* reason) {
 // marker, a byte past the end read as 0); "" if every DHT table it finds is
 // well-formed or `b` is no JPEG.
 std::string BadJpegHuffman(const unsigned char* b, size_t n) {
-  if (n < 2 || b[0] != 0xff || b[1] != 0xd8) return "";
+  // SOI, after any fill bytes (0xff 0xff 0xd8 is one to stb_image).
+  size_t at = 0;
+  while (at < n && b[at] == 0xff) ++at;
+  if (at == 0 || at >= n || b[at] != 0xd8) return "";
+  ++at;
   auto byte = [&](size_t i) -> size_t { return i < n ? b[i] : 0; };
-  size_t at = 2;
   for (;;) {
     while (at < n && b[at] != 0xff) ++at;
     while (at < n && b[at] == 0xff) ++at;
