@@ -778,9 +778,10 @@ TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   TextureImage image;
   // The second: its DHT segment runs past the file's end (stb_image reads
   // the missing bytes as 0 and overflows first); the third: bytes between
-  // segments, which stb_image skips to the next marker.
-  for (const std::string name :
-       {"dht-overflow.jpg", "dht-overflow-cut.jpg", "dht-overflow-junk.jpg"}) {
+  // segments, which stb_image skips to the next marker; the fourth: fill
+  // bytes before its SOI (0xff 0xff 0xd8).
+  for (const std::string name : {"dht-overflow.jpg", "dht-overflow-cut.jpg",
+                                 "dht-overflow-junk.jpg", "dht-overflow-fill.jpg"}) {
     const std::string path = "tests/data/" + name;
     Status s = ReadTexture(path, "m.mtl:2", &image);
     ASSERT_FALSE(s.ok()) << name;
