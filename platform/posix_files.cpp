@@ -336,11 +336,22 @@ bool WriteJournal(const char* dir, OutFile* const* files, const char (*old)[kMax
     len += size;
     return true;
   };
+  // Names in `dir` itself are written bare (a reader may spell the
+  // directory otherwise: "out", "./out"), others (--export) as they are.
+  auto name = [&](const char* path, const char* final) {
+    char fdir[kMaxPath];
+    DirOf(final, fdir);
+    if (std::strcmp(fdir, dir) != 0) return path;
+    const char* slash = std::strrchr(path, '/');
+    return slash ? slash + 1 : path;
+  };
   bool fits = add(kJournalHead, sizeof kJournalHead - 1);
-  for (int i = 0; i < n && fits; ++i)
-    fits = add(files[i]->tmpPath(), std::strlen(files[i]->tmpPath()) + 1) &&
-           add(files[i]->path(), std::strlen(files[i]->path()) + 1) &&
-           add(old[i], std::strlen(old[i]) + 1);
+  for (int i = 0; i < n && fits; ++i) {
+    const char* final = files[i]->path();
+    const char* names[3] = {name(files[i]->tmpPath(), final), name(final, final),
+                            name(old[i], final)};
+    for (const char* e : names) fits = fits && add(e, std::strlen(e) + 1);
+  }
   if (!fits) {
     if (why)
       std::snprintf(why, kWhyBytes, "the commit's journal would exceed %zu bytes", sizeof buf);
@@ -476,29 +487,41 @@ int FinishInterruptedCommit(const char* dir, int* renamed, char* why) {
     return -1;
   }
   buf[len] = '\0';
-  // Entries: only outputs in `dir` itself or .glb files (--export), each
-  // with its temporary name as OutFile makes it ("FINAL.tmp.PID").
+  // Entries: bare names of outputs in `dir`, or .glb files (--export) by
+  // their paths; each with its temporary name as OutFile makes it
+  // ("FINAL.tmp.PID") and its second name ("FINAL.old.PID").
   int count = 0;
   for (size_t at = head; at < static_cast<size_t>(len);) {
-    const char* tmp = buf + at;
-    const char* final = tmp + std::strlen(tmp) + 1;
-    if (final >= buf + len) break;
-    const char* old = final + std::strlen(final) + 1;
-    if (old >= buf + len) break;
-    at = static_cast<size_t>(old + std::strlen(old) + 1 - buf);
+    const char* entry[3];
+    entry[0] = buf + at;
+    entry[1] = entry[0] + std::strlen(entry[0]) + 1;
+    if (entry[1] >= buf + len) break;
+    entry[2] = entry[1] + std::strlen(entry[1]) + 1;
+    if (entry[2] >= buf + len) break;
+    at = static_cast<size_t>(entry[2] + std::strlen(entry[2]) + 1 - buf);
+    const char* final = entry[1];
     const size_t fl = std::strlen(final);
-    char fdir[kMaxPath];
-    DirOf(final, fdir);
-    const bool inDir = std::strcmp(fdir, dir) == 0;
+    const bool bare = std::strchr(final, '/') == nullptr;
     const bool glb = fl > 4 && std::strcmp(final + fl - 4, ".glb") == 0;
-    if (!(inDir || glb) || std::strncmp(tmp, final, fl) != 0 ||
-        std::strncmp(tmp + fl, ".tmp.", 5) != 0 || std::strncmp(old, final, fl) != 0 ||
-        std::strncmp(old + fl, ".old.", 5) != 0)
+    if (!(bare || glb) || std::strncmp(entry[0], final, fl) != 0 ||
+        std::strncmp(entry[0] + fl, ".tmp.", 5) != 0 || std::strncmp(entry[2], final, fl) != 0 ||
+        std::strncmp(entry[2] + fl, ".old.", 5) != 0)
       continue;
+    char path[3][kMaxPath + 64];
+    for (int k = 0; k < 3; ++k) {
+      if (bare)
+        std::snprintf(path[k], sizeof path[k], "%s/%s", dir, entry[k]);
+      else
+        std::snprintf(path[k], sizeof path[k], "%s", entry[k]);
+    }
     struct stat t;
-    if (::lstat(tmp, &t) == 0 && S_ISREG(t.st_mode) && ::rename(tmp, final) == 0) ++count;
-    ::unlink(old);
-    if (!inDir) SyncDir(fdir);
+    if (::lstat(path[0], &t) == 0 && S_ISREG(t.st_mode) && ::rename(path[0], path[1]) == 0) ++count;
+    ::unlink(path[2]);
+    if (!bare) {
+      char fdir[kMaxPath];
+      DirOf(path[1], fdir);
+      SyncDir(fdir);
+    }
   }
   SyncDir(dir);
   ::unlink(journal);
