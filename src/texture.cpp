@@ -30,7 +30,19 @@
 #pragma GCC diagnostic ignored "-Wsign-compare"
 #pragma GCC diagnostic ignored "-Wimplicit-fallthrough"
 #pragma GCC diagnostic ignored "-Wunused-but-set-variable"
+// stb_image 2.27 copies 0 bytes into a null buffer (a PNG whose first IDAT
+// chunk is empty): harmless, but undefined for memcpy (UBSan stops the
+// fuzzer there). Its copies go through StbMemcpy, which copies nothing then.
+// (<cstring> first: stb_image's own #include <string.h> is then a no-op.)
+#include <cstring>
+namespace {
+inline void* StbMemcpy(void* to, const void* from, size_t n) {
+  return n == 0 ? to : std::memcpy(to, from, n);
+}
+}  // namespace
+#define memcpy StbMemcpy
 #include <stb_image.h>
+#undef memcpy
 #pragma GCC diagnostic pop
 
 namespace vismask {
