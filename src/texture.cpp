@@ -265,6 +265,12 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
   // against the budget before any is made.
   if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp))
     return decodeError();
+  // stb_image 2.27 takes a BMP of width 0: no texels, a mean of NaN.
+  auto noTexels = [&]() {
+    return fail("the image is " + std::to_string(w) + "x" + std::to_string(h) +
+                " texels: it has none");
+  };
+  if (w <= 0 || h <= 0) return noTexels();
   const uint64_t need =
       size + kTextureDecodeBytesPerTexel * static_cast<uint64_t>(w) * static_cast<uint64_t>(h);
   if (budget > 0 && need > budget)
@@ -272,6 +278,10 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
                       "decoding its " + std::to_string(w) + "x" + std::to_string(h) + " texels");
   stbi_uc* data = stbi_load_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp, 3);
   if (!data) return decodeError();
+  if (w <= 0 || h <= 0) {
+    stbi_image_free(data);
+    return noTexels();
+  }
   TextureImage img;
   img.path = path;
   img.width = static_cast<uint32_t>(w);

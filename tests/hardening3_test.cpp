@@ -774,9 +774,10 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
   kill(pid, SIGTERM);
 }
 
-// The texture fuzz target's first find: a JPEG whose Huffman table declares
-// more than 256 codes made stb_image 2.27 write past its arrays. It is
-// refused before the decoder sees it.
+// The texture fuzz target's finds: a JPEG whose Huffman table declares
+// more than 256 codes made stb_image 2.27 write past its arrays (refused
+// before the decoder sees it); a PNG with an empty first IDAT chunk; a BMP of
+// width 0.
 TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   TextureImage image;
   // The second: its DHT segment runs past the file's end (stb_image reads
@@ -800,6 +801,11 @@ TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   // plain error now.
   s = ReadTexture("tests/data/png-empty-idat.png", "m.mtl:2", &image);
   EXPECT_FALSE(s.ok());
+  // A BMP of width 0: stb_image returned it, of no texels and a mean of NaN.
+  s = ReadTexture("tests/data/bmp-width-0.bmp", "m.mtl:2", &image);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.ToString().find("': the image is 0x"), std::string::npos) << s.ToString();
+  EXPECT_NE(s.ToString().find(" texels: it has none"), std::string::npos) << s.ToString();
   // The committed JPEG, whose tables are sound, still reads.
   EXPECT_TRUE(ReadTexture("tests/data/flat-8x4.jpg", "m.mtl:2", &image).ok());
 }
