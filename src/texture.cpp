@@ -205,6 +205,34 @@ std::string BadJpegHuffman(const unsigned char* b, size_t n) {
   }
 }
 
+// A PNG chunk that claims more bytes than the file has left: stb_image
+// 2.27 grows its buffer for the chunk (doubling, up to 2 GiB) before it
+// finds the bytes missing, so a file of a hundred bytes could take
+// gigabytes. "" if every chunk fits or `b` is no PNG.
+std::string BadPngChunks(const unsigned char* b, size_t n) {
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (n < 8 || std::memcmp(b, kSignature, 8) != 0) return "";
+  for (size_t at = 8; at + 8 <= n;) {
+    const size_t len =
+        (size_t{b[at]} << 24) | (size_t{b[at + 1]} << 16) | (size_t{b[at + 2]} << 8) | b[at + 3];
+    const size_t left = n - at - 8;  // after the chunk's length and type
+    if (len + 4 > left) {
+      char type[4 * 4 + 1] = "";
+      for (int k = 0; k < 4; ++k) {
+        const unsigned char c = b[at + 4 + k];
+        char one[5];
+        std::snprintf(one, sizeof one, c >= 0x20 && c < 0x7f && c != '\\' ? "%c" : "\\x%02x", c);
+        std::strcat(type, one);
+      }
+      return std::string("a chunk (") + type + ") of " + std::to_string(len) +
+             " bytes and its CRC, where the file has " + std::to_string(left) + " left";
+    }
+    if (std::memcmp(b + at + 4, "IEND", 4) == 0) return "";
+    at += 12 + len;
+  }
+  return "";
+}
+
 }  // namespace
 
 Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
@@ -259,8 +287,10 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
     return fail(reason);
   };
   const stbi_uc* encoded = reinterpret_cast<const stbi_uc*>(bytes.data());
-  const std::string corrupt = BadJpegHuffman(encoded, bytes.size());
+  std::string corrupt = BadJpegHuffman(encoded, bytes.size());
   if (!corrupt.empty()) return fail("corrupt JPEG: " + corrupt);
+  corrupt = BadPngChunks(encoded, bytes.size());
+  if (!corrupt.empty()) return fail("corrupt PNG: " + corrupt);
   // The size first, from the header alone: the decoded bytes are judged
   // against the budget before any is made.
   if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp))

@@ -776,8 +776,8 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
 
 // The texture fuzz target's finds: a JPEG whose Huffman table declares
 // more than 256 codes made stb_image 2.27 write past its arrays (refused
-// before the decoder sees it); a PNG with an empty first IDAT chunk; a BMP of
-// width 0.
+// before the decoder sees it); a PNG with an empty first IDAT chunk; a PNG
+// chunk longer than the file; a BMP of width 0.
 TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   TextureImage image;
   // The second: its DHT segment runs past the file's end (stb_image reads
@@ -801,6 +801,13 @@ TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   // plain error now.
   s = ReadTexture("tests/data/png-empty-idat.png", "m.mtl:2", &image);
   EXPECT_FALSE(s.ok());
+  // A PNG of 126 bytes whose chunk claims 1.6 GB: stb_image grew its
+  // buffer to 2 GiB before finding the bytes missing.
+  s = ReadTexture("tests/data/png-chunk-too-long.png", "m.mtl:2", &image);
+  EXPECT_NE(s.ToString().find("': corrupt PNG: a chunk (IDAT) of 1610621199 bytes and its CRC, "
+                              "where the file has 20 left"),
+            std::string::npos)
+      << s.ToString();
   // A BMP of width 0: stb_image returned it, of no texels and a mean of NaN.
   s = ReadTexture("tests/data/bmp-width-0.bmp", "m.mtl:2", &image);
   EXPECT_FALSE(s.ok());
