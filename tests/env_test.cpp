@@ -245,9 +245,9 @@ void WriteBoxWithBlock(const TempDir& dir) {
 }
 
 // Method R: every ray is absorbed in exactly one environment or escapes.
-// With direct light only (every Kd 0) and --stop-unshot 0 (with a
-// --max-shots it never reaches) the solve runs until every queue has drained, so emitted = absorbed
-// + escaped (+ unshot, 0 here) must hold to rounding and nothing may be left in flight. A ray
+// With direct light only (every Kd 0) and --stop-unshot 0 the solve runs
+// until every queue has drained, so emitted = absorbed + escaped (+ unshot,
+// 0 here) must hold to rounding and nothing may be left in flight. A ray
 // booked twice (say, not cleared where the tall block absorbs it) or lost
 // breaks it. A and B cannot close it (each foreign environment makes its own
 // estimate); their residuals are printed beside R's.
@@ -264,27 +264,11 @@ TEST(EnvTest, MethodRLedgerClosesInTwoAndEightEnvironments) {
     int m = 0;
     for (const char* method : {"R", "A", "B"}) {
       std::string out = dir.File("out" + std::to_string(k++));
-      Render({dir.File("cornell.obj"),
-              "--out",
-              out,
-              "--envs",
-              envs,
-              "--mask-method",
-              method,
-              "--mask-res",
-              "50",
-              "--rays",
-              "1024",
-              "--stop-unshot",
-              "0",
-              "--max-shots",
-              "100000000",
-              "--patch-size",
-              "60",
-              "--width",
-              "16",
-              "--height",
-              "16"});
+      // --stop-unshot 0 needs another stop: a --max-shots it never reaches.
+      Render(test::Words(dir.File("cornell.obj") + " --out " + out + " --envs " + envs +
+                         " --mask-method " + method +
+                         " --mask-res 50 --rays 1024 --stop-unshot 0 --max-shots 99999999 "
+                         "--patch-size 60 --width 16 --height 16"));
       std::string json = ReadFile(out + "/run.json");
       ASSERT_NE(json.find("\"stop_reason\": \"converged\""), std::string::npos) << json;
       auto emitted = EnergyTriple(json, "emitted"), absorbed = EnergyTriple(json, "absorbed"),
