@@ -779,7 +779,9 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
 // The texture fuzz target's finds: a JPEG whose Huffman table declares
 // more than 256 codes made stb_image 2.27 write past its arrays (refused
 // before the decoder sees it); a PNG with an empty first IDAT chunk; a PNG
-// chunk longer than the file; a BMP of width 0.
+// chunk longer than the file; a BMP of width 0. (A JPEG whose DC terms
+// overflow stb_image's int is a seed of the fuzz target, whose clang UBSan
+// stops there unless texture.cpp is compiled with -fwrapv.)
 TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   TextureImage image;
   // The second: its DHT segment runs past the file's end (stb_image reads

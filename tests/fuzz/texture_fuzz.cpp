@@ -7,7 +7,9 @@
 // image; and no message quotes a byte of the input that is not printable
 // ASCII (a PNG chunk named ESC [ 2 J once cleared the terminal).
 // tests/fuzz/texture-corpus/ holds the seeds: small PNG (8-bit, 16-bit,
-// grey with alpha), JPEG, BMP and TGA images.
+// grey with alpha), JPEG, BMP and TGA images, and jpeg-dc-overflow, whose
+// DC terms overflow stb_image 2.27's int (UBSan stops there unless
+// texture.cpp is compiled with -fwrapv, as the Makefile does).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
