@@ -41,6 +41,12 @@ inline void* StbMemcpy(void* to, const void* from, size_t n) {
 }
 }  // namespace
 #define memcpy StbMemcpy
+// Its buffers zeroed when made: for a corrupt JPEG that lacks some scans it
+// outputs blocks it never wrote, which were then whatever the heap held
+// (two decodes of one file differed).
+#define STBI_MALLOC(size) std::calloc(1, size)
+#define STBI_REALLOC(p, size) std::realloc(p, size)
+#define STBI_FREE(p) std::free(p)
 #include <stb_image.h>
 #undef memcpy
 #pragma GCC diagnostic pop

@@ -4,8 +4,9 @@
 // bytes. It must return a Status for anything: no crash, no sanitizer
 // report, no hang, no decoding beyond the budget (a small file that claims
 // 20000 x 20000 texels is refused by its header); what it accepts is a whole
-// image; and no message quotes a byte of the input that is not printable
-// ASCII (a PNG chunk named ESC [ 2 J once cleared the terminal).
+// image, the same each time; and no message quotes a byte of the input that
+// is not printable ASCII (a PNG chunk named ESC [ 2 J once cleared the
+// terminal).
 // tests/fuzz/texture-corpus/ holds the seeds: small PNG (8-bit, 16-bit,
 // grey with alpha), JPEG, BMP and TGA images, and jpeg-dc-overflow, whose
 // DC terms overflow stb_image 2.27's int (UBSan stops there unless
@@ -39,6 +40,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       __builtin_trap();
     for (int c = 0; c < 3; ++c)
       if (!(image.mean[c] >= 0.0 && image.mean[c] <= 1.0)) __builtin_trap();
+    // The same bytes decode to the same texels (stb_image once output
+    // blocks of a corrupt JPEG it never wrote: whatever the heap held).
+    vismask::TextureImage again;
+    if (!vismask::DecodeTexture(bytes, "fuzz.png", "fuzz.mtl:1", &again, kBudget).ok() ||
+        again.rgb != image.rgb)
+      __builtin_trap();
   }
   return 0;
 }
