@@ -147,6 +147,12 @@ $(BUILD)/obj/%.o: %.cpp $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
 	$(SAY) CXX $<
 	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
+# stb_image 2.27, compiled into texture.cpp, overflows signed ints on corrupt
+# JPEGs (its DC prediction: fixed upstream in 2.28): -fwrapv makes them wrap,
+# as the hardware does, instead of undefined behaviour (the texture fuzz
+# target, issue 42).
+$(BUILD)/obj/src/texture.o build/fuzz/obj/src/texture.o: CXXFLAGS += -fwrapv
+build/fuzz/obj/src/texture.o: FUZZ_CXXFLAGS += -fwrapv
 
 $(BUILD)/vismask: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(POSIX_OBJ)
 	$(SAY) LD $@
@@ -399,10 +405,11 @@ cluster-million:
 	tools/cluster-experiments --million-only
 
 # libFuzzer with ASan + UBSan (clang: tools/install-deps --fuzz; tests/fuzz/):
-# build/fuzz/scene_fuzz, the OBJ/MTL loader (seeds tests/fuzz/corpus), and
+# build/fuzz/scene_fuzz, the OBJ/MTL loader (seeds tests/fuzz/corpus),
 # build/fuzz/image_fuzz, the PFM and PGM readers (seeds
-# tests/fuzz/image-corpus). make fuzz runs each for FUZZ_SECONDS (or
-# FUZZ_RUNS executions, when given), one after the other; new inputs go to
+# tests/fuzz/image-corpus), and build/fuzz/texture_fuzz, the texture reader
+# (stb_image through vismask's checks; seeds tests/fuzz/texture-corpus).
+# make fuzz runs each for FUZZ_SECONDS (or FUZZ_RUNS executions, when given), one after the other; new inputs go to
 # build/fuzz/corpus-TARGET, a crash to build/fuzz/TARGET-crash-* (and make
 # fails). The targets link the library's objects compiled by clang with
 # coverage, from an archive (build/fuzz/libvismask.a), so each takes what
@@ -415,7 +422,7 @@ FUZZ_RUNS ?=
 FUZZ_REPORT_RUNS ?= 10000000
 FUZZ_REPORT_SECONDS ?=
 FUZZ_CXX ?= clang++
-FUZZ_TARGETS := scene image
+FUZZ_TARGETS := scene image texture
 FUZZ_BIN := $(patsubst %,build/fuzz/%_fuzz,$(FUZZ_TARGETS))
 FUZZ_CXXFLAGS := -std=c++17 -O1 -g -Wall -Wextra -fsanitize=address,undefined -fno-sanitize-recover=undefined \
                  -Iinclude -Iplatform -I/usr/include/stb -MMD -MP

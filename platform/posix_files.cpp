@@ -1,12 +1,17 @@
 // POSIX implementation of include/vismask/os.h's files and directories:
 // InFile, OutFile and their all-or-nothing commit, DirLock, MakeDirs.
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <zlib.h>
 
+#include <climits>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -52,13 +57,55 @@ InFile::~InFile() {
   if (fd_ >= 0) close(fd_);
 }
 
+namespace {
+
+// What a file that is not a regular file is, for messages.
+const char* KindOf(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+}  // namespace
+
 bool InFile::Open(const char* path, std::string* why) {
   if (fd_ >= 0) close(fd_);
+  fd_ = -1;
+  kind_ = nullptr;
+  // Non-blocking, so that opening a FIFO without a writer returns at once;
+  // then only a regular file is kept (a device such as /dev/zero or a FIFO
+  // would be read without end).
+  int fd;
   do {
-    fd_ = open(path, O_RDONLY | O_CLOEXEC);
-  } while (fd_ < 0 && errno == EINTR);
-  if (fd_ < 0) *why = std::strerror(errno);
-  return fd_ >= 0;
+    fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  } while (fd < 0 && errno == EINTR);
+  if (fd < 0) {
+    *why = std::strerror(errno);
+    return false;
+  }
+  struct stat st;
+  if (fstat(fd, &st) != 0) {
+    *why = std::strerror(errno);
+    close(fd);
+    return false;
+  }
+  if (!S_ISREG(st.st_mode)) {
+    kind_ = KindOf(st.st_mode);
+    *why = std::string("not a regular file (") + kind_ + ")";
+    close(fd);
+    return false;
+  }
+  const int flags = fcntl(fd, F_GETFL);
+  if (flags < 0 || fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+    *why = std::strerror(errno);
+    close(fd);
+    return false;
+  }
+  fd_ = fd;
+  return true;
 }
 
 int64_t InFile::Read(void* buf, size_t n, std::string* why) {
@@ -86,6 +133,52 @@ OutFile::~OutFile() {
   Discard();
 }
 
+namespace {
+
+// Whether process `pid` exists (one we may not signal exists too).
+bool Alive(long pid) {
+  return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+}
+
+}  // namespace
+
+int RemoveStaleTemporaries(const char* path, char* first, size_t firstSize) {
+  char dir[kMaxPath];
+  const char* slash = std::strrchr(path, '/');
+  const char* base = slash ? slash + 1 : path;
+  if (slash == nullptr)
+    std::snprintf(dir, sizeof dir, ".");
+  else
+    std::snprintf(dir, sizeof dir, "%.*s", slash == path ? 1 : static_cast<int>(slash - path),
+                  path);
+  DIR* d = ::opendir(dir);
+  if (d == nullptr) return 0;
+  const size_t baseLen = std::strlen(base);
+  int removed = 0;
+  while (const struct dirent* e = ::readdir(d)) {
+    // BASE.tmp.PID (a temporary file) or BASE.old.PID (a second name the
+    // commit keeps), PID all digits, not this process and not alive.
+    const char* name = e->d_name;
+    if (std::strncmp(name, base, baseLen) != 0) continue;
+    const char* rest = name + baseLen;
+    if (std::strncmp(rest, ".tmp.", 5) != 0 && std::strncmp(rest, ".old.", 5) != 0) continue;
+    const char* digits = rest + 5;
+    if (*digits == '\0' || std::strspn(digits, "0123456789") != std::strlen(digits) ||
+        std::strlen(digits) > 9)
+      continue;
+    const long pid = std::strtol(digits, nullptr, 10);
+    if (pid <= 0 || pid == static_cast<long>(::getpid()) || Alive(pid)) continue;
+    char full[kMaxPath + 256];
+    std::snprintf(full, sizeof full, "%s/%s", dir, name);
+    struct stat st;
+    if (::lstat(full, &st) != 0 || S_ISDIR(st.st_mode)) continue;
+    if (::unlink(full) != 0) continue;
+    if (removed++ == 0 && first != nullptr) std::snprintf(first, firstSize, "%s", full);
+  }
+  ::closedir(d);
+  return removed;
+}
+
 bool OutFile::Open(const char* path, char* why) {
   Discard();
   if (std::strlen(path) >= kMaxPath) {
@@ -94,12 +187,31 @@ bool OutFile::Open(const char* path, char* why) {
   }
   struct stat st;
   if (::lstat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-    if (why) std::snprintf(why, kWhyBytes, "'%s' exists and is not a regular file", path);
+    if (why)
+      std::snprintf(why, kWhyBytes, "'%s' exists and is %s", path,
+                    S_ISLNK(st.st_mode) ? "a symbolic link (an output is never written through one)"
+                                        : "not a regular file");
     return false;
   }
   std::strcpy(path_, path);
   std::snprintf(tmpPath_, sizeof tmpPath_, "%s.tmp.%ld", path, static_cast<long>(::getpid()));
-  fd_ = ::open(tmpPath_, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  // Created new, never through a symbolic link: a name planted in its
+  // place (the pid is easy to guess) must not redirect the output.
+  constexpr int kCreate = O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC;
+  fd_ = ::open(tmpPath_, kCreate, 0666);
+  if (fd_ < 0 && errno == EEXIST) {
+    // A regular file of that name is a leftover (a killed run that had
+    // this pid): removed, and the file made anew. Anything else, a
+    // symbolic link above all, is refused and left alone.
+    if (::lstat(tmpPath_, &st) == 0 && !S_ISREG(st.st_mode)) {
+      if (why)
+        std::snprintf(why, kWhyBytes, "'%s' exists and is %s: refused", tmpPath_,
+                      S_ISLNK(st.st_mode) ? "a symbolic link" : "not a regular file");
+      return false;
+    }
+    ::unlink(tmpPath_);
+    fd_ = ::open(tmpPath_, kCreate, 0666);
+  }
   if (fd_ < 0) {
     SetWhy(why, "cannot open", tmpPath_);
     return false;
@@ -107,12 +219,21 @@ bool OutFile::Open(const char* path, char* why) {
   tempSlot_ = ClaimTempSlot(tmpPath_);
   InstallSignalCleanup();
   writeErrno_ = 0;
+  bytes_ = 0;
+  crc_ = static_cast<uint32_t>(::crc32(0L, Z_NULL, 0));
   return true;
 }
 
 bool OutFile::Write(const void* data, size_t n) {
   if (fd_ < 0 || writeErrno_ != 0) return false;
   const char* s = static_cast<const char*>(data);
+  bytes_ += n;
+  for (size_t done = 0; done < n;) {
+    const size_t part = n - done < UINT_MAX ? n - done : UINT_MAX;
+    crc_ = static_cast<uint32_t>(
+        ::crc32(crc_, reinterpret_cast<const Bytef*>(s + done), static_cast<uInt>(part)));
+    done += part;
+  }
   while (n > 0) {
     ssize_t w = ::write(fd_, s, n);
     if (w < 0) {
@@ -132,6 +253,9 @@ bool OutFile::Close(char* why) {
     return false;
   }
   int failed = writeErrno_;
+  // On the disk before any rename makes it an output (a power cut after
+  // the commit must not leave an empty or short file under the final name).
+  if (failed == 0 && ::fsync(fd_) != 0) failed = errno;
   if (::close(fd_) != 0 && failed == 0) failed = errno;
   fd_ = -1;
   // CommitAll (the only caller) renames or removes it before a signal is handled.
@@ -158,7 +282,104 @@ void OutFile::Discard() {
   ReleaseTempSlot(&tempSlot_);
 }
 
-bool CommitAll(OutFile* const* files, int n, char* why) {
+namespace {
+
+constexpr char kJournalName[] = ".vismask.commit";
+constexpr char kJournalHead[] = "vismask commit 1\n";
+constexpr size_t kJournalBytes = 64 * 1024;
+
+// The directory part of `path` into dir (kMaxPath): "." when it has none.
+void DirOf(const char* path, char* dir) {
+  const char* slash = std::strrchr(path, '/');
+  if (slash == nullptr) {
+    std::snprintf(dir, kMaxPath, ".");
+  } else if (slash == path) {
+    std::snprintf(dir, kMaxPath, "/");
+  } else {
+    std::snprintf(dir, kMaxPath, "%.*s", static_cast<int>(slash - path), path);
+  }
+}
+
+// fsync on a directory: its entries (renames, unlinks) on the disk.
+bool SyncDir(const char* dir) {
+  int fd = ::open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return false;
+  bool ok = ::fsync(fd) == 0;
+  ::close(fd);
+  return ok;
+}
+
+// Writes all of `n` bytes to fd; false on an error.
+bool WriteAll(int fd, const char* s, size_t n) {
+  while (n > 0) {
+    ssize_t w = ::write(fd, s, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    s += w;
+    n -= static_cast<size_t>(w);
+  }
+  return true;
+}
+
+// The commit's journal, DIR/.vismask.commit: which temporary file becomes
+// which output (and the previous output's second name), written and made
+// durable before the first rename and removed after the last. A run killed
+// between the two leaves it, and FinishInterruptedCommit completes the
+// renames. Entries are NUL-separated: "tmp\0final\0old\0" after the head.
+bool WriteJournal(const char* dir, OutFile* const* files, const char (*old)[kMaxPath + 24], int n,
+                  char* journal, char* why) {
+  char buf[kJournalBytes];
+  size_t len = 0;
+  auto add = [&](const char* text, size_t size) {
+    if (len + size > sizeof buf) return false;
+    std::memcpy(buf + len, text, size);
+    len += size;
+    return true;
+  };
+  // Names in `dir` itself are written bare (a reader may spell the
+  // directory otherwise: "out", "./out"), others (--export) as they are.
+  auto name = [&](const char* path, const char* final) {
+    char fdir[kMaxPath];
+    DirOf(final, fdir);
+    if (std::strcmp(fdir, dir) != 0) return path;
+    const char* slash = std::strrchr(path, '/');
+    return slash ? slash + 1 : path;
+  };
+  bool fits = add(kJournalHead, sizeof kJournalHead - 1);
+  for (int i = 0; i < n && fits; ++i) {
+    const char* final = files[i]->path();
+    const char* names[3] = {name(files[i]->tmpPath(), final), name(final, final),
+                            name(old[i], final)};
+    for (const char* e : names) fits = fits && add(e, std::strlen(e) + 1);
+  }
+  if (!fits) {
+    if (why)
+      std::snprintf(why, kWhyBytes, "the commit's journal would exceed %zu bytes", sizeof buf);
+    return false;
+  }
+  std::snprintf(journal, kMaxPath + 32, "%s/%s", dir, kJournalName);
+  char tmp[kMaxPath + 64];
+  std::snprintf(tmp, sizeof tmp, "%s.tmp.%ld", journal, static_cast<long>(::getpid()));
+  ::unlink(tmp);
+  int fd = ::open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    SetWhy(why, "cannot create the commit's journal", tmp);
+    return false;
+  }
+  bool ok = WriteAll(fd, buf, len) && ::fsync(fd) == 0;
+  ok = ::close(fd) == 0 && ok;
+  if (!ok || ::rename(tmp, journal) != 0 || !SyncDir(dir)) {
+    SetWhy(why, "cannot write the commit's journal", journal);
+    ::unlink(tmp);
+    ::unlink(journal);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool CommitAll(OutFile* const* files, int n, char* why, const char* journalDir) {
   CommitGuard guard;
   bool ok = true;
   for (int i = 0; i < n; ++i) {
@@ -181,10 +402,20 @@ bool CommitAll(OutFile* const* files, int n, char* why) {
   }
   char old[kMax][kMaxPath + 24];
   bool kept[kMax] = {};
-  int renamed = 0;
-  for (int i = 0; i < n && ok; ++i) {
+  for (int i = 0; i < n; ++i)
     std::snprintf(old[i], sizeof old[i], "%s.old.%ld", files[i]->path_,
                   static_cast<long>(::getpid()));
+  // Every temporary file is on the disk (Close synced it); the journal
+  // then says what the renames are, so that a kill or a power cut during
+  // them can be finished (FinishInterruptedCommit) instead of leaving some
+  // outputs new and the others old.
+  char journal[kMaxPath + 32] = "";
+  if (journalDir != nullptr && !WriteJournal(journalDir, files, old, n, journal, why)) {
+    for (int i = 0; i < n; ++i) ::unlink(files[i]->tmpPath_);
+    return false;
+  }
+  int renamed = 0;
+  for (int i = 0; i < n && ok; ++i) {
     ::unlink(old[i]);
     if (::link(files[i]->path_, old[i]) == 0) {
       kept[i] = true;
@@ -212,7 +443,91 @@ bool CommitAll(OutFile* const* files, int n, char* why) {
     if (!ok && i >= renamed) ::unlink(files[i]->tmpPath_);
     if (kept[i]) ::unlink(old[i]);  // a no-op after the rename back
   }
+  // The renames on the disk (every directory an output is in), then the
+  // journal gone: the commit is done.
+  char synced[kMaxPath] = "";
+  for (int i = 0; i < n; ++i) {
+    char dir[kMaxPath];
+    DirOf(files[i]->path_, dir);
+    if (std::strcmp(dir, synced) == 0) continue;
+    SyncDir(dir);
+    std::memcpy(synced, dir, sizeof dir);
+  }
+  if (journal[0] != '\0') {
+    ::unlink(journal);
+    SyncDir(journalDir);
+  }
   return ok;
+}
+
+bool CommitAll(OutFile* const* files, int n, char* why) {
+  return CommitAll(files, n, why, nullptr);
+}
+
+int FinishInterruptedCommit(const char* dir, int* renamed, char* why) {
+  *renamed = 0;
+  char journal[kMaxPath + 32];
+  std::snprintf(journal, sizeof journal, "%s/%s", dir, kJournalName);
+  int fd = ::open(journal, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0 && errno == ENOENT) return 0;
+  if (fd < 0) {
+    SetWhy(why, "cannot read the commit's journal", journal);
+    return -1;
+  }
+  static char buf[kJournalBytes + 1];  // init only, one thread
+  struct stat st;
+  ssize_t len = -1;
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) &&
+      st.st_size <= static_cast<off_t>(kJournalBytes))
+    len = ::pread(fd, buf, kJournalBytes, 0);
+  ::close(fd);
+  const size_t head = sizeof kJournalHead - 1;
+  if (len < static_cast<ssize_t>(head) || std::memcmp(buf, kJournalHead, head) != 0) {
+    if (why) std::snprintf(why, kWhyBytes, "'%s' is not a commit journal of vismask", journal);
+    return -1;
+  }
+  buf[len] = '\0';
+  // Entries: bare names of outputs in `dir`, or .glb files (--export) by
+  // their paths; each with its temporary name as OutFile makes it
+  // ("FINAL.tmp.PID") and its second name ("FINAL.old.PID").
+  int count = 0;
+  for (size_t at = head; at < static_cast<size_t>(len);) {
+    const char* entry[3];
+    entry[0] = buf + at;
+    entry[1] = entry[0] + std::strlen(entry[0]) + 1;
+    if (entry[1] >= buf + len) break;
+    entry[2] = entry[1] + std::strlen(entry[1]) + 1;
+    if (entry[2] >= buf + len) break;
+    at = static_cast<size_t>(entry[2] + std::strlen(entry[2]) + 1 - buf);
+    const char* final = entry[1];
+    const size_t fl = std::strlen(final);
+    const bool bare = std::strchr(final, '/') == nullptr;
+    const bool glb = fl > 4 && std::strcmp(final + fl - 4, ".glb") == 0;
+    if (!(bare || glb) || std::strncmp(entry[0], final, fl) != 0 ||
+        std::strncmp(entry[0] + fl, ".tmp.", 5) != 0 || std::strncmp(entry[2], final, fl) != 0 ||
+        std::strncmp(entry[2] + fl, ".old.", 5) != 0)
+      continue;
+    char path[3][kMaxPath + 64];
+    for (int k = 0; k < 3; ++k) {
+      if (bare)
+        std::snprintf(path[k], sizeof path[k], "%s/%s", dir, entry[k]);
+      else
+        std::snprintf(path[k], sizeof path[k], "%s", entry[k]);
+    }
+    struct stat t;
+    if (::lstat(path[0], &t) == 0 && S_ISREG(t.st_mode) && ::rename(path[0], path[1]) == 0) ++count;
+    ::unlink(path[2]);
+    if (!bare) {
+      char fdir[kMaxPath];
+      DirOf(path[1], fdir);
+      SyncDir(fdir);
+    }
+  }
+  SyncDir(dir);
+  ::unlink(journal);
+  SyncDir(dir);
+  *renamed = count;
+  return 1;
 }
 
 bool CommitAll(OutFile* files, int n, char* why) {
@@ -234,9 +549,22 @@ DirLock::~DirLock() {
 bool DirLock::Acquire(const char* dir, char* why) {
   char path[kMaxPath + 16];
   std::snprintf(path, sizeof path, "%s/.vismask.lock", dir);
-  int fd = ::open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  inUse_ = false;
+  // Never through a symbolic link (the pid would be written into whatever
+  // it names), and only into a regular file (not a FIFO or a device).
+  int fd = ::open(path, O_RDWR | O_CREAT | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC, 0666);
+  if (fd < 0 && errno == ELOOP) {
+    if (why) std::snprintf(why, kWhyBytes, "the lock file '%s' is a symbolic link: refused", path);
+    return false;
+  }
   if (fd < 0) {
     SetWhy(why, "cannot open the lock file", path);
+    return false;
+  }
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    if (why) std::snprintf(why, kWhyBytes, "the lock file '%s' is not a regular file", path);
+    ::close(fd);
     return false;
   }
   if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
@@ -245,6 +573,7 @@ bool DirLock::Acquire(const char* dir, char* why) {
     ssize_t got = ::pread(fd, pid, sizeof pid - 1, 0);
     ::close(fd);
     if (err == EWOULDBLOCK) {
+      inUse_ = true;
       if (why)
         std::snprintf(why, kWhyBytes, "'%s' is in use by another vismask run (pid %s)", dir,
                       got > 0 ? pid : "unknown");

@@ -21,17 +21,23 @@ namespace vismask::os {
 
 namespace {
 
-void WriteAll(int fd, const char* s, size_t n) {
+// Writes all of `n` bytes; errno (0 when done) of the failure.
+int WriteAll(int fd, const char* s, size_t n) {
   while (n > 0) {
     ssize_t w = ::write(fd, s, n);
     if (w < 0) {
       if (errno == EINTR) continue;
-      return;
+      return errno;
     }
     s += w;
     n -= static_cast<size_t>(w);
   }
+  return 0;
 }
+
+// Standard output was closed when vismask started (GuardStandardDescriptors
+// put /dev/null there): what is written to it goes nowhere.
+bool gStdoutWasClosed = false;
 
 // The temporary names a fatal signal removes: OutFile's, from Open until
 // its file is renamed or removed. Written by the main thread only; `used`
@@ -182,8 +188,15 @@ double CpuSeconds() {
 void WriteErr(const char* s, size_t n) {
   WriteAll(2, s, n);
 }
-void WriteOut(const char* s, size_t n) {
-  WriteAll(1, s, n);
+bool WriteOut(const char* s, size_t n, char* why) {
+  if (gStdoutWasClosed) {
+    if (why) std::snprintf(why, kWhyBytes, "cannot write to standard output: it is closed");
+    return false;
+  }
+  const int err = WriteAll(1, s, n);
+  if (err != 0 && why)
+    std::snprintf(why, kWhyBytes, "cannot write to standard output: %s", std::strerror(err));
+  return err == 0;
 }
 
 void PrintErr(const char* fmt, ...) {
@@ -200,6 +213,7 @@ void GuardStandardDescriptors() {
   for (int fd = 0; fd <= 2; ++fd) {
     if (::fcntl(fd, F_GETFD) != -1 || errno != EBADF) continue;
     // open() returns the lowest free descriptor: this one.
+    if (fd == 1) gStdoutWasClosed = true;
     int opened = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
     if (opened != fd && opened >= 0) ::close(opened);  // not ours to fill; leave it
   }

@@ -49,6 +49,10 @@ int Compare(const Options& o) {
                                 ", the images are " + std::to_string(a.width) + "x" +
                                 std::to_string(a.height)));
   }
+  if (!mask.pixels.empty() &&
+      std::all_of(mask.pixels.begin(), mask.pixels.end(), [](uint8_t m) { return m != 0; }))
+    return Fail(Status::Error("vismask: --exclude: " + o.exclude +
+                              ": every pixel is excluded: nothing is left to compare"));
   ImageError e = CompareImages(Span<const float>(a.pixels.data(), a.pixels.size()),
                                Span<const float>(b.pixels.data(), b.pixels.size()),
                                Span<const uint8_t>(mask.pixels.data(), mask.pixels.size()));
@@ -58,8 +62,7 @@ int Compare(const Options& o) {
   if (!o.exclude.empty())
     n +=
         std::snprintf(line + n, sizeof line - size_t(n), "excluded_pixels %zu\n", e.excludedPixels);
-  os::WriteOut(line, static_cast<size_t>(n));
-  return kExitOk;
+  return WriteStdout(line, static_cast<size_t>(n)) ? kExitOk : kExitOutput;
 }
 
 }  // namespace run
@@ -74,10 +77,10 @@ int Main(int argc, const char* const* argv) {
   if (!s.ok()) return Fail(s);
   if (r->options.help) {
     const char* text = r->options.command == "view" ? ViewHelpText() : HelpText();
-    os::WriteOut(text, std::strlen(text));
-    return kExitOk;
+    return WriteStdout(text, std::strlen(text)) ? kExitOk : kExitOutput;
   }
   if (r->options.command == "compare") return Compare(r->options);
+  if (r->options.command == "verify") return Verify(r->options);
   if (r->options.command == "footprint") return Footprint(r->options);
   if (r->options.command == "view") return View(r->options);
   // The pipe transport forks here: every rank carries on from this point.

@@ -219,8 +219,7 @@ int Footprint(const Options& o) {
         "staged copies beside the arenas); budget_B, the larger, is what --mem-budget must "
         "allow\n");
   }
-  os::WriteOut(out.data(), out.size());
-  return kExitOk;
+  return WriteStdout(out.data(), out.size()) ? kExitOk : kExitOutput;
 }
 
 }  // namespace vismask::run

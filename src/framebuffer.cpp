@@ -142,8 +142,13 @@ void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* i
     open -= w;
     if (w > best) best = w, bestId = f[k].id;
   }
-  // Where ids were dropped, the kept ones stand for the whole pixel.
-  if (dropped && open > 0.0f && open < 1.0f) c *= 1.0f / (1.0f - open);
+  // Where ids were dropped, the kept ones stand for the whole pixel: for
+  // its colour and for the share of it that is front-facing (which the
+  // black-image warning reads: a 1 x 1 image of a lit room drops most).
+  if (dropped && open > 0.0f && open < 1.0f) {
+    c *= 1.0f / (1.0f - open);
+    front *= 1.0f / (1.0f - open);
+  }
   *color = c;
   *id = bestId;
   *frontShare = front;

@@ -17,6 +17,9 @@ usage:
                                          relative RMSE and max abs error of A
                                          against B (pixels where MASK.pgm is
                                          nonzero left out)
+  vismask verify OUT_DIR                 whether OUT_DIR holds one run's
+                                         complete outputs, as its run.json
+                                         lists them (exit 0; 1 if not)
   vismask view OUT_DIR [--glb NAME.glb] [--port P]
                                          serve the solved mesh (render
                                          --export) in the viewer page on
@@ -68,7 +71,7 @@ render options:
                        against an even spread above X (default 20)
   --seed S             random seed, unsigned 64-bit (default 1)
   --stop-unshot F      stop when unshot power < F * emitted power, 0 <= F < 1
-                       (default 1e-3)
+                       (default 1e-3); 0 needs another stop as well
   --max-shots N        stop after N shots (default: no limit)
   --max-seconds T      stop after T seconds of solving (default: no limit;
                        a time limit makes the result depend on speed)

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <istream>
 #include <limits>
 #include <streambuf>
@@ -182,14 +181,15 @@ ImageError CompareImages(Span<const float> a, Span<const float> b, Span<const ui
 namespace {
 
 // Reads the whole file at `path` into *bytes; an error message, empty on
-// success. Only regular files: a device (/dev/zero) or a FIFO would be read
-// until memory runs out.
+// success. Only regular files (InFile::Open): a device (/dev/zero) or a FIFO
+// would be read until memory runs out, or never answer.
 std::string ReadBytes(const std::string& path, std::string* bytes) {
   os::InFile in;
   std::string why;
-  if (!in.Open(path.c_str(), &why)) return "cannot open";
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return "cannot read: not a regular file";
+  if (!in.Open(path.c_str(), &why)) {
+    if (in.kind()) return std::string("cannot read: not a regular file (") + in.kind() + ")";
+    return "cannot open";
+  }
   const int64_t size = in.Size();
   if (size < 0) return "cannot read";
   if (static_cast<uint64_t>(size) > std::numeric_limits<size_t>::max() / 2)
@@ -245,10 +245,22 @@ Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmIm
   in >> magic >> w >> h >> scale;
   if (!in || magic != "PF" || w <= 0 || h <= 0 || scale == 0.0 || !std::isfinite(scale))
     return Status::At(name, 0, "not a colour PFM (expected 'PF', width, height, scale)");
+  // The scale's sign is the byte order; its magnitude would scale every
+  // pixel, which vismask does not do: only 1 and -1 are read.
+  if (scale != 1.0 && scale != -1.0)
+    return Status::At(name, 0,
+                      "PFM scale " + std::to_string(scale) +
+                          ": only 1 (big-endian) and -1 (little-endian) are read (any other "
+                          "would scale the pixels)");
   in.get();  // the single whitespace byte after the scale
   const size_t start = buf.Offset();
   std::string err = CheckPixelBytes(bytes.size() - start, w, h, 12, "PFM");
   if (!err.empty()) return Status::At(name, 0, err);
+  const size_t extra = bytes.size() - start - size_t(w) * size_t(h) * 12;
+  if (extra > 0)
+    return Status::At(name, 0,
+                      std::to_string(extra) + " bytes after the pixels (the header says " +
+                          std::to_string(w) + " x " + std::to_string(h) + "): not one PFM image");
   const bool bigEndian = scale > 0.0;
   const size_t rowFloats = size_t(w) * 3;
   std::vector<float> pixels(rowFloats * size_t(h));

@@ -29,6 +29,24 @@ Status Loader::ApplyEmit() {
   return Status::Ok();
 }
 
+Status Loader::DroppedEmitters(const std::vector<uint8_t>& used) const {
+  const std::vector<Material>& materials = *materials_;
+  auto emits = [&](size_t m) {
+    const glm::vec3& ke = materials[m].ke;
+    return ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
+  };
+  for (size_t m = 0; m < materials.size(); ++m)
+    if (m < used.size() && used[m] && emits(m)) return Status::Ok();
+  for (const auto& [m, at] : droppedFace_)
+    if (m < materials.size() && emits(m))
+      return Status::At(path_, at.first,
+                        "no emitter left: this face of emitting material '" + materials[m].name +
+                            "' " + at.second +
+                            " and was dropped, and no other face emits (fix the face, or --emit "
+                            "NAME=R,G,B makes another material emit)");
+  return Status::Ok();
+}
+
 std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) const {
   std::vector<std::string> w = warnings_;
   auto at = [&](int line) { return path_ + ":" + std::to_string(line) + ": warning: "; };
@@ -86,7 +104,7 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
   if (!loadedMtls_.insert(path).second) return Status::Ok();
   std::string text;
   std::string err = readMtl_(path, &text);
-  if (!err.empty()) return Status::At(objPath, objLine, err + " MTL file '" + path + "'");
+  if (!err.empty()) return Status::At(objPath, objLine, "MTL file '" + path + "': " + err);
   TextLines lines(text);
   std::vector<Material>& materials = *materials_;
   bool haveMaterial = false;

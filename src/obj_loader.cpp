@@ -91,6 +91,11 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
       }
       if (r.fate == FaceResult::kDegenerate) degenerate_.Add(line);
       if (r.fate == FaceResult::kSelfIntersecting) selfIntersecting_.Add(line);
+      if (r.fate == FaceResult::kDegenerate || r.fate == FaceResult::kSelfIntersecting)
+        droppedFace_.emplace(material,
+                             std::make_pair(line, r.fate == FaceResult::kDegenerate
+                                                      ? "has no area"
+                                                      : "has edges that cross (a bow tie)"));
     } else if (key == "usemtl") {
       if (args != 1) return Status::At(path, line, "'usemtl' needs 1 name, got " + Str(args));
       auto it = materialIndex_.find(t[1]);

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <string>
@@ -64,6 +65,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     o->compareA = args[1];
     o->compareB = args[2];
     if (mask) o->exclude = args[4];
+    return Status::Ok();
+  }
+  if (args[0] == "verify") {
+    if (args.size() != 2 || args[1].empty() || args[1].rfind("--", 0) == 0)
+      return Status::Error("vismask: verify: usage: vismask verify OUT_DIR");
+    o->command = "verify";
+    o->verifyDir = args[1];
     return Status::Ok();
   }
   if (args[0] == "view") {
@@ -400,6 +408,21 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     return Status::Error(
         "vismask: --view and --camera: give one or the other (--view frames the "
         "bounding box from a side, --camera places the camera itself)");
+  if (o->hasCamera) {
+    // Each pixel must span an angle float rays can tell apart: below 2^-20
+    // radians (8 float steps of a unit direction) neighbouring pixels see
+    // the same thing, and the projection overflows to a black image.
+    const double pixel = o->camera.fovyDeg * 3.14159265358979 / 180.0 / o->height;
+    if (pixel < std::ldexp(1.0, -20)) {
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "vismask: --camera: a field of view of %g degrees over %d pixels gives each "
+                    "pixel %.3g radians, below the %.3g (2^-20) that float rays can tell apart; "
+                    "widen the field of view",
+                    static_cast<double>(o->camera.fovyDeg), o->height, pixel, std::ldexp(1.0, -20));
+      return Status::Error(text);
+    }
+  }
   if (o->errorEvery > 0 && o->reference.empty())
     return Status::Error("vismask: --error-every: needs --reference REF.pfm to measure against");
   // --rays N alone keeps its meaning: N rays every shot.
@@ -416,6 +439,14 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   if (!o->exclude.empty() && o->reference.empty())
     return Status::Error(
         "vismask: --exclude: needs --reference REF.pfm (the mask applies to its error)");
+  // Unshot power reaches 0 only when every queue drains, which a scene
+  // that reflects never does: --stop-unshot 0 needs another stop.
+  if (o->stopUnshot == 0.0 && o->maxShots == 0 && o->maxSeconds == 0.0 && o->rayBudget == 0 &&
+      o->stopError == 0.0)
+    return Status::Error(
+        "vismask: --stop-unshot 0: would stop only when every queue drains, which a scene "
+        "that reflects never does; give --max-shots, --max-seconds, --ray-budget or "
+        "--stop-error too, or a fraction above 0");
   // --ranks N > 1 without --envs: --envs auto, one balanced environment a
   // rank (under mpirun, SetWorldSize does the same with the world's size).
   if (!o->hasEnvs && o->ranks > 1) o->envsAuto = true;

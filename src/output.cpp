@@ -286,7 +286,7 @@ int WriteOutputs(RunState* r, const SolveResult& res) {
     if (f == kRunJson && r->exportFile.isOpen()) commit[n++] = &r->exportFile;
     commit[n++] = &r->files[f];
   }
-  if (ok) ok = os::CommitAll(commit, n, why);
+  if (ok) ok = os::CommitAll(commit, n, why, r->options.outDir.c_str());
   if (!ok) {
     for (auto& f : r->files) f.Discard();
     r->exportFile.Discard();

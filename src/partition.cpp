@@ -14,6 +14,7 @@
 
 #include "geometry_util.h"
 #include "vismask/check.h"
+#include "vismask/mesh.h"
 #include "vismask/texture.h"
 
 namespace vismask {
@@ -211,6 +212,22 @@ double EstimatedPatches(const glm::vec3* c, int n, float patchSize) {
   if (n == 4) return std::max(cells(0, 1), cells(2, 3)) * std::max(cells(1, 2), cells(3, 0));
   double longest = 1.0;
   for (int i = 0; i < n; ++i) longest = std::max(longest, cells(i, (i + 1) % n));
+  if (n > 4) {
+    // A convex polygon of many corners that MeshScene cuts in strips: their
+    // count (the sliver estimate would be far too high).
+    std::vector<glm::dvec3> d(c, c + n);
+    const glm::dvec3 newell = NewellSum(d);
+    Polygon poly;
+    poly.corners.assign(c, c + n);
+    poly.area = 0.5 * glm::length(newell);
+    if (poly.area > 0.0) {
+      poly.normal = glm::vec3(newell / glm::length(newell));
+      double patches = 0.0, vertices = 0.0;
+      bool strips = false;
+      if (CountPolygonPatches("", poly, patchSize, &patches, &vertices, &strips).ok() && strips)
+        return patches;
+    }
+  }
   return (n - 2) * longest * longest;
 }
 

@@ -98,8 +98,13 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       numEmitters * 256;
   // Every rank prints the loader's warnings, as LoadScene did.
   for (const std::string& w : info.warnings) os::PrintErr("%s\n", w.c_str());
-  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine,
-                           &p->textures);
+  // The textures are decoded within what the budget leaves beside what
+  // init holds already (at least a byte: a budget already spent refuses any).
+  const uint64_t heldNow = p->held + kInitBaseBytes;
+  const uint64_t textureBudget =
+      p->budget == 0 ? 0 : (p->budget > heldNow ? p->budget - heldNow : 1);
+  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine, &p->textures,
+                           textureBudget);
   if (!s.ok()) return s;
   for (const TextureImage& t : p->textures.images)
     p->textureBytes += uint64_t{t.width} * t.height * 4;
@@ -181,9 +186,21 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // whole polygons in file order, the same on every rank): the size of an
   // automatic --round-work.
   double estimated = 0.0;
+  // Faces the mesher cuts in strips (mesh.h): one warning line, on rank 0.
+  size_t stripFaces = 0;
+  int stripLine = 0;
+  size_t stripCorners = 0;
+  double stripChange = 0.0;  // the largest relative change of area
   s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
     estimated +=
         EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()), p->patchSize);
+    bool strips = false;
+    double change = 0.0;
+    if (root && poly.corners.size() > 4 &&
+        MeshesInStrips(o.scene, poly, p->patchSize, &strips, &change).ok() && strips) {
+      if (stripFaces++ == 0) stripLine = poly.line, stripCorners = poly.corners.size();
+      if (std::fabs(change) > std::fabs(stripChange)) stripChange = change;
+    }
     if (probe) probe->Add(i, poly);
     if (check) check->Add(i, poly);
     if (!failed.ok()) return;
@@ -236,6 +253,17 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (probe) p->side = probe->Side();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
+  if (stripFaces > 0) {
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "%s:%d: warning: %zu convex face%s of many corners (here %zu) meshed in strips "
+                  "whose outline passes within 1/64 of the patch size of the corners it skips, "
+                  "not in ear-clipped slivers (their patches would not follow the area); area "
+                  "changed by at most %.2g%%",
+                  o.scene.c_str(), stripLine, stripFaces, stripFaces == 1 ? "" : "s", stripCorners,
+                  100.0 * std::fabs(stripChange));
+    p->emitterWarnings.push_back(text);
+  }
   probe.reset();
   check.reset();
   // Environment by environment, as meshing each would refuse it.

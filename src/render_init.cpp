@@ -246,8 +246,39 @@ int Init(RunState* r) {
   }
   if (!r->outLock.Acquire(o.outDir.c_str(), why)) {
     os::PrintErr("vismask: --out: %s\n", why);
-    return kExitUsage;
+    // Another run's directory is a usage error; a lock file that cannot
+    // be made (read-only, a directory or a link in its place) is an output
+    // that cannot be written.
+    return r->outLock.inUse() ? kExitUsage : kExitOutput;
   }
+  // A commit that a killed run left half done is finished first: the folder
+  // then holds that run's whole set, as its run.json lists it.
+  int renamed = 0;
+  const int finished = os::FinishInterruptedCommit(o.outDir.c_str(), &renamed, why);
+  if (finished < 0) {
+    os::PrintErr("vismask: --out: %s\n", why);
+    return kExitOutput;
+  }
+  if (finished > 0)
+    os::PrintErr(
+        "vismask: warning: --out: finished the commit an interrupted run left in '%s' (%d "
+        "file%s renamed)\n",
+        o.outDir.c_str(), renamed, renamed == 1 ? "" : "s");
+  // Temporary files of runs that were killed (SIGKILL, a power cut): they
+  // never look complete, but pile up. Those whose pid is gone are removed,
+  // with one line.
+  int stale = 0;
+  char staleFirst[os::kMaxPath + 256] = "";
+  auto removeStale = [&](const std::string& path) {
+    stale += os::RemoveStaleTemporaries(path.c_str(), stale == 0 ? staleFirst : nullptr,
+                                        sizeof staleFirst);
+  };
+  for (int f = 0; f < kNumOutputs; ++f) removeStale(o.outDir + "/" + kOutputNames[f]);
+  removeStale(o.outDir + "/.vismask.commit");
+  if (!o.exportPath.empty()) removeStale(o.exportPath);
+  if (stale > 0)
+    os::PrintErr("vismask: warning: removed %d temporary file%s that killed runs left (%s%s)\n",
+                 stale, stale == 1 ? "" : "s", staleFirst, stale > 1 ? ", ..." : "");
   for (int f = 0; f < kNumOutputs; ++f) {
     std::string path = o.outDir + "/" + kOutputNames[f];
     if (!r->files[f].Open(path.c_str(), why)) {

@@ -331,5 +331,16 @@ void RenderImage(RunState* r);
 int WriteOutputs(RunState* r, const SolveResult& res);
 int Footprint(const Options& o);
 int Compare(const Options& o);
+int Verify(const Options& o);
+
+// Writes a command's result to standard output; false, having said why on
+// stderr ("vismask: cannot write to standard output: ..."), if it did not
+// get there: the command then exits with kExitOutput.
+inline bool WriteStdout(const char* s, size_t n) {
+  char why[os::kWhyBytes];
+  if (os::WriteOut(s, n, why)) return true;
+  os::PrintErr("vismask: %s\n", why);
+  return false;
+}
 
 }  // namespace vismask::run

@@ -4,24 +4,67 @@
 
 namespace vismask::run {
 
-// One character of a JSON string as it is written inside the quotes: into
-// out (at least 7 bytes); returns the length.
-size_t JsonChar(char c, char* out) {
-  unsigned char ch = static_cast<unsigned char>(c);
+// The length of the valid UTF-8 sequence at s[0..n) (2 to 4 bytes; 1 for
+// ASCII), or 0 if s[0] does not start one (a stray continuation byte, an
+// overlong form, a surrogate, beyond U+10FFFF, or cut short).
+size_t Utf8Length(const unsigned char* s, size_t n) {
+  const unsigned char b = s[0];
+  if (b < 0x80) return 1;
+  size_t len = 0;
+  unsigned lo = 0x80, hi = 0xbf;  // the second byte's range
+  if (b >= 0xc2 && b <= 0xdf) {
+    len = 2;
+  } else if (b >= 0xe0 && b <= 0xef) {
+    len = 3;
+    if (b == 0xe0) lo = 0xa0;  // no overlong forms
+    if (b == 0xed) hi = 0x9f;  // no surrogates
+  } else if (b >= 0xf0 && b <= 0xf4) {
+    len = 4;
+    if (b == 0xf0) lo = 0x90;
+    if (b == 0xf4) hi = 0x8f;  // at most U+10FFFF
+  } else {
+    return 0;
+  }
+  if (n < len || s[1] < lo || s[1] > hi) return 0;
+  for (size_t k = 2; k < len; ++k)
+    if (s[k] < 0x80 || s[k] > 0xbf) return 0;
+  return len;
+}
+
+// The next piece of a JSON string's content from s[0..n) into out (at
+// least 7 bytes): a valid UTF-8 sequence as it is, '"' and '\\' escaped, and
+// a control character or a byte that is not valid UTF-8 as \u00XX (XX the
+// byte: run.json is valid JSON whatever bytes a path holds, and \u00XX
+// always stands for the byte XX, vismask verify reads it back so). Returns
+// the bytes consumed and *written.
+size_t JsonPiece(const char* s, size_t n, char* out, size_t* written) {
+  const unsigned char ch = static_cast<unsigned char>(s[0]);
   if (ch == '"' || ch == '\\') {
     out[0] = '\\';
-    out[1] = c;
-    return 2;
+    out[1] = s[0];
+    *written = 2;
+    return 1;
   }
-  if (ch < 0x20) return static_cast<size_t>(std::snprintf(out, 7, "\\u%04x", ch));
-  out[0] = c;
-  return 1;
+  const size_t len = ch < 0x20 ? 0 : Utf8Length(reinterpret_cast<const unsigned char*>(s), n);
+  if (len == 0) {
+    *written = static_cast<size_t>(std::snprintf(out, 7, "\\u%04x", ch));
+    return 1;
+  }
+  std::memcpy(out, s, len);
+  *written = len;
+  return len;
 }
 
 void JsonString(TextWriter* w, const char* s) {
   w->Write("\"", 1);
   char esc[8];
-  for (; *s; ++s) w->Write(esc, JsonChar(*s, esc));
+  for (size_t n = std::strlen(s); n > 0;) {
+    size_t written = 0;
+    const size_t used = JsonPiece(s, n, esc, &written);
+    w->Write(esc, written);
+    s += used;
+    n -= used;
+  }
   w->Write("\"", 1);
 }
 
@@ -29,7 +72,11 @@ void JsonString(TextWriter* w, const char* s) {
 std::string JsonQuoted(const std::string& s) {
   std::string q = "\"";
   char esc[8];
-  for (char c : s) q.append(esc, JsonChar(c, esc));
+  for (size_t i = 0; i < s.size();) {
+    size_t written = 0;
+    i += JsonPiece(s.data() + i, s.size() - i, esc, &written);
+    q.append(esc, written);
+  }
   return q + "\"";
 }
 
@@ -328,7 +375,22 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("],\n");
   w.Printf("    \"peak_rss_explained\": %.4f,\n",
            peak > 0 ? static_cast<double>(arenas + files) / static_cast<double>(peak) : 0.0);
-  w.Printf("    \"peak_rss_bytes\": %llu\n  }\n}\n", static_cast<unsigned long long>(peak));
+  w.Printf("    \"peak_rss_bytes\": %llu\n  }", static_cast<unsigned long long>(peak));
+  // The commit record: every other output of this run, its size and CRC-32
+  // (all are written by now; run.json is renamed last), so that a reader
+  // (vismask verify) can tell a complete set from a mixed one.
+  w.Printf(",\n  \"outputs\": [");
+  int listed = 0;
+  auto record = [&](const char* name, const os::OutFile& f) {
+    w.Printf("%s\n    {\"file\": ", listed++ ? "," : "");
+    JsonString(&w, name);
+    w.Printf(", \"bytes\": %llu, \"crc32\": \"%08x\"}", static_cast<unsigned long long>(f.bytes()),
+             static_cast<unsigned>(f.crc32()));
+  };
+  for (int f = 0; f < kNumOutputs; ++f)
+    if (f != kRunJson) record(kOutputNames[f], r->files[f]);
+  if (r->exportFile.isOpen()) record(o.exportPath.c_str(), r->exportFile);
+  w.Printf("\n  ]\n}\n");
   w.Flush();
 }
 

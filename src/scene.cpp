@@ -142,12 +142,20 @@ Status ParseObj(const std::string& objPath, LineSource& lines, const ObjCounts* 
     tally->Add(objPath, materials->size(), p);
     visit(p);
   });
+  // A read error ended the lines early: it comes first (what the loader
+  // made of the lines before it is beside the point).
+  if (!lines.error().empty()) return Status::At(objPath, lines.errorLine(), lines.error());
   if (!s.ok()) return s;
-  if (!lines.error().empty()) return Status::At(objPath, 0, lines.error() + " file");
   s = loader.ApplyEmit();
   if (!s.ok()) return s;
   s = tally->Check(objPath, *materials, perfect);
-  if (!s.ok()) return s;
+  if (!s.ok()) {
+    // "no emitter" because the emitting faces were dropped: said at the face.
+    std::vector<uint8_t> used = tally->used;
+    used.resize(materials->size(), 0);
+    Status dropped = loader.DroppedEmitters(used);
+    return dropped.ok() ? s : dropped;
+  }
   std::vector<uint8_t> used = tally->used;
   used.resize(materials->size(), 0);
   *warnings = loader.Warnings(used);
@@ -219,7 +227,7 @@ bool ClosedFacingIn(const std::vector<Polygon>& polys) {
 Status LoadScene(const std::string& objPath, Scene* scene, const LoadOptions& options) {
   std::string text;
   std::string err = objload::ReadText(objPath, &text);
-  if (!err.empty()) return Status::At(objPath, 0, err + " file");
+  if (!err.empty()) return Status::At(objPath, 0, err);
   return LoadSceneFromText(objPath, text, objload::ReadText, scene, nullptr, options);
 }
 

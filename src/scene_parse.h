@@ -24,6 +24,11 @@ namespace vismask::objload {
 
 // The largest OBJ or MTL file read.
 constexpr uintmax_t kMaxFileBytes = uintmax_t{4} << 30;
+// The longest line a scene file (OBJ) may have: the reader's line buffer is
+// bounded by it (a face of some 100,000 corners fits).
+constexpr size_t kMaxLineBytes = size_t{1} << 20;
+// A NUL byte in a file's first kTextProbeBytes makes it binary, refused.
+constexpr size_t kTextProbeBytes = 1024;
 
 // What float geometry and float images can carry (docs/STABILITY.md). Ray
 // tests multiply coordinates and square lengths in float (max 3.4e38, least
@@ -57,6 +62,9 @@ std::string ReadText(const std::string& path, std::string* text);
 // Checks that `path` is a regular file a loader may read (as ReadText does,
 // without reading it); returns an error message, empty on success.
 std::string CheckReadable(const std::string& path);
+// Why the first bytes of a file (their first kTextProbeBytes) show it is
+// not text (a NUL byte), or "".
+std::string NotText(const char* bytes, size_t n);
 // A file named inside another: relative to the naming file's directory.
 std::string Beside(const std::string& namingFile, const std::string& name);
 // Parses tokens[first..first+count) as finite floats into out[].
@@ -101,16 +109,18 @@ std::string NotDiffuse(const Finish& f);
 // Parses "a b c" (or one number) leniently, for keys only read to warn.
 bool LenientFloats(const Tokens& t, size_t count, double* out);
 
-// The lines of a text, one at a time, split as std::getline does: at '\n',
-// the last line kept even without one, no empty line after a final '\n'; a
-// leading UTF-8 byte-order mark dropped.
+// The lines of a text, one at a time: split at LF, CR LF or a lone CR (old
+// Mac files), the last line kept even without one, no empty line after a
+// final line end; a leading UTF-8 byte-order mark dropped.
 class LineSource {
  public:
   virtual ~LineSource() = default;
   // The next line into *line; false at the end (or on a read error: error()).
   virtual bool Next(std::string* line) = 0;
-  // A read error met on the way ("cannot read"), empty if none.
+  // An error met on the way ("cannot read (...)", a line too long, a binary
+  // file), empty if none, and the line it is at (0: the file as a whole).
   virtual std::string error() const { return ""; }
+  virtual int errorLine() const { return 0; }
 };
 
 // Lines of text held in memory by the caller.
@@ -125,19 +135,27 @@ class TextLines : public LineSource {
 };
 
 // Lines of a file read through a fixed 64 KiB buffer: the file is never
-// held whole. Open checks it as ReadText does.
+// held whole, nor a line longer than kMaxLineBytes (an error at its
+// number), and a file with a NUL byte in its first kTextProbeBytes is
+// refused there. Open checks it as ReadText does.
 class FileLines : public LineSource {
  public:
   // Returns an error message (as ReadText's), empty on success.
   std::string Open(const std::string& path);
   bool Next(std::string* line) override;
   std::string error() const override { return error_; }
+  int errorLine() const override { return errorLine_; }
 
  private:
+  bool Fail(std::string error, int line);  // false, the reading ended
+
   os::InFile in_;
   std::unique_ptr<char[]> buf_;
   size_t begin_ = 0, end_ = 0;
   bool first_ = true, eof_ = false;
+  bool pendingCr_ = false;  // the last line ended at a CR that ended the buffer
+  int lines_ = 0;           // lines returned so far
+  int errorLine_ = 0;
   std::string error_;
 };
 
@@ -170,6 +188,10 @@ class Loader {
   // The warnings, one line per kind, in the order they first arose and the
   // aggregate ones after. `used`: per material, whether a polygon uses it.
   std::vector<std::string> Warnings(const std::vector<uint8_t>& used) const;
+  // When no polygon of an emitting material is left (`used`) but faces of
+  // one were dropped (no area, or edges that cross): the error at the first
+  // such face, which "no emitter" would hide. Ok otherwise.
+  Status DroppedEmitters(const std::vector<uint8_t>& used) const;
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
@@ -196,6 +218,8 @@ class Loader {
   std::string notMtlWhere_;               // "file:line" of the first
   std::string path_;                      // the OBJ
   FaceTally triangulated_, cornersRemoved_, degenerate_, selfIntersecting_;
+  // Per material: the first face of it dropped whole, and why.
+  std::map<uint32_t, std::pair<int, const char*>> droppedFace_;
   std::vector<std::string> replacedKe_;  // "name (Ke r g b)" of each --emit that replaced one
   std::string replacedWhere_;
 };

@@ -14,9 +14,9 @@ using namespace objload;
 Status CountObj(const std::string& objPath, SceneInfo* info) {
   FileLines lines;
   std::string err = lines.Open(objPath);
-  if (!err.empty()) return Status::At(objPath, 0, err + " file");
+  if (!err.empty()) return Status::At(objPath, 0, err);
   ObjCounts c = CountStatements(lines);
-  if (!lines.error().empty()) return Status::At(objPath, 0, lines.error() + " file");
+  if (!lines.error().empty()) return Status::At(objPath, lines.errorLine(), lines.error());
   info->objPath = objPath;
   info->lines = c.lines;
   info->vertices = c.vertices;
@@ -35,7 +35,7 @@ Status Pass(const std::string& objPath, const LoadOptions& options, const SceneI
             std::vector<std::string>* warnings, bool perfect[3]) {
   FileLines lines;
   std::string err = lines.Open(objPath);
-  if (!err.empty()) return Status::At(objPath, 0, err + " file");
+  if (!err.empty()) return Status::At(objPath, 0, err);
   ObjCounts counts;
   counts.vertices = counted.vertices;
   counts.uvs = counted.uvs;

@@ -1,4 +1,5 @@
 // The parser's text helpers and line sources (scene_parse.h).
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,23 @@ std::string CoordinateError(double x) {
 namespace {
 bool IsSpace(char c) {
   return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
+
+const char* KindOf(std::filesystem::file_type t) {
+  switch (t) {
+    case std::filesystem::file_type::directory:
+      return "a directory";
+    case std::filesystem::file_type::character:
+      return "a character device";
+    case std::filesystem::file_type::block:
+      return "a block device";
+    case std::filesystem::file_type::fifo:
+      return "a FIFO";
+    case std::filesystem::file_type::socket:
+      return "a socket";
+    default:
+      return "not a file";
+  }
 }
 
 }  // namespace
@@ -83,14 +101,23 @@ std::string CheckReadable(const std::string& path) {
   // or a FIFO would be read until memory runs out.
   std::error_code ec;
   std::filesystem::file_status st = std::filesystem::status(path, ec);
-  if (ec) return std::string("cannot open (") + ec.message() + ")";
-  if (!std::filesystem::is_regular_file(st)) return "cannot read: not a regular file";
+  if (ec) return "cannot open (" + ec.message() + ")";
+  if (!std::filesystem::is_regular_file(st))
+    return std::string("cannot read: not a regular file (") + KindOf(st.type()) + ")";
   uintmax_t size = std::filesystem::file_size(path, ec);
-  if (ec) return std::string("cannot read (") + ec.message() + ")";
+  if (ec) return "cannot read (" + ec.message() + ")";
   if (size > kMaxFileBytes)
-    return "cannot read: " + std::to_string(size) + " bytes, more than the " +
+    return "cannot read: it has " + std::to_string(size) + " bytes, more than the " +
            std::to_string(kMaxFileBytes) + " a scene file may have";
   return "";
+}
+
+std::string NotText(const char* bytes, size_t n) {
+  const size_t look = std::min(n, kTextProbeBytes);
+  const void* nul = std::memchr(bytes, '\0', look);
+  if (nul == nullptr) return "";
+  return "not a text file (a NUL byte at byte " +
+         std::to_string(static_cast<const char*>(nul) - bytes + 1) + ")";
 }
 
 std::string ReadText(const std::string& path, std::string* text) {
@@ -103,8 +130,13 @@ std::string ReadText(const std::string& path, std::string* text) {
   char buf[1 << 16];
   for (;;) {
     const int64_t n = in.Read(buf, sizeof buf, &why);
-    if (n < 0) return "cannot read";
+    if (n < 0) return "cannot read (" + why + ")";
     if (n == 0) break;
+    // A binary file is refused by its first kilobyte, not read whole.
+    if (all.empty()) {
+      err = NotText(buf, static_cast<size_t>(n));
+      if (!err.empty()) return err;
+    }
     all.append(buf, static_cast<size_t>(n));
   }
   *text = std::move(all);
@@ -233,12 +265,22 @@ TextLines::TextLines(const std::string& text) : text_(text) {
 
 bool TextLines::Next(std::string* line) {
   if (pos_ >= text_.size()) return false;
-  size_t end = text_.find('\n', pos_);
+  size_t end = text_.find_first_of("\r\n", pos_);
   if (end == std::string::npos) end = text_.size();
   line->assign(text_, pos_, end - pos_);
-  pos_ = end + 1;
+  // A line ends at LF, CR LF or a lone CR (old Mac files).
+  pos_ = end + (end + 1 < text_.size() && text_[end] == '\r' && text_[end + 1] == '\n' ? 2 : 1);
   return true;
 }
+
+namespace {
+// The first CR or LF in [p, p + n), or null.
+const char* FindLineEnd(const char* p, size_t n) {
+  for (const char* e = p + n; p < e; ++p)
+    if (*p == '\n' || *p == '\r') return p;
+  return nullptr;
+}
+}  // namespace
 
 namespace {
 constexpr size_t kLineBuffer = size_t{1} << 16;
@@ -253,42 +295,85 @@ std::string FileLines::Open(const std::string& path) {
   begin_ = end_ = 0;
   first_ = true;
   eof_ = false;
+  lines_ = 0;
+  pendingCr_ = false;
+  errorLine_ = 0;
+  error_.clear();
   return "";
+}
+
+bool FileLines::Fail(std::string error, int line) {
+  error_ = std::move(error);
+  errorLine_ = line;
+  eof_ = true;
+  begin_ = end_ = 0;
+  return false;
 }
 
 bool FileLines::Next(std::string* line) {
   line->clear();
+  if (!error_.empty()) return false;
   bool any = false;  // a line has begun (bytes, or a '\n' ends an empty one)
   for (;;) {
     if (begin_ == end_) {
-      if (eof_ || !in_.isOpen()) return any;
+      if (eof_ || !in_.isOpen()) {
+        if (any) ++lines_;
+        return any;
+      }
       std::string why;
       const int64_t n = in_.Read(buf_.get(), kLineBuffer, &why);
       end_ = n > 0 ? static_cast<size_t>(n) : 0;
       begin_ = 0;
-      if (n < 0) {
-        error_ = "cannot read";
-        eof_ = true;
-        return false;
-      }
+      if (n < 0) return Fail("cannot read (" + why + ")", 0);
       if (end_ < kLineBuffer) eof_ = true;
+      // The LF of a CR LF whose CR ended the last buffer.
+      if (pendingCr_ && end_ > 0 && buf_[0] == '\n') begin_ = 1;
+      pendingCr_ = false;
       if (first_ && end_ > 0) {
         first_ = false;
+        // A binary file (1 GB of NUL bytes) is refused by its first
+        // kilobyte, at the line the NUL is on.
+        std::string err = NotText(buf_.get(), end_);
+        if (!err.empty()) {
+          const char* nul = static_cast<const char*>(std::memchr(buf_.get(), '\0', end_));
+          int at = 1;
+          for (const char* c = buf_.get(); c < nul; ++c)
+            at += *c == '\n' || (*c == '\r' && c[1] != '\n');
+          return Fail(err, at);
+        }
         // A UTF-8 byte-order mark at the start is not text (split reads of
         // it are not worth handling: the buffer holds far more than 3 bytes).
         if (end_ >= 3 && std::memcmp(buf_.get(), "\xef\xbb\xbf", 3) == 0) begin_ = 3;
       }
-      if (begin_ == end_) return any;
+      if (begin_ == end_) {
+        if (any) ++lines_;
+        return any;
+      }
     }
     const char* start = buf_.get() + begin_;
-    const void* nl = std::memchr(start, '\n', end_ - begin_);
+    // A line ends at LF, CR LF or a lone CR (old Mac files).
+    const char* nl = FindLineEnd(start, end_ - begin_);
+    const size_t n = nl != nullptr ? static_cast<size_t>(nl - start) : end_ - begin_;
+    // The line's bytes are bounded: a longer line (a 300 MB comment) is
+    // refused with its number instead of being held.
+    if (line->size() + n > kMaxLineBytes) {
+      line->clear();
+      return Fail("line longer than " + std::to_string(kMaxLineBytes) +
+                      " bytes (the most a scene file's line may have)",
+                  lines_ + 1);
+    }
+    line->append(start, n);
     if (nl != nullptr) {
-      size_t n = static_cast<size_t>(static_cast<const char*>(nl) - start);
-      line->append(start, n);
       begin_ += n + 1;
+      if (*nl == '\r') {
+        if (begin_ < end_ && buf_[begin_] == '\n')
+          ++begin_;
+        else if (begin_ == end_)
+          pendingCr_ = true;  // its LF, if any, comes with the next read
+      }
+      ++lines_;
       return true;
     }
-    line->append(start, end_ - begin_);
     begin_ = end_;
     any = true;
   }

@@ -52,7 +52,7 @@ std::vector<uint32_t> All(const Scene& scene) {
 // Checks every patch of `mesh` against its polygon, and that the patches of
 // each of `polygons` cover its area.
 void CheckMesh(const Scene& scene, const std::vector<uint32_t>& polygons, const Mesh& mesh,
-               float patchSize) {
+               float patchSize, double areaTolerance = 1e-5) {
   std::vector<double> area(scene.polygons.size(), 0.0);
   for (size_t i = 0; i < mesh.patches.size(); ++i) {
     const Patch& p = mesh.patches[i];
@@ -87,7 +87,8 @@ void CheckMesh(const Scene& scene, const std::vector<uint32_t>& polygons, const 
     area[p.surface] += p.area;
   }
   for (uint32_t i : polygons)
-    EXPECT_NEAR(area[i], scene.polygons[i].area, 1e-5 * scene.polygons[i].area) << "polygon " << i;
+    EXPECT_NEAR(area[i], scene.polygons[i].area, areaTolerance * scene.polygons[i].area)
+        << "polygon " << i;
 }
 
 // How many patches use each lattice vertex.
@@ -211,6 +212,67 @@ TEST(MeshTest, TooManyPatches) {
   EXPECT_TRUE(mesh.vertices.empty());
   EXPECT_FALSE(MeshScene(scene, {0}, 1e-30f, 1000, &mesh).ok());  // count overflows nothing
   EXPECT_TRUE(MeshScene(scene, {0}, 3.0f, 16, &mesh).ok());
+}
+
+// Issue 42 item 3: a convex disc of 10,000 corners was ear-clipped into
+// 9,998 slivers of up to (diameter / s)^2 patches each: over a million
+// where its area needs a few hundred. Such a polygon is cut in strips: its
+// patches number at most 2 (A / s^2 + P / s) whatever its corners, each
+// still at most s a side, counter-clockwise and in its plane, covering its
+// area less the slivers the chords cut off (below 0.5% here).
+TEST(MeshTest, ConvexPolygonsOfManyCornersFollowTheirArea) {
+  const float s = 0.1f;
+  auto arc = [](int n, double rx, double ry, double from, double to, bool closed) {
+    std::vector<glm::vec2> v;
+    const int count = closed ? n : n + 1;
+    for (int k = 0; k < count; ++k) {
+      const double a = from + (to - from) * k / n;
+      v.emplace_back(static_cast<float>(rx * std::cos(a)), static_cast<float>(ry * std::sin(a)));
+    }
+    return v;
+  };
+  const double pi = 3.14159265358979;
+  const std::vector<std::vector<glm::vec2>> shapes = {
+      arc(10000, 1.0, 1.0, 0.0, 2 * pi, true), arc(1000, 1.0, 1.0, 0.0, 2 * pi, true),
+      arc(100, 1.0, 1.0, 0.0, 2 * pi, true),   arc(2000, 2.0, 0.5, 0.0, 2 * pi, true),
+      arc(500, 1.0, 1.0, 0.0, pi, false),  // a half disc: two sharp corners
+  };
+  for (bool flat : {true, false}) {
+    const Scene scene = MakeScene(shapes, flat);
+    for (uint32_t i = 0; i < scene.polygons.size(); ++i) {
+      const Polygon& poly = scene.polygons[i];
+      SCOPED_TRACE(testing::Message()
+                   << "shape " << i << ", " << poly.corners.size() << " corners, flat " << flat);
+      double perimeter = 0.0;
+      for (size_t k = 0; k < poly.corners.size(); ++k)
+        perimeter +=
+            glm::length(glm::dvec3(poly.corners[(k + 1) % poly.corners.size()] - poly.corners[k]));
+      const double bound = 2.0 * (poly.area / (s * s) + perimeter / s);
+      Mesh mesh;
+      ASSERT_TRUE(MeshScene(scene, {i}, s, 1u << 24, &mesh).ok());
+      EXPECT_LE(static_cast<double>(mesh.patches.size()), bound);
+      CheckMesh(scene, {i}, mesh, s, 5e-3);
+      double area = 0.0;
+      for (const Patch& p : mesh.patches) area += p.area;
+      EXPECT_LE(area, poly.area * (1.0 + 1e-6));  // inside the outline
+      bool strips = false;
+      double change = 0.0;
+      ASSERT_TRUE(MeshesInStrips("test.obj", poly, s, &strips, &change).ok());
+      EXPECT_TRUE(strips);
+      EXPECT_NEAR(change, area / poly.area - 1.0, 1e-5);
+      double counted = 0.0, vertices = 0.0;
+      ASSERT_TRUE(CountPolygonPatches("test.obj", poly, s, &counted, &vertices).ok());
+      EXPECT_EQ(counted, static_cast<double>(mesh.patches.size()));
+      EXPECT_EQ(vertices, static_cast<double>(mesh.vertices.size()));
+    }
+  }
+  // A polygon whose slivers stay within the bound keeps them: a small
+  // hexagon is its 4 ear-clipped triangles, as before.
+  const Scene hexagon = MakeScene({arc(6, 0.04, 0.04, 0.0, 2 * pi, true)});
+  Mesh mesh;
+  ASSERT_TRUE(MeshScene(hexagon, {0}, s, 1u << 20, &mesh).ok());
+  EXPECT_EQ(mesh.patches.size(), 4u);
+  CheckMesh(hexagon, {0}, mesh, s);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <glm/geometric.hpp>
 #include <string>
 #include <vector>
@@ -373,6 +374,24 @@ TEST(TextureTest, TheImageShowsTheCheckerWhileTheSolveUsesItsMean) {
     }
     EXPECT_NEAR(area, 100.0, 1e-3);
   }
+}
+
+// The texture fuzz target's seeds (tests/fuzz/texture-corpus, make fuzz):
+// each decodes, from its bytes as from its file, to the same image.
+TEST(TextureTest, TextureFuzzSeedsDecode) {
+  int seen = 0;
+  for (const auto& entry : std::filesystem::directory_iterator("tests/fuzz/texture-corpus")) {
+    const std::string path = entry.path().string();
+    TextureImage fromFile, fromBytes;
+    Status a = ReadTexture(path, "m.mtl:1", &fromFile);
+    Status b = DecodeTexture(test::ReadFile(path), path, "m.mtl:1", &fromBytes, uint64_t{64} << 20);
+    ASSERT_TRUE(a.ok()) << a.ToString();
+    ASSERT_TRUE(b.ok()) << b.ToString();
+    EXPECT_EQ(fromFile.rgb, fromBytes.rgb) << path;
+    EXPECT_GT(fromFile.width, 0u);
+    ++seen;
+  }
+  EXPECT_GE(seen, 7);
 }
 
 }  // namespace

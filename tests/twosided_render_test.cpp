@@ -91,7 +91,7 @@ TEST(TwoSidedTest, LedgerClosesTwoSided) {
        // minutes (over a million shots; open issue, see the issue 20 report).
        {std::vector<std::string>{},
         std::vector<std::string>{"--envs", "2", "--mask-method", "R", "--stop-unshot", "0",
-                                 "--round-shots", "1"}}) {
+                                 "--max-shots", "100000000", "--round-shots", "1"}}) {
     std::vector<std::string> args = {"render",
                                      "scenes/miswound.obj",
                                      "--out",

@@ -49,19 +49,33 @@ struct TwinOptions {
 // at most `patchSize` long (up to float rounding of the corners). Triangles
 // split into n*n similar triangles, convex quads into an m*n bilinear grid of
 // planar quads, anything else is ear-clipped into triangles first. Patch areas
-// sum to the polygon's area. Patches of one polygon (of one of its triangles,
-// if triangulated) share lattice vertices; different polygons never do.
-// Fails (without partial output) if patchSize is not a positive finite number
-// or the mesh would exceed `maxPatches`.
+// sum to the polygon's area, but for one exception: a convex polygon of more
+// corners than a quad whose ear-clipped triangles would make more than
+// 2 (A / s^2 + P / s) patches (A its area, P its perimeter, s the patch size;
+// a disc of many corners: n - 2 slivers of up to (diameter / s)^2 patches
+// each) is cut in strips across its longest extent instead when they make
+// fewer: columns of quads, a fan at a pointed end, whose outline chords are
+// at most s long and pass each corner they skip within s / 64, so the
+// patches follow its area and outline whatever its corner count and cover
+// it less the slivers those chords cut off (MeshesInStrips). Patches of one polygon (of one of its
+// triangles, if triangulated) share lattice vertices; different polygons never do. Fails (without
+// partial output) if patchSize is not a positive finite number or the mesh would exceed
+// `maxPatches`.
 Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, float patchSize,
                  uint64_t maxPatches, Mesh* mesh);
 
 // The patches and lattice vertices MeshScene makes of `polygon` at
 // `patchSize` (added to *patches and *vertices), without making them: what
 // the streaming init counts for the environments a rank does not hold. The
-// error MeshScene gives for a polygon it cannot triangulate.
+// error MeshScene gives for a polygon it cannot triangulate. *strips (when
+// not null): whether it is cut in strips.
 Status CountPolygonPatches(const std::string& objPath, const Polygon& polygon, float patchSize,
-                           double* patches, double* vertices);
+                           double* patches, double* vertices, bool* strips = nullptr);
+// Whether MeshScene meshes `polygon` in strips at `patchSize` (above), and
+// then by how much their area differs from the polygon's (relative; < 0:
+// the slivers the chords cut off). The error MeshScene gives otherwise.
+Status MeshesInStrips(const std::string& objPath, const Polygon& polygon, float patchSize,
+                      bool* strips, double* areaChange);
 // MeshScene's error for a mesh of more than `maxPatches` patches.
 Status MeshSizeError(double numPatches, float patchSize, uint64_t maxPatches);
 

@@ -16,7 +16,7 @@
 namespace vismask {
 
 struct Options {
-  std::string command;  // "render", "footprint", "compare" or "view"; empty with --help
+  std::string command;  // "render", "footprint", "compare", "verify" or "view"; empty with --help
   bool help = false;
   std::string scene;
   LoadOptions load;  // --strict, --emit NAME=R,G,B|ka (repeatable)
@@ -111,8 +111,9 @@ struct Options {
   std::string compareA, compareB;
   // vismask view OUT_DIR [--glb NAME.glb] [--port P] (viewer.h)
   std::string viewDir;
-  std::string viewGlb;  // empty: the one .glb in viewDir
-  int viewPort = 0;     // 0: any free port
+  std::string verifyDir;  // vismask verify OUT_DIR
+  std::string viewGlb;    // empty: the one .glb in viewDir
+  int viewPort = 0;       // 0: any free port
 };
 
 // Rounds by work (ResolveRounds, AutoRoundWork): the full shots' worth of

@@ -22,7 +22,10 @@ double CpuSeconds();
 
 // Writes all of `s` to standard error / standard output (no buffering).
 void WriteErr(const char* s, size_t n);
-void WriteOut(const char* s, size_t n);
+// False (with *why, kWhyBytes, naming standard output) if the write failed
+// (/dev/full, a closed pipe) or standard output was closed when vismask
+// started (GuardStandardDescriptors): a result that reached nobody.
+bool WriteOut(const char* s, size_t n, char* why = nullptr);
 // printf-style to stderr; lines longer than 1 KiB are cut.
 void PrintErr(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
 
@@ -84,8 +87,8 @@ void InstallSignalCleanup();
 // signal N while waiting for rank PEER" (under mpirun, the rank that died).
 void NoteWaiting(int self, int peer);
 
-// A file opened for reading (the loaders at init: OBJ, MTL, PFM, PGM,
-// textures, a .glb's header). Read fills `buf` with up to n bytes, fewer
+// A regular file opened for reading (the loaders at init: OBJ, MTL, PFM,
+// PGM, textures, a .glb's header). Read fills `buf` with up to n bytes, fewer
 // only at the end of the file: the count, 0 at the end, -1 on an error
 // (*why: strerror's text). Closed on destruction.
 class InFile {
@@ -95,14 +98,21 @@ class InFile {
   InFile(const InFile&) = delete;
   InFile& operator=(const InFile&) = delete;
 
+  // Opens `path`, which must be a regular file: a device (/dev/zero), a
+  // FIFO (never waited for), a directory or a socket is refused, *why
+  // "not a regular file (a FIFO)" and kind() naming it.
   bool Open(const char* path, std::string* why);
   int64_t Read(void* buf, size_t n, std::string* why);
   // The file's size in bytes, -1 on an error.
   int64_t Size() const;
   bool isOpen() const { return fd_ >= 0; }
+  // After Open refused a file that is not a regular one: what it is ("a
+  // FIFO", "a character device", ...); null otherwise.
+  const char* kind() const { return kind_; }
 
  private:
   int fd_ = -1;
+  const char* kind_ = nullptr;
 };
 
 // An output file written under a temporary name ("NAME.tmp.PID", unique to
@@ -117,9 +127,12 @@ class OutFile {
   OutFile(const OutFile&) = delete;
   OutFile& operator=(const OutFile&) = delete;
 
-  // Opens the temporary file for writing. False (with *why, kWhyBytes) on
-  // failure, which includes a final name that exists and is not a regular
-  // file (it could not be replaced at the end of the run).
+  // Opens the temporary file for writing, created anew (O_EXCL) and never
+  // through a symbolic link (O_NOFOLLOW): a regular file already of that
+  // name is a leftover, removed first; a symbolic link or anything else
+  // there is refused. False (with *why, kWhyBytes) on failure, which
+  // includes a final name that exists and is not a regular file (a
+  // symbolic link, or what could not be replaced at the end of the run).
   bool Open(const char* path, char* why);
   // Writes all bytes. False on failure (remembered: the commit then fails
   // with the reason).
@@ -129,27 +142,57 @@ class OutFile {
   void Discard();
   bool isOpen() const { return fd_ >= 0; }
   const char* path() const { return path_; }
+  const char* tmpPath() const { return tmpPath_; }
+  // What Write has been given since Open: its byte count and CRC-32 (as
+  // zlib and gzip compute it), for the commit record in run.json.
+  uint64_t bytes() const { return bytes_; }
+  uint32_t crc32() const { return crc_; }
 
  private:
-  friend bool CommitAll(OutFile* const* files, int n, char* why);
-  // Closes; false (with *why) if a write or the close failed.
+  friend bool CommitAll(OutFile* const* files, int n, char* why, const char* journalDir);
+  // Syncs and closes; false (with *why) if a write, the sync or the close
+  // failed.
   bool Close(char* why);
 
   int fd_ = -1;
   int tempSlot_ = -1;   // the temporary name's entry in the signal handler's table
   int writeErrno_ = 0;  // errno of the first failed write, 0 if none
+  uint64_t bytes_ = 0;
+  uint32_t crc_ = 0;
   char path_[kMaxPath] = {};
   char tmpPath_[kMaxPath + 24] = {};
 };
+
+// Removes what runs that were killed left beside the output `path`:
+// PATH.tmp.PID and PATH.old.PID (regular files or links, never
+// directories) whose PID is not a live process and not this one. Returns
+// how many it removed; the first one's path into `first` (firstSize bytes)
+// when not null. Init only (it reads the directory).
+int RemoveStaleTemporaries(const char* path, char* first, size_t firstSize);
 
 // Commits `n` open files as one: every final name then holds the new file,
 // or, on failure (with *why), every final name holds what it held before
 // (files that existed are restored, new ones removed) and no temporary file
 // is left. Files are renamed in array order: put the one that marks a run
-// complete (run.json) last.
+// complete (run.json) last. Each file is synced before the renames, and
+// the directories after them.
 bool CommitAll(OutFile* files, int n, char* why);
 // The same for files that are not in one array (at most 16).
 bool CommitAll(OutFile* const* files, int n, char* why);
+// The same, with a journal: before the first rename, `journalDir`/
+// .vismask.commit (written under a temporary name, synced, renamed, the
+// directory synced) lists each temporary file and its final name; it is
+// removed once every rename is on the disk. A kill or a power cut between
+// the two leaves it, and FinishInterruptedCommit then completes the commit:
+// the folder holds the whole old set or, once finished, the whole new one.
+bool CommitAll(OutFile* const* files, int n, char* why, const char* journalDir);
+// Completes a commit that a killed run left in `dir` (its journal): renames
+// the temporary files it lists that are still there to their final names
+// (only outputs in `dir` and .glb files, each as FINAL.tmp.PID), removes
+// their second names (FINAL.old.PID) and the journal. Returns 0 if there was
+// no journal, 1 when it finished one (*renamed: the files it renamed), -1 on
+// an error (*why). Call with the directory's lock held.
+int FinishInterruptedCommit(const char* dir, int* renamed, char* why);
 
 // An exclusive lock on an output directory, held until destruction or the
 // process's end (flock on DIR/.vismask.lock, which holds the holder's pid).
@@ -162,11 +205,17 @@ class DirLock {
   DirLock(const DirLock&) = delete;
   DirLock& operator=(const DirLock&) = delete;
   // False (with *why, naming the holder's pid when known) if another
-  // process holds the lock or the lock file cannot be made.
+  // process holds the lock (inUse()) or the lock file cannot be made: it
+  // is opened without following a symbolic link, and must be a regular
+  // file.
   bool Acquire(const char* dir, char* why);
+  // After a failed Acquire: whether another process holds the lock (else
+  // the lock file could not be made or used).
+  bool inUse() const { return inUse_; }
 
  private:
   int fd_ = -1;
+  bool inUse_ = false;
 };
 
 }  // namespace vismask::os

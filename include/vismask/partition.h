@@ -72,7 +72,8 @@ bool ChooseEnvShape(int count, const glm::vec3& extent, int n[3]);
 
 // About how many patches the mesher makes of a polygon of `n` corners at
 // patch size `patchSize` (mesh.h: triangles n x n, quads m x n, others
-// triangulated): the weight a WorkSplitter balances.
+// triangulated; exactly, for a convex polygon cut in strips): the weight a
+// WorkSplitter balances.
 double EstimatedPatches(const glm::vec3* corners, int n, float patchSize);
 
 // Balanced split planes from polygons fed one at a time (see the top of

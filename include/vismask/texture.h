@@ -56,9 +56,25 @@ struct TextureImage {
   Texture View() const;      // over `rgb`
 };
 
+// What decoding a texture holds at its peak, per texel, on top of the
+// file's bytes: stb_image's inflated rows (up to 16-bit RGBA, 8 bytes), its
+// 8-bit conversion (4), the RGB result (3) and TextureImage's copy (3).
+constexpr uint64_t kTextureDecodeBytesPerTexel = 18;
+
 // Reads and decodes an image file into *image. `where` ("file:line" of the
 // map_Kd) prefixes the error: "where: cannot read texture 'path': reason".
-Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image);
+// Only a regular file is read (a device or a FIFO is refused by its kind),
+// of at most 2^31 - 1 bytes. With `budget` > 0, the file's bytes and then
+// the decoding's (kTextureDecodeBytesPerTexel a texel, the dimensions read
+// from the header first) must fit in it, or nothing more is read. Decoder
+// messages quote no raw byte of the file (\xNN).
+Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
+                   uint64_t budget = 0);
+// ReadTexture's decoding of a file's `bytes` (in memory; `path` names it in
+// messages): the dimensions judged against `budget` first, then decoded.
+// The texture fuzz target's entry (tests/fuzz/texture_fuzz.cpp).
+Status DecodeTexture(const std::string& bytes, const std::string& path, const std::string& where,
+                     TextureImage* image, uint64_t budget = 0);
 
 // The affine map x -> uv = (dot(u.xyz, x) + u.w, dot(v.xyz, x) + v.w) on a
 // polygon's plane, fitted to its corners' uv (least squares; exact for a
@@ -100,9 +116,11 @@ Status LoadSceneTextures(const Scene& scene, SceneTextures* out);
 // The same from what the streaming loader keeps of the polygons
 // (scene_stream.h): per material, whether a polygon uses it and the line of
 // its first polygon without texture coordinates (0: none).
+// `budget` > 0: the bytes init may still use; each image is read and
+// decoded within what the ones before it left (ReadTexture).
 Status LoadMaterialTextures(const std::string& objPath, const std::vector<Material>& materials,
                             const std::vector<uint8_t>& used, const std::vector<int>& noUvLine,
-                            SceneTextures* out);
+                            SceneTextures* out, uint64_t budget = 0);
 
 // Sets the reflectance of `mesh`'s textured patches (Kd times the texture's
 // mean over the patch) and fills mesh->textures (one per patch, or empty
