@@ -103,7 +103,11 @@ render options:
                        by default a non-planar face is triangulated, a
                        repeated or collinear corner removed, and a face with
                        no area or crossing edges dropped, each kind counted
-                       in one warning line
+                       in one warning line; and refuse faces before any
+                       usemtl, undefined materials, a missing MTL file and
+                       a texture not found as written (by default grey
+                       Kd 0.5, or the texture found in another letter case
+                       or dropped, each with one warning line)
   --emit NAME=R,G,B    make material NAME an emitter of exitance Ke =
                        (R, G, B), each >= 0, replacing the MTL's Ke (said
                        in a warning when that was not 0); NAME=ka takes the

@@ -29,6 +29,12 @@ Status Loader::ApplyEmit() {
   return Status::Ok();
 }
 
+std::string Loader::UndefinedMaterials() const {
+  std::string names;
+  for (const std::string& n : undefinedMaterials_) names += (names.empty() ? "" : ", ") + Quote(n);
+  return names;
+}
+
 std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) const {
   std::vector<std::string> w = warnings_;
   auto at = [&](int line) { return path_ + ":" + std::to_string(line) + ": warning: "; };
@@ -60,6 +66,14 @@ std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) cons
     for (const std::string& r : replacedKe_) list += (list.empty() ? "" : ", ") + r;
     w.push_back(replacedWhere_ + ": warning: --emit replaces the MTL's Ke of " + list);
   }
+  if (!undefinedMaterials_.empty()) {
+    const std::string names = UndefinedMaterials();
+    w.push_back(undefinedWhere_ +
+                ": warning: " + Count(undefinedMaterials_.size(), "material", "materials") +
+                " that no MTL defines, given the default grey (Kd 0.5; --emit NAME=R,G,B makes "
+                "one an emitter; first here): " +
+                names);
+  }
   const FaceTally& t = triangulated_;
   if (t.faces)
     w.push_back(at(t.line) + Count(t.faces, "non-planar face", "non-planar faces") +
@@ -86,7 +100,18 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
   if (!loadedMtls_.insert(path).second) return Status::Ok();
   std::string text;
   std::string err = readMtl_(path, &text);
-  if (!err.empty()) return Status::At(objPath, objLine, err + " MTL file '" + path + "'");
+  if (!err.empty()) {
+    // Published without its MTL (no such file; one that is there but
+    // cannot be read stays an error): the materials it would define get
+    // the default grey where faces use them (one more warning names them).
+    if (options_.strict || os::Exists(path.c_str()))
+      return Status::At(objPath, objLine, err + " MTL file '" + path + "'");
+    Warn(objPath, objLine,
+         "MTL file '" + path +
+             "' not found: the materials it defines get the default grey "
+             "(Kd 0.5)");
+    return Status::Ok();
+  }
   TextLines lines(text);
   std::vector<Material>& materials = *materials_;
   bool haveMaterial = false;
@@ -125,10 +150,14 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
     } else if (key == "map_Kd") {
       if (!haveMaterial) return Status::At(path, line, "'map_Kd' before any 'newmtl'");
       if (args == 0) return Status::At(path, line, "'map_Kd' needs a file name");
-      // Options (-bm 1, -s 1 1 1, ...) come before the name, which is the
-      // last token; they are not applied, and said so once.
-      if (args > 1) Warn(path, line, "ignoring map_Kd options");
-      materials.back().mapKd = Beside(path, t.back());
+      // Options (-bm 1, -s 1 1 1, ...) come before the name; they are not
+      // applied, and said so once. The name is the rest of the line, spaces
+      // and all (Blender writes 'map_Kd my tex.png' unquoted).
+      bool options = false;
+      const std::string name = MapName(lineText, t, &options);
+      if (name.empty()) return Status::At(path, line, "'map_Kd' needs a file name");
+      if (options) Warn(path, line, "ignoring map_Kd options");
+      materials.back().mapKd = Beside(path, name);
       materials.back().mapKdWhere = path + ":" + std::to_string(line);
     } else if (key == "Kd" || key == "Ke") {
       if (!haveMaterial) return Status::At(path, line, Quote(key) + " before any 'newmtl'");

@@ -98,8 +98,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       numEmitters * 256;
   // Every rank prints the loader's warnings, as LoadScene did.
   for (const std::string& w : info.warnings) os::PrintErr("%s\n", w.c_str());
-  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine,
-                           &p->textures);
+  s = LoadMaterialTextures(o.scene, &info.materials, info.usedMaterials, info.noUvLine,
+                           &p->textures, o.load.strict);
   if (!s.ok()) return s;
   for (const TextureImage& t : p->textures.images)
     p->textureBytes += uint64_t{t.width} * t.height * 4;

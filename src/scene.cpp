@@ -147,6 +147,12 @@ Status ParseObj(const std::string& objPath, LineSource& lines, const ObjCounts* 
   s = loader.ApplyEmit();
   if (!s.ok()) return s;
   s = tally->Check(objPath, *materials, perfect);
+  // No emitter, and materials the loader made up (no MTL defines them):
+  // name them, as one may be the light.
+  if (!s.ok() && s.line() == 0 && s.message().rfind("no emitter", 0) == 0 &&
+      !loader.UndefinedMaterials().empty())
+    return Status::At(objPath, 0,
+                      s.message() + "; materials no MTL defines: " + loader.UndefinedMaterials());
   if (!s.ok()) return s;
   std::vector<uint8_t> used = tally->used;
   used.resize(materials->size(), 0);

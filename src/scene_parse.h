@@ -47,6 +47,10 @@ std::string Str(size_t n);
 std::string CoordinateError(double x);
 // Splits a line at whitespace; '#' starts a comment, a CR (CRLF files) is space.
 Tokens Tokenize(const std::string& line);
+// The file name of a texture map statement ('map_Kd [options] name'), as
+// written on `line` (tokens `t`): what follows the known options, spaces
+// inside it kept. *hadOptions: some option was given. "" if no name.
+std::string MapName(const std::string& line, const Tokens& t, bool* hadOptions);
 // A piece of the input quoted in a message (at most 32 bytes, escaped).
 std::string Quote(const std::string& s);
 // Whether an unknown MTL key may be named in a warning.
@@ -154,6 +158,12 @@ struct ObjCounts {
 };
 ObjCounts CountStatements(LineSource& lines);
 
+// The material of faces the OBJ gives none (before any 'usemtl') and the
+// reflectance of every material the loader makes up (no 'usemtl', an
+// undefined name, a texture not found with Kd 0): a mid grey.
+inline constexpr char kDefaultMaterial[] = "default";
+inline constexpr float kDefaultKd = 0.5f;
+
 class Loader {
  public:
   Loader(std::vector<Material>* materials, const SceneFileReader& readMtl,
@@ -170,9 +180,14 @@ class Loader {
   // The warnings, one line per kind, in the order they first arose and the
   // aggregate ones after. `used`: per material, whether a polygon uses it.
   std::vector<std::string> Warnings(const std::vector<uint8_t>& used) const;
+  // The names 'usemtl' gave that no MTL defines ("'a', 'b'"), "" if none.
+  std::string UndefinedMaterials() const;
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
+  // The index of material `name`, made the default grey (Kd 0.5) at
+  // path:line if no MTL defined it.
+  uint32_t DefaultMaterial(const std::string& name, const std::string& path, int line);
   // One warning line per distinct `what`, at its first file:line.
   void Warn(const std::string& path, int line, const std::string& what) {
     if (!warnedKeys_.insert(what).second) return;
@@ -196,6 +211,8 @@ class Loader {
   std::string notMtlWhere_;               // "file:line" of the first
   std::string path_;                      // the OBJ
   FaceTally triangulated_, cornersRemoved_, degenerate_, selfIntersecting_;
+  std::vector<std::string> undefinedMaterials_;  // named by 'usemtl', defined by no MTL
+  std::string undefinedWhere_;                   // "file:line" of the first
   std::vector<std::string> replacedKe_;  // "name (Ke r g b)" of each --emit that replaced one
   std::string replacedWhere_;
 };
