@@ -73,7 +73,9 @@ int Main(int argc, const char* const* argv) {
   Status s = ParseArgs(argc, argv, &r->options);
   if (!s.ok()) return Fail(s);
   if (r->options.help) {
-    const char* text = r->options.command == "view" ? ViewHelpText() : HelpText();
+    const char* text = r->options.command == "view" ? ViewHelpText()
+                       : r->options.helpAll         ? HelpText()
+                                                    : UsageText();
     os::WriteOut(text, std::strlen(text));
     return kExitOk;
   }

@@ -5,6 +5,35 @@
 
 namespace vismask {
 
+const char* UsageText() {
+  return R"(vismask - fixed-memory progressive-refinement radiosity
+
+usage:
+  vismask render SCENE [options]         solve the scene's diffuse light and
+                                         render it into --out DIR (out/)
+  vismask footprint SCENE [options]      the memory a render would reserve
+  vismask compare A.pfm B.pfm            relative RMSE of A against B
+  vismask view OUT_DIR                   look around a render --export mesh
+  vismask --help all                     every option, outputs, exit status
+
+scenes read: Wavefront OBJ with its MTL files (Kd reflectance, Ke emitted
+exitance, map_Kd textures: PNG, JPEG, BMP, TGA). The light is the faces
+whose material has Ke > 0, or those --emit NAME=R,G,B names.
+
+examples:
+  vismask render scenes/cornell.obj --out out
+      the Cornell box, default view, into out/image.png (and .pfm, csv)
+  vismask render scenes/real/CornellBox-Glossy.obj --emit light=17,12,4
+      a published scene whose light's material its MTL lacks
+  vismask render scenes/cornell.obj --camera 278,273,-800,278,273,0,0,1,0,39
+      a view of your own: eye, target, up, vertical field of view
+  vismask render scenes/cornell.obj --envs 4 --ranks 2 --emitted-rays 1e6
+      four local environments on two processes, fewer rays
+  vismask render scenes/cornell.obj --export out/box.glb && vismask view out
+      the solved mesh as glTF, to walk through in a browser
+)";
+}
+
 const char* HelpText() {
   return R"(vismask - fixed-memory progressive-refinement radiosity
 

@@ -121,8 +121,8 @@ TEST_F(SceneTest, MapKdNamesMayHoldSpaces) {
                      "newmtl c\nmap_Kd -o 1 plain.png # a comment\n");
   Scene scene;
   std::vector<std::string> warnings;
-  Status s = LoadObjWarnings(Write("s.obj", test::kHead + std::string("f 1 2 3\n")), &scene,
-                             &warnings);
+  Status s =
+      LoadObjWarnings(Write("s.obj", test::kHead + std::string("f 1 2 3\n")), &scene, &warnings);
   ASSERT_TRUE(s.ok()) << s.ToString();
   EXPECT_EQ(scene.materials[2].mapKd, dir_ + "my tex.png");
   EXPECT_EQ(scene.materials[3].mapKd, dir_ + "two  spaces.png");
@@ -182,7 +182,7 @@ double FloorKd(const test::TempDir& dir) {
   return std::stod(rows[1][9]);
 }
 
-const std::vector<std::string> kQuick = {"--rays",   "64", "--max-shots",   "10", "--width", "16",
+const std::vector<std::string> kQuick = {"--rays",   "64", "--max-shots",  "10", "--width", "16",
                                          "--height", "16", "--patch-size", "2",  "--quiet"};
 
 test::RunResult Render(const test::TempDir& dir, std::vector<std::string> extra = {},
