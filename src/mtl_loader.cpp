@@ -7,26 +7,32 @@
 
 namespace vismask::objload {
 
-Status Loader::ApplyEmit() {
-  std::vector<Material>& materials = *materials_;
-  for (const EmitOverride& e : options_.emit) {
-    auto it = materialIndex_.find(e.material);
-    if (it == materialIndex_.end()) {
+Status ApplyEmitOverrides(const std::string& scenePath, const std::vector<EmitOverride>& emit,
+                          std::vector<Material>* materials, std::vector<std::string>* replaced,
+                          std::string* replacedWhere) {
+  for (const EmitOverride& e : emit) {
+    auto it = std::find_if(materials->begin(), materials->end(),
+                           [&](const Material& m) { return m.name == e.material; });
+    if (it == materials->end()) {
       std::string names;
-      for (const Material& m : materials) names += (names.empty() ? "" : ", ") + m.name;
+      for (const Material& m : *materials) names += (names.empty() ? "" : ", ") + m.name;
       return Status::Error(
-          "vismask: --emit: no material '" + e.material + "' in " + path_ +
+          "vismask: --emit: no material '" + e.material + "' in " + scenePath +
           (names.empty() ? " (it defines none)" : " (its materials: " + names + ")"));
     }
-    Material& m = materials[it->second.first];
+    Material& m = *it;
     if (m.ke != glm::vec3(0.0f)) {
-      if (replacedKe_.empty()) replacedWhere_ = m.where;
-      replacedKe_.push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) +
-                            ")");
+      if (replaced->empty()) *replacedWhere = m.where;
+      replaced->push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) +
+                          ")");
     }
     m.ke = e.fromKa ? m.ka : e.ke;
   }
   return Status::Ok();
+}
+
+Status Loader::ApplyEmit() {
+  return ApplyEmitOverrides(path_, options_.emit, materials_, &replacedKe_, &replacedWhere_);
 }
 
 std::string Loader::UndefinedMaterials() const {

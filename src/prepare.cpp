@@ -106,6 +106,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->scene.objPath = o.scene;
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
+  p->scene.camera = info.camera;
   glm::vec3 extent = info.bounds.hi - info.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
   p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
@@ -140,6 +141,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->envPieceBytes.assign(total, 0);
   p->twins.all = o.twoSided;
   p->twins.emitters = o.twoSidedEmitters;
+  // glTF's doubleSided materials: their patches get twins of their own.
+  for (const Material& m : info.materials)
+    if (m.twoSided) p->twins.materials.assign(info.materials.size(), 0);
+  for (size_t m = 0; m < p->twins.materials.size(); ++m)
+    p->twins.materials[m] = info.materials[m].twoSided;
 
   // Before pass 2 allocates: the parser's arrays, the camera's probe and
   // the emitter check against the budget; then the pieces as they come.
@@ -157,7 +163,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // are global, environment-major). The camera's side and the emitter
   // check take their polygons here too.
   std::unique_ptr<ViewProbe> probe;
-  if (chooseSide) probe = std::make_unique<ViewProbe>(info.bounds);
+  if (chooseSide && !info.camera.has) probe = std::make_unique<ViewProbe>(info.bounds);
   std::unique_ptr<EmitterCheck> check;
   if (root) {
     check =
@@ -206,9 +212,12 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       }
       p->envPatches[e] += patches;
       if (e < first) ++p->pieceBase;
-      if (p->twins.all || (p->twins.emitters && Emits(mat))) p->envTwins[e] += patches;
+      if (p->twins.Twins(poly.material, Emits(mat))) p->envTwins[e] += patches;
+      // An emitter whose twin emits (--two-sided-emitters, a doubleSided
+      // glTF material) sends as much again from its back (x2 is exact).
       if (Emits(mat))
-        emitted.emplace_back(e, (static_cast<double>(mat.ke.x) + mat.ke.y + mat.ke.z) * piece.area);
+        emitted.emplace_back(e, (static_cast<double>(mat.ke.x) + mat.ke.y + mat.ke.z) * piece.area *
+                                    (p->twins.TwinEmits(poly.material, true) ? 2.0 : 1.0));
       if (e < first || e >= end) continue;
       if (source == kNoPatch) {
         source = static_cast<uint32_t>(p->scene.polygons.size());
@@ -261,7 +270,6 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   double power = 0.0;
   for (const auto& [e, w] : emitted) power += w;
-  if (o.twoSidedEmitters) power *= 2.0;  // every emitter's twin emits as much
 
   // This rank's pieces, by environment (within one, in source order).
   std::stable_sort(own.begin(), own.end(),
@@ -322,7 +330,7 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
     if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
     // Twins in the environment of their originals, after all of its patches.
-    AddTwins(p.twins, &mesh);
+    AddTwins(p.twins, &mesh, &p.part.scene);
     if (mesh.patches.size() > kMaxPatches)
       return Status::Error(
           "vismask: --patch-size: the mesh needs " + std::to_string(mesh.patches.size()) +

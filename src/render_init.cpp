@@ -200,6 +200,7 @@ int Init(RunState* r) {
   // What init no longer needs goes before the arenas are made.
   p.part = Partition();
   p.scene.polygons = std::vector<Polygon>();
+  p.info.held.reset();  // a glTF scene
   p.pieces = std::vector<std::vector<uint32_t>>();
   // The system may refuse what the budget allowed (no --mem-budget, ulimit
   // -v, overcommit off): a user error naming the bytes, not a CHECK.
@@ -218,6 +219,13 @@ int Init(RunState* r) {
 
   if (o.hasCamera) {
     r->camera = o.camera;
+  } else if (!o.hasView && p.scene.camera.has) {
+    // The scene file's own camera (glTF) wins over a chosen side.
+    r->cameraFromScene = true;
+    r->camera.eye = p.scene.camera.eye;
+    r->camera.target = p.scene.camera.target;
+    r->camera.up = p.scene.camera.up;
+    r->camera.fovyDeg = p.scene.camera.fovyDeg;
   } else {
     r->hasSide = true;
     r->sideChosen = !o.hasView;

@@ -97,9 +97,10 @@ struct RunState {
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
   std::vector<Environment*> envPtrs;
-  Camera camera;            // the one used (--camera or a side's)
-  bool hasSide = false;     // the camera is a side's: --view or chosen (not --camera)
-  bool sideChosen = false;  // chosen by ChooseViewSide (not --view)
+  Camera camera;                 // the one used (--camera or a side's)
+  bool hasSide = false;          // the camera is a side's: --view or chosen (not --camera)
+  bool sideChosen = false;       // chosen by ChooseViewSide (not --view)
+  bool cameraFromScene = false;  // the scene file's camera (glTF), no --camera or --view
   ViewSide side = ViewSide::kFront;
   View view;
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank

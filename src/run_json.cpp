@@ -68,6 +68,7 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   else
     w.Printf("    \"view\": null,\n");
   w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
+  w.Printf("    \"camera_from_scene\": %s,\n", r->cameraFromScene ? "true" : "false");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf(

@@ -223,6 +223,13 @@ bool ClosedFacingIn(const std::vector<Polygon>& polys) {
 }  // namespace objload
 
 Status LoadScene(const std::string& objPath, Scene* scene, const LoadOptions& options) {
+  if (IsGltfPath(objPath)) {
+    std::vector<std::string> warnings;
+    Status s = LoadGltf(objPath, options, scene, &warnings);
+    if (s.ok())
+      for (const std::string& w : warnings) os::PrintErr("%s\n", w.c_str());
+    return s;
+  }
   std::string text;
   std::string err = objload::ReadText(objPath, &text);
   if (!err.empty()) return Status::At(objPath, 0, err + " file");

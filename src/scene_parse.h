@@ -158,6 +158,13 @@ struct ObjCounts {
 };
 ObjCounts CountStatements(LineSource& lines);
 
+// Applies --emit (`emit`, in order) to *materials by name; an --emit naming
+// no material is an error. Each that replaced a nonzero Ke is listed in
+// *replaced ("name (Ke r g b)"), *replacedWhere the first one's "where".
+Status ApplyEmitOverrides(const std::string& scenePath, const std::vector<EmitOverride>& emit,
+                          std::vector<Material>* materials, std::vector<std::string>* replaced,
+                          std::string* replacedWhere);
+
 // The material of faces the OBJ gives none (before any 'usemtl') and the
 // reflectance of every material the loader makes up (no 'usemtl', an
 // undefined name, a texture not found with Kd 0): a mid grey.

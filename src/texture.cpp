@@ -244,6 +244,36 @@ glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::v
   return weight > 0.0 ? sum / weight : glm::dvec3(texture.Sample(uv[0]));
 }
 
+// An image held in a scene file (a glTF's buffer or data: URI), decoded as
+// ReadTexture decodes a file's bytes. (ReadTexture's checks before decoding
+// belong to it; this is the same decoder on bytes already in memory.)
+Status DecodeHeldTexture(const std::string& bytes, const std::string& name,
+                         const std::string& where, TextureImage* image) {
+  auto fail = [&](const std::string& why) {
+    return ErrorAt(where, "cannot read texture '" + name + "': " + why);
+  };
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max())) return fail("too large");
+  int w = 0, h = 0, comp = 0;
+  stbi_uc* data = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                                        static_cast<int>(bytes.size()), &w, &h, &comp, 3);
+  if (!data) return fail("not a PNG, JPEG, BMP or TGA image");
+  TextureImage img;
+  img.path = name;
+  img.width = static_cast<uint32_t>(w);
+  img.height = static_cast<uint32_t>(h);
+  img.rgb.assign(data, data + size_t(w) * size_t(h) * 3);
+  stbi_image_free(data);
+  glm::dvec3 sum(0.0);
+  for (size_t i = 0; i < img.rgb.size(); i += 3)
+    for (int c = 0; c < 3; ++c) {
+      sum[c] += kSrgbTable[img.rgb[i + c]];
+      img.maxCode = std::max(img.maxCode, img.rgb[i + c]);
+    }
+  img.mean = sum / (static_cast<double>(w) * static_cast<double>(h));
+  *image = std::move(img);
+  return Status::Ok();
+}
+
 std::string FindTexture(const std::string& path) {
   if (os::Exists(path.c_str())) return path;
   const size_t slash = path.rfind('/');
@@ -270,7 +300,7 @@ void ResolveTextures(std::vector<Material>* materials, const std::vector<uint8_t
   size_t numOtherCase = 0, numMissing = 0;
   for (size_t m = 0; m < materials->size(); ++m) {
     Material& mat = (*materials)[m];
-    if (!used[m] || mat.mapKd.empty()) continue;
+    if (!used[m] || mat.mapKd.empty() || mat.mapKdBytes) continue;  // held in a glTF file
     const std::string found = FindTexture(mat.mapKd);
     // --strict: the name as written, and the reader says why it cannot.
     if (found == mat.mapKd || strict) continue;
@@ -331,7 +361,9 @@ Status LoadMaterialTextures(const std::string& objPath, std::vector<Material>* m
     auto it = byPath.find(mat.mapKd);
     if (it == byPath.end()) {
       TextureImage img;
-      Status s = ReadTexture(mat.mapKd, mat.mapKdWhere, &img);
+      Status s = mat.mapKdBytes
+                     ? DecodeHeldTexture(*mat.mapKdBytes, mat.mapKd, mat.mapKdWhere, &img)
+                     : ReadTexture(mat.mapKd, mat.mapKdWhere, &img);
       if (!s.ok()) return s;
       it = byPath.emplace(mat.mapKd, static_cast<uint32_t>(r.images.size())).first;
       r.images.push_back(std::move(img));

@@ -90,6 +90,11 @@ struct SceneTextures {
   bool any() const { return !images.empty(); }
 };
 
+// A texture held in the scene file (Material::mapKdBytes: a glTF's image),
+// decoded as ReadTexture decodes a file; `name` names it in errors.
+Status DecodeHeldTexture(const std::string& bytes, const std::string& name,
+                         const std::string& where, TextureImage* image);
+
 // The file a map_Kd path names: `path` itself if it exists, else the name
 // in the same folder in another letter case (the first such, bytewise), else "".
 std::string FindTexture(const std::string& path);
