@@ -222,7 +222,8 @@ glm::dmat4 LocalTransform(const tinygltf::Node& n) {
     return m;
   }
   glm::dmat4 t(1.0), r(1.0), s(1.0);
-  if (n.translation.size() == 3) t[3] = glm::dvec4(n.translation[0], n.translation[1], n.translation[2], 1.0);
+  if (n.translation.size() == 3)
+    t[3] = glm::dvec4(n.translation[0], n.translation[1], n.translation[2], 1.0);
   if (n.rotation.size() == 4) {
     const double x = n.rotation[0], y = n.rotation[1], z = n.rotation[2], w = n.rotation[3];
     r[0] = glm::dvec4(1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w), 0);
@@ -252,10 +253,11 @@ class Unused {
     if (entries_.empty()) return "";
     std::string list;
     for (const Entry& e : entries_)
-      list += (list.empty() ? "" : ", ") + e.field + " (" +
-              objload::Count(e.count, e.one, e.many) + ")";
-    return path + ": warning: glTF fields vismask cannot use (it renders diffuse light only), "
-                  "ignored: " +
+      list += (list.empty() ? "" : ", ") + e.field + " (" + objload::Count(e.count, e.one, e.many) +
+              ")";
+    return path +
+           ": warning: glTF fields vismask cannot use (it renders diffuse light only), "
+           "ignored: " +
            list;
   }
 
@@ -344,8 +346,8 @@ Status MakeMaterials(const std::string& path, const tinygltf::Model& m, Unused* 
     const int t = pbr.baseColorTexture.index;
     if (t >= 0) {
       if (static_cast<size_t>(t) >= m.textures.size())
-        return Status::At(path, 0, what + "baseColorTexture " + std::to_string(t) +
-                                       " does not exist");
+        return Status::At(path, 0,
+                          what + "baseColorTexture " + std::to_string(t) + " does not exist");
       if (pbr.baseColorTexture.texCoord != 0)
         unused->Add("baseColorTexture texCoord other than 0 (TEXCOORD_0 used)", "material",
                     "materials");
@@ -358,8 +360,9 @@ Status MakeMaterials(const std::string& path, const tinygltf::Model& m, Unused* 
           unused->Add("sampler wrap modes other than repeat", "texture", "textures");
       }
       if (tex.source < 0 || static_cast<size_t>(tex.source) >= m.images.size())
-        return Status::At(path, 0, what + "texture " + std::to_string(t) + ": image " +
-                                       std::to_string(tex.source) + " does not exist");
+        return Status::At(path, 0,
+                          what + "texture " + std::to_string(t) + ": image " +
+                              std::to_string(tex.source) + " does not exist");
       const tinygltf::Image& img = m.images[static_cast<size_t>(tex.source)];
       const std::string inFile = path + "#images[" + std::to_string(tex.source) + "]";
       mat.mapKdWhere = where;
@@ -370,8 +373,8 @@ Status MakeMaterials(const std::string& path, const tinygltf::Model& m, Unused* 
         if (!err.empty())
           return Status::At(path, 0, "image " + std::to_string(tex.source) + ": " + err);
         mat.mapKd = inFile;
-        mat.mapKdBytes = std::make_shared<const std::string>(
-            reinterpret_cast<const char*>(data), size);
+        mat.mapKdBytes =
+            std::make_shared<const std::string>(reinterpret_cast<const char*>(data), size);
       } else if (!img.image.empty()) {  // a data: URI
         mat.mapKd = inFile;
         mat.mapKdBytes = std::make_shared<const std::string>(img.image.begin(), img.image.end());
@@ -463,8 +466,8 @@ Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scen
         "node " + (node.name.empty() ? std::to_string(index) : Quote(node.name));
     if (node.camera >= 0 && !result.camera.has) {
       if (static_cast<size_t>(node.camera) >= m.cameras.size())
-        return Status::At(path, 0, nodeName + ": camera " + std::to_string(node.camera) +
-                                       " does not exist");
+        return Status::At(path, 0,
+                          nodeName + ": camera " + std::to_string(node.camera) + " does not exist");
       const tinygltf::Camera& cam = m.cameras[static_cast<size_t>(node.camera)];
       if (cam.type == "perspective" && cam.perspective.yfov > 0.0 && cam.perspective.yfov < M_PI) {
         // A glTF camera looks down its local -z, up +y.
@@ -482,8 +485,8 @@ Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scen
     }
     if (node.mesh < 0) continue;
     if (static_cast<size_t>(node.mesh) >= m.meshes.size())
-      return Status::At(path, 0, nodeName + ": mesh " + std::to_string(node.mesh) +
-                                     " does not exist");
+      return Status::At(path, 0,
+                        nodeName + ": mesh " + std::to_string(node.mesh) + " does not exist");
     if (node.skin >= 0) unused.Add("skinned meshes (drawn unskinned)", "node", "nodes");
     const glm::dmat3 linear(world);
     const bool flip = glm::determinant(linear) < 0.0;
@@ -538,8 +541,8 @@ Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scen
       uint32_t material = 0;
       if (prim.material >= 0) {
         if (static_cast<size_t>(prim.material) >= result.materials.size())
-          return Status::At(path, 0, where + "material " + std::to_string(prim.material) +
-                                         " does not exist");
+          return Status::At(
+              path, 0, where + "material " + std::to_string(prim.material) + " does not exist");
         material = static_cast<uint32_t>(prim.material);
       } else {
         if (defaultMaterial == kNoMaterial) {
@@ -581,8 +584,7 @@ Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scen
           size_t v = 0;
           if (!vertexAt(k[c], &v))
             return Status::At(path, 0, where + "index " + std::to_string(v) + " is out of range");
-          const glm::dvec4 x =
-              world * glm::dvec4(pos.Get(v, 0), pos.Get(v, 1), pos.Get(v, 2), 1.0);
+          const glm::dvec4 x = world * glm::dvec4(pos.Get(v, 0), pos.Get(v, 1), pos.Get(v, 2), 1.0);
           for (int a = 0; a < 3; ++a)
             if (!(std::fabs(x[a]) <= kMaxCoordinate))
               return Status::At(path, 0, where + CoordinateError(x[a]));
@@ -634,8 +636,7 @@ Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scen
                 " dropped (zero area: repeated or collinear vertices)");
   if (defaultFaces)
     w.push_back(path + ": warning: " + Count(defaultFaces, "triangle", "triangles") +
-                " with no material: the default grey material '" + kDefaultMaterial +
-                "' (Kd 0.5)");
+                " with no material: the default grey material '" + kDefaultMaterial + "' (Kd 0.5)");
   const std::string line = unused.Line(path);
   if (!line.empty()) w.push_back(line);
   if (!replaced.empty()) {

@@ -96,8 +96,8 @@ void WriteObj(const TempDir& dir, const TestScene& s, const std::string& name) {
       obj += "v " + G9(t.p[c].x) + " " + G9(t.p[c].y) + " " + G9(t.p[c].z) + "\nvt " +
              G9(t.uv[c].x) + " " + G9(t.uv[c].y) + "\n";
     obj += "f " + std::to_string(v + 1) + "/" + std::to_string(v + 1) + " " +
-           std::to_string(v + 2) + "/" + std::to_string(v + 2) + " " + std::to_string(v + 3) +
-           "/" + std::to_string(v + 3) + "\n";
+           std::to_string(v + 2) + "/" + std::to_string(v + 2) + " " + std::to_string(v + 3) + "/" +
+           std::to_string(v + 3) + "\n";
     v += 3;
   }
   test::WriteFile(dir.File(name + ".mtl"), mtl);
@@ -151,8 +151,8 @@ void WriteGltf(const std::string& path, const TestScene& s, bool glb) {
   for (const TestMaterial& m : s.materials) {
     if (!materials.empty()) materials += ",";
     const double strength = std::max({m.ke.x, m.ke.y, m.ke.z});
-    materials += "{\"name\":\"" + m.name + "\",\"doubleSided\":" +
-                 (m.doubleSided ? "true" : "false") +
+    materials += "{\"name\":\"" + m.name +
+                 "\",\"doubleSided\":" + (m.doubleSided ? "true" : "false") +
                  ",\"pbrMetallicRoughness\":{\"metallicFactor\":0,\"baseColorFactor\":[" +
                  G17(m.kd.x) + "," + G17(m.kd.y) + "," + G17(m.kd.z) + ",1]";
     if (!m.image.empty()) {
@@ -165,16 +165,17 @@ void WriteGltf(const std::string& path, const TestScene& s, bool glb) {
     }
     materials += "}";
     if (strength > 0.0)
-      materials += ",\"emissiveFactor\":[" + G17(m.ke.x / strength) + "," +
-                   G17(m.ke.y / strength) + "," + G17(m.ke.z / strength) +
+      materials += ",\"emissiveFactor\":[" + G17(m.ke.x / strength) + "," + G17(m.ke.y / strength) +
+                   "," + G17(m.ke.z / strength) +
                    "],\"extensions\":{\"KHR_materials_emissive_strength\":{"
                    "\"emissiveStrength\":" +
                    G17(strength / M_PI) + "}}";
     materials += "}";
   }
   while (bin.size() % 4) bin += '\0';
-  std::string json = "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":"
-                     "[\"KHR_materials_emissive_strength\"],\"scene\":0,\"scenes\":[{\"nodes\":[0";
+  std::string json =
+      "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":"
+      "[\"KHR_materials_emissive_strength\"],\"scene\":0,\"scenes\":[{\"nodes\":[0";
   if (s.camera) json += ",1";
   json += "]}],\"nodes\":[{\"mesh\":0}";
   if (s.camera)
@@ -199,7 +200,8 @@ void WriteGltf(const std::string& path, const TestScene& s, bool glb) {
     for (int i = 0; i < 4; ++i) b[i] = static_cast<char>((v >> (8 * i)) & 255);
     return b;
   };
-  std::string file = "glTF" + u32(2) + u32(static_cast<uint32_t>(12 + 8 + json.size() + 8 + bin.size())) +
+  std::string file = "glTF" + u32(2) +
+                     u32(static_cast<uint32_t>(12 + 8 + json.size() + 8 + bin.size())) +
                      u32(static_cast<uint32_t>(json.size())) + "JSON" + json +
                      u32(static_cast<uint32_t>(bin.size())) + std::string("BIN\0", 4) + bin;
   test::WriteFile(path, file);
@@ -262,7 +264,7 @@ TestScene CornellTriangles(bool doubleSided) {
   return s;
 }
 
-const std::vector<std::string> kRun = {"--width",       "48",   "--height", "48",
+const std::vector<std::string> kRun = {"--width",        "48",    "--height", "48",
                                        "--emitted-rays", "20000", "--quiet"};
 
 test::RunResult Render(const std::string& scene, const std::string& out,
@@ -391,7 +393,8 @@ TEST(GltfTest, MalformedFilesAreRefusedNamingTheFile) {
     std::string text;
     std::string word;
   };
-  const std::string head = R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)";
+  const std::string head =
+      R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)";
   const Case cases[] = {
       {"{ not json", "cannot read glTF"},
       {"glTF\x02\0\0\0\x10\0\0\0garbage!", "cannot read glTF"},
