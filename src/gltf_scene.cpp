@@ -294,7 +294,7 @@ std::string UriDecode(const std::string& uri) {
 // The materials: Kd, Ke, the base colour texture, two-sidedness.
 Status MakeMaterials(const std::string& path, const tinygltf::Model& m, Unused* unused,
                      std::vector<Material>* out) {
-  const std::string where = path + ":0";
+  const std::string where = path;  // "file" for messages (no line in a glTF)
   for (size_t i = 0; i < m.materials.size(); ++i) {
     const tinygltf::Material& g = m.materials[i];
     Material mat;
@@ -549,7 +549,7 @@ Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scen
           Material d;
           d.name = kDefaultMaterial;
           d.kd = glm::vec3(kDefaultKd);
-          d.where = path + ":0";
+          d.where = path;
           defaultMaterial = static_cast<uint32_t>(result.materials.size());
           result.materials.push_back(std::move(d));
         }

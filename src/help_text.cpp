@@ -17,16 +17,18 @@ usage:
   vismask --help all                     every option, outputs, exit status
 
 scenes read: Wavefront OBJ with its MTL files (Kd reflectance, Ke emitted
-exitance, map_Kd textures: PNG, JPEG, BMP, TGA). The light is the faces
-whose material has Ke > 0, or those --emit NAME=R,G,B names.
+exitance, map_Kd textures: PNG, JPEG, BMP, TGA), and glTF 2.0 (.gltf, .glb:
+triangles, base colour and its texture, emission, double-sided materials,
+the first camera). The light is the faces that emit, or those of the
+materials --emit NAME=R,G,B names.
 
 examples:
   vismask render scenes/cornell.obj --out out
       the Cornell box, default view, into out/image.png (and .pfm, csv)
   vismask render scenes/real/CornellBox-Glossy.obj --emit light=17,12,4
       a published scene whose light's material its MTL lacks
-  vismask render scenes/cornell.obj --camera 278,273,-800,278,273,0,0,1,0,39
-      a view of your own: eye, target, up, vertical field of view
+  vismask render scenes/gltf-cornell/cornell_box.gltf --width 256 --height 256
+      a Blender glTF export, its emissive light and double-sided walls
   vismask render scenes/cornell.obj --envs 4 --ranks 2 --emitted-rays 1e6
       four local environments on two processes, fewer rays
   vismask render scenes/cornell.obj --export out/box.glb && vismask view out
@@ -38,8 +40,9 @@ const char* HelpText() {
   return R"(vismask - fixed-memory progressive-refinement radiosity
 
 usage:
-  vismask render SCENE.obj [options]     solve and render a scene
-  vismask footprint SCENE.obj [options]  the memory each environment and rank
+  vismask render SCENE [options]         solve and render a scene (SCENE.obj,
+                                         SCENE.gltf or SCENE.glb)
+  vismask footprint SCENE [options]      the memory each environment and rank
                                          would reserve, without solving
                                          (render's options; --json for JSON)
   vismask compare A.pfm B.pfm [--exclude MASK.pgm]
