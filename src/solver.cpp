@@ -20,6 +20,8 @@ const char* StopReasonName(StopReason r) {
       return "ray-budget";
     case StopReason::kStalled:
       return "stalled";
+    case StopReason::kNoLoss:
+      return "no_loss";
   }
   return "?";
 }
@@ -132,6 +134,9 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
 
   bool done = ShouldStop(totals, options, &result);
   uint32_t idle = 0;
+  // The no-loss window: the power shot and the unshot at its start.
+  double windowShot = totals.radiosity - totals.unshot, windowUnshot = totals.unshot;
+  const bool bounded = options.maxShots > 0 || options.maxSeconds > 0.0 || options.rayBudget > 0;
   Span<double> envCpu =
       buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
   CHECK(envCpu.size() >= envs.size());  // rounds in a row without a shot
@@ -192,6 +197,19 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
       break;
     }
     done = ShouldStop(totals, options, &result);
+    // (Not when the run is bounded by --max-shots, --max-seconds or
+    // --ray-budget: the user stops it, and gets its outputs.)
+    if (!done && !bounded &&
+        totals.radiosity - totals.unshot - windowShot >= kStallShot * totals.emitted) {
+      if (!(totals.unshot < (1.0 - kStallFall) * windowUnshot)) {
+        result.reason = StopReason::kNoLoss;
+        result.stallFrom = windowUnshot / totals.emitted;
+        result.stallTo = result.unshotFraction;
+        break;
+      }
+      windowShot = totals.radiosity - totals.unshot;
+      windowUnshot = totals.unshot;
+    }
     if (idleRound && !done) continue;  // nothing new to measure or record
     bool due = probe && (done || (options.errorEvery > 0 &&
                                   result.shots / options.errorEvery > before / options.errorEvery));

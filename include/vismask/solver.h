@@ -52,12 +52,26 @@ struct SolveOptions {
 };
 
 // kStalled: rounds without a shot while power was left to shoot (a bug in
-// the admission of forwarded shots, never a convergence).
-enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget, kStalled };
+// the admission of forwarded shots, never a convergence). kNoLoss: the
+// unshot power did not fall by kStallFall of itself while kStallShot times
+// the emitted power was shot (power circulating where nothing absorbs it:
+// a cavity closed by faces of Kd 1 that the scene-wide check cannot see).
+enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget, kStalled, kNoLoss };
+// The no-loss stall's window: over kStallShot times the emitted power shot,
+// the unshot power must fall by kStallFall of its value at the window's
+// start. A scene whose shots keep rho of their power falls by at least
+// kStallShot (1 - rho) of the emitted power in a window, so only rho above
+// 1 - kStallFall / kStallShot (0.9995) can stall; counted power, never time,
+// so the same on every transport and rank count. Not checked when the run
+// has a bound of its own (--max-shots, --max-seconds, --ray-budget).
+constexpr double kStallShot = 20.0;
+constexpr double kStallFall = 0.01;
 const char* StopReasonName(StopReason r);
 
 struct SolveResult {
   StopReason reason = StopReason::kConverged;
+  // kNoLoss: the unshot fraction at the window's start and at its end.
+  double stallFrom = 0.0, stallTo = 0.0;
   uint64_t rounds = 0;
   // The collectives every rank of a run of several takes part in: the first
   // totals' AllGather and one AllToAll a round (exchange.h). What the
