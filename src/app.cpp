@@ -147,8 +147,8 @@ int Main(int argc, const char* const* argv) {
       for (auto& f : r->files) f.Discard();
       os::PrintErr(
           "vismask: the solve stalled after %llu shots: the unshot power went from %.4g%% to "
-          "%.4g%% of the emitted, not down by %g%% of itself, while %g times the emitted power "
-          "was shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
+          "%.4g%% of the emitted, not down by %g%% of itself, while %g times as much power was "
+          "shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
           "give them a Kd below 1, or stop sooner with --max-shots or --max-seconds)\n",
           static_cast<unsigned long long>(res.shots), 100.0 * res.stallFrom, 100.0 * res.stallTo,
           100.0 * kStallFall, kStallShot);

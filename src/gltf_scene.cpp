@@ -366,6 +366,7 @@ Status MakeMaterials(const std::string& path, const tinygltf::Model& m, Unused* 
       const tinygltf::Image& img = m.images[static_cast<size_t>(tex.source)];
       const std::string inFile = path + "#images[" + std::to_string(tex.source) + "]";
       mat.mapKdWhere = where;
+      mat.mapIsColour = true;
       if (img.bufferView >= 0) {
         const unsigned char* data = nullptr;
         size_t size = 0;

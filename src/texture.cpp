@@ -316,7 +316,10 @@ void ResolveTextures(std::vector<Material>* materials, const std::vector<uint8_t
     missing += (missing.empty() ? "'" : ", '") + mat.mapKd + "' (" + mat.name + ")";
     mat.mapKd.clear();
     mat.mapKdWhere.clear();
-    if (mat.kd == glm::vec3(0.0f)) mat.kd = glm::vec3(0.5f);
+    if (mat.mapIsColour)
+      mat.kd *= 0.5f;
+    else if (mat.kd == glm::vec3(0.0f))
+      mat.kd = glm::vec3(0.5f);
   }
   if (numOtherCase > 0)
     warnings->push_back(otherCaseWhere + ": warning: " + std::to_string(numOtherCase) +
@@ -326,7 +329,7 @@ void ResolveTextures(std::vector<Material>* materials, const std::vector<uint8_t
     warnings->push_back(missingWhere + ": warning: " + std::to_string(numMissing) +
                         (numMissing == 1 ? " texture" : " textures") +
                         " not found, their materials untextured with their Kd (0.5 grey where "
-                        "Kd is 0; first here): " +
+                        "Kd is 0, a glTF base colour factor times 0.5; first here): " +
                         missing);
 }
 

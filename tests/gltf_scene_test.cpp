@@ -14,6 +14,7 @@
 
 #include "test_util.h"
 #include "vismask/scene.h"
+#include "vismask/texture.h"
 
 namespace vismask {
 namespace {
@@ -444,9 +445,18 @@ TEST(GltfTest, ThePublishedBlenderBoxesRender) {
   EXPECT_FLOAT_EQ(light.ke.x, static_cast<float>(5.0 * M_PI));  // strength 5
   for (const Material& m : scene.materials) EXPECT_TRUE(m.twoSided) << m.name;
   EXPECT_EQ(scene.polygons.size(), 36u);
-  auto r = Render(gltf, dir.File("gltf"), {"--max-shots", "300"});
+  // The tall box's base colour is its missing texture (factor 1): without
+  // it, a mid grey (Kd 1 would close a lossless cavity inside the box).
+  SceneTextures textures;
+  ASSERT_TRUE(LoadSceneTextures(&scene, &textures).ok());
+  EXPECT_EQ(scene.materials[2].name, "tall_box_mat");
+  EXPECT_EQ(scene.materials[2].kd, glm::vec3(0.5f));
+  EXPECT_EQ(scene.materials[2].mapKd, "");
+  auto r = Render(gltf, dir.File("gltf"), {"--view", "left"});
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("1 texture not found"), std::string::npos) << r.err;
+  EXPECT_NE(ReadFile(dir.File("gltf/run.json")).find("\"stop_reason\": \"converged\""),
+            std::string::npos);
   // The light faces the ceiling 6 mm away, but it is double-sided: no
   // warning that it is wound the wrong way.
   EXPECT_EQ(r.err.find("wound the wrong way"), std::string::npos) << r.err;

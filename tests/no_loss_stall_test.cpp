@@ -44,7 +44,7 @@ TEST(NoLossStallTest, ACavityOfKdOneStopsWithExitFourAndNothingWritten) {
     std::string out;
     EXPECT_EQ(RunCavity(dir, extra, &out), 4) << extra << "\n" << out;
     EXPECT_NE(out.find("vismask: the solve stalled after "), std::string::npos) << out;
-    EXPECT_NE(out.find("not down by 1% of itself, while 20 times the emitted power was shot"),
+    EXPECT_NE(out.find("not down by 1% of itself, while 20 times as much power was shot"),
               std::string::npos)
         << out;
     EXPECT_FALSE(test::FileExists(dir.File("out/image.pfm")));

@@ -31,6 +31,10 @@ struct Material {
   // A glTF texture held in the file (a .glb's buffer or a data: URI): its
   // encoded bytes (mapKd then names it, "FILE#images[i]"); null otherwise.
   std::shared_ptr<const std::string> mapKdBytes = nullptr;
+  // glTF: the map is the colour and Kd only its factor (1 by default), so a
+  // map that is not found leaves Kd times 0.5, a mid-grey stand-in (an OBJ's
+  // Kd stays as written, 0 becoming 0.5).
+  bool mapIsColour = false;
   // Both sides of its faces are surfaces (glTF doubleSided): each patch
   // gets a twin (mesh.h, AddTwins), and an emitter's twin emits too.
   bool twoSided = false;

@@ -101,7 +101,8 @@ std::string FindTexture(const std::string& path);
 
 // The map_Kd of each used material looked up (FindTexture): one found in
 // another letter case is read from there, one not found at all is dropped
-// (the material untextured with its Kd, 0.5 grey where Kd is 0 0 0), each
+// (the material untextured with its Kd, 0.5 grey where Kd is 0 0 0, a glTF
+// base colour factor times 0.5: Material::mapIsColour), each
 // kind in one warning line naming them all. With `strict` nothing is
 // changed (the reader then refuses a name that is not found).
 void ResolveTextures(std::vector<Material>* materials, const std::vector<uint8_t>& used,
