@@ -6,7 +6,29 @@
 namespace vismask::run {
 
 Status CountScene(const Options& o, Prepared* p) {
-  return CountObj(o.scene, &p->info);
+  const double t0 = os::Seconds();
+  Status s = CountObj(o.scene, &p->info);
+  p->clock.Done("reading the scene", os::Seconds() - t0);
+  return s;
+}
+
+std::string InitStageLine(const char* what, double seconds, const std::string& detail) {
+  if (!(seconds > 1.0)) return "";
+  char line[256];
+  std::snprintf(line, sizeof line, "vismask: init: %s took %.1f s%s%s%s", what, seconds,
+                detail.empty() ? "" : " (", detail.c_str(), detail.empty() ? "" : ")");
+  return line;
+}
+
+void InitClock::Done(const char* what, double seconds, const std::string& detail) {
+  auto it =
+      std::find_if(stages.begin(), stages.end(), [&](const auto& s) { return s.first == what; });
+  if (it == stages.end())
+    stages.emplace_back(what, seconds);
+  else
+    it->second += seconds;
+  const std::string line = InitStageLine(what, seconds, detail);
+  if (report && !line.empty()) os::PrintErr("%s\n", line.c_str());
 }
 
 namespace {
@@ -80,6 +102,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // emitter check (rank 0), nothing else of the polygons.
   std::vector<std::pair<uint32_t, Polygon>> emitters;
   size_t numEmitters = 0;
+  double t0 = os::Seconds();
   // Each polygon, as mended, with its corners, area and material: where a
   // work-balanced split (an accumulator fed one polygon at a time) takes
   // them, its planes then set p->grid before pass 2 clips with it.
@@ -92,15 +115,20 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       },
       &info);
   if (!s.ok()) return s;
+  p->clock.Done("reading the scene", os::Seconds() - t0,
+                std::to_string(info.numPolygons) + " polygons");
   // Rank 0's emitter check (the same figure on every rank, for footprint).
   p->checkBytes =
       EmitterCheck::HeapBytes(numEmitters, std::min<size_t>(kEmitterCheckChunk, info.numPolygons)) +
       numEmitters * 256;
   // Every rank prints the loader's warnings, as LoadScene did.
   for (const std::string& w : info.warnings) os::PrintErr("%s\n", w.c_str());
+  t0 = os::Seconds();
   s = LoadMaterialTextures(o.scene, &info.materials, info.usedMaterials, info.noUvLine,
                            &p->textures, o.load.strict);
   if (!s.ok()) return s;
+  p->clock.Done("textures", os::Seconds() - t0,
+                std::to_string(p->textures.images.size()) + " images decoded");
   for (const TextureImage& t : p->textures.images)
     p->textureBytes += uint64_t{t.width} * t.height * 4;
   p->scene.objPath = o.scene;
@@ -187,6 +215,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // whole polygons in file order, the same on every rank): the size of an
   // automatic --round-work.
   double estimated = 0.0;
+  t0 = os::Seconds();
   s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
     estimated +=
         EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()), p->patchSize);
@@ -242,9 +271,12 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (!failed.ok()) return failed;
   if (o.roundWorkAuto)
     p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2]);
+  p->clock.Done("cutting the scene into environments", os::Seconds() - t0);
   if (probe) p->side = probe->Side();
+  t0 = os::Seconds();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
+  p->clock.Done("emitter check", os::Seconds() - t0);
   probe.reset();
   check.reset();
   // Environment by environment, as meshing each would refuse it.
@@ -325,6 +357,8 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
   CHECK(p.first <= first && end <= p.end);
   uint32_t nextId = p.idBase;
   for (uint32_t e = p.first; e < first; ++e) nextId += static_cast<uint32_t>(p.envPatches[e]);
+  const double t0 = os::Seconds();
+  double textureSeconds = 0.0;
   for (uint32_t e = first; e < end; ++e) {
     Mesh mesh;
     Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
@@ -338,7 +372,9 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     CHECK_EQ(static_cast<double>(mesh.patches.size()), p.envPatches[e]);
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
+    const double tt = os::Seconds();
     TextureMesh(p.part.scene, p.textures, &mesh);
+    textureSeconds += os::Seconds() - tt;
     if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh, &p.sourceIds);
     // Patch::surface is the piece's index in the whole partition (the
     // raster's fragment id, compared across ranks): the rank's pieces are
@@ -349,6 +385,8 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     envs->push_back(std::make_unique<Environment>());
     envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
   }
+  p.clock.Done("texture means", textureSeconds);
+  p.clock.Done("meshing", os::Seconds() - t0 - textureSeconds);
   return Status::Ok();
 }
 

@@ -73,6 +73,7 @@ int Init(RunState* r) {
     }
     // Pass 0: the statements counted, so that the parser's arrays are
     // judged against the budget before they exist.
+    p.clock.report = r->isRoot() && !o.quiet;
     Status s = CountScene(o, &p);
     if (!s.ok()) return FailInit(r, s);
     const uint64_t held = referenceBytes;
@@ -212,10 +213,13 @@ int Init(RunState* r) {
         static_cast<unsigned long long>(need));
     return kExitUsage;
   };
+  const double gridStart = os::Seconds();
   for (auto& e : r->envs) {
     if (!e->Build()) return refused("an environment's arena", e->footprint().total);
     r->envPtrs.push_back(e.get());
   }
+  p.clock.Done("grid and arenas", os::Seconds() - gridStart);
+  r->initStages = p.clock.stages;
 
   if (o.hasCamera) {
     r->camera = o.camera;

@@ -318,3 +318,39 @@ TEST(RenderTest, RanksWithoutEnvsMeanOneBalancedEnvironmentARank) {
 
 }  // namespace
 }  // namespace vismask
+
+#include "../src/run.h"
+
+namespace vismask {
+namespace {
+
+// Issue 40: init's stages. Each over a second prints a line on stderr (rank
+// 0, not --quiet); run.json lists them all with their seconds.
+TEST(RenderTest, InitStagesOverASecondSaySoAndRunJsonListsThem) {
+  EXPECT_EQ(run::InitStageLine("textures", 1.5, "9 images decoded"),
+            "vismask: init: textures took 1.5 s (9 images decoded)");
+  EXPECT_EQ(run::InitStageLine("meshing", 2.25, ""), "vismask: init: meshing took 2.2 s");
+  EXPECT_EQ(run::InitStageLine("meshing", 1.0, ""), "");
+  EXPECT_EQ(run::InitStageLine("meshing", 0.2, "x"), "");
+  run::InitClock clock;  // report off: counted, not printed
+  clock.Done("meshing", 0.5);
+  clock.Done("grid and arenas", 0.25);
+  clock.Done("meshing", 0.75);
+  ASSERT_EQ(clock.stages.size(), 2u);
+  EXPECT_EQ(clock.stages[0].first, "meshing");
+  EXPECT_DOUBLE_EQ(clock.stages[0].second, 1.25);
+
+  test::TempDir dir;
+  auto r = test::RunMain({"render", "scenes/textured/room.obj", "--out", dir.File("out"),
+                          "--max-shots", "50", "--width", "16", "--height", "16", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string json = test::ReadFile(dir.File("out/run.json"));
+  size_t at = json.find("\"init_stages\": {");
+  ASSERT_NE(at, std::string::npos);
+  for (const char* stage : {"reading the scene", "textures", "cutting the scene into environments",
+                            "emitter check", "texture means", "meshing", "grid and arenas"})
+    EXPECT_NE(json.find(std::string("\"") + stage + "\": ", at), std::string::npos) << stage;
+}
+
+}  // namespace
+}  // namespace vismask
