@@ -260,7 +260,8 @@ SHAREDIR := $(DESTDIR)$(PREFIX)/share/vismask
 MAN1DIR := $(DESTDIR)$(PREFIX)/share/man/man1
 $(BUILD)/vismask.1: $(BUILD)/vismask
 	@command -v help2man >/dev/null || { echo "make: help2man not found: tools/install-deps installs it" >&2; exit 1; }
-	help2man --no-info --no-discard-stderr --version-string=1 --name="fixed-memory parallel radiosity renderer" \
+	help2man --no-info --no-discard-stderr --version-string=1 --help-option="--help all" \
+	  --name="fixed-memory parallel radiosity renderer" \
 	  --output=$@ $(BUILD)/vismask
 install: all viewer $(BUILD)/vismask.1
 	install -d $(BINDIR) $(SHAREDIR)/viewer $(MAN1DIR)

@@ -76,7 +76,9 @@ int Main(int argc, const char* const* argv) {
   Status s = ParseArgs(argc, argv, &r->options);
   if (!s.ok()) return Fail(s);
   if (r->options.help) {
-    const char* text = r->options.command == "view" ? ViewHelpText() : HelpText();
+    const char* text = r->options.command == "view" ? ViewHelpText()
+                       : r->options.helpAll         ? HelpText()
+                                                    : UsageText();
     return WriteStdout(text, std::strlen(text)) ? kExitOk : kExitOutput;
   }
   if (r->options.command == "compare") return Compare(r->options);
@@ -141,6 +143,19 @@ int Main(int argc, const char* const* argv) {
           "new records let no environment shoot; try a larger --queue)\n",
           static_cast<unsigned long long>(res.shots),
           static_cast<unsigned long long>(r->rankEnvs.total), res.unshotFraction);
+    }
+    return r->transport->Finish(kExitStalled);
+  }
+  if (res.reason == StopReason::kNoLoss) {  // no outputs: the solve would never finish
+    if (r->isRoot()) {
+      for (auto& f : r->files) f.Discard();
+      os::PrintErr(
+          "vismask: the solve stalled after %llu shots: the unshot power went from %.4g%% to "
+          "%.4g%% of the emitted, not down by %g%% of itself, while %g times as much power was "
+          "shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
+          "give them a Kd below 1, or stop sooner with --max-shots or --max-seconds)\n",
+          static_cast<unsigned long long>(res.shots), 100.0 * res.stallFrom, 100.0 * res.stallTo,
+          100.0 * kStallFall, kStallShot);
     }
     return r->transport->Finish(kExitStalled);
   }

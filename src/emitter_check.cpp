@@ -223,6 +223,8 @@ std::vector<std::string> EmitterWarnings(const std::vector<EmitterEstimate>& all
   const glm::vec3 extent = bounds.hi - bounds.lo;
   const double largest = std::fmax(extent.x, std::fmax(extent.y, extent.z));
   for (const EmitterEstimate& e : all) {
+    // A two-sided material (glTF doubleSided) emits from both sides already.
+    if (materials[e.material].twoSided) continue;
     if (done[e.material] || !(e.nearWarning() || e.escapeWarning())) continue;
     done[e.material] = true;
     // How many of this material's emitting faces warn, and of how many.

@@ -5,12 +5,44 @@
 
 namespace vismask {
 
+const char* UsageText() {
+  return R"(vismask - fixed-memory progressive-refinement radiosity
+
+usage:
+  vismask render SCENE [options]         solve the scene's diffuse light and
+                                         render it into --out DIR (out/)
+  vismask footprint SCENE [options]      the memory a render would reserve
+  vismask compare A.pfm B.pfm            relative RMSE of A against B
+  vismask view OUT_DIR                   look around a render --export mesh
+  vismask --help all                     every option, outputs, exit status
+
+scenes read: Wavefront OBJ with its MTL files (Kd reflectance, Ke emitted
+exitance, map_Kd textures: PNG, JPEG, BMP, TGA), and glTF 2.0 (.gltf, .glb:
+triangles, base colour and its texture, emission, double-sided materials,
+the first camera). The light is the faces that emit, or those of the
+materials --emit NAME=R,G,B names.
+
+examples:
+  vismask render scenes/cornell.obj --out out
+      the Cornell box, default view, into out/image.png (and .pfm, csv)
+  vismask render scenes/real/CornellBox-Glossy.obj --emit light=17,12,4
+      a published scene whose light's material its MTL lacks
+  vismask render scenes/gltf-cornell/cornell_box.gltf --width 256 --height 256
+      a Blender glTF export, its emissive light and double-sided walls
+  vismask render scenes/cornell.obj --envs 4 --ranks 2 --emitted-rays 1e6
+      four local environments on two processes, fewer rays
+  vismask render scenes/cornell.obj --export out/box.glb && vismask view out
+      the solved mesh as glTF, to walk through in a browser
+)";
+}
+
 const char* HelpText() {
   return R"(vismask - fixed-memory progressive-refinement radiosity
 
 usage:
-  vismask render SCENE.obj [options]     solve and render a scene
-  vismask footprint SCENE.obj [options]  the memory each environment and rank
+  vismask render SCENE [options]         solve and render a scene (SCENE.obj,
+                                         SCENE.gltf or SCENE.glb)
+  vismask footprint SCENE [options]      the memory each environment and rank
                                          would reserve, without solving
                                          (render's options; --json for JSON)
   vismask compare A.pfm B.pfm [--exclude MASK.pgm]
@@ -106,7 +138,11 @@ render options:
                        by default a non-planar face is triangulated, a
                        repeated or collinear corner removed, and a face with
                        no area or crossing edges dropped, each kind counted
-                       in one warning line
+                       in one warning line; and refuse faces before any
+                       usemtl, undefined materials, a missing MTL file and
+                       a texture not found as written (by default grey
+                       Kd 0.5, or the texture found in another letter case
+                       or dropped, each with one warning line)
   --emit NAME=R,G,B    make material NAME an emitter of exitance Ke =
                        (R, G, B), each >= 0, replacing the MTL's Ke (said
                        in a warning when that was not 0); NAME=ka takes the

@@ -424,7 +424,7 @@ Status MeshScene(const Scene& scene, const std::vector<uint32_t>& polygons, floa
   return Status::Ok();
 }
 
-void AddTwins(const TwinOptions& options, Mesh* mesh) {
+void AddTwins(const TwinOptions& options, Mesh* mesh, const Scene* scene) {
   if (!options.any()) return;
   const uint32_t n = static_cast<uint32_t>(mesh->patches.size());
   CHECK_MSG(mesh->twin.empty(), "AddTwins runs once, on a mesh without twins");
@@ -435,7 +435,8 @@ void AddTwins(const TwinOptions& options, Mesh* mesh) {
   for (uint32_t i = 0; i < n; ++i) {
     const Patch p = mesh->patches[i];  // a copy: patches grows below
     const bool emits = p.ke.x > 0.0f || p.ke.y > 0.0f || p.ke.z > 0.0f;
-    if (!options.all && !(options.emitters && emits)) continue;
+    const uint32_t material = options.materials.empty() ? 0 : scene->polygons[p.surface].material;
+    if (!options.Twins(material, emits)) continue;
     // corner[0] stays, the rest run backwards; a triangle repeats its last.
     static const uint32_t kQuad[4] = {0, 3, 2, 1}, kTriangle[4] = {0, 2, 1, 1};
     const uint32_t* from = p.numCorners == 4 ? kQuad : kTriangle;
@@ -451,7 +452,7 @@ void AddTwins(const TwinOptions& options, Mesh* mesh) {
       t.corner[q] = p.corner[from[q]];
     }
     t.normal = -p.normal;
-    if (!(options.emitters && emits)) t.ke = glm::vec3(0.0f);
+    if (!options.TwinEmits(material, emits)) t.ke = glm::vec3(0.0f);
     t.globalId = static_cast<uint32_t>(mesh->patches.size());
     mesh->twin[i] = t.globalId;
     mesh->twin.push_back(i);

@@ -7,22 +7,24 @@
 
 namespace vismask::objload {
 
-Status Loader::ApplyEmit() {
-  std::vector<Material>& materials = *materials_;
-  for (const EmitOverride& e : options_.emit) {
-    auto it = materialIndex_.find(e.material);
-    if (it == materialIndex_.end()) {
+Status ApplyEmitOverrides(const std::string& scenePath, const std::vector<EmitOverride>& emit,
+                          std::vector<Material>* materials, std::vector<std::string>* replaced,
+                          std::string* replacedWhere) {
+  for (const EmitOverride& e : emit) {
+    auto it = std::find_if(materials->begin(), materials->end(),
+                           [&](const Material& m) { return m.name == e.material; });
+    if (it == materials->end()) {
       std::string names;
-      for (const Material& m : materials) names += (names.empty() ? "" : ", ") + m.name;
+      for (const Material& m : *materials) names += (names.empty() ? "" : ", ") + m.name;
       return Status::Error(
-          "vismask: --emit: no material '" + e.material + "' in " + path_ +
+          "vismask: --emit: no material '" + e.material + "' in " + scenePath +
           (names.empty() ? " (it defines none)" : " (its materials: " + names + ")"));
     }
-    Material& m = materials[it->second.first];
+    Material& m = *it;
     if (m.ke != glm::vec3(0.0f)) {
-      if (replacedKe_.empty()) replacedWhere_ = m.where;
-      replacedKe_.push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) +
-                            ")");
+      if (replaced->empty()) *replacedWhere = m.where;
+      replaced->push_back(m.name + " (Ke " + Num(m.ke.x) + " " + Num(m.ke.y) + " " + Num(m.ke.z) +
+                          ")");
     }
     m.ke = e.fromKa ? m.ka : e.ke;
   }
@@ -45,6 +47,16 @@ Status Loader::DroppedEmitters(const std::vector<uint8_t>& used) const {
                             " and was dropped, and no other face emits (fix the face, or --emit "
                             "NAME=R,G,B makes another material emit)");
   return Status::Ok();
+}
+
+Status Loader::ApplyEmit() {
+  return ApplyEmitOverrides(path_, options_.emit, materials_, &replacedKe_, &replacedWhere_);
+}
+
+std::string Loader::UndefinedMaterials() const {
+  std::string names;
+  for (const std::string& n : undefinedMaterials_) names += (names.empty() ? "" : ", ") + Quote(n);
+  return names;
 }
 
 std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) const {
@@ -78,6 +90,14 @@ std::vector<std::string> Loader::Warnings(const std::vector<uint8_t>& used) cons
     for (const std::string& r : replacedKe_) list += (list.empty() ? "" : ", ") + r;
     w.push_back(replacedWhere_ + ": warning: --emit replaces the MTL's Ke of " + list);
   }
+  if (!undefinedMaterials_.empty()) {
+    const std::string names = UndefinedMaterials();
+    w.push_back(undefinedWhere_ +
+                ": warning: " + Count(undefinedMaterials_.size(), "material", "materials") +
+                " that no MTL defines, given the default grey (Kd 0.5; --emit NAME=R,G,B makes "
+                "one an emitter; first here): " +
+                names);
+  }
   const FaceTally& t = triangulated_;
   if (t.faces)
     w.push_back(at(t.line) + Count(t.faces, "non-planar face", "non-planar faces") +
@@ -104,7 +124,18 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
   if (!loadedMtls_.insert(path).second) return Status::Ok();
   std::string text;
   std::string err = readMtl_(path, &text);
-  if (!err.empty()) return Status::At(objPath, objLine, "MTL file '" + path + "': " + err);
+  if (!err.empty()) {
+    // Published without its MTL (no such file; one that is there but
+    // cannot be read stays an error): the materials it would define get
+    // the default grey where faces use them (one more warning names them).
+    if (options_.strict || os::Exists(path.c_str()))
+      return Status::At(objPath, objLine, "MTL file '" + path + "': " + err);
+    Warn(objPath, objLine,
+         "MTL file '" + path +
+             "' not found: the materials it defines get the default grey "
+             "(Kd 0.5)");
+    return Status::Ok();
+  }
   TextLines lines(text);
   std::vector<Material>& materials = *materials_;
   bool haveMaterial = false;
@@ -143,10 +174,14 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
     } else if (key == "map_Kd") {
       if (!haveMaterial) return Status::At(path, line, "'map_Kd' before any 'newmtl'");
       if (args == 0) return Status::At(path, line, "'map_Kd' needs a file name");
-      // Options (-bm 1, -s 1 1 1, ...) come before the name, which is the
-      // last token; they are not applied, and said so once.
-      if (args > 1) Warn(path, line, "ignoring map_Kd options");
-      materials.back().mapKd = Beside(path, t.back());
+      // Options (-bm 1, -s 1 1 1, ...) come before the name; they are not
+      // applied, and said so once. The name is the rest of the line, spaces
+      // and all (Blender writes 'map_Kd my tex.png' unquoted).
+      bool options = false;
+      const std::string name = MapName(lineText, t, &options);
+      if (name.empty()) return Status::At(path, line, "'map_Kd' needs a file name");
+      if (options) Warn(path, line, "ignoring map_Kd options");
+      materials.back().mapKd = Beside(path, name);
       materials.back().mapKdWhere = path + ":" + std::to_string(line);
     } else if (key == "Kd" || key == "Ke") {
       if (!haveMaterial) return Status::At(path, line, Quote(key) + " before any 'newmtl'");

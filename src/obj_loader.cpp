@@ -17,6 +17,21 @@ void Loader::Reserve(const ObjCounts& counts) {
   normals_.reserve(counts.normals);
 }
 
+uint32_t Loader::DefaultMaterial(const std::string& name, const std::string& path, int line) {
+  std::vector<Material>& materials = *materials_;
+  const std::string where = path + ":" + std::to_string(line);
+  auto [it, added] =
+      materialIndex_.emplace(name, std::make_pair(static_cast<uint32_t>(materials.size()), where));
+  if (!added) return it->second.first;
+  Material m;
+  m.name = name;
+  m.kd = glm::vec3(kDefaultKd);
+  m.where = where;
+  materials.push_back(std::move(m));
+  finishes_.emplace_back();
+  return it->second.first;
+}
+
 Status Loader::LoadObj(const std::string& path, LineSource& lines, const PolygonVisitor& visit) {
   path_ = path;
   std::string err;
@@ -47,7 +62,16 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
     } else if (key == "f") {
       if (args < 3)
         return Status::At(path, line, "face with " + Str(args) + " vertices (needs 3 or more)");
-      if (!haveMaterial) return Status::At(path, line, "face before any 'usemtl'");
+      if (!haveMaterial) {
+        if (options_.strict) return Status::At(path, line, "face before any 'usemtl'");
+        // Faces with no material (an OBJ without usemtl, or faces above
+        // the first): the default grey, said once.
+        material = DefaultMaterial(kDefaultMaterial, path, line);
+        haveMaterial = true;
+        Warn(path, line,
+             "faces before any 'usemtl': they get the default grey material '" +
+                 std::string(kDefaultMaterial) + "' (Kd 0.5)");
+      }
       Polygon p;
       p.material = material;
       p.line = line;
@@ -99,9 +123,17 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
     } else if (key == "usemtl") {
       if (args != 1) return Status::At(path, line, "'usemtl' needs 1 name, got " + Str(args));
       auto it = materialIndex_.find(t[1]);
-      if (it == materialIndex_.end())
-        return Status::At(path, line, "undefined material " + Quote(t[1]));
-      material = it->second.first;
+      if (it == materialIndex_.end()) {
+        if (options_.strict) return Status::At(path, line, "undefined material " + Quote(t[1]));
+        // A name no MTL defines (its MTL missing, or left out of it): the
+        // default grey under that name, so that --emit may name it; the
+        // names go in one warning after loading.
+        if (undefinedMaterials_.empty()) undefinedWhere_ = path + ":" + std::to_string(line);
+        undefinedMaterials_.push_back(t[1]);
+        material = DefaultMaterial(t[1], path, line);
+      } else {
+        material = it->second.first;
+      }
       haveMaterial = true;
     } else if (key == "mtllib") {
       if (args == 0) return Status::At(path, line, "'mtllib' needs a file name");

@@ -35,12 +35,57 @@ bool ParseDouble(const std::string& s, double* out) {
   return true;
 }
 
+// A count: decimal digits, or a number in scientific notation whose value
+// is exactly an integer (1e6, 2.5e3, 10e-1; not 1.5 or 1e-1), read exactly
+// in decimal (no rounding through double), at most 2^64 - 1.
 bool ParseU64(const std::string& s, uint64_t* out) {
   if (s.empty() || !std::isdigit(static_cast<unsigned char>(s[0]))) return false;
-  errno = 0;
-  char* end = nullptr;
-  unsigned long long v = std::strtoull(s.c_str(), &end, 10);
-  if (end != s.c_str() + s.size() || errno == ERANGE) return false;
+  auto digit = [&](size_t i) {
+    return i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]));
+  };
+  std::string digits;  // the mantissa's digits, the point removed
+  long shift = 0;      // value = digits * 10^shift
+  size_t i = 0;
+  while (digit(i)) digits += s[i++];
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    if (!digit(i)) return false;
+    while (digit(i)) {
+      digits += s[i++];
+      --shift;
+    }
+  }
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    const bool negative = i < s.size() && s[i] == '-';
+    if (i < s.size() && (s[i] == '+' || s[i] == '-')) ++i;
+    if (!digit(i)) return false;
+    long e = 0;
+    while (digit(i)) {
+      e = std::min(e * 10 + (s[i++] - '0'), 100000L);  // beyond any count: capped
+    }
+    shift += negative ? -e : e;
+  }
+  if (i != s.size()) return false;
+  // A negative shift drops digits that must be zeros (10e-1, 2.50e1).
+  for (; shift < 0; ++shift) {
+    if (digits.empty()) break;
+    if (digits.back() != '0') return false;
+    digits.pop_back();
+  }
+  digits.erase(0, std::min(digits.find_first_not_of('0'), digits.size()));
+  if (digits.empty()) {
+    *out = 0;
+    return true;
+  }
+  if (shift > 20) return false;  // a nonzero value beyond 10^20
+  digits.append(static_cast<size_t>(shift), '0');
+  uint64_t v = 0;
+  for (char c : digits) {
+    const uint64_t d = static_cast<uint64_t>(c - '0');
+    if (v > (~uint64_t{0} - d) / 10) return false;
+    v = v * 10 + d;
+  }
   *out = v;
   return true;
 }
@@ -52,10 +97,14 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   std::vector<std::string> args(argv + 1, argv + argc);
   if (args.empty()) return Status::Error("vismask: no command (try 'vismask --help')");
   size_t i = 0;
-  if (args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+  // --help [all]: the short usage, or every option (what follows is
+  // ignored, as it always was after --help).
+  auto help = [&](size_t at) {
     o->help = true;
+    o->helpAll = at + 1 < args.size() && args[at + 1] == "all";
     return Status::Ok();
-  }
+  };
+  if (args[0] == "--help" || args[0] == "-h" || args[0] == "help") return help(0);
   if (args[0] == "compare") {
     const bool mask = args.size() == 5 && args[3] == "--exclude" && !args[4].empty();
     if (args.size() != 3 && !mask)
@@ -113,10 +162,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   o->command = args[i++];
   for (; i < args.size(); ++i) {
     const std::string& a = args[i];
-    if (a == "--help" || a == "-h") {
-      o->help = true;
-      return Status::Ok();
-    }
+    if (a == "--help" || a == "-h") return help(i);
     if (a == "--quiet") {
       o->quiet = true;
       continue;

@@ -6,7 +6,29 @@
 namespace vismask::run {
 
 Status CountScene(const Options& o, Prepared* p) {
-  return CountObj(o.scene, &p->info);
+  const double t0 = os::Seconds();
+  Status s = CountObj(o.scene, &p->info);
+  p->clock.Done("reading the scene", os::Seconds() - t0);
+  return s;
+}
+
+std::string InitStageLine(const char* what, double seconds, const std::string& detail) {
+  if (!(seconds > 1.0)) return "";
+  char line[256];
+  std::snprintf(line, sizeof line, "vismask: init: %s took %.1f s%s%s%s", what, seconds,
+                detail.empty() ? "" : " (", detail.c_str(), detail.empty() ? "" : ")");
+  return line;
+}
+
+void InitClock::Done(const char* what, double seconds, const std::string& detail) {
+  auto it =
+      std::find_if(stages.begin(), stages.end(), [&](const auto& s) { return s.first == what; });
+  if (it == stages.end())
+    stages.emplace_back(what, seconds);
+  else
+    it->second += seconds;
+  const std::string line = InitStageLine(what, seconds, detail);
+  if (report && !line.empty()) os::PrintErr("%s\n", line.c_str());
 }
 
 namespace {
@@ -80,6 +102,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // emitter check (rank 0), nothing else of the polygons.
   std::vector<std::pair<uint32_t, Polygon>> emitters;
   size_t numEmitters = 0;
+  double t0 = os::Seconds();
   // Each polygon, as mended, with its corners, area and material: where a
   // work-balanced split (an accumulator fed one polygon at a time) takes
   // them, its planes then set p->grid before pass 2 clips with it.
@@ -92,6 +115,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       },
       &info);
   if (!s.ok()) return s;
+  p->clock.Done("reading the scene", os::Seconds() - t0,
+                std::to_string(info.numPolygons) + " polygons");
   // Rank 0's emitter check (the same figure on every rank, for footprint).
   p->checkBytes =
       EmitterCheck::HeapBytes(numEmitters, std::min<size_t>(kEmitterCheckChunk, info.numPolygons)) +
@@ -103,14 +128,18 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   const uint64_t heldNow = p->held + kInitBaseBytes;
   const uint64_t textureBudget =
       p->budget == 0 ? 0 : (p->budget > heldNow ? p->budget - heldNow : 1);
-  s = LoadMaterialTextures(o.scene, info.materials, info.usedMaterials, info.noUvLine, &p->textures,
-                           textureBudget);
+  t0 = os::Seconds();
+  s = LoadMaterialTextures(o.scene, &info.materials, info.usedMaterials, info.noUvLine,
+                           &p->textures, textureBudget, o.load.strict);
   if (!s.ok()) return s;
+  p->clock.Done("textures", os::Seconds() - t0,
+                std::to_string(p->textures.images.size()) + " images decoded");
   for (const TextureImage& t : p->textures.images)
     p->textureBytes += uint64_t{t.width} * t.height * 4;
   p->scene.objPath = o.scene;
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
+  p->scene.camera = info.camera;
   glm::vec3 extent = info.bounds.hi - info.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
   p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
@@ -145,6 +174,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->envPieceBytes.assign(total, 0);
   p->twins.all = o.twoSided;
   p->twins.emitters = o.twoSidedEmitters;
+  // glTF's doubleSided materials: their patches get twins of their own.
+  for (const Material& m : info.materials)
+    if (m.twoSided) p->twins.materials.assign(info.materials.size(), 0);
+  for (size_t m = 0; m < p->twins.materials.size(); ++m)
+    p->twins.materials[m] = info.materials[m].twoSided;
 
   // Before pass 2 allocates: the parser's arrays, the camera's probe and
   // the emitter check against the budget; then the pieces as they come.
@@ -162,7 +196,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // are global, environment-major). The camera's side and the emitter
   // check take their polygons here too.
   std::unique_ptr<ViewProbe> probe;
-  if (chooseSide) probe = std::make_unique<ViewProbe>(info.bounds);
+  if (chooseSide && !info.camera.has) probe = std::make_unique<ViewProbe>(info.bounds);
   std::unique_ptr<EmitterCheck> check;
   if (root) {
     check =
@@ -191,6 +225,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   int stripLine = 0;
   size_t stripCorners = 0;
   double stripChange = 0.0;  // the largest relative change of area
+  t0 = os::Seconds();
   s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
     estimated +=
         EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()), p->patchSize);
@@ -223,9 +258,12 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       }
       p->envPatches[e] += patches;
       if (e < first) ++p->pieceBase;
-      if (p->twins.all || (p->twins.emitters && Emits(mat))) p->envTwins[e] += patches;
+      if (p->twins.Twins(poly.material, Emits(mat))) p->envTwins[e] += patches;
+      // An emitter whose twin emits (--two-sided-emitters, a doubleSided
+      // glTF material) sends as much again from its back (x2 is exact).
       if (Emits(mat))
-        emitted.emplace_back(e, (static_cast<double>(mat.ke.x) + mat.ke.y + mat.ke.z) * piece.area);
+        emitted.emplace_back(e, (static_cast<double>(mat.ke.x) + mat.ke.y + mat.ke.z) * piece.area *
+                                    (p->twins.TwinEmits(poly.material, true) ? 2.0 : 1.0));
       if (e < first || e >= end) continue;
       if (source == kNoPatch) {
         source = static_cast<uint32_t>(p->scene.polygons.size());
@@ -250,7 +288,9 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (!failed.ok()) return failed;
   if (o.roundWorkAuto)
     p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2]);
+  p->clock.Done("cutting the scene into environments", os::Seconds() - t0);
   if (probe) p->side = probe->Side();
+  t0 = os::Seconds();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
   if (stripFaces > 0) {
@@ -264,6 +304,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                   100.0 * std::fabs(stripChange));
     p->emitterWarnings.push_back(text);
   }
+  p->clock.Done("emitter check", os::Seconds() - t0);
   probe.reset();
   check.reset();
   // Environment by environment, as meshing each would refuse it.
@@ -289,7 +330,6 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   double power = 0.0;
   for (const auto& [e, w] : emitted) power += w;
-  if (o.twoSidedEmitters) power *= 2.0;  // every emitter's twin emits as much
 
   // This rank's pieces, by environment (within one, in source order).
   std::stable_sort(own.begin(), own.end(),
@@ -345,12 +385,14 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
   CHECK(p.first <= first && end <= p.end);
   uint32_t nextId = p.idBase;
   for (uint32_t e = p.first; e < first; ++e) nextId += static_cast<uint32_t>(p.envPatches[e]);
+  const double t0 = os::Seconds();
+  double textureSeconds = 0.0;
   for (uint32_t e = first; e < end; ++e) {
     Mesh mesh;
     Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
     if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
     // Twins in the environment of their originals, after all of its patches.
-    AddTwins(p.twins, &mesh);
+    AddTwins(p.twins, &mesh, &p.part.scene);
     if (mesh.patches.size() > kMaxPatches)
       return Status::Error(
           "vismask: --patch-size: the mesh needs " + std::to_string(mesh.patches.size()) +
@@ -358,7 +400,9 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     CHECK_EQ(static_cast<double>(mesh.patches.size()), p.envPatches[e]);
     for (Patch& patch : mesh.patches) patch.globalId += nextId;
     nextId += static_cast<uint32_t>(mesh.patches.size());
+    const double tt = os::Seconds();
     TextureMesh(p.part.scene, p.textures, &mesh);
+    textureSeconds += os::Seconds() - tt;
     if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh, &p.sourceIds);
     // Patch::surface is the piece's index in the whole partition (the
     // raster's fragment id, compared across ranks): the rank's pieces are
@@ -369,6 +413,8 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
     envs->push_back(std::make_unique<Environment>());
     envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
   }
+  p.clock.Done("texture means", textureSeconds);
+  p.clock.Done("meshing", os::Seconds() - t0 - textureSeconds);
   return Status::Ok();
 }
 

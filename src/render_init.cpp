@@ -73,6 +73,7 @@ int Init(RunState* r) {
     }
     // Pass 0: the statements counted, so that the parser's arrays are
     // judged against the budget before they exist.
+    p.clock.report = r->isRoot() && !o.quiet;
     Status s = CountScene(o, &p);
     if (!s.ok()) return FailInit(r, s);
     const uint64_t held = referenceBytes;
@@ -200,6 +201,7 @@ int Init(RunState* r) {
   // What init no longer needs goes before the arenas are made.
   p.part = Partition();
   p.scene.polygons = std::vector<Polygon>();
+  p.info.held.reset();  // a glTF scene
   p.pieces = std::vector<std::vector<uint32_t>>();
   // The system may refuse what the budget allowed (no --mem-budget, ulimit
   // -v, overcommit off): a user error naming the bytes, not a CHECK.
@@ -211,13 +213,23 @@ int Init(RunState* r) {
         static_cast<unsigned long long>(need));
     return kExitUsage;
   };
+  const double gridStart = os::Seconds();
   for (auto& e : r->envs) {
     if (!e->Build()) return refused("an environment's arena", e->footprint().total);
     r->envPtrs.push_back(e.get());
   }
+  p.clock.Done("grid and arenas", os::Seconds() - gridStart);
+  r->initStages = p.clock.stages;
 
   if (o.hasCamera) {
     r->camera = o.camera;
+  } else if (!o.hasView && p.scene.camera.has) {
+    // The scene file's own camera (glTF) wins over a chosen side.
+    r->cameraFromScene = true;
+    r->camera.eye = p.scene.camera.eye;
+    r->camera.target = p.scene.camera.target;
+    r->camera.up = p.scene.camera.up;
+    r->camera.fovyDeg = p.scene.camera.fovyDeg;
   } else {
     r->hasSide = true;
     r->sideChosen = !o.hasView;

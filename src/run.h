@@ -101,6 +101,10 @@ struct RunState {
   Camera camera;            // the one used (--camera or a side's)
   bool hasSide = false;     // the camera is a side's: --view or chosen (not --camera)
   bool sideChosen = false;  // chosen by ChooseViewSide (not --view)
+  bool cameraFromScene = false;
+  std::vector<std::pair<std::string, double>>
+      initStages;  // InitClock's, for run.json  // the scene file's camera (glTF), no --camera or
+                   // --view
   ViewSide side = ViewSide::kFront;
   View view;
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
@@ -249,8 +253,22 @@ inline int FailInit(const RunState* r, const Status& s) {
 // (scene_stream.h) and cut into environments, of which this rank keeps its
 // own pieces and counts every environment's patches. Heap; dropped at the
 // end of init.
+// Init's stages and their seconds (issue 40): each that takes over a second
+// says so on stderr when `report` (rank 0 without --quiet); run.json lists
+// them all (init_stages).
+struct InitClock {
+  bool report = false;
+  std::vector<std::pair<std::string, double>> stages;  // in order, each name once
+  // Adds `seconds` to stage `what` (`detail` says what it did).
+  void Done(const char* what, double seconds, const std::string& detail = "");
+};
+// The progress line for a stage: "vismask: init: WHAT took S s (DETAIL)",
+// or "" when it took a second or less.
+std::string InitStageLine(const char* what, double seconds, const std::string& detail);
+
 struct Prepared {
-  SceneInfo info;  // materials, bounds, statement counts, the loader's warnings
+  mutable InitClock clock;  // PrepareEnvs (const) times its meshing too
+  SceneInfo info;           // materials, bounds, statement counts, the loader's warnings
   // objPath, materials and bounds; polygons: the source polygons of this
   // rank's pieces only (for smoothing), sourceIds their indices in the file.
   Scene scene;

@@ -115,6 +115,7 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   else
     w.Printf("    \"view\": null,\n");
   w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
+  w.Printf("    \"camera_from_scene\": %s,\n", r->cameraFromScene ? "true" : "false");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf(
@@ -356,6 +357,13 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"predicted_bytes\": %llu,\n    \"arena_high_water_bytes\": %llu,\n",
            static_cast<unsigned long long>(r->predictedBytes),
            static_cast<unsigned long long>(highWater));
+  w.Printf("    \"init_stages\": {");
+  for (size_t i = 0; i < r->initStages.size(); ++i) {
+    w.Printf("%s", i ? ", " : "");
+    JsonString(&w, r->initStages[i].first.c_str());
+    w.Printf(": %.6f", r->initStages[i].second);
+  }
+  w.Printf("},\n");
   w.Printf("    \"init_peak_predicted_bytes\": %llu,\n",
            static_cast<unsigned long long>(r->initPeakBytes));
   w.Printf("    \"file_rss_bytes\": %llu,\n", static_cast<unsigned long long>(files));

@@ -154,8 +154,15 @@ Status ParseObj(const std::string& objPath, LineSource& lines, const ObjCounts* 
     std::vector<uint8_t> used = tally->used;
     used.resize(materials->size(), 0);
     Status dropped = loader.DroppedEmitters(used);
-    return dropped.ok() ? s : dropped;
+    if (!dropped.ok()) return dropped;
   }
+  // No emitter, and materials the loader made up (no MTL defines them):
+  // name them, as one may be the light.
+  if (!s.ok() && s.line() == 0 && s.message().rfind("no emitter", 0) == 0 &&
+      !loader.UndefinedMaterials().empty())
+    return Status::At(objPath, 0,
+                      s.message() + "; materials no MTL defines: " + loader.UndefinedMaterials());
+  if (!s.ok()) return s;
   std::vector<uint8_t> used = tally->used;
   used.resize(materials->size(), 0);
   *warnings = loader.Warnings(used);
@@ -225,6 +232,13 @@ bool ClosedFacingIn(const std::vector<Polygon>& polys) {
 }  // namespace objload
 
 Status LoadScene(const std::string& objPath, Scene* scene, const LoadOptions& options) {
+  if (IsGltfPath(objPath)) {
+    std::vector<std::string> warnings;
+    Status s = LoadGltf(objPath, options, scene, &warnings);
+    if (s.ok())
+      for (const std::string& w : warnings) os::PrintErr("%s\n", w.c_str());
+    return s;
+  }
   std::string text;
   std::string err = objload::ReadText(objPath, &text);
   if (!err.empty()) return Status::At(objPath, 0, err);

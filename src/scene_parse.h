@@ -52,6 +52,10 @@ std::string Str(size_t n);
 std::string CoordinateError(double x);
 // Splits a line at whitespace; '#' starts a comment, a CR (CRLF files) is space.
 Tokens Tokenize(const std::string& line);
+// The file name of a texture map statement ('map_Kd [options] name'), as
+// written on `line` (tokens `t`): what follows the known options, spaces
+// inside it kept. *hadOptions: some option was given. "" if no name.
+std::string MapName(const std::string& line, const Tokens& t, bool* hadOptions);
 // A piece of the input quoted in a message (at most 32 bytes, escaped).
 std::string Quote(const std::string& s);
 // Whether an unknown MTL key may be named in a warning.
@@ -59,6 +63,8 @@ bool LooksLikeKey(const std::string& s);
 // Reads a whole file (regular files only, at most kMaxFileBytes); returns an
 // error message, empty on success.
 std::string ReadText(const std::string& path, std::string* text);
+// The same for a binary file (a .glb, a glTF's buffers): no text check.
+std::string ReadBytes(const std::string& path, std::string* bytes);
 // Checks that `path` is a regular file a loader may read (as ReadText does,
 // without reading it); returns an error message, empty on success.
 std::string CheckReadable(const std::string& path);
@@ -172,6 +178,19 @@ struct ObjCounts {
 };
 ObjCounts CountStatements(LineSource& lines);
 
+// Applies --emit (`emit`, in order) to *materials by name; an --emit naming
+// no material is an error. Each that replaced a nonzero Ke is listed in
+// *replaced ("name (Ke r g b)"), *replacedWhere the first one's "where".
+Status ApplyEmitOverrides(const std::string& scenePath, const std::vector<EmitOverride>& emit,
+                          std::vector<Material>* materials, std::vector<std::string>* replaced,
+                          std::string* replacedWhere);
+
+// The material of faces the OBJ gives none (before any 'usemtl') and the
+// reflectance of every material the loader makes up (no 'usemtl', an
+// undefined name, a texture not found with Kd 0): a mid grey.
+inline constexpr char kDefaultMaterial[] = "default";
+inline constexpr float kDefaultKd = 0.5f;
+
 class Loader {
  public:
   Loader(std::vector<Material>* materials, const SceneFileReader& readMtl,
@@ -192,9 +211,14 @@ class Loader {
   // one were dropped (no area, or edges that cross): the error at the first
   // such face, which "no emitter" would hide. Ok otherwise.
   Status DroppedEmitters(const std::vector<uint8_t>& used) const;
+  // The names 'usemtl' gave that no MTL defines ("'a', 'b'"), "" if none.
+  std::string UndefinedMaterials() const;
 
  private:
   Status LoadMtl(const std::string& path, const std::string& objPath, int objLine);
+  // The index of material `name`, made the default grey (Kd 0.5) at
+  // path:line if no MTL defined it.
+  uint32_t DefaultMaterial(const std::string& name, const std::string& path, int line);
   // One warning line per distinct `what`, at its first file:line.
   void Warn(const std::string& path, int line, const std::string& what) {
     if (!warnedKeys_.insert(what).second) return;
@@ -220,6 +244,8 @@ class Loader {
   FaceTally triangulated_, cornersRemoved_, degenerate_, selfIntersecting_;
   // Per material: the first face of it dropped whole, and why.
   std::map<uint32_t, std::pair<int, const char*>> droppedFace_;
+  std::vector<std::string> undefinedMaterials_;  // named by 'usemtl', defined by no MTL
+  std::string undefinedWhere_;                   // "file:line" of the first
   std::vector<std::string> replacedKe_;  // "name (Ke r g b)" of each --emit that replaced one
   std::string replacedWhere_;
 };

@@ -12,6 +12,12 @@ namespace vismask {
 using namespace objload;
 
 Status CountObj(const std::string& objPath, SceneInfo* info) {
+  if (IsGltfPath(objPath)) {  // parsed whole by ScanObj: only checked here
+    std::string err = CheckReadable(objPath);
+    if (!err.empty()) return Status::At(objPath, 0, err + " file");
+    info->objPath = objPath;
+    return Status::Ok();
+  }
   FileLines lines;
   std::string err = lines.Open(objPath);
   if (!err.empty()) return Status::At(objPath, 0, err);
@@ -50,6 +56,28 @@ Status Pass(const std::string& objPath, const LoadOptions& options, const SceneI
 
 Status ScanObj(const std::string& objPath, const LoadOptions& options, const PolygonVisit& visit,
                SceneInfo* info) {
+  if (IsGltfPath(objPath)) {
+    auto scene = std::make_shared<Scene>();
+    Status s = LoadGltf(objPath, options, scene.get(), &info->warnings);
+    if (!s.ok()) return s;
+    info->objPath = objPath;
+    info->materials = scene->materials;
+    info->bounds = scene->bounds;
+    info->numPolygons = scene->polygons.size();
+    info->camera = scene->camera;
+    info->usedMaterials.assign(scene->materials.size(), 0);
+    info->noUvLine.assign(scene->materials.size(), 0);
+    info->heldBytes = 0;
+    for (const Polygon& p : scene->polygons) {
+      info->usedMaterials[p.material] = 1;
+      info->heldBytes += sizeof(Polygon) + 16 * 3 + p.corners.capacity() * sizeof(glm::vec3) +
+                         p.uv.capacity() * sizeof(glm::vec2) + p.vn.capacity() * sizeof(glm::vec3);
+    }
+    info->faces = info->numPolygons;
+    info->held = scene;
+    for (uint32_t i = 0; i < scene->polygons.size(); ++i) visit(i, scene->polygons[i]);
+    return Status::Ok();
+  }
   SceneTally tally;
   bool perfect[3] = {false, false, false};
   Status s =
@@ -76,6 +104,10 @@ Status ScanObj(const std::string& objPath, const LoadOptions& options, const Pol
 }
 
 Status StreamObj(const SceneInfo& info, const LoadOptions& options, const PolygonVisit& visit) {
+  if (info.held) {
+    for (uint32_t i = 0; i < info.held->polygons.size(); ++i) visit(i, info.held->polygons[i]);
+    return Status::Ok();
+  }
   std::vector<Material> materials;
   SceneTally tally;
   std::vector<std::string> warnings;

@@ -57,6 +57,48 @@ Tokens Tokenize(const std::string& line) {
   return tokens;
 }
 
+std::string MapName(const std::string& line, const Tokens& t, bool* hadOptions) {
+  // The options of a texture map statement and how many values each takes
+  // at most (numbers; -blendu and the like take one word).
+  struct Option {
+    const char* name;
+    size_t values;
+    bool numbers;
+  };
+  static const Option kOptions[] = {
+      {"-blendu", 1, false}, {"-blendv", 1, false}, {"-bm", 1, true},       {"-boost", 1, true},
+      {"-cc", 1, false},     {"-clamp", 1, false},  {"-imfchan", 1, false}, {"-mm", 2, true},
+      {"-o", 3, true},       {"-s", 3, true},       {"-t", 3, true},        {"-texres", 1, true},
+      {"-type", 1, false}};
+  *hadOptions = false;
+  size_t k = 1;
+  while (k < t.size() && t[k].size() > 1 && t[k][0] == '-') {
+    const Option* o = nullptr;
+    for (const Option& c : kOptions)
+      if (t[k] == c.name) o = &c;
+    if (!o) break;  // not an option: a name that starts with '-'
+    *hadOptions = true;
+    ++k;
+    for (size_t v = 0; v < o->values && k + 1 < t.size(); ++v, ++k) {
+      if (!o->numbers) continue;
+      char* end = nullptr;
+      std::strtod(t[k].c_str(), &end);
+      if (end == t[k].c_str() || *end != '\0') break;
+    }
+  }
+  if (k >= t.size()) return "";
+  // The tokens are the line's own bytes in order: the name runs from the
+  // k-th to the end of the last, with the spaces between kept as written.
+  size_t at = 0, begin = 0, end = 0;
+  for (size_t i = 0; i < t.size(); ++i) {
+    at = line.find(t[i], at);
+    if (i == k) begin = at;
+    at += t[i].size();
+  }
+  end = at;
+  return line.substr(begin, end - begin);
+}
+
 std::string Str(size_t n) {
   return std::to_string(n);
 }
@@ -120,7 +162,9 @@ std::string NotText(const char* bytes, size_t n) {
          std::to_string(static_cast<const char*>(nul) - bytes + 1) + ")";
 }
 
-std::string ReadText(const std::string& path, std::string* text) {
+namespace {
+
+std::string ReadWhole(const std::string& path, bool text, std::string* out) {
   std::string err = CheckReadable(path);
   if (!err.empty()) return err;
   os::InFile in;
@@ -133,14 +177,24 @@ std::string ReadText(const std::string& path, std::string* text) {
     if (n < 0) return "cannot read (" + why + ")";
     if (n == 0) break;
     // A binary file is refused by its first kilobyte, not read whole.
-    if (all.empty()) {
+    if (text && all.empty()) {
       err = NotText(buf, static_cast<size_t>(n));
       if (!err.empty()) return err;
     }
     all.append(buf, static_cast<size_t>(n));
   }
-  *text = std::move(all);
+  *out = std::move(all);
   return "";
+}
+
+}  // namespace
+
+std::string ReadText(const std::string& path, std::string* text) {
+  return ReadWhole(path, true, text);
+}
+
+std::string ReadBytes(const std::string& path, std::string* bytes) {
+  return ReadWhole(path, false, bytes);
 }
 
 // A file named inside another (mtllib in an OBJ, map_Kd in an MTL): relative

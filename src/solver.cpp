@@ -1,5 +1,6 @@
 #include "vismask/solver.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -20,6 +21,8 @@ const char* StopReasonName(StopReason r) {
       return "ray-budget";
     case StopReason::kStalled:
       return "stalled";
+    case StopReason::kNoLoss:
+      return "no_loss";
   }
   return "?";
 }
@@ -45,24 +48,68 @@ uint32_t ShotBudget(uint32_t env, uint32_t numEnvs, uint32_t roundShots, uint64_
   return static_cast<uint32_t>(mine < roundShots ? mine : roundShots);
 }
 
+void TimeLeft::Add(double seconds, uint64_t shots, double unshot) {
+  if (!(unshot > 0.0)) return;
+  const double ln = std::log(unshot);
+  if (have_ && seconds > seconds_) {
+    // ln(unshot) falls about linearly in time for a progressive solve:
+    // its slope, smoothed over the updates (each weighs its interval).
+    const double dt = seconds - seconds_;
+    const double slope = (lnUnshot_ - ln) / dt;
+    const double w = std::min(1.0, dt / 10.0);
+    slope_ = weight_ > 0.0 ? (1.0 - w) * slope_ + w * slope : slope;
+    weight_ += dt;
+    shotRate_ = (shots - shots_) / dt;
+  }
+  have_ = true;
+  seconds_ = seconds;
+  shots_ = shots;
+  lnUnshot_ = ln;
+}
+
+double TimeLeft::Estimate(const SolveOptions& o) const {
+  double left = -1.0;
+  if (weight_ >= 1.0 && slope_ > 0.0 && o.stopUnshot > 0.0)
+    left = std::max(0.0, (lnUnshot_ - std::log(o.stopUnshot)) / slope_);
+  if (o.maxSeconds > 0.0) {
+    const double rest = std::max(0.0, o.maxSeconds - seconds_);
+    left = left < 0.0 ? rest : std::min(left, rest);
+  }
+  if (o.maxShots > 0 && shotRate_ > 0.0) {
+    const double rest = o.maxShots > shots_ ? (o.maxShots - shots_) / shotRate_ : 0.0;
+    left = left < 0.0 ? rest : std::min(left, rest);
+  }
+  return left;
+}
+
 namespace {
 
 class Progress {
  public:
-  explicit Progress(bool quiet) : quiet_(quiet), tty_(os::StderrIsTerminal()) {}
+  Progress(bool quiet, const SolveOptions& options)
+      : quiet_(quiet), tty_(os::StderrIsTerminal()), options_(options) {}
   void Update(double now, double elapsed, uint64_t shots, double unshot, bool final) {
     if (quiet_) return;
     if (!final && now < next_) return;
     next_ = now + (tty_ ? 0.25 : 2.0);
+    left_.Add(elapsed, shots, unshot);
     double rate = elapsed > 0.0 ? static_cast<double>(shots) / elapsed : 0.0;
-    os::PrintErr("%svismask: shot %llu  unshot %.4f%%  %.1f s  %.0f shots/s%s", tty_ ? "\r" : "",
-                 static_cast<unsigned long long>(shots), 100.0 * unshot, elapsed, rate,
+    char left[48] = "";
+    const double estimate = left_.Estimate(options_);
+    if (!final && estimate >= 1e6)
+      std::snprintf(left, sizeof left, "  over 1e6 s left");
+    else if (!final && estimate >= 0.0)
+      std::snprintf(left, sizeof left, "  about %.0f s left", std::ceil(estimate));
+    os::PrintErr("%svismask: shot %llu  unshot %.4f%%  %.1f s  %.0f shots/s%s%s", tty_ ? "\r" : "",
+                 static_cast<unsigned long long>(shots), 100.0 * unshot, elapsed, rate, left,
                  tty_ && !final ? "   " : "\n");
   }
 
  private:
   bool quiet_;
   bool tty_;
+  const SolveOptions& options_;
+  TimeLeft left_;
   double next_ = 0.0;
 };
 
@@ -99,7 +146,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
   CHECK(envs.size() == rankEnvs.count);
   for (uint32_t i = 0; i < envs.size(); ++i) CHECK(envs[i]->index() == rankEnvs.first + i);
   SolveResult result;
-  Progress progress(options.quiet || transport->rank() != 0);
+  Progress progress(options.quiet || transport->rank() != 0, options);
   ErrorProbe* probe = options.probe;
   const double start = os::Seconds();
   // The solve's clock leaves out the seconds spent measuring the error.
@@ -132,6 +179,9 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
 
   bool done = ShouldStop(totals, options, &result);
   uint32_t idle = 0;
+  // The no-loss window: the power shot and the unshot at its start.
+  double windowShot = totals.radiosity - totals.unshot, windowUnshot = totals.unshot;
+  const bool bounded = options.maxShots > 0 || options.maxSeconds > 0.0 || options.rayBudget > 0;
   Span<double> envCpu =
       buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
   CHECK(envCpu.size() >= envs.size());  // rounds in a row without a shot
@@ -194,6 +244,22 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
       break;
     }
     done = ShouldStop(totals, options, &result);
+    // The no-loss window: a new one opens as soon as the unshot power has
+    // fallen by kStallFall of the window's start; kStallShot times that
+    // start shot without it is a stall. (Not when the run is bounded by
+    // --max-shots, --max-seconds or --ray-budget: the user stops it, and
+    // gets its outputs.)
+    if (!done && !bounded) {
+      if (totals.unshot < (1.0 - kStallFall) * windowUnshot) {
+        windowShot = totals.radiosity - totals.unshot;
+        windowUnshot = totals.unshot;
+      } else if (totals.radiosity - totals.unshot - windowShot >= kStallShot * windowUnshot) {
+        result.reason = StopReason::kNoLoss;
+        result.stallFrom = windowUnshot / totals.emitted;
+        result.stallTo = result.unshotFraction;
+        break;
+      }
+    }
     if (idleRound && !done) continue;  // nothing new to measure or record
     bool due = probe && (done || (options.errorEvery > 0 &&
                                   result.shots / options.errorEvery > before / options.errorEvery));

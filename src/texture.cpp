@@ -409,21 +409,82 @@ glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::v
   return weight > 0.0 ? sum / weight : glm::dvec3(texture.Sample(uv[0]));
 }
 
-Status LoadSceneTextures(const Scene& scene, SceneTextures* out) {
-  const size_t nm = scene.materials.size();
+std::string FindTexture(const std::string& path) {
+  if (os::Exists(path.c_str())) return path;
+  const size_t slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash + 1);
+  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  std::vector<std::string> names;
+  std::string why;
+  if (name.empty() || !os::ListDirectory(dir.c_str(), &names, &why)) return "";
+  auto lower = [](std::string s) {
+    for (char& c : s)
+      if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    return s;
+  };
+  const std::string want = lower(name);
+  // Sorted bytewise: of several names that differ only in case, the first.
+  for (const std::string& n : names)
+    if (lower(n) == want) return slash == std::string::npos ? n : dir + n;
+  return "";
+}
+
+void ResolveTextures(std::vector<Material>* materials, const std::vector<uint8_t>& used,
+                     bool strict, std::vector<std::string>* warnings) {
+  std::string otherCase, otherCaseWhere, missing, missingWhere;
+  size_t numOtherCase = 0, numMissing = 0;
+  for (size_t m = 0; m < materials->size(); ++m) {
+    Material& mat = (*materials)[m];
+    if (!used[m] || mat.mapKd.empty() || mat.mapKdBytes) continue;  // held in a glTF file
+    const std::string found = FindTexture(mat.mapKd);
+    // --strict: the name as written, and the reader says why it cannot.
+    if (found == mat.mapKd || strict) continue;
+    const size_t slash = found.rfind('/');
+    if (!found.empty()) {
+      if (numOtherCase++ == 0) otherCaseWhere = mat.mapKdWhere;
+      otherCase += (otherCase.empty() ? "'" : ", '") + mat.mapKd + "' as '" +
+                   (slash == std::string::npos ? found : found.substr(slash + 1)) + "'";
+      mat.mapKd = found;
+      continue;
+    }
+    if (numMissing++ == 0) missingWhere = mat.mapKdWhere;
+    missing += (missing.empty() ? "'" : ", '") + mat.mapKd + "' (" + mat.name + ")";
+    mat.mapKd.clear();
+    mat.mapKdWhere.clear();
+    if (mat.mapIsColour)
+      mat.kd *= 0.5f;
+    else if (mat.kd == glm::vec3(0.0f))
+      mat.kd = glm::vec3(0.5f);
+  }
+  if (numOtherCase > 0)
+    warnings->push_back(otherCaseWhere + ": warning: " + std::to_string(numOtherCase) +
+                        (numOtherCase == 1 ? " texture" : " textures") +
+                        " found in another letter case (first here): " + otherCase);
+  if (numMissing > 0)
+    warnings->push_back(missingWhere + ": warning: " + std::to_string(numMissing) +
+                        (numMissing == 1 ? " texture" : " textures") +
+                        " not found, their materials untextured with their Kd (0.5 grey where "
+                        "Kd is 0, a glTF base colour factor times 0.5; first here): " +
+                        missing);
+}
+
+Status LoadSceneTextures(Scene* scene, SceneTextures* out, bool strict) {
+  const size_t nm = scene->materials.size();
   std::vector<uint8_t> used(nm, 0);
   std::vector<int> noUv(nm, 0);
-  for (const Polygon& p : scene.polygons) {
+  for (const Polygon& p : scene->polygons) {
     used[p.material] = 1;
     if (p.uv.empty() && noUv[p.material] == 0) noUv[p.material] = p.line;
   }
-  return LoadMaterialTextures(scene.objPath, scene.materials, used, noUv, out);
+  return LoadMaterialTextures(scene->objPath, &scene->materials, used, noUv, out, strict);
 }
 
-Status LoadMaterialTextures(const std::string& objPath, const std::vector<Material>& materials,
+Status LoadMaterialTextures(const std::string& objPath, std::vector<Material>* materialsIo,
                             const std::vector<uint8_t>& used, const std::vector<int>& noUvLineOf,
-                            SceneTextures* out, uint64_t budget) {
+                            SceneTextures* out, uint64_t budget, bool strict) {
   SceneTextures r;
+  ResolveTextures(materialsIo, used, strict, &r.warnings);
+  const std::vector<Material>& materials = *materialsIo;
   const size_t nm = materials.size();
   r.ofMaterial.assign(nm, kNoTexture);
   r.kdOfMaterial.resize(nm);
@@ -438,7 +499,11 @@ Status LoadMaterialTextures(const std::string& objPath, const std::vector<Materi
     auto it = byPath.find(mat.mapKd);
     if (it == byPath.end()) {
       TextureImage img;
-      Status s = ReadTexture(mat.mapKd, mat.mapKdWhere, &img, budget);
+      // A file, or an image the scene file holds (glTF): the same checks
+      // and decoder, within the budget (DecodeTexture).
+      Status s = mat.mapKdBytes
+                     ? DecodeTexture(*mat.mapKdBytes, mat.mapKd, mat.mapKdWhere, &img, budget)
+                     : ReadTexture(mat.mapKd, mat.mapKdWhere, &img, budget);
       if (!s.ok()) return s;
       if (budget > 0) budget -= std::min(budget - 1, static_cast<uint64_t>(img.rgb.size()));
       it = byPath.emplace(mat.mapKd, static_cast<uint32_t>(r.images.size())).first;

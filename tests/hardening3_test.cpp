@@ -597,9 +597,11 @@ TEST(Hardening3Test, MessagesNameWhatHappened) {
     EXPECT_EQ(st.ToString().find('\x1b'), std::string::npos) << st.ToString();
     EXPECT_NE(st.ToString().find("\\x1b[2J"), std::string::npos) << st.ToString();
   }
-  // Whole sentences: the file first, then what went wrong with it.
+  // Whole sentences: the file first, then what went wrong with it. (A
+  // missing MTL is a repair with a warning unless --strict: issue 40.)
   WriteFile(dir.File("m.obj"), "mtllib none.mtl\n");
-  r = render(dir.File("m.obj"));
+  r = test::RunMain({"render", dir.File("m.obj"), "--strict", "--width", "8", "--height", "8",
+                     "--max-shots", "50", "--quiet", "--out", dir.File("out")});
   EXPECT_NE(r.err.find(dir.File("m.obj") + ":1: MTL file '" + dir.File("none.mtl") +
                        "': cannot open (No such file or directory)"),
             std::string::npos)

@@ -2,6 +2,7 @@
 // wrong, --help lists every option, and the defaults chosen at init.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -44,7 +45,7 @@ TEST(RenderTest, BadOptionsExitTwoAndWriteNothing) {
       {{"--stop-error", "nan"}, "--stop-error"},
       {{"--stop-error"}, "missing value"},
       {{"--round-work", "-1"}, "--round-work"},
-      {{"--round-work", "1e6"}, "--round-work"},
+      {{"--round-work", "1.5e0"}, "--round-work"},  // 1e6 is a count (issue 40); 1.5 is not
       {{"--envs", "auto:0"}, "--envs"},
       {{"--envs", "auto:"}, "--envs"},
       {{"--envs", "auto:67"}, "no grid"},
@@ -113,7 +114,7 @@ TEST(RenderTest, TruncatedFilesNameFileAndLine) {
 
 TEST(RenderTest, HelpListsEveryOption) {
   testing::internal::CaptureStdout();
-  auto r = RunMain({"--help"});
+  auto r = RunMain({"--help", "all"});
   std::string out = testing::internal::GetCapturedStdout();
   EXPECT_EQ(r.code, 0);
   for (const char* flag :
@@ -122,6 +123,78 @@ TEST(RenderTest, HelpListsEveryOption) {
         "--exposure",  "--quiet",       "--correct-unshot", "--stop-error", "--aa",
         "--strict",    "--emit",        "--round-shots",    "--round-work", "--envs auto"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag;
+}
+
+// Issue 40: --help is a short usage a user can read, with the formats read
+// and five examples that parse; --help all is the whole list.
+TEST(RenderTest, HelpIsShortWithFiveExamples) {
+  testing::internal::CaptureStdout();
+  auto r = RunMain({"--help"});
+  std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_EQ(r.code, 0);
+  std::vector<std::string> lines;
+  std::istringstream in(out);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  EXPECT_LE(lines.size(), 40u) << out;
+  EXPECT_NE(out.find("--help all"), std::string::npos) << out;
+  EXPECT_NE(out.find("scenes read: Wavefront OBJ"), std::string::npos) << out;
+  EXPECT_EQ(out.find("--ray-alloc"), std::string::npos) << out;  // solver internals: --help all
+  auto at = std::find(lines.begin(), lines.end(), "examples:");
+  ASSERT_NE(at, lines.end()) << out;
+  size_t examples = 0;
+  for (++at; at != lines.end(); ++at) {
+    if (at->rfind("  vismask ", 0) != 0) continue;
+    ++examples;
+    // The command (up to any '&&') parses as given.
+    std::istringstream words(at->substr(2, at->find(" &&") - 2));
+    std::vector<std::string> args;
+    for (std::string w; words >> w;) args.push_back(w);
+    std::vector<const char*> argv;
+    for (const std::string& w : args) argv.push_back(w.c_str());
+    Options o;
+    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    EXPECT_TRUE(s.ok()) << *at << ": " << s.ToString();
+  }
+  EXPECT_EQ(examples, 5u) << out;
+  testing::internal::CaptureStdout();
+  r = RunMain({"render", "--help", "all"});
+  std::string all = testing::internal::GetCapturedStdout();
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(all.find("--ray-alloc"), std::string::npos);
+  EXPECT_GT(all.size(), 3 * out.size());
+}
+
+// Counts accept scientific notation when the value is exactly an integer,
+// read in decimal (no rounding through double).
+TEST(RenderTest, CountsAcceptExactIntegersInScientificNotation) {
+  auto parse = [](const char* flag, const char* value, Options* o) {
+    const char* argv[] = {"vismask", "render", "s.obj", flag, value};
+    return ParseArgs(5, argv, o);
+  };
+  Options o;
+  ASSERT_TRUE(parse("--emitted-rays", "1e6", &o).ok());
+  EXPECT_EQ(o.emittedRays, 1000000u);
+  ASSERT_TRUE(parse("--emitted-rays", "2.5E3", &o).ok());
+  EXPECT_EQ(o.emittedRays, 2500u);
+  ASSERT_TRUE(parse("--emitted-rays", "10e-1", &o).ok());
+  EXPECT_EQ(o.emittedRays, 1u);
+  ASSERT_TRUE(parse("--emitted-rays", "1e+12", &o).ok());
+  EXPECT_EQ(o.emittedRays, 1000000000000u);
+  ASSERT_TRUE(parse("--max-shots", "3e3", &o).ok());
+  EXPECT_EQ(o.maxShots, 3000u);
+  ASSERT_TRUE(parse("--seed", "1.8446744073709551615e19", &o).ok());
+  EXPECT_EQ(o.seed, 18446744073709551615ull);
+  ASSERT_TRUE(parse("--seed", "18446744073709551615", &o).ok());
+  EXPECT_EQ(o.seed, 18446744073709551615ull);
+  ASSERT_TRUE(parse("--seed", "0e999999", &o).ok());
+  EXPECT_EQ(o.seed, 0u);
+  for (const char* bad : {"1.5", "1e-1", "2.515e2", "1e", "1e+", "e3", "1.e3", "-1e3", "1e6x",
+                          "1.8446744073709551616e19", "2e19", "1e21", " 1e3"}) {
+    Status s = parse("--seed", bad, &o);
+    EXPECT_FALSE(s.ok()) << bad;
+  }
+  Status s = parse("--emitted-rays", "1.5e0", &o);
+  EXPECT_EQ(s.ToString(), "vismask: --emitted-rays: expected an integer in [1, 1e12], got '1.5e0'");
 }
 
 // Issue 20: how big a round is. With several environments and neither
@@ -275,6 +348,42 @@ TEST(RenderTest, RanksWithoutEnvsMeanOneBalancedEnvironmentARank) {
   EXPECT_EQ(one.envs[0] * one.envs[1] * one.envs[2], 4);
   EXPECT_TRUE(one.roundWorkAuto);
   EXPECT_GT(one.roundShots, 1u);
+}
+
+}  // namespace
+}  // namespace vismask
+
+#include "../src/run.h"
+
+namespace vismask {
+namespace {
+
+// Issue 40: init's stages. Each over a second prints a line on stderr (rank
+// 0, not --quiet); run.json lists them all with their seconds.
+TEST(RenderTest, InitStagesOverASecondSaySoAndRunJsonListsThem) {
+  EXPECT_EQ(run::InitStageLine("textures", 1.5, "9 images decoded"),
+            "vismask: init: textures took 1.5 s (9 images decoded)");
+  EXPECT_EQ(run::InitStageLine("meshing", 2.25, ""), "vismask: init: meshing took 2.2 s");
+  EXPECT_EQ(run::InitStageLine("meshing", 1.0, ""), "");
+  EXPECT_EQ(run::InitStageLine("meshing", 0.2, "x"), "");
+  run::InitClock clock;  // report off: counted, not printed
+  clock.Done("meshing", 0.5);
+  clock.Done("grid and arenas", 0.25);
+  clock.Done("meshing", 0.75);
+  ASSERT_EQ(clock.stages.size(), 2u);
+  EXPECT_EQ(clock.stages[0].first, "meshing");
+  EXPECT_DOUBLE_EQ(clock.stages[0].second, 1.25);
+
+  test::TempDir dir;
+  auto r = test::RunMain({"render", "scenes/textured/room.obj", "--out", dir.File("out"),
+                          "--max-shots", "50", "--width", "16", "--height", "16", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string json = test::ReadFile(dir.File("out/run.json"));
+  size_t at = json.find("\"init_stages\": {");
+  ASSERT_NE(at, std::string::npos);
+  for (const char* stage : {"reading the scene", "textures", "cutting the scene into environments",
+                            "emitter check", "texture means", "meshing", "grid and arenas"})
+    EXPECT_NE(json.find(std::string("\"") + stage + "\": ", at), std::string::npos) << stage;
 }
 
 }  // namespace

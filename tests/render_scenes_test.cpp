@@ -86,6 +86,14 @@ TEST(RenderTest, RealScenesRender) {
         "scenes/real/CornellBox-Sphere.mtl:15: warning: specular materials rendered as diffuse "
         "with their Kd: "
         "leftSphere (illum 5), rightSphere (illum 7)"}},
+      // As published, its light's material is in no MTL: grey, and --emit
+      // names it (issue 40).
+      {{"scenes/real/CornellBox-Glossy.obj", "--emit", "light=17,12,4"},
+       {"scenes/real/CornellBox-Glossy.mtl:4: warning: specular materials rendered as diffuse "
+        "with their Kd: sphere (Ks), shortBox (Ks)",
+        "scenes/real/CornellBox-Glossy.obj:3009: warning: 1 material that no MTL defines, given "
+        "the default grey (Kd 0.5; --emit NAME=R,G,B makes one an emitter; first here): "
+        "'light'"}},
       {{"scenes/real/cornell_box.obj", "--emit", "light=ka"},
        {"scenes/real/cornell_box.obj:77: warning: 1 non-planar face triangulated (first here; up "
         "to 0.8 off "

@@ -74,9 +74,10 @@ TEST_F(SceneTest, ByteOrderMarkIsSkipped) {
   EXPECT_EQ(scene.polygons.size(), 1u);
 }
 
+// --strict keeps the refusals the loader now repairs (scene_forgiving_test.cpp).
 TEST_F(SceneTest, MissingMtl) {
   Scene scene;
-  ExpectError(LoadScene(Write("s.obj", "v 0 0 0\nmtllib none.mtl\n"), &scene), obj(), 2,
+  ExpectError(LoadScene(Write("s.obj", "v 0 0 0\nmtllib none.mtl\n"), &scene, kStrict), obj(), 2,
               "none.mtl");
 }
 
@@ -168,15 +169,15 @@ TEST_F(SceneTest, NonPlanar) {
 
 TEST_F(SceneTest, UndefinedMaterial) {
   Scene scene;
-  ExpectError(LoadBody("usemtl nope\n", &scene), obj(), 7, "undefined material 'nope'");
+  ExpectError(LoadBody("usemtl nope\n", &scene, kStrict), obj(), 7, "undefined material 'nope'");
 }
 
 TEST_F(SceneTest, FaceBeforeUsemtl) {
   Write("m.mtl", kMtl);
   Scene scene;
-  ExpectError(
-      LoadScene(Write("s.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), &scene),
-      obj(), 5, "usemtl");
+  ExpectError(LoadScene(Write("s.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"),
+                        &scene, kStrict),
+              obj(), 5, "usemtl");
 }
 
 TEST_F(SceneTest, UnknownStatement) {

@@ -62,7 +62,7 @@ TEST_F(SceneTest, TruncatedMtlNamesItsLine) {
   Write("m.mtl", "newmtl");  // cut off before the name
   ExpectError(LoadScene(obj(), &scene), mtl(), 1, "newmtl");
   Write("m.mtl", "newmtl other\nKd 0.5 0.5 0.5\n");  // cut off before 'light'
-  ExpectError(LoadScene(obj(), &scene), obj(), 2, "undefined material");
+  ExpectError(LoadScene(obj(), &scene, kStrict), obj(), 2, "undefined material");
 }
 
 TEST_F(SceneTest, DirectoryIsUnreadableNotAnException) {

@@ -60,3 +60,34 @@ TEST(SolverTest, ShotBudgetHonoursMaxShots) {
 
 }  // namespace
 }  // namespace vismask
+
+namespace vismask {
+namespace {
+
+// Issue 40: the progress line's time left. Unshot power falling by e every
+// 2 s, from 1 towards --stop-unshot e^-10: 20 s in all.
+TEST(SolverTest, TimeLeftFollowsTheUnshotDecayAndTheBounds) {
+  SolveOptions o;
+  o.stopUnshot = std::exp(-10.0);
+  TimeLeft t;
+  EXPECT_LT(t.Estimate(o), 0.0);  // nothing yet
+  t.Add(0.0, 0, 1.0);
+  EXPECT_LT(t.Estimate(o), 0.0);
+  for (int s = 2; s <= 8; s += 2) t.Add(s, 100 * s, std::exp(-s / 2.0));
+  EXPECT_NEAR(t.Estimate(o), 12.0, 1e-9);  // at 8 s: 12 s to go
+  // A bound that comes sooner wins: --max-seconds 10, or --max-shots at
+  // 100 shots/s.
+  o.maxSeconds = 10.0;
+  EXPECT_NEAR(t.Estimate(o), 2.0, 1e-9);
+  o.maxSeconds = 0.0;
+  o.maxShots = 1300;
+  EXPECT_NEAR(t.Estimate(o), 5.0, 1e-9);
+  // Unshot power that stops falling: no estimate without a bound.
+  o.maxShots = 0;
+  TimeLeft flat;
+  for (int s = 0; s <= 8; s += 2) flat.Add(s, 100 * s, 0.5);
+  EXPECT_LT(flat.Estimate(o), 0.0);
+}
+
+}  // namespace
+}  // namespace vismask

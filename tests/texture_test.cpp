@@ -233,7 +233,7 @@ TEST(TextureTest, KdZeroWithAMapWarnsOnceNamingTheMaterials) {
   Scene scene;
   ASSERT_TRUE(LoadScene(dir.File("s.obj"), &scene).ok());
   SceneTextures t;
-  ASSERT_TRUE(LoadSceneTextures(scene, &t).ok());
+  ASSERT_TRUE(LoadSceneTextures(&scene, &t).ok());
   ASSERT_EQ(t.warnings.size(), 1u);
   EXPECT_EQ(t.warnings[0], dir.File("s.mtl") +
                                ":6: warning: Kd 0 0 0 with map_Kd: the map alone "
@@ -269,17 +269,19 @@ TEST(TextureTest, KdZeroWithWhiteTexelsIsAPerfectReflector) {
   EXPECT_NEAR(kd, (SrgbToLinear(255) + SrgbToLinear(20)) / 2, 0.02);
 }
 
+// A texture not found is an error with --strict (without, a warning:
+// scene_forgiving_test.cpp); one that cannot be decoded always.
 TEST(TextureTest, MissingOrUnreadableTextureIsAnErrorAtItsLine) {
   TempDir dir;
   WriteScene(dir, std::string(kLight) + "newmtl tex\nKd 0.5 0.5 0.5\nmap_Kd -bm 1 missing.png\n");
-  auto r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out"), "--quiet"});
+  auto r = RunMain({"render", dir.File("s.obj"), "--out", dir.File("out"), "--quiet", "--strict"});
   EXPECT_EQ(r.code, 2);
   std::string expect = dir.File("s.mtl") + ":6: cannot read texture '" + dir.File("missing.png") +
                        "': cannot open\n";
   EXPECT_NE(r.err.find(expect), std::string::npos) << r.err;
   EXPECT_FALSE(test::FileExists(dir.File("out")));
   // footprint reads the textures too (their bytes count).
-  r = RunMain({"footprint", dir.File("s.obj")});
+  r = RunMain({"footprint", dir.File("s.obj"), "--strict"});
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find(expect), std::string::npos) << r.err;
   // A truncated PNG.

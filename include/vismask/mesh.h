@@ -1,6 +1,7 @@
 // Meshing: polygons into patches no longer than a given edge length, and the
 // display lattice of shared vertices used for Gouraud shading.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <glm/vec3.hpp>
 #include <string>
@@ -38,11 +39,21 @@ struct Mesh {
 };
 
 // Which patches AddTwins copies: every patch (--two-sided), and/or every
-// emitting patch, whose twin then emits too (--two-sided-emitters).
+// emitting patch, whose twin then emits too (--two-sided-emitters), and/or
+// the patches of the materials marked in `materials` (glTF doubleSided:
+// both sides are surfaces, an emitter's twin emits too).
 struct TwinOptions {
   bool all = false;
   bool emitters = false;
-  bool any() const { return all || emitters; }
+  std::vector<uint8_t> materials;  // per material: twin its patches; empty: none
+  bool any() const {
+    return all || emitters || std::find(materials.begin(), materials.end(), 1) != materials.end();
+  }
+  bool Marked(uint32_t m) const { return m < materials.size() && materials[m]; }
+  // Whether a patch of material m (emitting or not) gets a twin.
+  bool Twins(uint32_t m, bool emits) const { return all || (emitters && emits) || Marked(m); }
+  // Whether that twin emits the original's Ke.
+  bool TwinEmits(uint32_t m, bool emits) const { return emits && (emitters || Marked(m)); }
 };
 
 // Appends the patches of the given polygons of `scene` to `mesh`, with edges
@@ -83,9 +94,12 @@ Status MeshSizeError(double numPatches, float patchSize, uint64_t maxPatches);
 // the same corners (bit for bit) in reverse order from corner[0], so its
 // front is the original's back, normal negated, same kd and area, on its
 // own copy of the lattice vertices (the two sides are displayed apart).
-// An emitter's twin emits Ke with `options.emitters`, nothing otherwise.
-// Twins keep the original's `surface`; globalId is the index, as for the
-// others. Sets mesh->twin for every patch. Does nothing when !options.any().
-void AddTwins(const TwinOptions& options, Mesh* mesh);
+// An emitter's twin emits Ke with `options.emitters` or when its material is
+// two-sided, nothing otherwise. `scene` (the one `mesh` was made from:
+// Patch::surface indexes its polygons) gives a patch's material; it may be
+// null when options.materials is empty. Twins keep the original's `surface`;
+// globalId is the index, as for the others. Sets mesh->twin for every patch.
+// Does nothing when !options.any().
+void AddTwins(const TwinOptions& options, Mesh* mesh, const Scene* scene = nullptr);
 
 }  // namespace vismask

@@ -18,6 +18,7 @@ namespace vismask {
 struct Options {
   std::string command;  // "render", "footprint", "compare", "verify" or "view"; empty with --help
   bool help = false;
+  bool helpAll = false;  // --help all: every option (HelpText); --help alone: UsageText
   std::string scene;
   LoadOptions load;  // --strict, --emit NAME=R,G,B|ka (repeatable)
   std::string outDir = "out";
@@ -163,7 +164,10 @@ bool SetWorldSize(int ranks, Options* options);
 // From the scene and the options alone, so every rank computes the same.
 uint64_t AutoRoundWork(const Options& options, double patches, int numEnvs);
 
-// The --help text.
+// `vismask --help`: a short usage, the input formats read and five
+// examples, pointing to `--help all`.
+const char* UsageText();
+// The --help all text: every command and option.
 const char* HelpText();
 
 }  // namespace vismask

@@ -7,6 +7,7 @@
 #include <functional>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,24 @@ struct Material {
   std::string mapKd;   // map_Kd: the texture's path (relative to the cwd), "" if none
   std::string where;   // "file:line" of its 'newmtl'
   std::string mapKdWhere = "";  // "file:line" of its 'map_Kd' ("" if none)
+  // A glTF texture held in the file (a .glb's buffer or a data: URI): its
+  // encoded bytes (mapKd then names it, "FILE#images[i]"); null otherwise.
+  std::shared_ptr<const std::string> mapKdBytes = nullptr;
+  // glTF: the map is the colour and Kd only its factor (1 by default), so a
+  // map that is not found leaves Kd times 0.5, a mid-grey stand-in (an OBJ's
+  // Kd stays as written, 0 becoming 0.5).
+  bool mapIsColour = false;
+  // Both sides of its faces are surfaces (glTF doubleSided): each patch
+  // gets a twin (mesh.h, AddTwins), and an emitter's twin emits too.
+  bool twoSided = false;
+};
+
+// A camera a scene file gives (glTF: the first camera a node of the scene
+// holds), as --camera takes it.
+struct SceneCamera {
+  bool has = false;
+  glm::vec3 eye{0.0f}, target{0.0f, 0.0f, 1.0f}, up{0.0f, 1.0f, 0.0f};
+  float fovyDeg = 39.3f;
 };
 
 // A planar simple polygon with 3 or more corners, counter-clockwise seen from
@@ -44,10 +63,11 @@ struct Polygon {
 };
 
 struct Scene {
-  std::string objPath;
+  std::string objPath;  // the scene file (OBJ or glTF)
   std::vector<Material> materials;
   std::vector<Polygon> polygons;
-  Bounds bounds;  // of all polygon corners
+  Bounds bounds;       // of all polygon corners
+  SceneCamera camera;  // glTF: its first camera
 };
 
 // What the loader is told besides the files (the command line's --strict
@@ -88,6 +108,26 @@ struct LoadOptions {
 // token; options before it are ignored with a warning).
 Status LoadScene(const std::string& objPath, Scene* scene,
                  const LoadOptions& options = LoadOptions());
+
+// Whether `path` is a glTF 2.0 file by its extension (.gltf or .glb, any
+// letter case): LoadScene and the streaming passes read it with LoadGltf.
+bool IsGltfPath(const std::string& path);
+
+// Loads a glTF 2.0 file (.gltf with its buffers and images beside it, or
+// .glb) into *scene (src/gltf_scene.cpp, tinygltf): the triangles of the
+// default scene's meshes (strips and fans too) with their nodes' transforms,
+// as polygons in node order (each triangle mended or dropped as an OBJ face
+// is, ShapeFace); per material Kd = baseColorFactor and the
+// baseColorTexture as map_Kd, Ke = pi * emissiveFactor *
+// KHR_materials_emissive_strength (glTF gives the radiance a surface emits,
+// vismask the exitance of a diffuse emitter: pi times it), doubleSided;
+// the first camera a node holds. Then --emit and the scene-wide checks, as
+// for an OBJ. Errors name the file (line 0) and the element; what vismask
+// cannot use (metallic, roughness, normal maps, transmission, other
+// extensions, lines and points, ...) is named in one warning in *warnings.
+// Init-time: the file is parsed whole (a glTF is not a stream of lines).
+Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scene,
+                std::vector<std::string>* warnings);
 
 // Reads the file at `path` into *text; returns an error message ("cannot
 // open", ...), empty on success.

@@ -8,6 +8,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -29,9 +30,15 @@ struct SceneInfo {
   std::vector<uint8_t> usedMaterials;
   std::vector<int> noUvLine;
   std::vector<std::string> warnings;  // the loader's, not yet printed
+  // A glTF file (IsGltfPath) is parsed whole by pass 1 and held for the
+  // later passes: its polygons, their heap bytes, its first camera.
+  std::shared_ptr<const Scene> held;
+  uint64_t heldBytes = 0;
+  SceneCamera camera;
   // The most heap a pass holds for the parser: the vertex, uv and normal
-  // arrays (12, 8 and 12 bytes each, reserved exactly from pass 0's counts).
-  uint64_t ParserBytes() const { return 12 * vertices + 8 * uvs + 12 * normals; }
+  // arrays (12, 8 and 12 bytes each, reserved exactly from pass 0's counts),
+  // or the glTF scene held.
+  uint64_t ParserBytes() const { return 12 * vertices + 8 * uvs + 12 * normals + heldBytes; }
 };
 
 // A polygon of the scene, as mended, with its index in file order.

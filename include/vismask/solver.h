@@ -55,13 +55,44 @@ struct SolveOptions {
   bool correctUnshot = false;
 };
 
+// The progress line's estimate of the time left (stderr only: it never
+// touches the outputs). Fed (seconds, shots, unshot fraction) at each
+// update; ln(unshot) falls about linearly in time, so its smoothed slope
+// gives the seconds until --stop-unshot, capped by what --max-seconds and
+// --max-shots (at the recent shot rate) leave.
+class TimeLeft {
+ public:
+  void Add(double seconds, uint64_t shots, double unshot);
+  // Seconds left, or < 0 when there is no estimate yet (less than a second
+  // of updates, or the unshot power not falling, and no bound).
+  double Estimate(const SolveOptions& options) const;
+
+ private:
+  bool have_ = false;
+  double seconds_ = 0.0, lnUnshot_ = 0.0, slope_ = 0.0, weight_ = 0.0, shotRate_ = 0.0;
+  uint64_t shots_ = 0;
+};
+
 // kStalled: rounds without a shot while power was left to shoot (a bug in
-// the admission of forwarded shots, never a convergence).
-enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget, kStalled };
+// the admission of forwarded shots, never a convergence). kNoLoss: the
+// unshot power did not fall by kStallFall of itself while kStallShot times
+// as much was shot (power circulating where nothing absorbs it: a cavity
+// closed by faces of Kd 1 that the scene-wide check cannot see).
+enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget, kStalled, kNoLoss };
+// The no-loss stall's window: once kStallShot times the unshot power at
+// the window's start U0 has been shot, the unshot power must have fallen
+// by kStallFall U0 (a new window opens as soon as it has). Shots that keep rho of their power lose
+// kStallShot (1 - rho) U0 in a window, so only rho above 1 - kStallFall / kStallShot (0.9995) can
+// stall; counted power, never time, so the same on every transport and rank count. Not checked when
+// the run has a bound of its own (--max-shots, --max-seconds, --ray-budget).
+constexpr double kStallShot = 20.0;
+constexpr double kStallFall = 0.01;
 const char* StopReasonName(StopReason r);
 
 struct SolveResult {
   StopReason reason = StopReason::kConverged;
+  // kNoLoss: the unshot fraction at the window's start and at its end.
+  double stallFrom = 0.0, stallTo = 0.0;
   uint64_t rounds = 0;
   // The collectives every rank of a run of several takes part in: the first
   // totals' AllGather and one AllToAll a round (exchange.h). What the

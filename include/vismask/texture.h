@@ -106,21 +106,35 @@ struct SceneTextures {
   bool any() const { return !images.empty(); }
 };
 
-// Loads the textures of `scene`. Fails on an unreadable image (at its
-// map_Kd line) and on a map whose reflectance would reach 1 (Kd 0 0 0 takes
-// the map alone, so a texel of 255 would be reflectance 1: Kd must stay
-// below 1). Materials with Kd 0 0 0 and a map make one warning naming them
-// all; faces of a textured material without texture coordinates, another
-// (they take the texture's mean, untextured).
-Status LoadSceneTextures(const Scene& scene, SceneTextures* out);
+// The file a map_Kd path names: `path` itself if it exists, else the name
+// in the same folder in another letter case (the first such, bytewise), else "".
+std::string FindTexture(const std::string& path);
+
+// The map_Kd of each used material looked up (FindTexture): one found in
+// another letter case is read from there, one not found at all is dropped
+// (the material untextured with its Kd, 0.5 grey where Kd is 0 0 0, a glTF
+// base colour factor times 0.5: Material::mapIsColour), each
+// kind in one warning line naming them all. With `strict` nothing is
+// changed (the reader then refuses a name that is not found).
+void ResolveTextures(std::vector<Material>* materials, const std::vector<uint8_t>& used,
+                     bool strict, std::vector<std::string>* warnings);
+
+// Loads the textures of `scene` (its materials' map_Kd resolved first, as
+// ResolveTextures says). Fails on an unreadable image (at its map_Kd line).
+// Materials with Kd 0 0 0 and a map make one warning naming them all (the
+// map alone is the reflectance); faces of a textured material without
+// texture coordinates, another (they take the texture's mean, untextured).
+Status LoadSceneTextures(Scene* scene, SceneTextures* out, bool strict = false);
 // The same from what the streaming loader keeps of the polygons
 // (scene_stream.h): per material, whether a polygon uses it and the line of
 // its first polygon without texture coordinates (0: none).
 // `budget` > 0: the bytes init may still use; each image is read and
-// decoded within what the ones before it left (ReadTexture).
-Status LoadMaterialTextures(const std::string& objPath, const std::vector<Material>& materials,
+// decoded within what the ones before it left (ReadTexture). `materials`
+// may be repaired (a texture found in another letter case, or dropped with
+// a warning unless `strict`).
+Status LoadMaterialTextures(const std::string& objPath, std::vector<Material>* materials,
                             const std::vector<uint8_t>& used, const std::vector<int>& noUvLine,
-                            SceneTextures* out, uint64_t budget = 0);
+                            SceneTextures* out, uint64_t budget = 0, bool strict = false);
 
 // Sets the reflectance of `mesh`'s textured patches (Kd times the texture's
 // mean over the patch) and fills mesh->textures (one per patch, or empty
