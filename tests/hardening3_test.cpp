@@ -779,7 +779,8 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
 // The texture fuzz target's finds: a JPEG whose Huffman table declares
 // more than 256 codes made stb_image 2.27 write past its arrays (refused
 // before the decoder sees it); a PNG with an empty first IDAT chunk; a PNG
-// chunk longer than the file; a BMP of width 0. (A JPEG whose DC terms
+// chunk longer than the file; a BMP without its palette; a BMP of width 0.
+// (A JPEG whose DC terms
 // overflow stb_image's int is a seed of the fuzz target, whose clang UBSan
 // stops there unless texture.cpp is compiled with -fwrapv.)
 TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
@@ -810,6 +811,13 @@ TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   s = ReadTexture("tests/data/png-chunk-too-long.png", "m.mtl:2", &image);
   EXPECT_NE(s.ToString().find("': corrupt PNG: a chunk (IDAT) of 1610621199 bytes and its CRC, "
                               "where the file has 20 left"),
+            std::string::npos)
+      << s.ToString();
+  // A 1-bit BMP without its palette: stb_image read the colours from a
+  // stack array it never filled (two decodes differed).
+  s = ReadTexture("tests/data/bmp-no-palette.bmp", "m.mtl:2", &image);
+  EXPECT_NE(s.ToString().find("': unsupported BMP: no palette (its pixels start inside the "
+                              "header) for 1-bit pixels (2 colours needed)"),
             std::string::npos)
       << s.ToString();
   // A BMP of width 0: stb_image returned it, of no texels and a mean of NaN.
