@@ -254,7 +254,10 @@ std::string BadBmpPalette(const unsigned char* b, size_t n) {
   const long long offset = le(10, 4), hsz = le(14, 4);
   const long long bpp = hsz == 12 ? le(24, 2) : le(28, 2);
   if (bpp != 1 && bpp != 4 && bpp != 8) return "";
-  const long long colours = hsz == 12 ? (offset - 14 - 24) / 3 : (offset - 14 - hsz) / 4;
+  // As stb_image counts them: / 3 (toward 0) for the old header, >> 2
+  // (toward minus infinity) for the others.
+  const long long d = offset - 14 - hsz;
+  const long long colours = hsz == 12 ? (offset - 14 - 24) / 3 : (d >= 0 ? d / 4 : -((3 - d) / 4));
   // stb_image refuses 0 or more than 256, but takes a negative count (an
   // offset inside the header) as an empty palette.
   if (colours == 0 || colours > 256 || colours >= (1LL << bpp)) return "";
