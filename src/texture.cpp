@@ -239,6 +239,34 @@ std::string BadPngChunks(const unsigned char* b, size_t n) {
   return "";
 }
 
+// A palette BMP (1, 4 or 8 bits a pixel) whose palette has fewer than
+// 2^bits colours: stb_image 2.27 reads the colours past it from a stack
+// array it never filled, so the texels would be whatever the stack held
+// (and two decodes differ). Read as stb_image reads the header (a byte past
+// the end as 0); "" if the palette is whole or `b` is no such BMP.
+std::string BadBmpPalette(const unsigned char* b, size_t n) {
+  if (n < 2 || b[0] != 'B' || b[1] != 'M') return "";
+  auto le = [&](size_t at, int bytes) {
+    long long v = 0;
+    for (int k = bytes - 1; k >= 0; --k) v = (v << 8) | (at + k < n ? b[at + k] : 0);
+    return v;
+  };
+  const long long offset = le(10, 4), hsz = le(14, 4);
+  const long long bpp = hsz == 12 ? le(24, 2) : le(28, 2);
+  if (bpp != 1 && bpp != 4 && bpp != 8) return "";
+  // As stb_image counts them: / 3 (toward 0) for the old header, >> 2
+  // (toward minus infinity) for the others.
+  const long long d = offset - 14 - hsz;
+  const long long colours = hsz == 12 ? (offset - 14 - 24) / 3 : (d >= 0 ? d / 4 : -((3 - d) / 4));
+  // stb_image refuses 0 or more than 256, but takes a negative count (an
+  // offset inside the header) as an empty palette.
+  if (colours == 0 || colours > 256 || colours >= (1LL << bpp)) return "";
+  return (colours < 0 ? std::string("no palette (its pixels start inside the header)")
+                      : "a palette of " + std::to_string(colours) + " colours") +
+         " for " + std::to_string(bpp) + "-bit pixels (" + std::to_string(1LL << bpp) +
+         " colours needed)";
+}
+
 }  // namespace
 
 Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
@@ -297,6 +325,8 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
   if (!corrupt.empty()) return fail("corrupt JPEG: " + corrupt);
   corrupt = BadPngChunks(encoded, bytes.size());
   if (!corrupt.empty()) return fail("corrupt PNG: " + corrupt);
+  corrupt = BadBmpPalette(encoded, bytes.size());
+  if (!corrupt.empty()) return fail("unsupported BMP: " + corrupt);
   // The size first, from the header alone: the decoded bytes are judged
   // against the budget before any is made.
   if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp))

@@ -781,7 +781,8 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
 // The texture fuzz target's finds: a JPEG whose Huffman table declares
 // more than 256 codes made stb_image 2.27 write past its arrays (refused
 // before the decoder sees it); a PNG with an empty first IDAT chunk; a PNG
-// chunk longer than the file; a BMP of width 0. (A JPEG whose DC terms
+// chunk longer than the file; a BMP without its palette; a BMP of width 0.
+// (A JPEG whose DC terms
 // overflow stb_image's int is a seed of the fuzz target, whose clang UBSan
 // stops there unless texture.cpp is compiled with -fwrapv.)
 TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
@@ -814,6 +815,17 @@ TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
                               "where the file has 20 left"),
             std::string::npos)
       << s.ToString();
+  // A 1-bit BMP without its palette: stb_image read the colours from a
+  // stack array it never filled (two decodes differed).
+  // (The second: its pixels start 3 bytes before the header's end, which
+  // stb_image counts as -1 colours, not 0.)
+  for (const char* name : {"tests/data/bmp-no-palette.bmp", "tests/data/bmp-palette-offset.bmp"}) {
+    s = ReadTexture(name, "m.mtl:2", &image);
+    EXPECT_NE(s.ToString().find("': unsupported BMP: no palette (its pixels start inside the "
+                                "header) for 1-bit pixels (2 colours needed)"),
+              std::string::npos)
+        << s.ToString();
+  }
   // A BMP of width 0: stb_image returned it, of no texels and a mean of NaN.
   s = ReadTexture("tests/data/bmp-width-0.bmp", "m.mtl:2", &image);
   EXPECT_FALSE(s.ok());
