@@ -194,10 +194,13 @@ void Environment::Deliver(const uint8_t* packet) {
     // A hemisphere mask waits for every upstream neighbour's. R's packets
     // come only from neighbours that send rays here, each ready at once;
     // those of one round for one shot go into one slot (Or, below).
-    int source[3];
-    envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
-    for (int a = 0; a < 3; ++a) slot.expected += cell_[a] != source[a];
-    if (options_.maskMethod == MaskMethod::kR) slot.expected = 1;
+    if (options_.maskMethod == MaskMethod::kR) {
+      slot.expected = 1;
+    } else {
+      int source[3];
+      envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
+      for (int a = 0; a < 3; ++a) slot.expected += cell_[a] != source[a];
+    }
     ++queued_;
   }
   Slot& slot = slots_[s];

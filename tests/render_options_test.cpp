@@ -197,6 +197,13 @@ TEST(RenderTest, CountsAcceptExactIntegersInScientificNotation) {
   EXPECT_EQ(s.ToString(), "vismask: --emitted-rays: expected an integer in [1, 1e12], got '1.5e0'");
 }
 
+// `vismask render scenes/cornell.obj ARGS` parsed into *o.
+Status ParseCornell(const std::vector<const char*>& args, Options* o) {
+  std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return ParseArgs(static_cast<int>(argv.size()), argv.data(), o);
+}
+
 // Issue 20: how big a round is. With several environments and neither
 // --round-shots nor --round-work, rounds by work (its size chosen at init);
 // --round-shots alone keeps the rounds of before; one environment, one shot.
@@ -227,10 +234,8 @@ TEST(RenderTest, RoundSizeDefaults) {
       {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
   };
   for (const Case& c : cases) {
-    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
-    argv.insert(argv.end(), c.args.begin(), c.args.end());
     Options o;
-    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    Status s = ParseCornell(c.args, &o);
     ASSERT_TRUE(s.ok()) << s.ToString();
     EXPECT_EQ(o.roundShots, c.shots) << c.args.size();
     EXPECT_EQ(o.roundWorkAuto, c.autoWork) << c.args.size();
@@ -271,10 +276,8 @@ TEST(RenderTest, MaskMethodDefaults) {
       {{"--mask-method", "B"}, MaskMethod::kB},
   };
   for (const Case& c : cases) {
-    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
-    argv.insert(argv.end(), c.args.begin(), c.args.end());
     Options o;
-    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    Status s = ParseCornell(c.args, &o);
     ASSERT_TRUE(s.ok()) << s.ToString();
     EXPECT_EQ(static_cast<int>(o.maskMethod), static_cast<int>(c.method)) << c.args.size();
   }
@@ -305,10 +308,8 @@ TEST(RenderTest, QueueDefaults) {
       {{"--envs", "2", "--queue", "64"}, 64},
   };
   for (const Case& c : cases) {
-    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
-    argv.insert(argv.end(), c.args.begin(), c.args.end());
     Options o;
-    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), &o);
+    Status s = ParseCornell(c.args, &o);
     ASSERT_TRUE(s.ok()) << s.ToString();
     EXPECT_EQ(o.queue, c.queue) << c.args[1];
   }
@@ -321,9 +322,7 @@ TEST(RenderTest, QueueDefaults) {
 // environments; --envs given is kept as given.
 TEST(RenderTest, RanksWithoutEnvsMeanOneBalancedEnvironmentARank) {
   auto parse = [](std::vector<const char*> args, Options* o) {
-    std::vector<const char*> argv = {"vismask", "render", "scenes/cornell.obj"};
-    argv.insert(argv.end(), args.begin(), args.end());
-    Status s = ParseArgs(static_cast<int>(argv.size()), argv.data(), o);
+    Status s = ParseCornell(args, o);
     EXPECT_TRUE(s.ok()) << s.ToString();
   };
   Options three;
