@@ -460,6 +460,103 @@ bool CommitAll(OutFile* const* files, int n, char* why, const char* journalDir) 
   return ok;
 }
 
+namespace {
+
+// VISMASK_TEST_CHECKPOINT_KILL=STAGE:K (WriteFileAtomic's test hook).
+enum class KillStage { kNone, kWrite, kSync, kRename, kRenamed };
+struct KillAt {
+  KillStage stage = KillStage::kNone;
+  long call = 0;
+};
+KillAt ReadKillAt() {
+  KillAt k;
+  const char* v = std::getenv("VISMASK_TEST_CHECKPOINT_KILL");
+  if (v == nullptr) return k;
+  const char* colon = std::strchr(v, ':');
+  if (colon == nullptr) return k;
+  const size_t len = static_cast<size_t>(colon - v);
+  const char* names[] = {"write", "sync", "rename", "renamed"};
+  const KillStage stages[] = {KillStage::kWrite, KillStage::kSync, KillStage::kRename,
+                              KillStage::kRenamed};
+  for (int i = 0; i < 4; ++i)
+    if (std::strlen(names[i]) == len && std::strncmp(v, names[i], len) == 0) k.stage = stages[i];
+  k.call = std::strtol(colon + 1, nullptr, 10);
+  return k;
+}
+long gAtomicCalls = 0;
+
+void MaybeKill(const KillAt& k, KillStage stage) {
+  if (k.stage == stage && k.call == gAtomicCalls) ::kill(::getpid(), SIGKILL);
+}
+
+}  // namespace
+
+bool WriteFileAtomic(const char* path, const FilePart* parts, int n, uint32_t* crc, char* why) {
+  static const KillAt kill = ReadKillAt();
+  ++gAtomicCalls;
+  char tmp[kMaxPath + 24];
+  if (std::strlen(path) >= kMaxPath) {
+    if (why) std::snprintf(why, kWhyBytes, "path too long: %.200s...", path);
+    return false;
+  }
+  std::snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, static_cast<long>(::getpid()));
+  ::unlink(tmp);  // a leftover of a killed run that had this pid
+  int fd = ::open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    SetWhy(why, "cannot open", tmp);
+    return false;
+  }
+  int slot = ClaimTempSlot(tmp);
+  InstallSignalCleanup();
+  uint64_t total = 0, done = 0;
+  for (int i = 0; i < n; ++i) total += parts[i].bytes;
+  uLong sum = ::crc32(0L, Z_NULL, 0);
+  bool ok = true;
+  for (int i = 0; i < n && ok; ++i) {
+    const char* s = static_cast<const char*>(parts[i].data);
+    for (size_t left = parts[i].bytes; left > 0 && ok;) {
+      size_t step = left < (size_t{1} << 24) ? left : (size_t{1} << 24);
+      // The test hook's torn file: half the bytes on the disk.
+      if (kill.stage == KillStage::kWrite && done < total / 2 && done + step > total / 2)
+        step = static_cast<size_t>(total / 2 - done);
+      if (step == 0) step = left;
+      sum = ::crc32(sum, reinterpret_cast<const Bytef*>(s), static_cast<uInt>(step));
+      ok = WriteAll(fd, s, step);
+      s += step;
+      left -= step;
+      done += step;
+      if (done >= total / 2) MaybeKill(kill, KillStage::kWrite);
+    }
+  }
+  if (!ok) SetWhy(why, "cannot write", tmp);
+  MaybeKill(kill, KillStage::kSync);
+  if (ok && ::fsync(fd) != 0) {
+    ok = false;
+    SetWhy(why, "cannot sync", tmp);
+  }
+  if (::close(fd) != 0 && ok) {
+    ok = false;
+    SetWhy(why, "cannot close", tmp);
+  }
+  if (ok) MaybeKill(kill, KillStage::kRename);
+  if (ok && ::rename(tmp, path) != 0) {
+    ok = false;
+    SetWhy(why, "cannot rename to its final name", tmp);
+  }
+  if (!ok) ::unlink(tmp);
+  ReleaseTempSlot(&slot);
+  if (!ok) return false;
+  MaybeKill(kill, KillStage::kRenamed);
+  char dir[kMaxPath];
+  DirOf(path, dir);
+  if (!SyncDir(dir)) {
+    SetWhy(why, "cannot sync the directory of", path);
+    return false;
+  }
+  if (crc) *crc = static_cast<uint32_t>(sum);
+  return true;
+}
+
 bool CommitAll(OutFile* const* files, int n, char* why) {
   return CommitAll(files, n, why, nullptr);
 }

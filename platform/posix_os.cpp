@@ -54,6 +54,8 @@ TempSlot gTemp[kMaxTempFiles];
 std::atomic<int> gCommitting{0};
 std::atomic<int> gDeferred{0};
 std::atomic<bool> gHandlersInstalled{false};
+std::atomic<bool> gDeferInterrupts{false};
+std::atomic<int> gInterrupt{0};
 volatile sig_atomic_t gWaitSelf = -1;
 volatile sig_atomic_t gWaitPeer = -1;
 constexpr int kFatalSignals[] = {SIGINT, SIGTERM, SIGHUP};
@@ -89,6 +91,12 @@ const char* SignalName(int sig) {
 
 void OnFatalSignal(int sig) {
   int savedErrno = errno;
+  // Checkpointing: the first signal waits for the round's end.
+  if (gDeferInterrupts.load() && gInterrupt.load() == 0) {
+    gInterrupt.store(sig);
+    errno = savedErrno;
+    return;
+  }
   if (gCommitting.load()) {
     gDeferred.store(sig);
     errno = savedErrno;
@@ -166,6 +174,15 @@ void InstallSignalCleanup() {
     for (int other : kFatalSignals) sigaddset(&act.sa_mask, other);
     ::sigaction(sig, &act, nullptr);
   }
+}
+
+void DeferInterrupts(bool on) {
+  InstallSignalCleanup();
+  gDeferInterrupts.store(on);
+}
+
+int PendingInterrupt() {
+  return gInterrupt.load();
 }
 
 void NoteWaiting(int self, int peer) {

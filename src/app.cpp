@@ -85,6 +85,18 @@ int Main(int argc, const char* const* argv) {
   if (r->options.command == "verify") return Verify(r->options);
   if (r->options.command == "footprint") return Footprint(r->options);
   if (r->options.command == "view") return View(r->options);
+  // --resume without --envs: the checkpoint's environments (a run of 16
+  // ranks, resumed on 15, keeps its 16 environments).
+  if (!r->options.resumeDir.empty() && !r->options.hasEnvs) {
+    const std::string spec = ManifestValue(r->options.resumeDir, "environments");
+    if (!spec.empty()) {
+      std::vector<const char*> args(argv, argv + argc);
+      args.push_back("--envs");
+      args.push_back(spec.c_str());
+      s = ParseArgs(static_cast<int>(args.size()), args.data(), &r->options);
+      if (!s.ok()) return Fail(s);
+    }
+  }
   // The pipe transport forks here: every rank carries on from this point.
   r->transport = MakeTransport(
       TransportRequest{r->options.transport, r->options.ranks, r->options.rankTimeout}, &s);
@@ -112,6 +124,30 @@ int Main(int argc, const char* const* argv) {
   r->transport->AllGather(&mine, sizeof mine, all);
   for (int k = 0; k < r->transport->size(); ++k) rc = std::max(rc, static_cast<int>(all[k]));
   if (rc != kExitOk) return r->transport->Finish(rc);
+  // --checkpoint, --resume: the directory, and the state resumed from.
+  const bool checkpointing = !r->options.checkpointDir.empty();
+  if (checkpointing) {
+    std::string identity;
+    if (r->isRoot()) {
+      uint64_t bytes = 0;
+      uint32_t crc = 0;
+      std::string why;
+      if (!SizeAndCrc(r->options.scene, &bytes, &crc, &why)) {
+        os::PrintErr("vismask: %s: %s\n", r->options.scene.c_str(), why.c_str());
+        bytes = crc = 0;  // the scene was read at init: seen only if it went since
+      }
+      identity = CheckpointIdentity(bytes, crc, EnvSpec(r->options), r->options.resultArgs);
+    }
+    Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
+    s = r->checkpoints.Setup(r->options.checkpointDir, r->options.checkpointEvery, envs,
+                             r->rankEnvs.total, r->transport.get(), identity);
+    if (s.ok() && !r->options.resumeDir.empty()) s = r->checkpoints.Resume(&r->resumeState);
+    if (!s.ok()) {
+      if (!s.message().empty()) Fail(s);
+      return r->transport->Finish(kExitUsage);
+    }
+    os::DeferInterrupts(true);
+  }
   r->initSeconds = os::Seconds() - start;
 
   SetPhase(Phase::kSolve);
@@ -131,9 +167,31 @@ int Main(int argc, const char* const* argv) {
   ReferenceProbe probe(r.get());
   if (!r->options.reference.empty()) so.probe = &probe;
   so.errorEvery = r->options.errorEvery;
+  if (checkpointing) so.hook = &r->checkpoints;
+  if (r->checkpoints.resumed()) so.resume = &r->resumeState;
   SolveResult res =
       Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->rankEnvs,
             r->transport.get(), &r->exchange, so, r->isRoot() ? &r->convergence : nullptr);
+  // Past the solve a signal ends the run at once again (the outputs' commit defers it).
+  if (checkpointing) os::DeferInterrupts(false);
+  if (res.reason == StopReason::kInterrupted) {  // a signal: the checkpoint holds the solve
+    const int sig = r->checkpoints.interrupt();
+    if (r->isRoot()) {
+      for (auto& f : r->files) f.Discard();
+      r->exportFile.Discard();
+      if (r->checkpoints.written() > 0 || r->checkpoints.resumed())
+        os::PrintErr(
+            "vismask: ended by signal %d after %llu shots; the checkpoint in %s holds round %llu: "
+            "the same command with --resume %s instead of --checkpoint goes on from there\n",
+            sig, static_cast<unsigned long long>(res.shots), r->options.checkpointDir.c_str(),
+            static_cast<unsigned long long>(r->checkpoints.checkpointRounds()),
+            r->options.checkpointDir.c_str());
+      else
+        os::PrintErr("vismask: ended by signal %d after %llu shots; no checkpoint was written\n",
+                     sig, static_cast<unsigned long long>(res.shots));
+    }
+    return r->transport->Finish(128 + sig);
+  }
   if (res.reason == StopReason::kStalled) {  // no outputs: the solve did not finish
     if (r->isRoot()) {
       for (auto& f : r->files) f.Discard();

@@ -4,6 +4,8 @@
 // display values), trace.cpp (rays) and env_queue.cpp (shots and the queue).
 #include "vismask/environment.h"
 
+#include <cstring>
+
 #include <algorithm>
 #include <cmath>
 #include <glm/common.hpp>
@@ -331,6 +333,38 @@ void Environment::Reset() {
   readyTree_.Clear(-std::numeric_limits<double>::infinity());
   queued_ = 0;
   outCount_ = 0;
+}
+
+EnvState Environment::SaveState() const {
+  EnvState s;
+  std::memset(static_cast<void*>(&s), 0, sizeof s);  // padding too: the same bytes every time
+  s.arenaUsed = arena_.used();
+  s.numPatches = patches_.size();
+  s.gridSteps = grid_.steps();
+  s.centreSteps = centreSteps_;
+  s.centreWork = centreWork_;
+  s.nextElement = nextElement_;
+  s.queued = queued_;
+  s.outCount = outCount_;
+  s.index = index_;
+  s.ledger = ledger_;
+  s.stats = stats_;
+  return s;
+}
+
+bool Environment::RestoreState(const EnvState& s) {
+  if (s.index != index_ || s.numPatches != patches_.size() || s.arenaUsed != arena_.used() ||
+      s.outCount != 0 || s.nextElement > elements_.size())
+    return false;
+  grid_.SetSteps(s.gridSteps);
+  centreSteps_ = s.centreSteps;
+  centreWork_ = s.centreWork;
+  nextElement_ = s.nextElement;
+  queued_ = s.queued;
+  outCount_ = 0;
+  ledger_ = s.ledger;
+  stats_ = s.stats;
+  return true;
 }
 
 }  // namespace vismask

@@ -79,6 +79,7 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
   x->mine[0].elapsed = elapsed;
   x->mine[0].waited = waited;
   x->mine[0].roundCpu = roundCpu;
+  x->mine[0].interrupt = static_cast<uint64_t>(os::PendingInterrupt());
 }
 
 // The totals of the gathered reports (x->all), summed in environment order.
@@ -91,6 +92,7 @@ RoundTotals SumTotals(const RankEnvs& rankEnvs, int ranks, const ExchangeBuffers
     if (first.waited > tot.waitedMax) tot.waitedMax = first.waited;
     if (first.roundCpu > tot.roundCpuMax) tot.roundCpuMax = first.roundCpu;
     tot.roundCpuSum += first.roundCpu;
+    if (first.interrupt > tot.interrupt) tot.interrupt = first.interrupt;
     RankEnvs re = EnvsOfRank(rankEnvs.total, ranks, r);
     uint64_t rankSteps = 0, rankWork = 0;
     for (uint32_t k = 0; k < re.count; ++k) {

@@ -10,7 +10,7 @@ namespace vismask::run {
 struct FootprintFigures {
   std::vector<std::unique_ptr<Environment>> envs;
   std::vector<RunState> probes;  // per rank: its own buffers' layout
-  std::vector<uint64_t> rankTotal, rankEnvBytes, rankOwn, rankInitPeak;
+  std::vector<uint64_t> rankTotal, rankEnvBytes, rankOwn, rankInitPeak, rankCheckpoint;
   uint64_t patches = 0, twins = 0, envBytes = 0, total = 0;
   GlbMesh exportMesh;  // counts only: what --export would write
 };
@@ -24,6 +24,7 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
   f->rankEnvBytes.assign(ranks, 0);
   f->rankOwn.assign(ranks, 0);
   f->rankInitPeak.assign(ranks, 0);
+  f->rankCheckpoint.assign(ranks, 0);
   f->probes = std::vector<RunState>(ranks);
   auto& envs = f->envs;
   for (int k = 0; k < ranks; ++k) {
@@ -43,8 +44,10 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
     r.LayoutRank(measure, p.packetBytes, ranks, k == 0, p.textures,
                  TexturesUsed(p, r.rankEnvs.first, r.rankEnvs.count));
     f->rankOwn[k] = ArenaRoundUp(measure.used());
-    for (uint32_t e = r.rankEnvs.first; e < r.rankEnvs.first + r.rankEnvs.count; ++e)
+    for (uint32_t e = r.rankEnvs.first; e < r.rankEnvs.first + r.rankEnvs.count; ++e) {
       f->rankEnvBytes[k] += envs[e]->footprint().total;
+      f->rankCheckpoint[k] += CheckpointFileBytes(envs[e]->footprint().total);
+    }
     f->rankTotal[k] = f->rankEnvBytes[k] + f->rankOwn[k];
     const uint64_t held = k == 0 ? (o.reference.empty() ? 0 : uint64_t(o.width) * o.height * 12) +
                                        (o.exclude.empty() ? 0 : uint64_t(o.width) * o.height)
@@ -157,11 +160,13 @@ int Footprint(const Options& o) {
       add("    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
           "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
           "\"texture_bytes\": %llu, \"export_bytes\": %llu, \"rank_arena_bytes\": %llu, "
-          "\"total_bytes\": %llu, \"init_peak_bytes\": %llu, \"budget_bytes\": %llu}%s\n",
+          "\"total_bytes\": %llu, \"init_peak_bytes\": %llu, \"budget_bytes\": %llu, "
+          "\"checkpoint_bytes\": %llu}%s\n",
           k, r.rankEnvs.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes,
           (ull)r.rankImageBytes, (ull)r.rankOutputBytes, (ull)r.rankTextureBytes,
           (ull)r.rankExportBytes, (ull)rankOwn[k], (ull)rankTotal[k], (ull)fig.rankInitPeak[k],
-          (ull)std::max(rankTotal[k], fig.rankInitPeak[k]), k + 1 < ranks ? "," : "");
+          (ull)std::max(rankTotal[k], fig.rankInitPeak[k]), (ull)fig.rankCheckpoint[k],
+          k + 1 < ranks ? "," : "");
     }
     out += "  ]\n}\n";
   } else {
@@ -209,15 +214,16 @@ int Footprint(const Options& o) {
           o.twoSided ? "--two-sided" : "--two-sided-emitters", (ull)fig.patches, (ull)fig.twins,
           (ull)base.patches, (ull)fig.total, (long long)fig.total - (long long)base.total,
           100.0 * (static_cast<double>(fig.total) / static_cast<double>(base.total) - 1.0));
-    add("\n%4s %14s %14s\n", "rank", "init_peak_B", "budget_B");
+    add("\n%4s %14s %14s %14s\n", "rank", "init_peak_B", "budget_B", "checkpoint_B");
     for (int k = 0; k < ranks; ++k)
-      add("%4d %14llu %14llu\n", k, (ull)fig.rankInitPeak[k],
-          (ull)std::max(rankTotal[k], fig.rankInitPeak[k]));
+      add("%4d %14llu %14llu %14llu\n", k, (ull)fig.rankInitPeak[k],
+          (ull)std::max(rankTotal[k], fig.rankInitPeak[k]), (ull)fig.rankCheckpoint[k]);
     add("\nbytes are arena reservations (the whole of a solve's memory after init); a rank's\n"
         "process also holds its binary and libraries (see run.json's memory section).\n"
         "init_peak_B bounds init's own peak (the scene read in passes, the meshes and\n"
         "staged copies beside the arenas); budget_B, the larger, is what --mem-budget must "
-        "allow\n");
+        "allow.\ncheckpoint_B: the disk a --checkpoint takes on the rank (its environments' files,\n"
+        "written from the arenas: no memory beside them); its directory holds two (a and b)\n");
   }
   return WriteStdout(out.data(), out.size()) ? kExitOk : kExitOutput;
 }

@@ -250,6 +250,25 @@ local environments and visibility masks:
                        longer one rank's round or init takes than another's
                        and rank 0's output writing (default 60; 0: wait
                        forever)
+  --checkpoint DIR     write the solve's state to DIR at a round's end every
+                       --checkpoint-every seconds of solve, and when the run
+                       gets SIGINT, SIGTERM or SIGHUP (it then ends with
+                       128 + the signal, no outputs): one file per
+                       environment on the rank holding it, written
+                       atomically, and DIR/manifest on rank 0 naming the
+                       newest complete checkpoint (a second signal ends the
+                       run at once)
+  --checkpoint-every S seconds of solve between checkpoints (default 300;
+                       0: every round)
+  --resume DIR         go on from DIR's newest complete checkpoint (and keep
+                       checkpointing there): the outputs are the bytes a run
+                       never stopped gives. Give the same scene and options;
+                       --ranks, --transport, --out, --quiet, --rank-timeout,
+                       --mem-budget, --checkpoint and --checkpoint-every may
+                       differ (without --envs, the checkpoint's
+                       environments); another scene or option is refused
+                       (exit 2, naming the difference). Each rank needs the
+                       files of the environments it now holds in DIR
   --mem-budget BYTES   refuse at init (exit 2, with the numbers) when a rank
                        would reserve more than BYTES (suffix K, M or G for
                        KiB, MiB, GiB); a run that starts never runs out
@@ -284,7 +303,8 @@ exit status: 0 success; 1 an output could not be written (view: the viewer
 page or python3 is missing); 2 bad input or
 options (the message names file:line or the option); 3 a rank was lost
 or silent (--rank-timeout); 4 the solve stalled (no environment could shoot
-while power was left)
+while power was left); with --checkpoint, 128 + the signal (130 for SIGINT)
+after a signal, its checkpoint written
 )";
 }
 

@@ -363,6 +363,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--transport") {
       if (v != "loop" && v != "pipe" && v != "mpi") return Bad(a, v, "loop, pipe or mpi");
       o->transport = v;
+    } else if (a == "--checkpoint" || a == "--resume") {
+      if (v.empty()) return Bad(a, v, "a directory");
+      (a == "--checkpoint" ? o->checkpointDir : o->resumeDir) = v;
+    } else if (a == "--checkpoint-every") {
+      if (!ParseDouble(v, &d) || d < 0.0 || d > 1e9)
+        return Bad(a, v, "seconds in [0, 1e9] (0: every round)");
+      o->checkpointEvery = d;
     } else if (a == "--mem-budget") {
       std::string digits = v;
       uint64_t scale = 1;
@@ -450,6 +457,27 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   if (o->scene.empty())
     return Status::Error("vismask: " + o->command + ": no scene given (vismask " + o->command +
                          " SCENE.obj)");
+  if (o->command != "render" && (!o->checkpointDir.empty() || !o->resumeDir.empty()))
+    return Status::Error("vismask: --checkpoint and --resume are options of 'vismask render'");
+  if (o->checkpointDir.empty()) o->checkpointDir = o->resumeDir;
+  // What a checkpoint must agree with: the arguments as given, less the
+  // scene (compared by its bytes), --envs (by its meaning) and the options
+  // that leave the result as it is.
+  o->resultArgs.clear();
+  for (size_t k = 1; k < args.size(); ++k) {
+    const std::string& a = args[k];
+    const bool flag = a.rfind("--", 0) == 0;
+    const bool noValue = a == "--quiet" || a == "--strict" || a == "--two-sided" ||
+                         a == "--two-sided-emitters" || a == "--json";
+    if (!flag) continue;  // the scene (values are taken with their flag)
+    bool neutral = a == "--envs";
+    for (const char* n : kResultNeutral) neutral = neutral || a == n;
+    if (!neutral) {
+      o->resultArgs.push_back(a);
+      if (!noValue && k + 1 < args.size()) o->resultArgs.push_back(args[k + 1]);
+    }
+    if (!noValue) ++k;
+  }
   if (o->hasView && o->hasCamera)
     return Status::Error(
         "vismask: --view and --camera: give one or the other (--view frames the "
@@ -528,6 +556,12 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
                            std::to_string(n - 1));
   }
   return Status::Ok();
+}
+
+std::string EnvSpec(const Options& o) {
+  if (o.envsAuto) return "auto:" + std::to_string(o.envsAutoCount);
+  return std::to_string(o.envs[0]) + "x" + std::to_string(o.envs[1]) + "x" +
+         std::to_string(o.envs[2]);
 }
 
 }  // namespace vismask

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "vismask/checkpoint.h"
 #include "vismask/display.h"
 #include "vismask/emitter_check.h"
 #include "vismask/environment.h"
@@ -133,6 +134,9 @@ struct RunState {
   GlbMesh exportWhole;       // the whole mesh, after the export (rank 0: for run.json)
   uint64_t exportBytes = 0;  // the file's size (rank 0)
   TextWriter convergence;
+  // --checkpoint, --resume (checkpoint.h): the writer, and the state resumed from.
+  Checkpoints checkpoints;
+  SolveState resumeState;
   double initSeconds = 0.0;
   double ambientB[3] = {0, 0, 0};  // the ambient term of the last image drawn
   // Display values shared across cuts and smoothed polygons (display.h).
@@ -350,6 +354,8 @@ int WriteOutputs(RunState* r, const SolveResult& res);
 int Footprint(const Options& o);
 int Compare(const Options& o);
 int Verify(const Options& o);
+// The size and CRC-32 of a file; false (with *why) if it cannot be read.
+bool SizeAndCrc(const std::string& path, uint64_t* bytes, uint32_t* crc, std::string* why);
 
 // Writes a command's result to standard output; false, having said why on
 // stderr ("vismask: cannot write to standard output: ..."), if it did not

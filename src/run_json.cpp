@@ -329,6 +329,35 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"solve_seconds\": %.6f,\n    \"error_seconds\": %.6f,\n", res.seconds,
            res.errorSeconds);
   w.Printf("    \"output_seconds\": %.6f\n  },\n", outputSeconds);
+  if (!o.checkpointDir.empty()) {
+    // --checkpoint, --resume: what was written, when, and each rank's bytes.
+    const Checkpoints& c = r->checkpoints;
+    w.Printf("  \"checkpoint\": {\n    \"dir\": ");
+    JsonString(&w, o.checkpointDir.c_str());
+    w.Printf(",\n    \"every_seconds\": %.17g,\n    \"written\": %llu,\n    \"failed\": %llu,\n",
+             o.checkpointEvery, static_cast<unsigned long long>(c.written()),
+             static_cast<unsigned long long>(c.failed()));
+    if (c.haveCheckpoint())
+      w.Printf("    \"last_rounds\": %llu,\n    \"last_solve_seconds\": %.6f,\n",
+               static_cast<unsigned long long>(c.checkpointRounds()), c.checkpointElapsed());
+    else
+      w.Printf("    \"last_rounds\": null,\n    \"last_solve_seconds\": null,\n");
+    if (c.resumed())
+      w.Printf("    \"resumed_from_rounds\": %llu,\n",
+               static_cast<unsigned long long>(c.resumedRounds()));
+    else
+      w.Printf("    \"resumed_from_rounds\": null,\n");
+    w.Printf("    \"rank0_write_seconds\": %.6f,\n    \"rank_bytes\": [", c.writeSeconds());
+    const int ranks = r->transport->size();
+    for (int k = 0; k < ranks; ++k) {
+      RankEnvs re = EnvsOfRank(r->rankEnvs.total, ranks, k);
+      uint64_t bytes = 0;
+      for (uint32_t e = re.first; e < re.first + re.count; ++e)
+        bytes += CheckpointFileBytes(r->summary[e].arenaBytes);
+      w.Printf("%s%llu", k ? ", " : "", static_cast<unsigned long long>(bytes));
+    }
+    w.Printf("]\n  },\n");
+  }
   w.Printf("  \"memory\": {\n    \"environment_arena_bytes\": [");
   for (size_t i = 0; i < r->summary.size(); ++i)
     w.Printf("%s%llu", i ? ", " : "", static_cast<unsigned long long>(r->summary[i].arenaBytes));

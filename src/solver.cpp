@@ -23,6 +23,8 @@ const char* StopReasonName(StopReason r) {
       return "stalled";
     case StopReason::kNoLoss:
       return "no_loss";
+    case StopReason::kInterrupted:
+      return "interrupted";
   }
   return "?";
 }
@@ -100,9 +102,14 @@ class Progress {
       std::snprintf(left, sizeof left, "  over 1e6 s left");
     else if (!final && estimate >= 0.0)
       std::snprintf(left, sizeof left, "  about %.0f s left", std::ceil(estimate));
-    os::PrintErr("%svismask: shot %llu  unshot %.4f%%  %.1f s  %.0f shots/s%s%s", tty_ ? "\r" : "",
-                 static_cast<unsigned long long>(shots), 100.0 * unshot, elapsed, rate, left,
-                 tty_ && !final ? "   " : "\n");
+    char saved[64] = "";
+    if (options_.hook && options_.hook->haveCheckpoint())
+      std::snprintf(saved, sizeof saved, "  checkpoint: round %llu, %.0f s ago",
+                    static_cast<unsigned long long>(options_.hook->checkpointRounds()),
+                    std::max(0.0, elapsed - options_.hook->checkpointElapsed()));
+    os::PrintErr("%svismask: shot %llu  unshot %.4f%%  %.1f s  %.0f shots/s%s%s%s",
+                 tty_ ? "\r" : "", static_cast<unsigned long long>(shots), 100.0 * unshot, elapsed,
+                 rate, left, saved, tty_ && !final ? "   " : "\n");
   }
 
  private:
@@ -146,9 +153,13 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
   CHECK(envs.size() == rankEnvs.count);
   for (uint32_t i = 0; i < envs.size(); ++i) CHECK(envs[i]->index() == rankEnvs.first + i);
   SolveResult result;
+  const SolveState* resume = options.resume;
+  if (resume) result = resume->result;
   Progress progress(options.quiet || transport->rank() != 0, options);
   ErrorProbe* probe = options.probe;
-  const double start = os::Seconds();
+  // Resumed: the clock goes on from the checkpoint's.
+  const double start =
+      os::Seconds() - (resume ? resume->totals.elapsed + result.errorSeconds : 0.0);
   // The solve's clock leaves out the seconds spent measuring the error.
   auto clock = [&] { return os::Seconds() - start - result.errorSeconds; };
   auto measure = [&] {
@@ -158,12 +169,18 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     result.errorSeconds += os::Seconds() - t0;
   };
   uint64_t measuredAt = ~0ull;  // the shot count last measured
-  RoundTotals totals =
-      GatherTotals(envs, rankEnvs, transport, buffers, 0.0, 0.0, &result.waitSeconds);
-  result.collectives = 1;
-  result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
-  result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
-  result.lossEstimate = LossEstimate(totals);
+  RoundTotals totals;
+  if (resume) {
+    totals = resume->totals;
+    totals.interrupt = 0;
+    measuredAt = resume->measuredAt;
+  } else {
+    totals = GatherTotals(envs, rankEnvs, transport, buffers, 0.0, 0.0, &result.waitSeconds);
+    result.collectives = 1;
+    result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
+    result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
+    result.lossEstimate = LossEstimate(totals);
+  }
   if (convergence)
     convergence->Printf("shot,seconds,unshot_fraction%s\n",
                         probe ? ",relative_rmse,error_seconds" : "");
@@ -177,15 +194,32 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
       convergence->Printf(probe ? ",,\n" : "\n");
   };
 
-  bool done = ShouldStop(totals, options, &result);
-  uint32_t idle = 0;
+  // A checkpoint is written only where the solve goes on: a resumed one is not done.
+  bool done = resume ? false : ShouldStop(totals, options, &result);
+  uint32_t idle = resume ? resume->idle : 0;
   // The no-loss window: the power shot and the unshot at its start.
-  double windowShot = totals.radiosity - totals.unshot, windowUnshot = totals.unshot;
+  double windowShot = resume ? resume->windowShot : totals.radiosity - totals.unshot,
+         windowUnshot = resume ? resume->windowUnshot : totals.unshot;
   const bool bounded = options.maxShots > 0 || options.maxSeconds > 0.0 || options.rayBudget > 0;
   Span<double> envCpu =
       buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
   CHECK(envCpu.size() >= envs.size());  // rounds in a row without a shot
+  SolveState state;
   while (!done) {
+    if (options.hook) {
+      // Zeroed, padding too: the checkpoint's bytes are the state's.
+      std::memset(static_cast<void*>(&state), 0, sizeof state);
+      state.result = result;
+      state.totals = totals;
+      state.measuredAt = measuredAt;
+      state.windowShot = windowShot;
+      state.windowUnshot = windowUnshot;
+      state.idle = idle;
+      if (options.hook->AtRoundEnd(state)) {
+        result.reason = StopReason::kInterrupted;
+        break;
+      }
+    }
     double cpu0 = os::CpuSeconds();
     for (uint32_t k = 0; k < n; ++k) {
       uint32_t i = options.order.empty() ? k : options.order[k];
@@ -270,7 +304,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     row(due);
     progress.Update(os::Seconds(), elapsed, result.shots, result.unshotFraction, false);
   }
-  if (probe && measuredAt != result.shots) {
+  if (probe && measuredAt != result.shots && result.reason != StopReason::kInterrupted) {
     measure();
     row(true);
   }

@@ -28,24 +28,6 @@ std::string ReadSmall(const std::string& path, size_t limit, std::string* why) {
   return text;
 }
 
-// The size and CRC-32 of a file; false (with *why) if it cannot be read.
-bool SizeAndCrc(const std::string& path, uint64_t* bytes, uint32_t* crc, std::string* why) {
-  os::InFile in;
-  if (!in.Open(path.c_str(), why)) return false;
-  *bytes = 0;
-  uLong c = ::crc32(0L, Z_NULL, 0);
-  static char buf[1 << 16];
-  for (;;) {
-    const int64_t n = in.Read(buf, sizeof buf, why);
-    if (n < 0) return false;
-    if (n == 0) break;
-    c = ::crc32(c, reinterpret_cast<const Bytef*>(buf), static_cast<uInt>(n));
-    *bytes += static_cast<uint64_t>(n);
-  }
-  *crc = static_cast<uint32_t>(c);
-  return true;
-}
-
 // Reads a JSON string starting at text[*at] == '"' (run.json's escapes:
 // \" \\ and \u00XX, which stands for the byte XX); false if malformed.
 bool JsonStringAt(const std::string& text, size_t* at, std::string* out) {
@@ -112,6 +94,24 @@ bool ParseOutputs(const std::string& json, std::vector<Listed>* out) {
 }
 
 }  // namespace
+
+bool SizeAndCrc(const std::string& path, uint64_t* bytes, uint32_t* crc, std::string* why) {
+  os::InFile in;
+  if (!in.Open(path.c_str(), why)) return false;
+  *bytes = 0;
+  uLong c = ::crc32(0L, Z_NULL, 0);
+  static char buf[1 << 16];
+  for (;;) {
+    const int64_t n = in.Read(buf, sizeof buf, why);
+    if (n < 0) return false;
+    if (n == 0) break;
+    c = ::crc32(c, reinterpret_cast<const Bytef*>(buf), static_cast<uInt>(n));
+    *bytes += static_cast<uint64_t>(n);
+  }
+  *crc = static_cast<uint32_t>(c);
+  return true;
+}
+
 
 int Verify(const Options& o) {
   const std::string& dir = o.verifyDir;

@@ -38,6 +38,10 @@ class Arena {
   size_t used() const { return used_; }
   size_t capacity() const { return capacity_; }
   size_t remaining() const { return capacity_ - used_; }
+  // The bytes handed out so far (used() of them; null while measuring):
+  // what a checkpoint saves and restores (checkpoint.h).
+  uint8_t* data() { return base_; }
+  const uint8_t* data() const { return base_; }
 
   // `bytes` bytes aligned to `align` (a power of two <= kAlign). Zeroed.
   // Zero bytes reserve nothing (null).

@@ -112,6 +112,24 @@ struct EnvOptions {
   ElementOptions elements;
 };
 
+// What a checkpoint keeps of an environment beside its arena's bytes (the
+// patches' energy, elements, shot counts, queue, slots and selection trees
+// all live there): the counters and the ledger held in the object. Trivially
+// copyable, written as it is (checkpoint.h).
+struct EnvState {
+  uint64_t arenaUsed;  // the arena's bytes (checked on resume: the same layout)
+  uint64_t numPatches;
+  uint64_t gridSteps;
+  uint64_t centreSteps;
+  uint64_t centreWork;
+  uint32_t nextElement;
+  uint32_t queued;
+  uint32_t outCount;  // 0 at a round's end (the outbox is delivered)
+  uint32_t index;
+  EnergyLedger ledger;
+  EnvStats stats;
+};
+
 class Environment {
  public:
   Environment() = default;
@@ -251,6 +269,19 @@ class Environment {
   double kdArea() const { return kdArea_; }  // sum of kd * area, channels averaged
   size_t arenaCapacity() const { return arena_.capacity(); }
   size_t arenaUsed() const { return arena_.used(); }
+
+  // Checkpoint and resume (checkpoint.h), between rounds only: the state
+  // beside the arena, and the arena's bytes (restored over an arena laid
+  // out by the same scene and options: spans hold no pointers into it).
+  EnvState SaveState() const;
+  // False if `s` is not of this environment's layout (index, patches,
+  // arena bytes); then nothing is changed.
+  bool RestoreState(const EnvState& s);
+  // The whole block (capacity, footprint().total: what `footprint` counts).
+  Span<const uint8_t> arenaBytes() const {
+    return Span<const uint8_t>(arena_.data(), arena_.capacity());
+  }
+  Span<uint8_t> mutableArenaBytes() { return Span<uint8_t>(arena_.data(), arena_.capacity()); }
 
   // Test hooks: the shooter a plain progressive-refinement step would take.
   uint32_t TopShooter() const { return tree_.Top(); }

@@ -27,6 +27,7 @@ struct EnvReport {
   double elapsed;       // seconds since the solve began, on this rank's clock
   double waited;        // this rank's SolveResult::waitSeconds so far (first entry of a rank)
   double roundCpu;      // CPU seconds of this rank's shots in the last round (first entry)
+  uint64_t interrupt;   // a signal this rank caught, to end at this round (first entry; 0: none)
   double envCpu;        // CPU seconds of this environment's shots in the last round
   uint64_t roundSteps;  // grid steps of this environment's shots in the last round
   uint64_t roundWork;   // their work (Environment::workSteps), what rounds are sized by
@@ -54,6 +55,10 @@ struct RoundTotals {
   double waitedMax = 0.0;     // the most any rank has waited
   double roundCpuMax = 0.0;   // the most CPU any rank used for the last round's shots
   double roundCpuSum = 0.0;   // the CPU all ranks used for them together
+  // A signal some rank caught (SIGINT, SIGTERM or SIGHUP, the largest
+  // number; 0: none) while checkpointing defers them (os::DeferInterrupts):
+  // every rank learns it at the same round, writes a checkpoint and ends.
+  uint64_t interrupt = 0;
   double envCpuMax = 0.0;     // the most CPU any environment used for them
   uint64_t steps = 0;         // grid steps, all environments, so far
   uint64_t envStepsMax = 0;   // the most grid steps any environment did in the last round

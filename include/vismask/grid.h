@@ -127,6 +127,8 @@ class Grid {
   // ruled out by their cell's plane (a deterministic count, the same on
   // every machine).
   uint64_t steps() const { return steps_; }
+  // Resume (checkpoint.h): the count a checkpoint saved.
+  void SetSteps(uint64_t steps) { steps_ = steps; }
 
  private:
   mutable uint64_t steps_ = 0;

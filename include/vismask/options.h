@@ -90,6 +90,17 @@ struct Options {
   double rankTimeout =
       kDefaultRankTimeout;  // --rank-timeout S: a silent peer ends the run; 0: never
   uint64_t memBudget = 0;   // --mem-budget BYTES per rank; 0: none
+  // --checkpoint DIR: the solve's state written there at round ends, every
+  // --checkpoint-every S seconds of solve (0: every round) and on SIGINT,
+  // SIGTERM or SIGHUP; --resume DIR: the solve continued from DIR's newest
+  // checkpoint (and checkpointed there, unless --checkpoint names another).
+  std::string checkpointDir;
+  double checkpointEvery = 300.0;
+  std::string resumeDir;
+  // The arguments a checkpoint must agree with (checkpoint.h): every one
+  // given but the scene, --envs (compared as EnvSpec) and those that leave
+  // the result as it is (kResultNeutral).
+  std::vector<std::string> resultArgs;
   bool json = false;        // footprint --json
   std::string reference;    // --reference REF.pfm: the error of the image against it
   uint64_t errorEvery = 0;  // --error-every K shots (with --reference); 0: at the end only
@@ -126,6 +137,16 @@ constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
 
 constexpr float kAutoPatchDivisions =
     28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
+
+// The options that do not change a render's result: a checkpoint may be
+// resumed with other values (or without them). --envs is compared by its
+// meaning (EnvSpec), not as given.
+constexpr const char* kResultNeutral[] = {"--ranks",      "--transport",        "--out",
+                                          "--quiet",      "--rank-timeout",     "--mem-budget",
+                                          "--checkpoint", "--checkpoint-every", "--resume"};
+// The environments a run has, as a checkpoint records them: "auto:N" or
+// "NXxNYxNZ" (after SetWorldSize under mpirun).
+std::string EnvSpec(const Options& o);
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.

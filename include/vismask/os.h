@@ -87,6 +87,29 @@ void InstallSignalCleanup();
 // signal N while waiting for rank PEER" (under mpirun, the rank that died).
 void NoteWaiting(int self, int peer);
 
+// Checkpointing (checkpoint.h): while deferring, the first SIGINT, SIGTERM
+// or SIGHUP only records itself (PendingInterrupt: its number, else 0), so
+// that the solve ends at the next round with a checkpoint; a second one
+// ends the process as above. Off again: signals end the process at once.
+void DeferInterrupts(bool on);
+int PendingInterrupt();
+
+// One piece of a file WriteFileAtomic writes.
+struct FilePart {
+  const void* data;
+  size_t bytes;
+};
+// Writes the parts, in order, to PATH.tmp.PID (removed by a fatal signal,
+// as OutFile's), syncs it, renames it to `path` and syncs the directory:
+// `path` holds its old file or the whole new one, whatever ends the
+// process. *crc (may be null) gets the CRC-32 of the bytes written. False
+// (with *why, kWhyBytes) on failure, the temporary file removed. Allocates
+// nothing. For tests, VISMASK_TEST_CHECKPOINT_KILL=STAGE:K kills the
+// process with SIGKILL at the K-th call's STAGE: "write" (half the bytes
+// written), "sync" (all written, before the sync), "rename" (synced, before
+// the rename) or "renamed" (before the directory's sync).
+bool WriteFileAtomic(const char* path, const FilePart* parts, int n, uint32_t* crc, char* why);
+
 // A regular file opened for reading (the loaders at init: OBJ, MTL, PFM,
 // PGM, textures, a .glb's header). Read fills `buf` with up to n bytes, fewer
 // only at the end of the file: the count, 0 at the end, -1 on an error

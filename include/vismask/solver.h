@@ -32,6 +32,23 @@ class ErrorProbe {
   virtual double Measure() = 0;
 };
 
+struct SolveState;
+
+// Called by Solve on every rank at each round's end (and before the first
+// round), with the same state on every rank: checkpoint.h writes the state
+// there. True ends the solve (StopReason::kInterrupted): a signal asked for
+// it and the state was saved.
+class RoundHook {
+ public:
+  virtual ~RoundHook() = default;
+  virtual bool AtRoundEnd(const SolveState& state) = 0;
+  // For the progress line: whether a checkpoint was written (or resumed
+  // from), the rounds it holds and the solve's clock when it was written.
+  virtual bool haveCheckpoint() const = 0;
+  virtual uint64_t checkpointRounds() const = 0;
+  virtual double checkpointElapsed() const = 0;
+};
+
 struct SolveOptions {
   double stopUnshot = 1e-3;  // stop when unshot/emitted power < this
   uint64_t maxShots = 0;     // 0: no limit
@@ -53,6 +70,8 @@ struct SolveOptions {
   // --correct-unshot's choice of what the estimate is of.
   double stopError = 0.0;
   bool correctUnshot = false;
+  RoundHook* hook = nullptr;           // --checkpoint
+  const SolveState* resume = nullptr;  // --resume: the state the checkpoint saved
 };
 
 // The progress line's estimate of the time left (stderr only: it never
@@ -78,7 +97,16 @@ class TimeLeft {
 // unshot power did not fall by kStallFall of itself while kStallShot times
 // as much was shot (power circulating where nothing absorbs it: a cavity
 // closed by faces of Kd 1 that the scene-wide check cannot see).
-enum class StopReason { kConverged, kMaxShots, kMaxSeconds, kRayBudget, kStalled, kNoLoss };
+// kInterrupted: a signal ended the solve at a round's end (RoundHook).
+enum class StopReason {
+  kConverged,
+  kMaxShots,
+  kMaxSeconds,
+  kRayBudget,
+  kStalled,
+  kNoLoss,
+  kInterrupted
+};
 // The no-loss stall's window: once kStallShot times the unshot power at
 // the window's start U0 has been shot, the unshot power must have fallen
 // by kStallFall U0 (a new window opens as soon as it has). Shots that keep rho of their power lose
@@ -138,6 +166,18 @@ struct SolveResult {
   uint64_t criticalRankWork = 0;
   double biasEstimate = 0.0;  // BiasEstimate of the final totals
   double lossEstimate = 0.0;  // LossEstimate of the final totals
+};
+
+// The solver's own state at a round's end, beside its environments': with
+// their states (Environment::SaveState and the arenas) what a checkpoint
+// keeps, so that a resumed solve takes the same decisions as one never
+// stopped. Trivially copyable; the same on every rank.
+struct SolveState {
+  SolveResult result;
+  RoundTotals totals;  // the last round's (what the next round's admission reads)
+  uint64_t measuredAt;
+  double windowShot, windowUnshot;  // the no-loss window
+  uint32_t idle;                    // rounds in a row without a shot
 };
 
 // The relative bias of the radiosity from the power not yet shot, estimated
