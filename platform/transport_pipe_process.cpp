@@ -41,6 +41,7 @@ void ChildSigterm(int) {
   if (::getppid() != gRankZeroPid) {
     ssize_t ignored = ::write(2, gParentLostLine, gParentLostLineBytes);
     (void)ignored;
+    os::RemoveTempFiles();  // a checkpoint file this rank was writing (checkpoint.h)
     ::_exit(kExitLostRank);
   }
   ::signal(SIGTERM, SIG_DFL);

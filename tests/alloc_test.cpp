@@ -384,6 +384,37 @@ TEST(AllocTest, ExportAllocatesNothingAfterInit) {
   }
 }
 
+// --checkpoint at every round's end (each environment's file written from
+// its arena, the manifest from init's buffer, the collectives that agree on
+// them), on one process and on two pipe ranks; then a solve resumed from a
+// checkpoint a killed run left: nothing allocated after init.
+TEST(AllocTest, CheckpointAndResumeAllocateNothing) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  const std::string flags =
+      "--envs 2x2x1 --max-shots 120 --round-shots 4 --width 64 --height 64 --quiet";
+  test::TempDir ck;
+  for (const std::string ranks : {"", " --ranks 2"}) {
+    CountedRender run("scenes/cornell.obj", flags + ranks + " --checkpoint-every 0 --checkpoint " +
+                                                ck.File("every" + std::to_string(ranks.size())));
+    ASSERT_EQ(run.code, 0) << run.err << " (an allocation after init in a forked rank exits 97)";
+    EXPECT_EQ(run.allocations, 0) << ranks << ": heap allocations after init in rank 0";
+    EXPECT_EQ(JsonField(run.Json(), "written"), 7u) << "a checkpoint at each round's end but the last";
+  }
+  // A checkpoint of round 2 (the run killed while writing the third's first file).
+  std::string log;
+  ASSERT_NE(test::ShellOutput("sh -c 'VISMASK_TEST_CHECKPOINT_KILL=sync:11 " + test::VismaskBin() +
+                                  " render scenes/cornell.obj " + flags + " --out " +
+                                  ck.File("killed") + " --checkpoint " + ck.File("k") +
+                                  " --checkpoint-every 0'",
+                              60, &log),
+            0)
+      << log;
+  CountedRender resumed("scenes/cornell.obj", flags + " --resume " + ck.File("k"));
+  ASSERT_EQ(resumed.code, 0) << resumed.err;
+  EXPECT_EQ(resumed.allocations, 0) << "heap allocations after init in a resumed run";
+  EXPECT_EQ(JsonField(resumed.Json(), "resumed_from_rounds"), 2u);
+}
+
 // The default camera's side is chosen at init; the check for a black image
 // runs in the output phase, on a scene whose walls face away from the
 // camera (a box closed on -z, open on +z, seen with --view front).

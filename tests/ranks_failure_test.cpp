@@ -24,6 +24,8 @@ using test::FileExists;
 using test::HaveMpi;
 using test::MpiCommand;
 using test::ReadFile;
+using test::StartCommand;
+using test::WaitForExit;
 using test::TempDir;
 using test::VismaskBin;
 
@@ -86,32 +88,6 @@ TEST(RanksTest, KilledPipeChildEndsTheRunWithExitThree) {
 // A rank that stops (SIGSTOP) or hangs, issue 17 item 12, and one that dies
 // under mpirun, item 13: the run ends with the status the README gives,
 // naming the rank, and --out holds no output and no temporary file.
-
-// Starts `cmd` under /bin/sh; the pid is the command's own (exec).
-pid_t StartCommand(const std::string& cmd) {
-  std::fflush(nullptr);
-  pid_t pid = fork();
-  if (pid == 0) {
-    execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
-    _exit(127);
-  }
-  return pid;
-}
-
-// Waits up to `seconds` for `pid` to end; kills it (SIGKILL) if it does not.
-// True if it ended by itself; *status is its wait status, *took the seconds.
-bool WaitForExit(pid_t pid, double seconds, int* status, double* took) {
-  auto start = std::chrono::steady_clock::now();
-  for (;;) {
-    *took = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (waitpid(pid, status, WNOHANG) == pid) return true;
-    if (*took > seconds) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  kill(pid, SIGKILL);
-  waitpid(pid, status, 0);
-  return false;
-}
 
 // Names in `dir` with ".tmp" in them (rank 0's temporary outputs).
 std::vector<std::string> TempFilesIn(const std::string& dir) {
