@@ -325,8 +325,10 @@ bool Checkpoints::Write(const SolveState& state) {
     crc = Crc(crc, &es, sizeof es);
     crc = Crc(crc, &state, sizeof state);
     head.crc = Crc(crc, arena.data(), arena.size());
-    const os::FilePart parts[] = {
-        {&head, sizeof head}, {&es, sizeof es}, {&state, sizeof state}, {arena.data(), arena.size()}};
+    const os::FilePart parts[] = {{&head, sizeof head},
+                                  {&es, sizeof es},
+                                  {&state, sizeof state},
+                                  {arena.data(), arena.size()}};
     if (!os::WriteFileAtomic(paths_[2 * i + slot].c_str(), parts, 4, nullptr, why)) mine = 0;
   }
   transport_->AllGather(&mine, sizeof mine, all);

@@ -4,10 +4,9 @@
 // display values), trace.cpp (rays) and env_queue.cpp (shots and the queue).
 #include "vismask/environment.h"
 
-#include <cstring>
-
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <limits>

@@ -112,7 +112,6 @@ bool SizeAndCrc(const std::string& path, uint64_t* bytes, uint32_t* crc, std::st
   return true;
 }
 
-
 int Verify(const Options& o) {
   const std::string& dir = o.verifyDir;
   char why[os::kWhyBytes] = "";

@@ -398,16 +398,17 @@ TEST(AllocTest, CheckpointAndResumeAllocateNothing) {
                                                 ck.File("every" + std::to_string(ranks.size())));
     ASSERT_EQ(run.code, 0) << run.err << " (an allocation after init in a forked rank exits 97)";
     EXPECT_EQ(run.allocations, 0) << ranks << ": heap allocations after init in rank 0";
-    EXPECT_EQ(JsonField(run.Json(), "written"), 7u) << "a checkpoint at each round's end but the last";
+    EXPECT_EQ(JsonField(run.Json(), "written"), 7u)
+        << "a checkpoint at each round's end but the last";
   }
   // A checkpoint of round 2 (the run killed while writing the third's first file).
   std::string log;
-  ASSERT_NE(test::ShellOutput("sh -c 'VISMASK_TEST_CHECKPOINT_KILL=sync:11 " + test::VismaskBin() +
-                                  " render scenes/cornell.obj " + flags + " --out " +
-                                  ck.File("killed") + " --checkpoint " + ck.File("k") +
-                                  " --checkpoint-every 0'",
-                              60, &log),
-            0)
+  ASSERT_NE(
+      test::ShellOutput("sh -c 'VISMASK_TEST_CHECKPOINT_KILL=sync:11 " + test::VismaskBin() +
+                            " render scenes/cornell.obj " + flags + " --out " + ck.File("killed") +
+                            " --checkpoint " + ck.File("k") + " --checkpoint-every 0'",
+                        60, &log),
+      0)
       << log;
   CountedRender resumed("scenes/cornell.obj", flags + " --resume " + ck.File("k"));
   ASSERT_EQ(resumed.code, 0) << resumed.err;

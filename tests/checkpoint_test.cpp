@@ -27,12 +27,12 @@ using test::ShellOutput;
 using test::TempDir;
 using test::VismaskBin;
 
-// 2x2x1 environments, 8 rounds of at most 4 shots each: with
+// 2x2x1 environments (small: patches of 60 units), 8 rounds of at most 4 shots each: with
 // --checkpoint-every 0 a checkpoint at each of the 7 round ends before the
 // last, of 5 files on one process (4 environments and the manifest).
 const char kRun[] =
     " render scenes/cornell.obj --envs 2x2x1 --max-shots 120 --round-shots 4 --width 64 "
-    "--height 64 --quiet";
+    "--height 64 --patch-size 60 --quiet";
 constexpr int kFilesPerCheckpoint = 5;
 constexpr int kCheckpoints = 7;
 const char* const kStages[] = {"write", "sync", "rename", "renamed"};
@@ -82,13 +82,13 @@ std::vector<std::string> TempFiles(const std::string& dir) {
 // and compares every resumed run's outputs with `ref`'s.
 void KillAndResume(const TempDir& dir, const std::string& ref, const std::string& launch,
                    const std::string& ranks, const char* stage, int k,
-                   const std::vector<std::string>& resumes) {
+                   const std::vector<std::string>& resumes, const std::string& run = kRun) {
   SCOPED_TRACE(std::string("killed at ") + stage + ":" + std::to_string(k) + " " + launch + ranks);
   const std::string ck = dir.File("ck");
   std::filesystem::remove_all(ck);
   std::string log;
   const int code = Shell("VISMASK_TEST_CHECKPOINT_KILL=" + std::string(stage) + ":" +
-                             std::to_string(k) + " " + launch + kRun + ranks + " --out " +
+                             std::to_string(k) + " " + launch + run + ranks + " --out " +
                              dir.File("killed") + " --checkpoint " + ck + " --checkpoint-every 0",
                          &log);
   ASSERT_NE(code, 0) << "the run was not killed\n" << log;
@@ -101,11 +101,10 @@ void KillAndResume(const TempDir& dir, const std::string& ref, const std::string
     std::filesystem::remove_all(out);
     std::filesystem::copy(ck, copy);
     std::string rlog;
-    const std::string cmd = resumes[i] == "mpi2" ? test::MpiCommand("2") + kRun
-                                                 : VismaskBin() + kRun + resumes[i];
-    ASSERT_EQ(Shell(cmd + " --out " + out + " --resume " + copy, &rlog), 0)
-        << resumes[i] << "\n"
-        << rlog;
+    const std::string cmd =
+        resumes[i] == "mpi2" ? test::MpiCommand("2") + run : VismaskBin() + run + resumes[i];
+    ASSERT_EQ(Shell(cmd + " --out " + out + " --resume " + copy, &rlog), 0) << resumes[i] << "\n"
+                                                                            << rlog;
     ExpectSameOutputs(ref, out);
     // The killed run's temporary checkpoint file, removed by the resumed run
     // (one process: with several, a rank may outlive rank 0 by a moment,
@@ -127,20 +126,32 @@ class CheckpointTest : public ::testing::Test {
 };
 
 // One process, killed by SIGKILL at a random round's checkpoint (a random
-// file of it, at a random step of its writing): the resumed run's outputs
-// are the uninterrupted run's. The seed is printed, so a failure can be
-// rerun.
+// file of it, at a random step of its writing), for each mask method: the
+// outputs of the run resumed (on one process; for R also on two pipe ranks)
+// are the uninterrupted run's. The seed is printed, so a failure can be rerun.
 TEST_F(CheckpointTest, LoopKilledAtARandomRoundResumesIdentically) {
   const unsigned seed = std::random_device{}();
   std::printf("seed %u\n", seed);
   SCOPED_TRACE("seed " + std::to_string(seed));
   std::mt19937 rng(seed);
-  for (int trial = 0; trial < 2; ++trial) {
+  for (const std::string method :
+       {"", " --mask-method A --mask-res 20", " --mask-method B --mask-res 20",
+        " --mask-method C --mask-res 20"}) {
+    SCOPED_TRACE(method);
+    const std::string run = kRun + method;
+    std::string log;
+    if (!method.empty()) {
+      ASSERT_EQ(RunVismask(run + " --out " + ref() + "m", &log), 0) << log;
+    }
     // After the first checkpoint is complete: one before that has nothing to resume.
-    const int k = std::uniform_int_distribution<int>(
-        kFilesPerCheckpoint + 1, kFilesPerCheckpoint * kCheckpoints)(rng);
+    const int k = std::uniform_int_distribution<int>(kFilesPerCheckpoint + 1,
+                                                     kFilesPerCheckpoint * kCheckpoints)(rng);
     const char* stage = kStages[std::uniform_int_distribution<int>(0, 3)(rng)];
-    KillAndResume(dir, ref(), VismaskBin(), "", stage, k, {"", " --ranks 2"});
+    // Resumed on two pipe ranks too for the default method (R).
+    std::vector<std::string> resumes = {""};
+    if (method.empty()) resumes.push_back(" --ranks 2");
+    KillAndResume(dir, method.empty() ? ref() : ref() + "m", VismaskBin(), "", stage, k, resumes,
+                  run);
   }
 }
 
@@ -180,8 +191,7 @@ TEST_F(CheckpointTest, KillWhileWritingACheckpointLeavesThePreviousOneUsable) {
     for (const char* stage : kStages) {
       KillAndResume(dir, ref(), VismaskBin(), "", stage, k, {""});
       const bool third = k == manifest && std::string(stage) == "renamed";
-      EXPECT_EQ(ManifestLine(dir.File("ck"), "generation"), third ? "3" : "2")
-          << stage << ":" << k;
+      EXPECT_EQ(ManifestLine(dir.File("ck"), "generation"), third ? "3" : "2") << stage << ":" << k;
       // The killed write's temporary file: half written, synced or not, never renamed.
       const bool leftTemp = std::string(stage) != "renamed";
       EXPECT_EQ(TempFiles(dir.File("ck")).size(), leftTemp ? 1u : 0u) << stage << ":" << k;
@@ -205,8 +215,8 @@ TEST(CheckpointSignalTest, SigintWritesACheckpointAndExits130) {
                       err = dir.File("err" + std::to_string(ranks.size()));
     std::filesystem::remove_all(ck);
     std::filesystem::remove_all(out);
-    pid_t pid = test::StartCommand(VismaskBin() + run + ranks + " --out " + out +
-                                   " --checkpoint " + ck + " --checkpoint-every 1000 2>" + err);
+    pid_t pid = test::StartCommand(VismaskBin() + run + ranks + " --out " + out + " --checkpoint " +
+                                   ck + " --checkpoint-every 1000 2>" + err);
     ASSERT_GT(pid, 0);
     // In the solve: its first progress line.
     for (int i = 0; i < 1000 && ReadFile(err).find("vismask: shot") == std::string::npos; ++i)
@@ -224,7 +234,8 @@ TEST(CheckpointSignalTest, SigintWritesACheckpointAndExits130) {
     const std::string shots = ManifestLine(ck, "shots");
     ASSERT_NE(shots, "") << ReadFile(err);
     EXPECT_LT(std::stoi(shots), 2000) << "the checkpoint is of the run's end";
-    ASSERT_EQ(RunVismask(run + ranks + " --quiet --out " + out + " --resume " + ck, &log), 0) << log;
+    ASSERT_EQ(RunVismask(run + ranks + " --quiet --out " + out + " --resume " + ck, &log), 0)
+        << log;
     ExpectSameOutputs(dir.File("ref"), out);
   }
 }
@@ -235,12 +246,12 @@ TEST(CheckpointSignalTest, SigintWritesACheckpointAndExits130) {
 TEST_F(CheckpointTest, CheckpointOfAnotherRunIsRefused) {
   const std::string ck = dir.File("ck");
   std::string log;
-  ASSERT_NE(Shell("VISMASK_TEST_CHECKPOINT_KILL=rename:" +
-                      std::to_string(3 * kFilesPerCheckpoint + 1) + " " + VismaskBin() + kRun +
-                      " --out " + dir.File("killed") + " --checkpoint " + ck +
-                      " --checkpoint-every 0",
-                  &log),
-            0)
+  ASSERT_NE(
+      Shell("VISMASK_TEST_CHECKPOINT_KILL=rename:" + std::to_string(3 * kFilesPerCheckpoint + 1) +
+                " " + VismaskBin() + kRun + " --out " + dir.File("killed") + " --checkpoint " + ck +
+                " --checkpoint-every 0",
+            &log),
+      0)
       << log;
   // Another scene: the same file with one more comment line.
   std::filesystem::copy("scenes/cornell.obj", dir.File("cornell.obj"));
@@ -257,7 +268,8 @@ TEST_F(CheckpointTest, CheckpointOfAnotherRunIsRefused) {
   for (const Case& c : cases) {
     const std::string out = dir.File("refused");
     log.clear();
-    EXPECT_EQ(RunVismask(c.cmd + " --out " + out + " --resume " + ck, &log), 2) << c.cmd << "\n" << log;
+    EXPECT_EQ(RunVismask(c.cmd + " --out " + out + " --resume " + ck, &log), 2) << c.cmd << "\n"
+                                                                                << log;
     EXPECT_NE(log.find("the checkpoint is of another run"), std::string::npos) << log;
     EXPECT_NE(log.find(c.names), std::string::npos) << log;
     EXPECT_FALSE(FileExists(out + "/run.json"));
@@ -274,8 +286,8 @@ TEST_F(CheckpointTest, CheckpointOfAnotherRunIsRefused) {
     test::WriteFile(file, bytes);
     log.clear();
     EXPECT_EQ(RunVismask(std::string(kRun) + " --out " + dir.File("refused") + " --resume " +
-                      dir.File("damaged"),
-                  &log),
+                             dir.File("damaged"),
+                         &log),
               2)
         << log;
     EXPECT_NE(log.find("damaged"), std::string::npos) << log;
@@ -283,16 +295,17 @@ TEST_F(CheckpointTest, CheckpointOfAnotherRunIsRefused) {
   // No checkpoint at all.
   log.clear();
   EXPECT_EQ(RunVismask(std::string(kRun) + " --out " + dir.File("refused") + " --resume " +
-                    dir.File("none"),
-                &log),
+                           dir.File("none"),
+                       &log),
             2);
   EXPECT_NE(log.find("no complete checkpoint"), std::string::npos) << log;
   // Options that leave the result as it is may differ.
   log.clear();
-  ASSERT_EQ(RunVismask(std::string(kRun) + " --ranks 2 --transport pipe --rank-timeout 30 --mem-budget 1G "
-                                    "--checkpoint-every 5 --out " +
-                    dir.File("neutral") + " --resume " + ck,
-                &log),
+  ASSERT_EQ(RunVismask(std::string(kRun) +
+                           " --ranks 2 --transport pipe --rank-timeout 30 --mem-budget 1G "
+                           "--checkpoint-every 5 --out " +
+                           dir.File("neutral") + " --resume " + ck,
+                       &log),
             0)
       << log;
   ExpectSameOutputs(ref(), dir.File("neutral"));

@@ -25,9 +25,9 @@ using test::HaveMpi;
 using test::MpiCommand;
 using test::ReadFile;
 using test::StartCommand;
-using test::WaitForExit;
 using test::TempDir;
 using test::VismaskBin;
+using test::WaitForExit;
 
 // Starts the real binary on 4 ranks, kills one child, and expects every
 // process gone within 5 s, exit status 3, a message naming the lost rank,

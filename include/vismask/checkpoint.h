@@ -69,13 +69,13 @@ class Checkpoints final : public RoundHook {
   uint64_t checkpointRounds() const override { return lastRounds_; }
   double checkpointElapsed() const override { return lastElapsed_; }
 
-  uint64_t written() const { return written_; }           // by this run
-  uint64_t failed() const { return failed_; }             // checkpoints not written (a warning each)
+  uint64_t written() const { return written_; }  // by this run
+  uint64_t failed() const { return failed_; }    // checkpoints not written (a warning each)
   uint64_t resumedRounds() const { return resumedRounds_; }  // 0: not resumed
   bool resumed() const { return resumed_; }
-  uint64_t rankBytes() const { return rankBytes_; }  // this rank's files, one checkpoint
+  uint64_t rankBytes() const { return rankBytes_; }      // this rank's files, one checkpoint
   double writeSeconds() const { return writeSeconds_; }  // spent writing, all checkpoints
-  int interrupt() const { return interrupt_; }         // the signal that ended the solve, or 0
+  int interrupt() const { return interrupt_; }           // the signal that ended the solve, or 0
 
  private:
   bool Write(const SolveState& state);

@@ -51,10 +51,10 @@ struct RoundTotals {
   double lost = 0.0;    // the ledger's residual less the power in flight
   uint64_t shootable = 0;
   double emitted = 0.0;
-  double elapsed = 0.0;       // rank 0's clock
-  double waitedMax = 0.0;     // the most any rank has waited
-  double roundCpuMax = 0.0;   // the most CPU any rank used for the last round's shots
-  double roundCpuSum = 0.0;   // the CPU all ranks used for them together
+  double elapsed = 0.0;      // rank 0's clock
+  double waitedMax = 0.0;    // the most any rank has waited
+  double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
+  double roundCpuSum = 0.0;  // the CPU all ranks used for them together
   // A signal some rank caught (SIGINT, SIGTERM or SIGHUP, the largest
   // number; 0: none) while checkpointing defers them (os::DeferInterrupts):
   // every rank learns it at the same round, writes a checkpoint and ends.
