@@ -263,10 +263,11 @@ local environments and visibility masks:
   --resume DIR         go on from DIR's newest complete checkpoint (and keep
                        checkpointing there): the outputs are the bytes a run
                        never stopped gives. Give the same scene and options;
-                       --ranks, --transport, --out, --quiet, --rank-timeout,
-                       --mem-budget, --checkpoint and --checkpoint-every may
-                       differ (without --envs, the checkpoint's
-                       environments); another scene or option is refused
+                       --ranks, --transport, --out, --export, --quiet,
+                       --rank-timeout, --mem-budget, --checkpoint and
+                       --checkpoint-every may differ (without --envs, the
+                       checkpoint's environments); another scene or option
+                       is refused
                        (exit 2, naming the difference). Each rank needs the
                        files of the environments it now holds in DIR
   --mem-budget BYTES   refuse at init (exit 2, with the numbers) when a rank

@@ -141,9 +141,9 @@ constexpr float kAutoPatchDivisions =
 // The options that do not change a render's result: a checkpoint may be
 // resumed with other values (or without them). --envs is compared by its
 // meaning (EnvSpec), not as given.
-constexpr const char* kResultNeutral[] = {"--ranks",      "--transport",        "--out",
-                                          "--quiet",      "--rank-timeout",     "--mem-budget",
-                                          "--checkpoint", "--checkpoint-every", "--resume"};
+constexpr const char* kResultNeutral[] = {
+    "--ranks",        "--transport",  "--out",        "--export",           "--quiet",
+    "--rank-timeout", "--mem-budget", "--checkpoint", "--checkpoint-every", "--resume"};
 // The environments a run has, as a checkpoint records them: "auto:N" or
 // "NXxNYxNZ" (after SetWorldSize under mpirun).
 std::string EnvSpec(const Options& o);
