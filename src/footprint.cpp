@@ -222,8 +222,8 @@ int Footprint(const Options& o) {
         "process also holds its binary and libraries (see run.json's memory section).\n"
         "init_peak_B bounds init's own peak (the scene read in passes, the meshes and\n"
         "staged copies beside the arenas); budget_B, the larger, is what --mem-budget must "
-        "allow.\ncheckpoint_B: the disk a --checkpoint takes on the rank (its environments' "
-        "files,\n"
+        "allow\n"
+        "checkpoint_B: the disk a --checkpoint takes on the rank (its environments' files,\n"
         "written from the arenas: no memory beside them); its directory holds two (a and b)\n");
   }
   return WriteStdout(out.data(), out.size()) ? kExitOk : kExitOutput;
