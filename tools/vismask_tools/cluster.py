@@ -9,6 +9,9 @@ import json
 import os
 import shlex
 import shutil
+import signal
+import subprocess
+import time
 
 from .files import load_json, run_json
 from .network import network_seconds
@@ -19,6 +22,7 @@ CAMERA_IN_ROOM = "0.5,1.6,0.5,8,1.2,8,0,1,0,70"
 COMPARED = ["image.pfm", "patches.csv"]
 MILLION_BEGIN, MILLION_END = "<!-- million: begin -->", "<!-- million: end -->"
 EFF_BEGIN, EFF_END = "<!-- efficiency: begin -->", "<!-- efficiency: end -->"
+RESUME_BEGIN, RESUME_END = "<!-- resume: begin -->", "<!-- resume: end -->"
 
 
 def log(msg):
@@ -96,6 +100,15 @@ class Config:
         # default options, at a stop rule that leaves 1% of the power unshot.
         self.eff_args = ["--patch-size", "0.25", "--stop-unshot", "0.1" if quick else "1e-2",
                          "--width", "64", "--height", "64", "--camera", CAMERA_IN_ROOM, "--quiet"]
+        # Issue 43: 16 boards, one killed mid-solve, the run resumed on 15 from
+        # its checkpoint. The building in rounds of 4 shots an environment (so
+        # the solve has rounds to lose), a checkpoint every round.
+        self.resume_nodes = 2 if quick else 16
+        self.resume_args = ["--patch-size", "0.25", "--envs", "4x1x4", "--rays", "512",
+                            "--max-shots", shots(800), "--round-shots", "2" if quick else "4",
+                            "--width", "128", "--height", "128", "--camera", CAMERA_IN_ROOM]
+        self.resume_kill_round = 2 if quick else 6  # the node dies once a checkpoint holds this round
+        self.resume_victim = 1 if quick else 5      # the rank (node - 1) killed
         self.eff_baseline = ("one environment, one process (the baseline)", [])
         self.eff_cases = [("uniform 4x1x4, rounds by work (default)", ["--envs", "4x1x4"]),
                           ("auto:16, rounds by work (default)", ["--envs", "auto:16"])]
@@ -251,3 +264,123 @@ def million(c):
                     "budget": rep["mem_budget"],
                     "identical": same_bytes(os.path.join(d, "out"), ref)}
     return m
+
+
+def manifest(d):
+    """DIR/manifest's lines as a dict ({} when there is none)."""
+    try:
+        with open(os.path.join(d, "manifest")) as f:
+            return dict(l.rstrip("\n").split(" ", 1) for l in f if " " in l)
+    except OSError:
+        return {}
+
+
+def rank_pid(parent, rank):
+    """The pid of the vismask-mpi process of MPI rank `rank` among the
+    descendants of `parent` (by OMPI_COMM_WORLD_RANK), or None."""
+    key = ("OMPI_COMM_WORLD_RANK=%d" % rank).encode()
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            with open("/proc/%s/cmdline" % pid, "rb") as f:
+                if b"vismask-mpi" not in f.read():
+                    continue
+            with open("/proc/%s/environ" % pid, "rb") as f:
+                if key in f.read().split(b"\0"):
+                    return int(pid)
+        except OSError:
+            continue
+    return None
+
+
+def resume_run(c):
+    """Issue 43: the building on N simulated nodes, uninterrupted; then with
+    --checkpoint (every round) and one node's rank killed (SIGKILL) once a
+    checkpoint holds round K; then resumed on N - 1 nodes. Returns the
+    figures (None if a step failed before anything could be compared)."""
+    scene, args, n = c.building, c.resume_args, c.resume_nodes
+    ref = c.path("resume-ref")
+    shutil.rmtree(ref, ignore_errors=True)
+    rc, err, ref_wall = run(["build/vismask", "render", scene] + args + ["--out", ref, "--quiet"])
+    if rc != 0:
+        log(err)
+        return None
+    r = {"nodes": n, "args": args, "kill_round": c.resume_kill_round, "victim": c.resume_victim}
+    sim = ["tools/cluster-sim", "--nodes", str(n), "--link", "1gbit", "--report"]
+    # The uninterrupted run, and what a checkpoint a round costs.
+    d = c.path("resume-whole")
+    fresh(d)
+    rc, err, wall = run(sim + [os.path.join(d, "report.json"), "--", "render", scene] + args +
+                        ["--out", os.path.join(d, "out"), "--quiet"])
+    if rc != 0:
+        log(err[-3000:])
+        return None
+    rj = run_json(os.path.join(d, "out"))
+    r["whole"] = {"wall": load_json(os.path.join(d, "report.json"))["wall_seconds"],
+                  "solve": rj["timings"]["solve_seconds"], "rounds": rj["result"]["rounds"],
+                  "identical": same_bytes(os.path.join(d, "out"), ref)}
+    d = c.path("resume-every")
+    fresh(d)
+    ck_every = os.path.join(d, "ck")
+    rc, err, wall = run(sim + [os.path.join(d, "report.json"), "--", "render", scene] + args +
+                        ["--out", os.path.join(d, "out"), "--quiet", "--checkpoint", ck_every,
+                         "--checkpoint-every", "0"])
+    if rc != 0:
+        log(err[-3000:])
+        return None
+    rj = run_json(os.path.join(d, "out"))
+    r["every"] = {"wall": load_json(os.path.join(d, "report.json"))["wall_seconds"],
+                  "solve": rj["timings"]["solve_seconds"], "rounds": rj["result"]["rounds"],
+                  "written": rj["checkpoint"]["written"],
+                  "write_seconds": rj["checkpoint"]["rank0_write_seconds"],
+                  "rank_bytes": rj["checkpoint"]["rank_bytes"],
+                  "identical": same_bytes(os.path.join(d, "out"), ref)}
+    # Killed: rank `victim` (a whole node: its one rank) once the manifest holds round K.
+    d = c.path("resume-killed")
+    fresh(d)
+    ck = os.path.join(d, "ck")
+    cmd = sim + [os.path.join(d, "report.json"), "--", "render", scene] + args + \
+        ["--out", os.path.join(d, "out"), "--quiet", "--checkpoint", ck, "--checkpoint-every", "0"]
+    r["killed_cmd"] = cmd
+    log("$ " + " ".join(shlex.quote(x) for x in cmd))
+    t0 = time.monotonic()
+    with open(os.path.join(d, "log.txt"), "w") as logf:
+        p = subprocess.Popen(cmd, stdout=logf, stderr=subprocess.STDOUT)
+        killed_at = None
+        while p.poll() is None:
+            if killed_at is None and int(manifest(ck).get("rounds", "0")) >= c.resume_kill_round:
+                pid = rank_pid(p.pid, c.resume_victim)
+                if pid is not None:
+                    os.kill(pid, signal.SIGKILL)
+                    killed_at = time.monotonic() - t0
+                    r["killed_rounds"] = int(manifest(ck).get("rounds", "0"))
+            time.sleep(0.05)
+    r["killed"] = {"code": p.returncode, "wall": time.monotonic() - t0, "kill_seconds": killed_at}
+    m = manifest(ck)
+    r["checkpoint_rounds"] = int(m.get("rounds", "0"))
+    r["checkpoint_shots"] = int(m.get("shots", "0"))
+    if killed_at is None or not m:
+        log("the node was not killed (the run ended first) or no checkpoint was written")
+        return r
+    # Resumed on N - 1 nodes: the environments stay 4x1x4 (--envs is given).
+    d = c.path("resume-resumed")
+    fresh(d)
+    cmd = ["tools/cluster-sim", "--nodes", str(n - 1), "--link", "1gbit", "--report",
+           os.path.join(d, "report.json"), "--", "render", scene] + args + \
+        ["--out", os.path.join(d, "out"), "--quiet", "--resume", ck]
+    r["resumed_cmd"] = cmd
+    rc, err, wall = run(cmd)
+    with open(os.path.join(d, "log.txt"), "w") as f:
+        f.write(err)
+    r["resumed"] = {"code": rc, "wall": wall}
+    if rc == 0:
+        rj = run_json(os.path.join(d, "out"))
+        r["resumed"].update({"wall": load_json(os.path.join(d, "report.json"))["wall_seconds"],
+                             "solve": rj["timings"]["solve_seconds"],
+                             "rounds": rj["result"]["rounds"],
+                             "from_rounds": rj["checkpoint"]["resumed_from_rounds"],
+                             "identical": same_bytes(os.path.join(d, "out"), ref),
+                             "identical_whole": same_bytes(os.path.join(d, "out"),
+                                                           c.path("resume-whole", "out"))})
+    return r
