@@ -175,20 +175,24 @@ def write_resume(c, add, r):
         " one-process run's. The node died %.1f s into the run (mpirun then ended the run with"
         " status %d); the checkpoint held round %d of %d (%d shots). **Time lost**: the killed"
         " run's %.1f s plus the resumed run's %.1f s, less the %.1f s of the uninterrupted run"
-        " with the same checkpoints, is %.1f s of wall time; this includes starting %d ranks"
-        " again (mpirun's daemons, init: the scene read and the arenas built) and the rounds the"
-        " killed run did after its last checkpoint." % (
+        " with the same checkpoints, is %.1f s of wall time: mpirun noticing the lost rank and"
+        " ending the others, starting %d ranks again (mpirun's daemons, init: the scene read and"
+        " the arenas built) and the rounds the killed run did after its last checkpoint (all on"
+        " this machine's 2 shared cores, see above)." % (
             "are byte for byte" if res["identical"] and res["identical_whole"] else "**differ from**",
             n, k["kill_seconds"], k["code"], r["checkpoint_rounds"], e["rounds"],
             r["checkpoint_shots"], k["wall"], res["wall"], e["wall"], lost, n - 1))
     add("")
     per = e["write_seconds"] / e["written"] if e["written"] else float("nan")
-    add("**What a checkpoint costs.** Each rank's files: %s (its 1 environment's arena, written as"
-        " it is); rank 0 spent %.2f s in %d checkpoints, %.3f s each (its own files, and waiting"
+    envs = 16  # --envs 4x1x4
+    add("**What a checkpoint costs.** Each rank's files: at most %s (the arenas of its %s, written"
+        " as they are); rank 0 spent %.2f s in %d checkpoints, %.3f s each (its own files, and waiting"
         " in the two collectives for the slowest rank's), against a solve of %.2f s without"
         " them (%.2f s with one every round). At the default `--checkpoint-every 300` that is"
         " %.3f %% of the solve's time (goal: at most 2 %%: %s)." % (
-            fmt_bytes(max(e["rank_bytes"])), e["write_seconds"], e["written"], per, w["solve"],
+            fmt_bytes(max(e["rank_bytes"])),
+            "environment" if envs <= n else "%d environments" % -(-envs // n),
+            e["write_seconds"], e["written"], per, w["solve"],
             e["solve"], 100.0 * per / 300.0, "met" if per / 300.0 <= 0.02 else "**not met**"))
     add(RESUME_END)
 
