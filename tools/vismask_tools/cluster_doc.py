@@ -166,6 +166,10 @@ def write_resume(c, add, r):
             "%.2f" % res["solve"] if "solve" in res else "–",
             res.get("rounds", "–"), yes(res.get("identical")) if "identical" in res else "–"))
     add("")
+    add("*wall s*: mpirun start to end (cluster-sim's report); *solve s*: rank 0's run.json (a"
+        " resumed run's clock goes on from its checkpoint's); *exit*: mpirun's status (137: a"
+        " rank killed by SIGKILL).")
+    add("")
     if not res or res["code"] != 0:
         add("**The resumed run failed** (build/cluster/resume-resumed/log.txt).")
         add(RESUME_END)
@@ -185,13 +189,15 @@ def write_resume(c, add, r):
     add("")
     per = e["write_seconds"] / e["written"] if e["written"] else float("nan")
     envs = 16  # --envs 4x1x4
-    add("**What a checkpoint costs.** Each rank's files: at most %s (the arenas of its %s, written"
-        " as they are); rank 0 spent %.2f s in %d checkpoints, %.3f s each (its own files, and waiting"
+    add("**What a checkpoint costs.** Each rank's files: at most %s (the %s, written"
+        " unchanged); rank 0 spent %.2f s in %d checkpoints, %.3f s each (its own files, and waiting"
         " in the two collectives for the slowest rank's), against a solve of %.2f s without"
-        " them (%.2f s with one every round). At the default `--checkpoint-every 300` that is"
-        " %.3f %% of the solve's time (goal: at most 2 %%: %s)." % (
+        " them (%.2f s with one every round). At the default `--checkpoint-every 300`, one such"
+        " checkpoint per 300 s of solve is %.3f %% of the solve's time (goal: at most 2 %%: %s;"
+        " worked out from the cost of a checkpoint measured here, not from a solve of 300 s)." % (
             fmt_bytes(max(e["rank_bytes"])),
-            "environment" if envs <= n else "%d environments" % -(-envs // n),
+            "arena of its environment" if envs <= n else
+            "arenas of its %d environments" % -(-envs // n),
             e["write_seconds"], e["written"], per, w["solve"],
             e["solve"], 100.0 * per / 300.0, "met" if per / 300.0 <= 0.02 else "**not met**"))
     add(RESUME_END)
