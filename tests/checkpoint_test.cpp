@@ -311,5 +311,38 @@ TEST_F(CheckpointTest, CheckpointOfAnotherRunIsRefused) {
   ExpectSameOutputs(ref(), dir.File("neutral"));
 }
 
+// `vismask footprint` gives each rank's checkpoint bytes before the run:
+// what its environments' files take on the disk, and what run.json says.
+TEST_F(CheckpointTest, FootprintGivesEachRanksCheckpointBytes) {
+  std::string run = kRun;
+  run.replace(run.find(" render "), 8, " footprint ");
+  std::string json;
+  ASSERT_EQ(RunVismask(run + " --ranks 2 --json", &json), 0) << json;
+  std::vector<unsigned long long> predicted;
+  for (size_t at = json.find("\"checkpoint_bytes\": "); at != std::string::npos;
+       at = json.find("\"checkpoint_bytes\": ", at + 1))
+    predicted.push_back(std::stoull(json.substr(at + 20)));
+  ASSERT_EQ(predicted.size(), 2u) << json;
+  const std::string ck = dir.File("ck"), out = dir.File("out");
+  std::string log;
+  ASSERT_EQ(RunVismask(std::string(kRun) + " --ranks 2 --out " + out + " --checkpoint " + ck +
+                           " --checkpoint-every 0",
+                       &log),
+            0)
+      << log;
+  // Two environments a rank (2x2x1 on 2 ranks): 0 and 1 on rank 0, 2 and 3 on rank 1.
+  for (int rank = 0; rank < 2; ++rank) {
+    unsigned long long bytes = 0;
+    for (int e = 2 * rank; e < 2 * rank + 2; ++e)
+      bytes += std::filesystem::file_size(ck + "/env-0000" + std::to_string(e) + ".a");
+    EXPECT_EQ(bytes, predicted[rank]) << "rank " << rank;
+  }
+  const std::string runJson = ReadFile(out + "/run.json");
+  EXPECT_NE(runJson.find("\"rank_bytes\": [" + std::to_string(predicted[0]) + ", " +
+                         std::to_string(predicted[1]) + "]"),
+            std::string::npos)
+      << runJson;
+}
+
 }  // namespace
 }  // namespace vismask
