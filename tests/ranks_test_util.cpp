@@ -28,6 +28,9 @@ pid_t StartCommand(const std::string& cmd) {
   std::fflush(nullptr);
   pid_t pid = fork();
   if (pid == 0) {
+    // SIGINT as a terminal's Ctrl-C finds it: the test binary may run in
+    // the background of a shell (tools/run-tests), which ignores it there.
+    signal(SIGINT, SIG_DFL);
     execl("/bin/sh", "sh", "-c", ("exec " + cmd).c_str(), static_cast<char*>(nullptr));
     _exit(127);
   }

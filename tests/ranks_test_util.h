@@ -15,7 +15,7 @@ bool HaveMpi();
 // never frees.
 std::string MpiCommand(const std::string& ranks);
 
-// Starts `cmd` under /bin/sh; the pid is the command's own (exec).
+// Starts `cmd` under /bin/sh, SIGINT at its default; the pid is the command's own (exec).
 pid_t StartCommand(const std::string& cmd);
 // Waits up to `seconds` for `pid` to end; kills it (SIGKILL) if it does not.
 // True if it ended by itself; *status is its wait status, *took the seconds.
