@@ -56,7 +56,9 @@ std::atomic<int> gDeferred{0};
 std::atomic<bool> gHandlersInstalled{false};
 volatile sig_atomic_t gWaitSelf = -1;
 volatile sig_atomic_t gWaitPeer = -1;
-constexpr int kFatalSignals[] = {SIGINT, SIGTERM, SIGHUP};
+// SIGABRT too: a failed assertion in a library (or abort() anywhere) leaves
+// no temporary file behind either.
+constexpr int kFatalSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGABRT};
 
 // Async-signal-safe text: appends `s`, or `v` in decimal, to buf[*n].
 void Append(char* buf, size_t cap, size_t* n, const char* s) {
@@ -82,6 +84,8 @@ const char* SignalName(int sig) {
       return "SIGTERM";
     case SIGHUP:
       return "SIGHUP";
+    case SIGABRT:
+      return "SIGABRT";
     default:
       return "a signal";
   }
