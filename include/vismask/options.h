@@ -127,6 +127,12 @@ constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
 constexpr float kAutoPatchDivisions =
     28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
 
+// The most rays one shot traces (--max-rays under power allocation, --rays
+// when fixed): Method R's packet bits, and what sizes a round.
+inline uint32_t RayCap(const Options& o) {
+  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
+}
+
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.
 Status ParseArgs(int argc, const char* const* argv, Options* options);
