@@ -58,7 +58,9 @@ std::atomic<bool> gDeferInterrupts{false};
 std::atomic<int> gInterrupt{0};
 volatile sig_atomic_t gWaitSelf = -1;
 volatile sig_atomic_t gWaitPeer = -1;
-constexpr int kFatalSignals[] = {SIGINT, SIGTERM, SIGHUP};
+// SIGABRT too: a failed assertion in a library (or abort() anywhere) leaves
+// no temporary file behind either.
+constexpr int kFatalSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGABRT};
 
 // Async-signal-safe text: appends `s`, or `v` in decimal, to buf[*n].
 void Append(char* buf, size_t cap, size_t* n, const char* s) {
@@ -84,6 +86,8 @@ const char* SignalName(int sig) {
       return "SIGTERM";
     case SIGHUP:
       return "SIGHUP";
+    case SIGABRT:
+      return "SIGABRT";
     default:
       return "a signal";
   }

@@ -18,6 +18,7 @@ void CheckOpFailed(const char* file, int line, const char* expr, const CheckValu
                    const CheckValue& b) {
   os::PrintErr("%s:%d: internal error: CHECK(%s) failed: %s against %s\n", file, line, expr, a.text,
                b.text);
+  os::RemoveTempFiles();  // as CheckFailed: no output of a failed run is left
   std::abort();
 }
 

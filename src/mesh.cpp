@@ -38,11 +38,6 @@ std::string Num(double x) {
   return buf;
 }
 
-// How many parts an edge of length `len` needs (double: it may be huge).
-double Divisions(double len, double patchSize) {
-  return std::max(1.0, std::ceil(len / patchSize));
-}
-
 bool IsConvexQuad(const std::vector<glm::dvec3>& c, glm::dvec3 normal) {
   return c.size() == 4 && IsConvex(c, normal);
 }
@@ -267,7 +262,7 @@ bool StripPieces(const std::vector<glm::dvec3>& c, glm::dvec3 normal, uint32_t i
     const glm::dvec2 br = bottom.At(next, &sb), tr = top.At(next, &st);
     const double hl = tl.y - bl.y, hr = tr.y - br.y;
     const double chord = std::max(glm::length(br - bl), glm::length(tr - tl));
-    Piece piece{index, 4, {to3(bl), to3(br), to3(tr), to3(tl)}, Divisions(chord, s), 0.0};
+    Piece piece{index, 4, {to3(bl), to3(br), to3(tr), to3(tl)}, EdgeDivisions(chord, s), 0.0};
     if (hl <= 0.0 || hr <= 0.0) {
       // A pointed end: a fan from the point over the other side.
       piece.numCorners = 3;
@@ -275,16 +270,16 @@ bool StripPieces(const std::vector<glm::dvec3>& c, glm::dvec3 normal, uint32_t i
       piece.m = 0.0;
       if (hl <= 0.0) {
         piece.c[0] = to3(bl), piece.c[1] = to3(br), piece.c[2] = to3(tr);
-        piece.n = Divisions(hr, s);
+        piece.n = EdgeDivisions(hr, s);
       } else {
         piece.c[0] = to3(br), piece.c[1] = to3(tl), piece.c[2] = to3(bl);
-        piece.n = Divisions(hl, s);
+        piece.n = EdgeDivisions(hl, s);
       }
       piece.c[3] = piece.c[2];
       patches += piece.n;
       vertices += piece.n + 2.0;
     } else {
-      piece.n = Divisions(std::max(hl, hr), s);
+      piece.n = EdgeDivisions(std::max(hl, hr), s);
       patches += piece.m * piece.n;
       vertices += (piece.m + 1.0) * (piece.n + 1.0);
     }
@@ -307,8 +302,8 @@ Status PlanPolygon(const std::string& objPath, const Polygon& poly, uint32_t ind
   for (const glm::vec3& v : poly.corners) c.emplace_back(v);
   if (IsConvexQuad(c, glm::dvec3(poly.normal))) {
     Piece q{index, 4, {c[0], c[1], c[2], c[3]}, 0.0, 0.0};
-    q.m = Divisions(std::max(glm::length(c[1] - c[0]), glm::length(c[2] - c[3])), s);
-    q.n = Divisions(std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1])), s);
+    q.m = EdgeDivisions(std::max(glm::length(c[1] - c[0]), glm::length(c[2] - c[3])), s);
+    q.n = EdgeDivisions(std::max(glm::length(c[3] - c[0]), glm::length(c[2] - c[1])), s);
     *numPatches += q.m * q.n;
     *numVertices += (q.m + 1) * (q.n + 1);
     if (pieces) pieces->push_back(q);
@@ -344,7 +339,7 @@ Status PlanPolygon(const std::string& objPath, const Polygon& poly, uint32_t ind
     Piece t{index, 3, {c[tri[0]], c[tri[1]], c[tri[2]], c[tri[2]]}, 0.0, 0.0};
     double longest = std::max(
         {glm::length(t.c[1] - t.c[0]), glm::length(t.c[2] - t.c[1]), glm::length(t.c[0] - t.c[2])});
-    t.n = t.m = Divisions(longest, s);
+    t.n = t.m = EdgeDivisions(longest, s);
     triPatches += t.n * t.n;
     triVertices += (t.n + 1) * (t.n + 2) / 2;
     triangles.push_back(t);
@@ -377,6 +372,10 @@ Status MeshesInStrips(const std::string& objPath, const Polygon& polygon, float 
   }
   if (polygon.area > 0.0) *areaChange = area / polygon.area - 1.0;
   return Status::Ok();
+}
+
+double EdgeDivisions(double len, double patchSize) {
+  return std::max(1.0, std::ceil(len / patchSize));
 }
 
 Status MeshSizeError(double numPatches, float patchSize, uint64_t maxPatches) {

@@ -207,7 +207,7 @@ double EstimatedPatches(const glm::vec3* c, int n, float patchSize) {
   CHECK(n >= 3 && patchSize > 0.0f);
   auto cells = [&](int i, int j) {
     double len = glm::length(glm::dvec3(c[j]) - glm::dvec3(c[i]));
-    return std::max(1.0, std::ceil(len / patchSize));
+    return EdgeDivisions(len, patchSize);
   };
   if (n == 4) return std::max(cells(0, 1), cells(2, 3)) * std::max(cells(1, 2), cells(3, 0));
   double longest = 1.0;

@@ -13,17 +13,9 @@
 
 namespace vismask {
 
-namespace {
-
-uint32_t MostRaysAShot(const Options& o) {
-  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
-}
-
-}  // namespace
-
 void ResolveRounds(int numEnvs, Options* o) {
   o->roundWorkAuto = false;
-  const uint64_t packet = PacketBytes(MaskShapeOf(o->maskMethod, o->maskRes, MostRaysAShot(*o)));
+  const uint64_t packet = PacketBytes(MaskShapeOf(o->maskMethod, o->maskRes, RayCap(*o)));
   // The outbox holds 6 packets a shot: fewer shots a round with big packets.
   const uint32_t fit = static_cast<uint32_t>(std::max<uint64_t>(
       1, std::min<uint64_t>(kAutoRoundShots, kAutoRoundOutboxBytes / (6 * packet))));
@@ -58,7 +50,7 @@ uint64_t AutoRoundWork(const Options& o, double patches, int numEnvs) {
   double cells = kStepCellsPerPatch * patches / std::max(1, numEnvs);
   double steps = std::max(1.0, std::cbrt(std::max(cells, 1.0)));
   const WorkCosts& w = WorkCostsOf(o.maskMethod);
-  double shot = MostRaysAShot(o) * (steps + w.ray + w.hit) + w.shot;
+  double shot = RayCap(o) * (steps + w.ray + w.hit) + w.shot;
   return static_cast<uint64_t>(kAutoRoundWorkShots * shot);
 }
 

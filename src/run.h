@@ -325,11 +325,6 @@ struct Prepared {
 // tables, the transport's and iostream's buffers), a bound.
 constexpr uint64_t kInitBaseBytes = uint64_t{4} << 20;
 
-// The most rays one shot traces: Method R's packet bits.
-inline uint32_t RayCap(const Options& o) {
-  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
-}
-
 // Pass 0 (scene_stream.h): the statements counted, nothing parsed.
 Status CountScene(const Options& o, Prepared* p);
 // Passes 1 and 2: the scene parsed and checked, then cut into environments;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "test_util.h"
+#include "vismask/check.h"
 #include "vismask/os.h"
 
 namespace vismask {
@@ -67,6 +68,27 @@ TEST(HardeningTest, RefusedArenaMemoryIsAUserError) {
     EXPECT_NE(err.find(" bytes for "), std::string::npos) << err;
     EXPECT_EQ(err.find("internal error"), std::string::npos) << err;
     EXPECT_FALSE(test::FileExists(out)) << extra;
+  }
+}
+
+// A failed CHECK_EQ, or an abort() anywhere (a library's assertion), leaves
+// no temporary output behind, as a failed CHECK does.
+TEST(HardeningDeathTest, FailedChecksAndAbortsRemoveTemporaryFiles) {
+  for (int how = 0; how < 3; ++how) {
+    TempDir dir;
+    auto writeThenFail = [&] {
+      os::OutFile f;
+      char why[os::kWhyBytes] = "";
+      if (!f.Open(dir.File("image.pfm").c_str(), why) || !f.Write("PF\n", 3)) return;
+      if (how == 0) CHECK_EQ(2 + 2, 5);
+      if (how == 1) CHECK(how == 0);
+      std::abort();
+    };
+    EXPECT_DEATH(writeThenFail(), "") << how;
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()),
+                            std::filesystem::directory_iterator()),
+              0)
+        << how;
   }
 }
 

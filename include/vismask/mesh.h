@@ -89,6 +89,10 @@ Status MeshesInStrips(const std::string& objPath, const Polygon& polygon, float 
                       bool* strips, double* areaChange);
 // MeshScene's error for a mesh of more than `maxPatches` patches.
 Status MeshSizeError(double numPatches, float patchSize, uint64_t maxPatches);
+// How many parts an edge of length `len` is cut into at `patchSize`:
+// ceil(len / patchSize), at least 1 (double: it may be huge). The meshing
+// and the partition's patch estimate both count with it.
+double EdgeDivisions(double len, double patchSize);
 
 // Appends a twin of each patch `options` selects, after all the patches:
 // the same corners (bit for bit) in reverse order from corner[0], so its

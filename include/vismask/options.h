@@ -69,8 +69,9 @@ struct Options {
   uint32_t maskRes = 50;
   // Round size (ResolveRounds). --round-shots K: at most K shots per
   // environment per round; --round-work N: a round ends for an environment
-  // once its rays' grid walks have done N steps (cells entered plus patches
-  // tested: Grid::steps, a count, never a time), 0: never. With several
+  // once its work reaches N: its rays' grid steps (cells entered plus
+  // patches tested: Grid::steps) plus a charge per ray, per hit and per shot
+  // (WorkCostsOf the mask method, work.h); a count, never a time; 0: never. With several
   // environments and neither given, both are automatic: roundWorkAuto, and
   // init sets roundWork from the scene (AutoRoundWork); with one
   // environment and neither given, one shot a round (nothing to exchange).
@@ -106,7 +107,7 @@ struct Options {
   uint64_t errorEvery = 0;  // --error-every K shots (with --reference); 0: at the end only
   std::string exclude;  // --exclude MASK.pgm (render with --reference, compare): pixels left out of
                         // the error
-  bool correctUnshot = false;
+  bool correctUnshot = false;  // --correct-unshot on: patches.csv's b gets kd * ambient
   // --two-sided: every polygon gets a second, reversed copy (its twin), so
   // both sides receive, reflect and show. --two-sided-emitters: emitting
   // polygons get one too (with --two-sided, their twins already exist),
@@ -117,8 +118,7 @@ struct Options {
   bool smooth =
       true;  // --smooth on|off: share display values across smoothed polygons (smoothing.h)
   float creaseDeg = 30.0f;  // --crease DEG: the most two normals may differ by and be smoothed
-  double stopError = 0.0;   // --stop-error E: stop when the estimated bias < E; 0: off  //
-                            // --correct-unshot on: patches.csv's b gets kd * ambient
+  double stopError = 0.0;   // --stop-error E: stop when the estimated bias < E; 0: off
   // vismask compare A.pfm B.pfm
   std::string compareA, compareB;
   // vismask view OUT_DIR [--glb NAME.glb] [--port P] (viewer.h)
@@ -135,8 +135,16 @@ constexpr uint32_t kAutoRoundWorkShots = 32;
 constexpr uint32_t kAutoRoundShots = 256;
 constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
 
-constexpr float kAutoPatchDivisions =
-    28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
+// The automatic patch size divides the scene's largest extent by this: the
+// setting that gave the smallest error against the ground truth at the
+// default rays (docs/RESULTS.md).
+constexpr float kAutoPatchDivisions = 28.0f;
+
+// The most rays one shot traces (--max-rays under power allocation, --rays
+// when fixed): Method R's packet bits, and what sizes a round.
+inline uint32_t RayCap(const Options& o) {
+  return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
+}
 
 // The options that do not change a render's result: a checkpoint may be
 // resumed with other values (or without them). --envs is compared by its
@@ -160,13 +168,12 @@ void ResolveRounds(int numEnvs, Options* options);
 // The default --queue: numEnvs x roundShots slots (admission shares the
 // free slots among the environments, so that is what lets each make a
 // whole round), but at most kAutoQueueShots an environment and
-// kAutoQueueBytes of `packetBytes` slots, and at least kMinAutoQueue. The
-// fixed 64 of before held the building's solve in 16 environments to 123
-// rounds; 1024 slots take 19 (issue 20). More than 64 an environment made
-// the stiff box in 2x2x2 (Method R, --stop-error 8e-3) take more shots:
-// 44 757 with 512 slots, over 100 000 with 2 048 (admission lets every
-// environment shoot its weak local patches while the strong power waits
-// in the queues).
+// kAutoQueueBytes of `packetBytes` slots, and at least kMinAutoQueue. Why
+// both bounds: too few slots make a split solve take many rounds (each
+// environment waits for room to admit foreign shooters); too many an
+// environment let it shoot its weak local patches while strong foreign
+// power waits in the queue, which costs shots on stiff scenes (the
+// measured trade-off is in docs/DESIGN.md, "Packets, queues, rounds").
 constexpr uint64_t kAutoQueueBytes = 1u << 20;
 constexpr uint32_t kMinAutoQueue = 64;
 constexpr uint32_t kAutoQueueShots = 64;

@@ -76,7 +76,7 @@ uint64_t FileRssBytes();
 // exists, its name is in a fixed table (no allocation); RemoveTempFiles()
 // unlinks every name there, and is async-signal-safe. The first
 // OutFile::Open, or InstallSignalCleanup(), installs handlers for SIGINT,
-// SIGTERM and SIGHUP (those not ignored) that remove the temporary files,
+// SIGTERM, SIGHUP and SIGABRT (those not ignored) that remove the temporary files,
 // write the NoteWaiting line if one is set, and let the signal end the
 // process as it would have. A signal that arrives during CommitAll waits
 // until the commit is done (complete outputs, or the previous ones).
