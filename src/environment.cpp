@@ -46,6 +46,16 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
   elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options_.elements.perPatch));
+  // Per-pixel direct light: the indirect radiosity and unshot emission per
+  // patch, and the emitter list (counted from the staged patches, which
+  // Build copies in unchanged).
+  const bool direct = options_.directSamples > 0;
+  indirect_ =
+      arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
+  emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
+  direct_.Layout(arena, direct
+                            ? DirectLight::Count(Span<const Patch>(staged_.data(), staged_.size()))
+                            : DirectLight::Counts{});
   part(&footprint_.elements);
   vertices_ = arena.Alloc<glm::vec3>(numVertices);
   vertexB_ = arena.Alloc<glm::vec3>(numVertices);
@@ -280,6 +290,7 @@ bool Environment::Build() {
     }
   }
   grid_.Build(patches_, geom_);
+  if (options_.directSamples > 0) direct_.Build(patches_);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())
@@ -319,6 +330,11 @@ void Environment::Reset() {
       ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
+    if (!indirect_.empty())
+      for (int c = 0; c < 3; ++c) {
+        indirect_[3 * i + c] = 0.0;
+        emitLeft_[3 * i + c] = e.unshot[c];
+      }
     tree_.Set(i, UnshotKey(e));
     Element& root = elements_[i];
     root = Element{};

@@ -194,8 +194,14 @@ void RenderImage(RunState* r) {
   for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->ambientMine[i] = AmbientReport{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
   GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
-  double* ambient = r->ambientB;
-  AmbientTerm(r->ambient, ambient);
+  AmbientTerm(r->ambient, r->ambientB);
+  // Per-pixel direct light shows the first bounce of the emission not yet
+  // shot; the image's ambient term leaves it out (patches.csv's and
+  // run.json's, r->ambientB, keep it).
+  double display[3];
+  bool direct = !r->envPtrs.empty() && r->envPtrs[0]->directPerPixel();
+  AmbientTerm(r->ambient, display, direct);
+  const double* ambient = display;
   r->fb.Clear();
   for (Environment* env : r->envPtrs) env->ComputeVertexRadiosity(ambient);
   if (r->sharedCapacity > 0) {

@@ -102,6 +102,11 @@ struct Options {
   // and emitters' twins emit Ke as well: twice the emitted power.
   bool twoSided = false;
   bool twoSidedEmitters = false;
+  // --direct-samples N: shadow rays per shaded point toward the emitters
+  // (direct light gathered per pixel, direct.h); 0: the image shows the
+  // solved radiosity alone. -1 (not given): kDefaultDirectSamples with one
+  // environment, 0 with several (ResolveDirect).
+  int directSamples = -1;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
   bool smooth =
       true;  // --smooth on|off: share display values across smoothed polygons (smoothing.h)
@@ -126,6 +131,9 @@ constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
 
 constexpr float kAutoPatchDivisions =
     28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
+
+// The default --direct-samples with one environment.
+constexpr int kDefaultDirectSamples = 16;
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.
