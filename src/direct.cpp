@@ -89,9 +89,8 @@ Plan MakePlan(Span<const Patch> patches) {
       for (int k = 0; k < e.second; ++k) {
         const Point& a = e.first.first;
         const Point& b = e.first.second;
-        plan.edges.back().push_back(
-            {glm::vec3(std::get<0>(a), std::get<1>(a), std::get<2>(a)),
-             glm::vec3(std::get<0>(b), std::get<1>(b), std::get<2>(b))});
+        plan.edges.back().push_back({glm::vec3(std::get<0>(a), std::get<1>(a), std::get<2>(a)),
+                                     glm::vec3(std::get<0>(b), std::get<1>(b), std::get<2>(b))});
       }
   }
   // The outline's corners: the ends of edges where the next edge turns.

@@ -30,10 +30,10 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
   uint32_t cornersSeen = 0;
   for (uint32_t k = 0; k < corners && cornersTell; ++k) {
     bool usable;
-    cornersSeen +=
-        h.light->CornerVisible(*h.grid, h.patch, h.twin, x0, h.normal, k, h.epsilon, h.hint, &usable)
-            ? 1u
-            : 0u;
+    cornersSeen += h.light->CornerVisible(*h.grid, h.patch, h.twin, x0, h.normal, k, h.epsilon,
+                                          h.hint, &usable)
+                       ? 1u
+                       : 0u;
     cornersTell = usable;
   }
   glm::vec3 all(0.0f), seen(0.0f);

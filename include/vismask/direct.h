@@ -54,7 +54,8 @@ class DirectLight {
     uint32_t patch;  // local index
     float cdfHi;     // the cumulative share of the power up to and including this one
     float split;     // a quad: the share of its area in triangle (0, 1, 2); a triangle: 1
-    glm::vec3 scale;  // Ke / pi over the pdf per unit area: Ke * (total weight) / (weight / area) / pi
+    glm::vec3
+        scale;  // Ke / pi over the pdf per unit area: Ke * (total weight) / (weight / area) / pi
   };
   // One emitting polygon (its patches, coplanar, one Ke): E0 from its edges
   // that no other of its patches shares.
@@ -95,7 +96,8 @@ class DirectLight {
               const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
               glm::vec3* weight) const;
 
-  // The emitters' outline corners (each polygon's, where its outline turns), and whether the ray from x (normal n) to corner k reaches it
+  // The emitters' outline corners (each polygon's, where its outline turns), and whether the ray
+  // from x (normal n) to corner k reaches it
   // (*usable false when the corner lies on or below x's horizon, or x
   // behind its polygon: the ray tells nothing).
   uint32_t numCorners() const { return static_cast<uint32_t>(corners_.size()); }

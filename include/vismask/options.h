@@ -133,7 +133,7 @@ constexpr float kAutoPatchDivisions =
     28.0f;  // issue 15: 16 measured 2.9% against the ground truth, 28 2.4% (docs/RESULTS.md)
 
 // The default --direct-samples with one environment.
-constexpr int kDefaultDirectSamples = 16;
+constexpr int kDefaultDirectSamples = 32;
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.
