@@ -126,6 +126,14 @@ render options:
                        of the pixel square, computed analytically); off: the
                        pixel centre only, quads as two Gouraud triangles
                        (the images before --aa existed); default on
+  --direct-samples N   direct light gathered per pixel, 0..1024: the image's
+                       direct part is the exact unoccluded irradiance of the
+                       emitters times the share of N shadow rays that reach
+                       them (rays to the emitters' corners and 4 first; all
+                       N only where those disagree); the solve supplies the
+                       rest; 0: the solved radiosity alone (the images
+                       before it). Default 32 with one environment, 0 with
+                       several (where it is refused)
   --smooth on|off      on: where polygons with a smoothing group ('s N') or
                        vertex normals ('vn') meet, the image shades across
                        them smoothly, within the crease angle; default on
