@@ -4,6 +4,8 @@
 // closed form, a hard shadow edge is as sharp as its geometry, the
 // indirect part has no step at patch edges, a quarter of the rays gives
 // the converged image's mean.
+#include "vismask/direct.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,7 +16,6 @@
 
 #include "grid_test_util.h"
 #include "test_util.h"
-#include "vismask/direct.h"
 #include "vismask/image_io.h"
 
 namespace vismask {
@@ -131,12 +132,10 @@ void WriteFloorScene(const std::string& dir, double side, double height, double 
 // Renders dir/s.obj looking straight down at the origin from height 0.5
 // (fov 90: the image spans [-0.5, 0.5] of the floor), size x size.
 PfmImage RenderDown(const test::TempDir& dir, int size, const std::string& flags) {
-  std::vector<std::string> args = {"render",  dir.File("s.obj"),
-                                   "--out",   dir.File("out"),
-                                   "--camera", "0,0.5,0,0,0,0,0,0,1,90",
-                                   "--width", std::to_string(size),
-                                   "--height", std::to_string(size),
-                                   "--quiet"};
+  std::vector<std::string> args = {
+      "render",   dir.File("s.obj"),        "--out",   dir.File("out"),
+      "--camera", "0,0.5,0,0,0,0,0,0,1,90", "--width", std::to_string(size),
+      "--height", std::to_string(size),     "--quiet"};
   for (const std::string& w : test::Words(flags)) args.push_back(w);
   test::RunResult r = test::RunMain(args);
   EXPECT_EQ(r.code, 0) << r.err;
@@ -210,18 +209,12 @@ TEST(DirectTest, IndirectPartHasNoStepAtPatchEdges) {
   // more than a few percent of the row's mean, while the patches (20
   // units, about 6 pixels here) differ by their Monte Carlo noise.
   test::TempDir dir;
-  std::vector<std::string> args = {"render",
-                                   "scenes/cornell.obj",
-                                   "--out",
-                                   dir.path(),
-                                   "--camera",
-                                   "278,273,-800,278,273,0,0,1,0,39.3076",
-                                   "--width",
-                                   "128",
-                                   "--height",
-                                   "128",
-                                   "--emitted-rays",
-                                   "1000000",
+  std::vector<std::string> args = {"render",         "scenes/cornell.obj",
+                                   "--out",          dir.path(),
+                                   "--camera",       "278,273,-800,278,273,0,0,1,0,39.3076",
+                                   "--width",        "128",
+                                   "--height",       "128",
+                                   "--emitted-rays", "1000000",
                                    "--quiet"};
   test::RunResult r = test::RunMain(args);
   ASSERT_EQ(r.code, 0) << r.err;
@@ -252,9 +245,9 @@ TEST(DirectTest, AQuarterOfTheRaysGivesTheConvergedMean) {
   // within 5%. (Without per-pixel direct light, 22% too bright here.)
   test::TempDir dir;
   auto render = [&](const std::string& extra, PfmImage* img, std::string* json) {
-    std::vector<std::string> args = {"render",       "scenes/cornell.obj", "--out", dir.path(),
-                                     "--width",      "64",                 "--height", "64",
-                                     "--emitted-rays", "400000",           "--quiet"};
+    std::vector<std::string> args = {
+        "render", "scenes/cornell.obj", "--out",  dir.path(), "--width", "64", "--height",
+        "64",     "--emitted-rays",     "400000", "--quiet"};
     for (const std::string& w : test::Words(extra)) args.push_back(w);
     test::RunResult r = test::RunMain(args);
     ASSERT_EQ(r.code, 0) << r.err;

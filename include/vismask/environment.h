@@ -212,6 +212,10 @@ class Environment {
   // then gives the patch's emission + the leaf's indirect radiosity + kd *
   // ambient).
   bool directPerPixel() const { return options_.directSamples > 0; }
+  // Whether LeafRadiosity gives the indirect part alone (directPerPixel()
+  // and the image being drawn) or the whole (the export).
+  void SetDisplayIndirect(bool on) { displayIndirect_ = on && directPerPixel(); }
+  bool displayIndirect() const { return displayIndirect_; }
   uint32_t directSamples() const { return options_.directSamples; }
   const DirectLight& directLight() const { return direct_; }
   float rayEpsilon() const { return options_.rayEpsilon; }
@@ -450,6 +454,7 @@ class Environment {
   Span<double> indirect_;
   Span<double> emitLeft_;
   double shotDirect_[3] = {0, 0, 0};
+  bool displayIndirect_ = false;
   DirectLight direct_;
   uint32_t nextElement_ = 0;
   Span<glm::vec3> vertices_;
