@@ -231,6 +231,37 @@ TEST(DirectTest, IndirectPartHasNoStepAtPatchEdges) {
   }
 }
 
+TEST(DirectTest, ExportIsTheSolvedWhole) {
+  // The export keeps the view-independent solution: the same bytes with
+  // per-pixel direct light as without, while the images differ.
+  test::TempDir dir;
+  std::string glb[2], image[2];
+  for (int k = 0; k < 2; ++k) {
+    std::vector<std::string> args = {"render",
+                                     "scenes/cornell.obj",
+                                     "--out",
+                                     dir.File("out" + std::to_string(k)),
+                                     "--width",
+                                     "48",
+                                     "--height",
+                                     "48",
+                                     "--quiet",
+                                     "--emitted-rays",
+                                     "200000",
+                                     "--export",
+                                     dir.File("c" + std::to_string(k) + ".glb"),
+                                     "--direct-samples",
+                                     k == 0 ? "0" : "32"};
+    test::RunResult r = test::RunMain(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    glb[k] = test::ReadFile(dir.File("c" + std::to_string(k) + ".glb"));
+    image[k] = test::ReadFile(dir.File("out" + std::to_string(k) + "/image.pfm"));
+  }
+  EXPECT_FALSE(glb[0].empty());
+  EXPECT_EQ(glb[0], glb[1]);
+  EXPECT_NE(image[0], image[1]);
+}
+
 double Mean(const PfmImage& img) {
   double s = 0.0;
   for (float v : img.pixels) s += v;
