@@ -82,7 +82,7 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
     // (LeafRadiosity), interpolated as the whole was; the direct part is
     // gathered at each shaded point.
     DirectHook hook;
-    const bool direct = facing && env.displayIndirect() && !env.directLight().empty();
+    const bool direct = facing && env.ShowsIndirect(i) && !env.directLight().empty();
     if (direct) {
       constexpr float kInvPi = 0.318309886183790672f;
       hook.light = &env.directLight();

@@ -134,7 +134,7 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
   const PatchTexture* t = patchTexture(patch);
   // Per-pixel direct light: the patch's indirect radiosity, every leaf alike
   // (the direct part, which has the detail, is gathered per pixel).
-  if (displayIndirect_) {
+  if (ShowsIndirect(patch)) {
     glm::dvec3 ind = Indirect(e);
     for (int c = 0; c < 3; ++c)
       b[c] = static_cast<float>(static_cast<double>(p.ke[c]) +

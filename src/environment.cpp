@@ -53,6 +53,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   indirect_ =
       arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
   emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
+  smoothPatch_ = arena.Alloc<uint8_t>(direct && !stagedSmooth_.empty() ? numPatches : 0);
   direct_.Layout(arena, direct
                             ? DirectLight::Count(Span<const Patch>(staged_.data(), staged_.size()))
                             : DirectLight::Counts{});
@@ -308,6 +309,18 @@ bool Environment::Build() {
   for (size_t k = 0; k < stagedSmooth_.size(); ++k) smooth_[k] = stagedSmooth_[k];
   for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i)
     patchSmoothEdges_[i] = stagedSmoothEdges_[i];
+  // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
+  // patch of theirs) as they were: their patches show the solved whole.
+  if (!smoothPatch_.empty()) {
+    std::vector<uint32_t> smoothed;
+    for (const Patch& p : patches_)
+      for (uint32_t k = 0; k < p.numCorners; ++k)
+        if (FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
+    std::sort(smoothed.begin(), smoothed.end());
+    for (uint32_t i = 0; i < patches_.size(); ++i)
+      smoothPatch_[i] =
+          std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
+  }
   std::vector<SmoothVertex>().swap(stagedSmooth_);
   std::vector<uint8_t>().swap(stagedSmoothEdges_);
   Reset();

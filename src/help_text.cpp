@@ -106,7 +106,12 @@ render options:
                        (default 1e-3); 0 needs another stop as well
   --max-shots N        stop after N shots (default: no limit)
   --max-seconds T      stop after T seconds of solving (default: no limit;
-                       a time limit makes the result depend on speed)
+                       a time limit makes the result depend on speed).
+                       Without --emitted-rays (one rank, power allocation)
+                       it plans them: the rays a solve that ends within
+                       about T can afford, from the rays per second timed
+                       through the scene's grid at init (run.json:
+                       emitted_rays, emitted_rays_planned)
   --width W, --height H   image size in pixels (default 512 x 512)
   --camera ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy_deg
                        eye, target, up and vertical field of view (default:

@@ -231,6 +231,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000000000ull)
         return Bad(a, v, "an integer in [1, 1e12]");
       o->emittedRays = u;
+      o->hasEmittedRays = true;
     } else if (a == "--min-rays" || a == "--max-rays") {
       if (!ParseU64(v, &u) || u < 1 || u > 100000000) return Bad(a, v, "an integer in [1, 1e8]");
       (a == "--min-rays" ? o->minRays : o->maxRays) = static_cast<uint32_t>(u);

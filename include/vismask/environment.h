@@ -216,6 +216,13 @@ class Environment {
   // and the image being drawn) or the whole (the export).
   void SetDisplayIndirect(bool on) { displayIndirect_ = on && directPerPixel(); }
   bool displayIndirect() const { return displayIndirect_; }
+  // Whether patch i shows its indirect part alone (and the image gathers
+  // its direct part): displayIndirect() and its polygon not smoothed (a
+  // smoothed polygon, whose direct part the gather would shade with its
+  // facets' normals, shows the solved whole, as without it).
+  bool ShowsIndirect(uint32_t i) const {
+    return displayIndirect_ && (smoothPatch_.empty() || !smoothPatch_[i]);
+  }
   uint32_t directSamples() const { return options_.directSamples; }
   const DirectLight& directLight() const { return direct_; }
   float rayEpsilon() const { return options_.rayEpsilon; }
@@ -279,6 +286,13 @@ class Environment {
   double kdArea() const { return kdArea_; }  // sum of kd * area, channels averaged
   size_t arenaCapacity() const { return arena_.capacity(); }
   size_t arenaUsed() const { return arena_.used(); }
+
+  // --max-seconds's plan (app.cpp): the seconds `rays` form-factor-like
+  // rays take through this environment's grid (from patch centres, cosine
+  // directions, a fixed stream), and the power a ray carries, changed.
+  double TimeRays(uint32_t rays) const;
+  double rayQuantum() const { return options_.rayQuantum; }
+  void SetRayQuantum(double q) { options_.rayQuantum = q; }
 
   // Test hooks: the shooter a plain progressive-refinement step would take.
   uint32_t TopShooter() const { return tree_.Top(); }
@@ -455,6 +469,7 @@ class Environment {
   Span<double> emitLeft_;
   double shotDirect_[3] = {0, 0, 0};
   bool displayIndirect_ = false;
+  Span<uint8_t> smoothPatch_;  // directPerPixel(): 1 for a patch of a smoothed polygon
   DirectLight direct_;
   uint32_t nextElement_ = 0;
   Span<glm::vec3> vertices_;

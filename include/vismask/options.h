@@ -32,8 +32,10 @@ struct Options {
   bool hasRayAlloc = false;
   uint32_t rays = 4096;  // --rays: per shot (fixed)
   bool hasRays = false;
-  uint64_t emittedRays = 4000000;  // --emitted-rays: the rays the emitted power is worth (power)
-  uint32_t minRays = 16;           // --min-rays: the fewest a shot traces (power)
+  bool hasEmittedRays = false;      // --emitted-rays given (else --max-seconds may plan it)
+  bool emittedRaysPlanned = false;  // --max-seconds chose emittedRays (app.cpp, PlanBudget)
+  uint64_t emittedRays = 4000000;   // --emitted-rays: the rays the emitted power is worth (power)
+  uint32_t minRays = 16;            // --min-rays: the fewest a shot traces (power)
   uint32_t maxRays =
       8192;           // --max-rays: the most a shot traces (power); more power -> partial shots
   bool sobol = true;  // --sampler sobol|random
