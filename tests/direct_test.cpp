@@ -296,5 +296,30 @@ TEST(DirectTest, AQuarterOfTheRaysGivesTheConvergedMean) {
   EXPECT_NEAR(Mean(quarter) / Mean(done), 1.0, 0.05);
 }
 
+TEST(DirectTest, MaxSecondsPlansTheEmittedRays) {
+  // --max-seconds without --emitted-rays: fewer than the default, from the
+  // rate timed at init, and run.json says so; given, they are kept.
+  test::TempDir dir;
+  auto json = [&](const std::string& extra) {
+    std::vector<std::string> args = {
+        "render",  "scenes/cornell.obj", "--out", dir.path(), "--width", "16", "--height", "16",
+        "--quiet", "--max-seconds",      "0.5"};
+    for (const std::string& w : test::Words(extra)) args.push_back(w);
+    test::RunResult r = test::RunMain(args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return test::ReadFile(dir.File("run.json"));
+  };
+  std::string planned = json("");
+  EXPECT_NE(planned.find("\"emitted_rays_planned\": true"), std::string::npos);
+  size_t at = planned.find("\"emitted_rays\": ");
+  ASSERT_NE(at, std::string::npos);
+  long rays = std::atol(planned.c_str() + at + 16);
+  EXPECT_GE(rays, 10000);
+  EXPECT_LT(rays, 4000000);
+  std::string given = json("--emitted-rays 300000");
+  EXPECT_EQ(given.find("emitted_rays_planned"), std::string::npos);
+  EXPECT_NE(given.find("\"emitted_rays\": 300000,"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace vismask
