@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "vismask/check.h"
+#include "vismask/direct.h"
 #include "vismask/smoothing.h"
 
 namespace vismask {
@@ -65,6 +66,7 @@ glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const do
 void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
                      Framebuffer* fb, Span<const Texture> textures) {
   Span<const Element> elements = env.elements();
+  uint32_t hint = kNoPatch;  // the last occluder of a shadow ray
   for (uint32_t i = 0; i < env.patches().size(); ++i) {
     const Patch& p = env.patches()[i];
     const bool triangle = p.numCorners == 3;
@@ -76,6 +78,24 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
     if (!facing && env.twinOf(i) != kNoPatch) continue;
     const PatchTexture* tex = facing ? env.patchTexture(i) : nullptr;
     CHECK(!tex || (tex->texture < textures.size() && textures[tex->texture].texels));
+    // Per-pixel direct light: the leaves show their indirect radiosity
+    // (LeafRadiosity), interpolated as the whole was; the direct part is
+    // gathered at each shaded point.
+    DirectHook hook;
+    const bool direct = facing && env.ShowsIndirect(i) && !env.directLight().empty();
+    if (direct) {
+      constexpr float kInvPi = 0.318309886183790672f;
+      hook.light = &env.directLight();
+      hook.grid = &env.grid();
+      hook.patch = i;
+      hook.twin = env.twinOf(i);
+      hook.normal = p.normal;
+      hook.planePoint = p.corner[0];
+      hook.scale = kInvPi * p.kd * (tex ? tex->scale : glm::vec3(1.0f));
+      hook.samples = env.directSamples();
+      hook.epsilon = env.rayEpsilon();
+      hook.hint = &hint;
+    }
     // Depth-first over the tree, with a fixed stack (4 entries per level).
     struct Node {
       uint32_t e;
@@ -120,6 +140,7 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
         for (int k = 0; k < n; ++k) piece.uv[k] = PatchUv(*tex, triangle, node.c[k]);
         piece.uv[3] = piece.uv[n - 1];
       }
+      if (direct) piece.direct = &hook;
       DrawPiece(view, piece, fb);
     }
   }

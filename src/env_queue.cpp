@@ -86,6 +86,14 @@ void Environment::ShootLocal(uint32_t i) {
   double power[3];
   for (int c = 0; c < 3; ++c) {
     power[c] = fraction < 1.0 ? src.unshot[c] * fraction : src.unshot[c];
+    // Per-pixel direct light: the share of this shot that is the patch's
+    // own emission, in proportion to the emission in its unshot power.
+    shotDirect_[c] = 0.0;
+    if (!emitLeft_.empty() && src.unshot[c] > 0.0) {
+      double& left = emitLeft_[3 * size_t(i) + c];
+      shotDirect_[c] = std::fmin(1.0, left / src.unshot[c]);
+      left = fraction < 1.0 ? left - shotDirect_[c] * power[c] : 0.0;
+    }
     ledger_.unshot[c] -= power[c];
     src.unshot[c] = fraction < 1.0 ? src.unshot[c] - power[c] : 0.0;
   }
@@ -135,6 +143,9 @@ MaskBits Environment::SlotMask(uint32_t slot) const {
 }
 
 void Environment::ShootForeign(uint32_t s) {
+  // A foreign shot's light is indirect here (per-pixel direct light runs
+  // with one environment only: DESIGN, Direct light per pixel).
+  for (double& d : shotDirect_) d = 0.0;
   Slot& slot = slots_[s];
   MaskBits in = SlotMask(s);
   MaskBits out = ScratchMask(0);

@@ -33,6 +33,7 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
     e.b[c] += reflected * invArea;
     e.var[c] += (reflected * invArea) * (reflected * invArea);  // one ray's term
     e.unshot[c] += reflected;
+    if (!indirect_.empty()) indirect_[3 * size_t(leaf) + c] += reflected * (1.0 - shotDirect_[c]);
     ledger_.unshot[c] += reflected;
     ledger_.radiosity[c] += reflected;
     ledger_.absorbed[c] += share[c] - reflected;
@@ -101,6 +102,11 @@ void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32
       double older = el.received[c] -
                      (el.quarter[0][c] + el.quarter[1][c] + el.quarter[2][c] + el.quarter[3][c]);
       ch.received[c] = older * (quarterArea[q] / areaSum) + el.quarter[q][c];
+      // The indirect part in the same proportion as the whole.
+      if (!indirect_.empty())
+        indirect_[3 * size_t(first + q) + c] =
+            el.received[c] > 0.0 ? indirect_[3 * size_t(e) + c] * (ch.received[c] / el.received[c])
+                                 : 0.0;
     }
   }
   el.child = first;
@@ -126,6 +132,15 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
   const Element& el = elements_[e];
   glm::vec3 b;
   const PatchTexture* t = patchTexture(patch);
+  // Per-pixel direct light: the patch's indirect radiosity, every leaf alike
+  // (the direct part, which has the detail, is gathered per pixel).
+  if (ShowsIndirect(patch)) {
+    glm::dvec3 ind = Indirect(e);
+    for (int c = 0; c < 3; ++c)
+      b[c] = static_cast<float>(static_cast<double>(p.ke[c]) +
+                                (ind[c] + p.kd[c] * ambient[c]) * (t ? t->scale[c] : 1.0f));
+    return b;
+  }
   if (t) {
     // Reflected light as the material's mean reflectance would give it
     // (scale = kd_mat / kd): the display multiplies the texture back in.
@@ -138,6 +153,12 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
     b[c] = static_cast<float>(static_cast<double>(p.ke[c]) + el.received[c] / el.area +
                               p.kd[c] * ambient[c]);
   return b;
+}
+
+void Environment::EmissionUnshot(double out[3]) const {
+  for (int c = 0; c < 3; ++c) out[c] = 0.0;
+  for (size_t i = 0; i < emitLeft_.size(); i += 3)
+    for (int c = 0; c < 3; ++c) out[c] += emitLeft_[i + c];
 }
 
 int64_t Environment::FindSmooth(uint32_t v) const {

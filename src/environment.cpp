@@ -47,6 +47,17 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
   elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options_.elements.perPatch));
+  // Per-pixel direct light: the indirect radiosity and unshot emission per
+  // patch, and the emitter list (counted from the staged patches, which
+  // Build copies in unchanged).
+  const bool direct = options_.directSamples > 0;
+  indirect_ =
+      arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
+  emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
+  smoothPatch_ = arena.Alloc<uint8_t>(direct && !stagedSmooth_.empty() ? numPatches : 0);
+  direct_.Layout(arena, direct
+                            ? DirectLight::Count(Span<const Patch>(staged_.data(), staged_.size()))
+                            : DirectLight::Counts{});
   part(&footprint_.elements);
   vertices_ = arena.Alloc<glm::vec3>(numVertices);
   vertexB_ = arena.Alloc<glm::vec3>(numVertices);
@@ -281,6 +292,7 @@ bool Environment::Build() {
     }
   }
   grid_.Build(patches_, geom_);
+  if (options_.directSamples > 0) direct_.Build(patches_);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())
@@ -298,6 +310,18 @@ bool Environment::Build() {
   for (size_t k = 0; k < stagedSmooth_.size(); ++k) smooth_[k] = stagedSmooth_[k];
   for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i)
     patchSmoothEdges_[i] = stagedSmoothEdges_[i];
+  // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
+  // patch of theirs) as they were: their patches show the solved whole.
+  if (!smoothPatch_.empty()) {
+    std::vector<uint32_t> smoothed;
+    for (const Patch& p : patches_)
+      for (uint32_t k = 0; k < p.numCorners; ++k)
+        if (FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
+    std::sort(smoothed.begin(), smoothed.end());
+    for (uint32_t i = 0; i < patches_.size(); ++i)
+      smoothPatch_[i] =
+          std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
+  }
   std::vector<SmoothVertex>().swap(stagedSmooth_);
   std::vector<uint8_t>().swap(stagedSmoothEdges_);
   Reset();
@@ -320,6 +344,11 @@ void Environment::Reset() {
       ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
+    if (!indirect_.empty())
+      for (int c = 0; c < 3; ++c) {
+        indirect_[3 * i + c] = 0.0;
+        emitLeft_[3 * i + c] = e.unshot[c];
+      }
     tree_.Set(i, UnshotKey(e));
     Element& root = elements_[i];
     root = Element{};

@@ -106,7 +106,12 @@ render options:
                        (default 1e-3); 0 needs another stop as well
   --max-shots N        stop after N shots (default: no limit)
   --max-seconds T      stop after T seconds of solving (default: no limit;
-                       a time limit makes the result depend on speed)
+                       a time limit makes the result depend on speed).
+                       Without --emitted-rays (one rank, power allocation)
+                       it plans them: the rays a solve that ends within
+                       about T can afford, from the rays per second timed
+                       through the scene's grid at init (run.json:
+                       emitted_rays, emitted_rays_planned)
   --width W, --height H   image size in pixels (default 512 x 512)
   --camera ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy_deg
                        eye, target, up and vertical field of view (default:
@@ -126,6 +131,14 @@ render options:
                        of the pixel square, computed analytically); off: the
                        pixel centre only, quads as two Gouraud triangles
                        (the images before --aa existed); default on
+  --direct-samples N   direct light gathered per pixel, 0..1024: the image's
+                       direct part is the exact unoccluded irradiance of the
+                       emitters times the share of N shadow rays that reach
+                       them (rays to the emitters' corners and 4 first; all
+                       N only where those disagree); the solve supplies the
+                       rest; 0: the solved radiosity alone (the images
+                       before it). Default 32 with one environment, 0 with
+                       several (where it is refused)
   --smooth on|off      on: where polygons with a smoothing group ('s N') or
                        vertex normals ('vn') meet, the image shades across
                        them smoothly, within the crease angle; default on

@@ -231,6 +231,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (!ParseU64(v, &u) || u < 1 || u > 1000000000000ull)
         return Bad(a, v, "an integer in [1, 1e12]");
       o->emittedRays = u;
+      o->hasEmittedRays = true;
     } else if (a == "--min-rays" || a == "--max-rays") {
       if (!ParseU64(v, &u) || u < 1 || u > 100000000) return Bad(a, v, "an integer in [1, 1e8]");
       (a == "--min-rays" ? o->minRays : o->maxRays) = static_cast<uint32_t>(u);
@@ -395,6 +396,9 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--stop-error") {
       if (!ParseDouble(v, &d) || !(d > 0.0) || d >= 1.0) return Bad(a, v, "a number in (0, 1)");
       o->stopError = d;
+    } else if (a == "--direct-samples") {
+      if (!ParseU64(v, &u) || u > 1024) return Bad(a, v, "an integer in [0, 1024]");
+      o->directSamples = static_cast<int>(u);
     } else if (a == "--aa") {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->aa = v == "on";
@@ -534,6 +538,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
   }
   int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   ResolveRounds(numEnvs, o);
+  // Per-pixel direct light traces its shadow rays in one environment's grid.
+  if (o->directSamples > 0 && numEnvs > 1)
+    return Status::Error("vismask: --direct-samples: " + std::to_string(o->directSamples) +
+                         " with " + std::to_string(numEnvs) +
+                         " environments: per-pixel direct light needs one environment (give "
+                         "--direct-samples 0, or no --envs)");
+  if (o->directSamples < 0) o->directSamples = numEnvs == 1 ? kDefaultDirectSamples : 0;
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
                          std::to_string(numEnvs) +

@@ -186,24 +186,36 @@ void DrawAntialiased(RunState* r, const double* ambient) {
 
 }  // namespace
 
-// Draws the current solution into rank 0's framebuffer: the ambient term
-// from every environment (summed in environment order), each rank's patches
-// drawn by that rank, and rank 0 depth-compositing the others'. Collective.
-void RenderImage(RunState* r) {
-  Transport* t = r->transport.get();
-  for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->ambientMine[i] = AmbientReport{};
-  for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
-  GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
-  double* ambient = r->ambientB;
-  AmbientTerm(r->ambient, ambient);
-  r->fb.Clear();
+// Every environment's vertex radiosity from `ambient`, shared across cuts
+// and smoothed polygons. Collective.
+void ShareDisplayValues(RunState* r, const double* ambient) {
   for (Environment* env : r->envPtrs) env->ComputeVertexRadiosity(ambient);
   if (r->sharedCapacity > 0) {
     Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
     CollectShared(envs, r->sharedMine);
-    t->AllGather(r->sharedMine.data(), r->sharedMine.bytes(), r->sharedAll.data());
+    r->transport->AllGather(r->sharedMine.data(), r->sharedMine.bytes(), r->sharedAll.data());
     ShareVertices(envs, r->sharedAll, r->sharedScratch, r->shareRule);
   }
+}
+
+// Draws the current solution into rank 0's framebuffer: the ambient term
+// from every environment (summed in environment order), each rank's patches
+// drawn by that rank, and rank 0 depth-compositing the others'. Collective.
+void RenderImage(RunState* r) {
+  for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->ambientMine[i] = AmbientReport{};
+  for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
+  GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
+  AmbientTerm(r->ambient, r->ambientB);
+  // Per-pixel direct light shows the first bounce of the emission not yet
+  // shot; the image's ambient term leaves it out (patches.csv's and
+  // run.json's, r->ambientB, keep it).
+  double display[3];
+  bool direct = !r->envPtrs.empty() && r->envPtrs[0]->directPerPixel();
+  AmbientTerm(r->ambient, display, direct);
+  const double* ambient = display;
+  r->fb.Clear();
+  for (Environment* env : r->envPtrs) env->SetDisplayIndirect(direct);
+  ShareDisplayValues(r, ambient);
   if (r->fb.aa)
     DrawAntialiased(r, ambient);
   else
@@ -234,6 +246,13 @@ int WriteOutputs(RunState* r, const SolveResult& res) {
   double start = os::Seconds();
   RenderImage(r);
   WritePatchesCsv(r);
+  // The export is the view-independent solution: with per-pixel direct
+  // light the image's vertex values were the indirect part alone, so the
+  // whole is worked out again (with Cohen's ambient term, as without it).
+  if (!r->options.exportPath.empty() && !r->envPtrs.empty() && r->envPtrs[0]->directPerPixel()) {
+    for (Environment* env : r->envPtrs) env->SetDisplayIndirect(false);
+    ShareDisplayValues(r, r->ambientB);
+  }
   WriteExport(r);
   for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->summaryMine[i] = EnvSummary{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) {

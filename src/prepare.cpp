@@ -372,6 +372,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   e.elements.maxDepth = o.elementDepth;
   e.elements.threshold = o.elementSpread;
   e.elements.chi2 = o.elementChi2;
+  e.directSamples =
+      p->grid.count() == 1 && o.directSamples > 0 ? static_cast<uint32_t>(o.directSamples) : 0;
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
   return Status::Ok();

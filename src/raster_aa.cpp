@@ -13,8 +13,10 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "direct_gather.h"
 #include "raster_internal.h"
 #include "vismask/camera.h"
+#include "vismask/direct.h"
 #include "vismask/raster.h"
 #include "vismask/texture.h"
 
@@ -129,15 +131,18 @@ inline glm::vec3 Textured(const DisplayPiece& piece, const glm::vec3& c, glm::ve
 
 // The piece's parameters at 2D plane point `h` (relative to corner 0) and the
 // radiance there.
+// `extra` (per-pixel direct light) is added to the interpolated radiance
+// before the texture modulates it.
 template <bool kTextured>
-glm::vec3 RadianceAt(const PieceSetup& s, const DisplayPiece& piece, Vec2 h) {
+glm::vec3 RadianceAt(const PieceSetup& s, const DisplayPiece& piece, Vec2 h,
+                     const glm::vec3& extra) {
   if (s.numCorners == 3) {
     Vec2 e{s.c2[1].x - s.c2[0].x, s.c2[1].y - s.c2[0].y};
     Vec2 f{s.c2[2].x - s.c2[0].x, s.c2[2].y - s.c2[0].y};
     float b1 = Cross(h, f) * s.invDet, b2 = Cross(e, h) * s.invDet;
     b1 = std::fmin(std::fmax(b1, 0.0f), 1.0f);
     b2 = std::fmin(std::fmax(b2, 0.0f), 1.0f - b1);
-    glm::vec3 c = (1.0f - b1 - b2) * piece.c[0] + b1 * piece.c[1] + b2 * piece.c[2];
+    glm::vec3 c = (1.0f - b1 - b2) * piece.c[0] + b1 * piece.c[1] + b2 * piece.c[2] + extra;
     if constexpr (kTextured)
       return Textured(piece, c,
                       (1.0f - b1 - b2) * piece.uv[0] + b1 * piece.uv[1] + b2 * piece.uv[2]);
@@ -164,7 +169,7 @@ glm::vec3 RadianceAt(const PieceSetup& s, const DisplayPiece& piece, Vec2 h) {
   u = std::fmin(std::fmax(u, 0.0f), 1.0f);
   v = std::fmin(std::fmax(v, 0.0f), 1.0f);
   glm::vec3 c = ((1.0f - u) * (1.0f - v)) * piece.c[0] + (u * (1.0f - v)) * piece.c[1] +
-                (u * v) * piece.c[2] + ((1.0f - u) * v) * piece.c[3];
+                (u * v) * piece.c[2] + ((1.0f - u) * v) * piece.c[3] + extra;
   if constexpr (kTextured)
     return Textured(piece, c,
                     ((1.0f - u) * (1.0f - v)) * piece.uv[0] + (u * (1.0f - v)) * piece.uv[1] +
@@ -308,7 +313,30 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       }
       glm::vec3 pCam = zSample * glm::vec3((sx - halfW) * invF, (halfH - sy) * invF, 1.0f);
       glm::vec3 r = pCam - s.origin;
-      glm::vec3 rad = RadianceAt<kTextured>(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)});
+      glm::vec3 extra(0.0f);
+      if (piece.direct) {
+        // Per-pixel direct light: the samples spread over the pixel square
+        // where the piece covers all of it, else all at the centroid.
+        const DirectHook& dh = *piece.direct;
+        auto worldAt = [&](float px, float py) {
+          float z = 1.0f / (ia * px + ib * py + ic);
+          if (!(z > 0.0f)) z = zSample;
+          glm::vec3 pc = z * glm::vec3((px - halfW) * invF, (halfH - py) * invF, 1.0f);
+          return view.eye + pc.x * view.right + pc.y * view.up + pc.z * view.forward;
+        };
+        const uint32_t pixel =
+            static_cast<uint32_t>(y) * static_cast<uint32_t>(view.width) + static_cast<uint32_t>(x);
+        const glm::vec3 centre = worldAt(sx, sy);
+        if (inside)
+          extra = GatherDirect(dh, centre, pixel, [&](uint32_t k) {
+            glm::vec2 off = DirectPixelOffset(pixel, k);
+            return worldAt(fx + off.x, fy + off.y);
+          });
+        else
+          extra = GatherDirect(dh, centre, pixel, [&](uint32_t) { return centre; });
+      }
+      glm::vec3 rad =
+          RadianceAt<kTextured>(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)}, extra);
       Fragment in{
           key, piece.id, back ? -cover : cover, {cover * rad.x, cover * rad.y, cover * rad.z}};
       size_t idx =

@@ -9,6 +9,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "direct_gather.h"
 #include "raster_internal.h"
 #include "vismask/camera.h"
 #include "vismask/raster.h"
@@ -69,12 +70,21 @@ void DrawTriangle(const View& view, const CamVert<kTextured>* v, const DisplayPi
           static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
       if (!Nearer(z, id, fb->depth[idx], fb->id[idx])) continue;
       glm::vec3 c = (b0 * invZ[0]) * v[0].c + (b1 * invZ[1]) * v[1].c + (b2 * invZ[2]) * v[2].c;
+      glm::vec3 extra(0.0f);
+      if (piece.direct) {
+        // Per-pixel direct light at the pixel centre.
+        glm::vec3 pc = z * glm::vec3((px - halfW) / view.focal, (halfH - py) / view.focal, 1.0f);
+        glm::vec3 w = view.eye + pc.x * view.right + pc.y * view.up + pc.z * view.forward;
+        extra =
+            GatherDirect(*piece.direct, w, static_cast<uint32_t>(idx), [&](uint32_t) { return w; });
+      }
       if constexpr (kTextured) {
         glm::vec2 uv =
             (b0 * invZ[0]) * v[0].uv + (b1 * invZ[1]) * v[1].uv + (b2 * invZ[2]) * v[2].uv;
-        fb->color[idx] = piece.ke + piece.texture->Modulation(uv * z) * (c * z - piece.ke);
+        fb->color[idx] = piece.ke + piece.texture->Modulation(uv * z) *
+                                        ((piece.direct ? c * z + extra : c * z) - piece.ke);
       } else {
-        fb->color[idx] = c * z;
+        fb->color[idx] = piece.direct ? c * z + extra : c * z;
       }
       fb->depth[idx] = z;
       fb->id[idx] = id;

@@ -43,6 +43,8 @@ bool SetWorldSize(int ranks, Options* o) {
   o->envsAutoCount = std::min(ranks, kMaxAutoEnvs);
   if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs)) return false;
   ResolveRounds(o->envsAutoCount, o);
+  // Per-pixel direct light needs one environment (ParseArgs).
+  if (o->envsAutoCount > 1) o->directSamples = 0;
   return true;
 }
 

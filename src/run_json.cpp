@@ -152,6 +152,9 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
   w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
   w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
+  w.Printf("    \"direct_samples\": %d,\n", o.directSamples < 0 ? 0 : o.directSamples);
+  // Only when --max-seconds planned --emitted-rays (its value is the plan).
+  if (o.emittedRaysPlanned) w.Printf("    \"emitted_rays_planned\": true,\n");
   w.Printf("    \"smooth\": %s,\n    \"crease\": %.9g,\n", o.smooth ? "true" : "false",
            o.creaseDeg);
   // Only when on, so that a one-sided run.json is what it was before them.

@@ -357,17 +357,19 @@ AmbientReport AmbientOf(const Environment& env) {
     r.emitted[c] = env.ledger().emitted[c];
     r.radiosity[c] = env.ledger().radiosity[c];
   }
+  env.EmissionUnshot(r.emission);
   for (const Patch& p : env.patches())
     for (int c = 0; c < 3; ++c) r.kdArea[c] += static_cast<double>(p.kd[c]) * p.area;
   return r;
 }
 
-void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]) {
+void AmbientTerm(Span<const AmbientReport> reports, double ambient[3], bool direct) {
   double area = 0.0, unshot[3] = {0, 0, 0}, kdArea[3] = {0, 0, 0}, emitted[3] = {0, 0, 0},
-         radiosity[3] = {0, 0, 0};
+         radiosity[3] = {0, 0, 0}, emission[3] = {0, 0, 0};
   for (const AmbientReport& r : reports) {
     area += r.area;
     for (int c = 0; c < 3; ++c) {
+      emission[c] += r.emission[c];
       unshot[c] += r.unshot[c];
       kdArea[c] += r.kdArea[c];
       emitted[c] += r.emitted[c];
@@ -380,6 +382,17 @@ void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]) {
     // No estimate (nothing shot or lost yet in a channel where every face
     // has kd 1): no ambient term rather than an infinite one.
     ambient[c] = area > 0.0 && meanKd < 1.0 ? unshot[c] / area / (1.0 - meanKd) : 0.0;
+    if (!direct) continue;
+    // Per-pixel direct light: the reflectance the shots so far have met
+    // (what came back reflected over the power shot: the open sides of a
+    // scene lose light that the mean kd does not know of), and the image's
+    // share of what is not yet shown: of the unshot emission only the
+    // bounces after its first.
+    double reflected = radiosity[c] - emitted[c], shot = emitted[c] + reflected - unshot[c];
+    double rho = shot > 0.0 && reflected >= 0.0 ? std::fmin(reflected / shot, 0.999) : meanKd;
+    ambient[c] = kdArea[c] > 0.0 && rho < 1.0
+                     ? (unshot[c] - emission[c] + emission[c] * rho) * rho / (1.0 - rho) / kdArea[c]
+                     : 0.0;
   }
 }
 

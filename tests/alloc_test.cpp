@@ -184,6 +184,30 @@ TEST(AllocTest, CornellRenderAllocatesNothingAfterInit) {
   EXPECT_GT(std::atol(json.c_str() + at + 10), 10) << "no element split during the counted solve";
 }
 
+TEST(AllocTest, DirectLightPerPixelAllocatesNothingAfterInit) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  // Per-pixel direct light (the default with one environment) in both
+  // rasters, with the error measured during the solve (each measurement
+  // draws the image again).
+  for (const char* raster : {"on", "off"}) {
+    test::TempDir refDir;
+    {
+      CountedRender ref("scenes/cornell.obj",
+                        std::string("--max-shots 300 --width 64 --height 48 --aa ") + raster);
+      ASSERT_EQ(ref.code, 0);
+      EXPECT_EQ(ref.allocations, 0) << raster;
+      EXPECT_NE(ref.Json().find("\"direct_samples\": 32"), std::string::npos);
+      test::WriteFile(refDir.File("ref.pfm"), test::ReadFile(ref.dir.File("image.pfm")));
+    }
+    CountedRender run("scenes/cornell.obj",
+                      std::string("--max-shots 600 --width 64 --height 48 --direct-samples 8 "
+                                  "--error-every 100 --reference ") +
+                          refDir.File("ref.pfm") + " --aa " + raster);
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_EQ(run.allocations, 0) << "heap allocations after init, --aa " << raster;
+  }
+}
+
 TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   // The defaults (power allocation with partial shots, Sobol' samples,

@@ -244,7 +244,8 @@ class ViewerBrowserTest : public testing::Test {
   TempDir dir_;
 };
 
-// Sampled alike (vismask --aa off: each pixel's centre, quads as the two
+// Sampled alike (--direct-samples 0: the export is the solved whole, the
+// per-pixel direct light the image's alone; vismask --aa off: each pixel's centre, quads as the two
 // triangles the export has; --elements 0: the image interpolates exactly
 // the lattice values the file holds; the page with aa=0), the page must
 // give vismask's picture: same radiance, exposure, clamp and sRGB transfer,
@@ -254,8 +255,8 @@ class ViewerBrowserTest : public testing::Test {
 // view gives 0.52 mean and 0.6% beyond 16, a 2.2 sRGB exponent instead of
 // 2.4 gives 6.1 mean (docs/DESIGN.md, The viewer).
 TEST_F(ViewerBrowserTest, SampledAlikeTheScreenshotIsImagePng) {
-  std::string json =
-      RenderAndShoot("--elements 0 --aa off --emitted-rays 1000000", "--aa off --probe-orbit");
+  std::string json = RenderAndShoot(
+      "--elements 0 --aa off --emitted-rays 1000000 --direct-samples 0", "--aa off --probe-orbit");
   EXPECT_LE(Field(json, "mean_abs"), 0.1) << json;
   EXPECT_LE(Field(json, "p999"), 2.0) << json;
   EXPECT_LE(Field(json, "over_16"), 0.001) << json;
@@ -296,8 +297,10 @@ TEST_F(ViewerBrowserTest, SampledAlikeTheScreenshotIsImagePng) {
 // 90% within 1, 99% within 14. The bounds (docs/DESIGN.md, The viewer) sit
 // between that and what a 10% exposure error (4.5 mean, p90 10) or a 1%
 // field-of-view error (p99 118) gives.
+// (--direct-samples 0: the page shows the export, the solved whole; the
+// image's per-pixel direct light belongs to the image alone, DESIGN.)
 TEST_F(ViewerBrowserTest, ScreenshotMatchesImagePng) {
-  std::string json = RenderAndShoot("", "");
+  std::string json = RenderAndShoot("--direct-samples 0", "");
   EXPECT_LE(Field(json, "mean_abs"), 0.75) << json;
   EXPECT_LE(Field(json, "p90"), 1.0) << json;
   EXPECT_LE(Field(json, "p99"), 24.0) << json;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "vismask/arena.h"
+#include "vismask/direct.h"
 #include "vismask/element.h"
 #include "vismask/grid.h"
 #include "vismask/mask.h"
@@ -110,6 +111,11 @@ struct EnvOptions {
   // Method B: which open pixels take a centre ray (--centre-rays; ReadsOnly).
   CentreChoice centreRays = CentreChoice::kAuto;
   ElementOptions elements;
+  // --direct-samples: shadow rays a shaded point sends to the emitters
+  // (direct.h); 0: no per-pixel direct light (the display shows the solved
+  // radiosity, direct part included). With N > 0 the environment keeps each
+  // patch's indirect radiosity apart and its emitter list.
+  uint32_t directSamples = 0;
 };
 
 // What a checkpoint keeps of an environment beside its arena's bytes (the
@@ -219,6 +225,35 @@ class Environment {
   // The leaf element of patch `patch` at parameters `st`.
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
   Span<const Element> elements() const { return elements_; }
+  // Per-pixel direct light (EnvOptions::directSamples > 0): the emitters,
+  // and whether the display shows indirect radiosity only (LeafRadiosity
+  // then gives the patch's emission + the leaf's indirect radiosity + kd *
+  // ambient).
+  bool directPerPixel() const { return options_.directSamples > 0; }
+  // Whether LeafRadiosity gives the indirect part alone (directPerPixel()
+  // and the image being drawn) or the whole (the export).
+  void SetDisplayIndirect(bool on) { displayIndirect_ = on && directPerPixel(); }
+  bool displayIndirect() const { return displayIndirect_; }
+  // Whether patch i shows its indirect part alone (and the image gathers
+  // its direct part): displayIndirect() and its polygon not smoothed (a
+  // smoothed polygon, whose direct part the gather would shade with its
+  // facets' normals, shows the solved whole, as without it).
+  bool ShowsIndirect(uint32_t i) const {
+    return displayIndirect_ && (smoothPatch_.empty() || !smoothPatch_[i]);
+  }
+  uint32_t directSamples() const { return options_.directSamples; }
+  const DirectLight& directLight() const { return direct_; }
+  float rayEpsilon() const { return options_.rayEpsilon; }
+  // Leaf element e's indirect radiosity: what it received from shots other
+  // than an emitter's own emission, reflected, over its area (0 without
+  // directPerPixel()).
+  glm::dvec3 Indirect(uint32_t e) const {
+    if (indirect_.empty()) return glm::dvec3(0.0);
+    return glm::dvec3(indirect_[3 * e], indirect_[3 * e + 1], indirect_[3 * e + 2]) /
+           static_cast<double>(elements_[e].area);
+  }
+  // The emitted power not yet shot (per channel; 0 without directPerPixel()).
+  void EmissionUnshot(double out[3]) const;
   // The lattice vertices on a face this environment shares with a neighbour
   // (where the partition cut a polygon), and their surface's normal: the
   // display shares their values across the cut (display.h).
@@ -282,6 +317,13 @@ class Environment {
     return Span<const uint8_t>(arena_.data(), arena_.capacity());
   }
   Span<uint8_t> mutableArenaBytes() { return Span<uint8_t>(arena_.data(), arena_.capacity()); }
+
+  // --max-seconds's plan (app.cpp): the seconds `rays` form-factor-like
+  // rays take through this environment's grid (from patch centres, cosine
+  // directions, a fixed stream), and the power a ray carries, changed.
+  double TimeRays(uint32_t rays) const;
+  double rayQuantum() const { return options_.rayQuantum; }
+  void SetRayQuantum(double q) { options_.rayQuantum = q; }
 
   // Test hooks: the shooter a plain progressive-refinement step would take.
   uint32_t TopShooter() const { return tree_.Top(); }
@@ -450,6 +492,16 @@ class Environment {
   Span<PatchEnergy> energy_;
   Span<uint32_t> shotCount_;
   Span<Element> elements_;  // roots first (element i is patch i's), then the pool
+  // directPerPixel(), 3 channels: per element, the reflected power received
+  // from shots other than emission (indirect_, history included like
+  // Element::received); per patch, the emitted power not yet shot (emitLeft_); shotDirect_, the
+  // share of the current shot's power, per channel, that is emission.
+  Span<double> indirect_;
+  Span<double> emitLeft_;
+  double shotDirect_[3] = {0, 0, 0};
+  bool displayIndirect_ = false;
+  Span<uint8_t> smoothPatch_;  // directPerPixel(): 1 for a patch of a smoothed polygon
+  DirectLight direct_;
   uint32_t nextElement_ = 0;
   Span<glm::vec3> vertices_;
   Span<glm::vec3> vertexB_;

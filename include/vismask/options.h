@@ -32,8 +32,10 @@ struct Options {
   bool hasRayAlloc = false;
   uint32_t rays = 4096;  // --rays: per shot (fixed)
   bool hasRays = false;
-  uint64_t emittedRays = 4000000;  // --emitted-rays: the rays the emitted power is worth (power)
-  uint32_t minRays = 16;           // --min-rays: the fewest a shot traces (power)
+  bool hasEmittedRays = false;      // --emitted-rays given (else --max-seconds may plan it)
+  bool emittedRaysPlanned = false;  // --max-seconds chose emittedRays (app.cpp, PlanBudget)
+  uint64_t emittedRays = 4000000;   // --emitted-rays: the rays the emitted power is worth (power)
+  uint32_t minRays = 16;            // --min-rays: the fewest a shot traces (power)
   uint32_t maxRays =
       8192;           // --max-rays: the most a shot traces (power); more power -> partial shots
   bool sobol = true;  // --sampler sobol|random
@@ -114,6 +116,11 @@ struct Options {
   // and emitters' twins emit Ke as well: twice the emitted power.
   bool twoSided = false;
   bool twoSidedEmitters = false;
+  // --direct-samples N: shadow rays per shaded point toward the emitters
+  // (direct light gathered per pixel, direct.h); 0: the image shows the
+  // solved radiosity alone. -1 (not given): kDefaultDirectSamples with one
+  // environment, 0 with several (ResolveDirect).
+  int directSamples = -1;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
   bool smooth =
       true;  // --smooth on|off: share display values across smoothed polygons (smoothing.h)
@@ -155,6 +162,9 @@ constexpr const char* kResultNeutral[] = {
 // The environments a run has, as a checkpoint records them: "auto:N" or
 // "NXxNYxNZ" (after SetWorldSize under mpirun).
 std::string EnvSpec(const Options& o);
+
+// The default --direct-samples with one environment.
+constexpr int kDefaultDirectSamples = 32;
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.

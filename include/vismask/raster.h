@@ -83,6 +83,30 @@ struct Framebuffer {
 };
 
 struct Texture;
+class DirectLight;
+class Grid;
+
+// Per-pixel direct light for one piece (direct.h): at each point the raster
+// shades, `scale` times the irradiance from `light`'s emitters there (at
+// most `samples` shadow rays through `grid`) is added to the interpolated
+// radiance, before a texture modulates it. The antialiased raster spreads
+// a pixel's shadow rays over the pixel square where the piece covers all
+// of it (so a shadow edge is box-filtered like a silhouette), and sends
+// them all from the covered part's centroid where it covers part; the
+// point sampled one from the pixel centre. Sample points come from the
+// pixel index (DirectLightSample, DirectPixelOffset; src/direct_gather.h).
+struct DirectHook {
+  const DirectLight* light = nullptr;
+  const Grid* grid = nullptr;
+  uint32_t patch = kNoPatch;  // the receiver (local to `grid`), skipped by its shadow rays
+  uint32_t twin = kNoPatch;
+  glm::vec3 normal{0.0f};      // the receiver's unit normal
+  glm::vec3 planePoint{0.0f};  // a point of its plane (shaded points are projected onto it)
+  glm::vec3 scale{0.0f};       // kd / pi (times the texture's display scale)
+  uint32_t samples = 0;
+  float epsilon = 0.0f;      // shadow rays stop this far from either end (scene units)
+  uint32_t* hint = nullptr;  // the last occluder (Grid::Occluded), or null
+};
 
 // A planar convex piece to draw: world corners counter-clockwise from the
 // front (a quad's corners are its bilinear parameter square's (0,0), (1,0),
@@ -99,6 +123,7 @@ struct DisplayPiece {
   const Texture* texture = nullptr;  // null: untextured (uv and ke unused)
   glm::vec2 uv[4];
   glm::vec3 ke;
+  const DirectHook* direct = nullptr;  // null: no per-pixel direct light
 };
 
 // Draws one piece: antialiased, the radiance interpolated perspective-correctly

@@ -239,6 +239,7 @@ struct AmbientReport {
   double kdArea[3];
   double emitted[3];  // the ledger's (for EffectiveReflectance when kd is 1 everywhere)
   double radiosity[3];
+  double emission[3];  // per-pixel direct light: the emitted power not yet shot (in `unshot` too)
 };
 AmbientReport AmbientOf(const Environment& env);
 // Cohen's ambient radiosity estimate, per channel, from every environment's
@@ -247,6 +248,12 @@ AmbientReport AmbientOf(const Environment& env);
 // 1/(1 - mean kd); where the mean kd is 1, 1/(the share of the power shot
 // so far that was lost), and 0 (no estimate) while none was
 // (EffectiveReflectance).
-void AmbientTerm(Span<const AmbientReport> reports, double ambient[3]);
+// With `direct` (per-pixel direct light, which shows the first bounce of
+// every emitter's whole emission): the power still to be shown, reflected,
+// is spread over kd * area, with the reflectance the shots so far met
+// (rho: reflected power received over the power shot) in place of the
+// mean kd: the unshot reflected power U gives U rho / (1 - rho), the
+// unshot emission E (its first bounce already shown) E rho^2 / (1 - rho).
+void AmbientTerm(Span<const AmbientReport> reports, double ambient[3], bool direct = false);
 
 }  // namespace vismask
