@@ -119,6 +119,11 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
+  {
+    OutsideShooter shooters[kMaxOutsideShooters];
+    numOutside_ = OutsideShooters(grid, static_cast<int>(index), options.outside, shooters);
+    for (uint32_t k = 0; k < numOutside_; ++k) outside_[k] = Outside{shooters[k], {0, 0, 0}, 0};
+  }
 
   // Local copies of the patches and a compact local vertex lattice.
   staged_.clear();
@@ -326,6 +331,19 @@ void Environment::Reset() {
     root.child = kNoElement;
   }
   nextElement_ = static_cast<uint32_t>(patches_.size());
+  // The outside shooters emit as patches do; their power counts in the
+  // radiosity power R as an emitter's b * area does (the power shot so far
+  // is R - unshot).
+  for (uint32_t k = 0; k < numOutside_; ++k) {
+    Outside& o = outside_[k];
+    o.shots = 0;
+    for (int c = 0; c < 3; ++c) {
+      o.unshot[c] = o.shooter.power[c];
+      ledger_.emitted[c] += o.unshot[c];
+      ledger_.unshot[c] += o.unshot[c];
+      ledger_.radiosity[c] += o.unshot[c];
+    }
+  }
   for (Slot& s : slots_) s = Slot();
   slotIndex_.Clear();
   readyTree_.Clear(-std::numeric_limits<double>::infinity());

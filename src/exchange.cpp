@@ -59,10 +59,8 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
     r.unshot = Sum3(l.unshot) + r.flight;
     r.emitted = Sum3(l.emitted);
     r.lost = r.emitted - Sum3(l.absorbed) - Sum3(l.escaped) - r.unshot;
-    uint32_t top = e->TopShooter();
     r.held = uint64_t(e->queuedCount()) + e->outboxCount();
-    r.shootable = e->queuedCount() + e->outboxCount() +
-                  (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
+    r.shootable = e->queuedCount() + e->outboxCount() + e->HasLocalUnshot();
     r.shots = e->stats().shots + e->stats().foreignShots;
     r.rays = e->stats().rays;
     r.forwardsCreated = e->stats().forwardsCreated;

@@ -330,6 +330,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   double power = 0.0;
   for (const auto& [e, w] : emitted) power += w;
+  power += OutsidePower(p->grid, o.outside);  // --sky, --sun
 
   // This rank's pieces, by environment (within one, in source order).
   std::stable_sort(own.begin(), own.end(),
@@ -362,6 +363,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
     e.minRays = o.minRays;
   }
   e.seed = o.seed;
+  e.outside = o.outside;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
   e.roundShots = o.roundShots;

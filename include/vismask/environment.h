@@ -16,6 +16,7 @@
 #include "vismask/mask.h"
 #include "vismask/max_tree.h"
 #include "vismask/mesh.h"
+#include "vismask/outside.h"
 #include "vismask/packet.h"
 #include "vismask/partition.h"
 #include "vismask/patch.h"
@@ -110,6 +111,8 @@ struct EnvOptions {
   // Method B: which open pixels take a centre ray (--centre-rays; ReadsOnly).
   CentreChoice centreRays = CentreChoice::kAuto;
   ElementOptions elements;
+  // --sky, --sun: the light from outside the scene's box (outside.h).
+  OutsideLight outside;
 };
 
 class Environment {
@@ -254,6 +257,10 @@ class Environment {
 
   // Test hooks: the shooter a plain progressive-refinement step would take.
   uint32_t TopShooter() const { return tree_.Top(); }
+  // Whether a local patch or an outside shooter (--sky, --sun) has unshot power.
+  bool HasLocalUnshot() const;
+  // The outside shooters this environment holds (outside.h).
+  uint32_t numOutside() const { return numOutside_; }
 
  private:
   // A queued foreign shooter: its packet header, its mask so far (AND of the
@@ -272,6 +279,26 @@ class Environment {
 
   void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
   void ShootLocal(uint32_t i);
+  // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
+  // no patch to skip and no centre-mask cache.
+  void ShootOutside(uint32_t k);
+  // The outside shooter with the most unshot power (ties to the first), or
+  // -1 when none has any.
+  int BestOutside() const;
+  // Ray r of a shot of shooter `id` from its five uniforms: ShotRay for a
+  // patch; for an outside shooter (outside.h) its direction (cosine for the
+  // sky, the sun's cone for the sun) from a point of its face, the origin
+  // moved back along the ray to OutsideLift() outside the scene's box, so
+  // that the ray crosses geometry lying on the box's face (a floor on its
+  // bottom) rather than starting in its plane.
+  Ray MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
+                  glm::vec3* local) const;
+  // How far off its plane a shooter's centre rays start: rayEpsilon in front
+  // of a patch, OutsideLift() behind an outside shooter (outside the box).
+  float CentreLift(uint32_t id) const {
+    return OutsideKindOf(id) == OutsideKind::kNone ? options_.rayEpsilon : -OutsideLift();
+  }
+  float OutsideLift() const { return 4.0f * options_.rayEpsilon; }
   void ShootForeign(uint32_t slot);
   // Traces `rays` rays of one shooter through this environment. Rays whose
   // pixel is closed in `in` are skipped; with a mask method, `out` loses the
@@ -454,6 +481,14 @@ class Environment {
   uint32_t outCount_ = 0;
   uint32_t queued_ = 0;
   uint32_t newForwards_ = 0;
+  // --sky, --sun: this environment's outside shooters (fixed, no arena).
+  struct Outside {
+    OutsideShooter shooter;
+    double unshot[3];
+    uint32_t shots;
+  };
+  Outside outside_[kMaxOutsideShooters] = {};
+  uint32_t numOutside_ = 0;
   EnergyLedger ledger_;
   EnvStats stats_;
   uint64_t centreSteps_ = 0;  // grid steps of the centre rays really cast
