@@ -120,9 +120,12 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
   {
-    OutsideShooter shooters[kMaxOutsideShooters];
-    numOutside_ = OutsideShooters(grid, static_cast<int>(index), options.outside, shooters);
-    for (uint32_t k = 0; k < numOutside_; ++k) outside_[k] = Outside{shooters[k], {0, 0, 0}, 0};
+    std::vector<OutsideShooter> shooters;
+    OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
+                    &shooters);
+    outside_.clear();
+    for (const OutsideShooter& s : shooters) outside_.push_back(Outside{s, {0, 0, 0}, 0});
+    numOutside_ = static_cast<uint32_t>(outside_.size());
   }
 
   // Local copies of the patches and a compact local vertex lattice.

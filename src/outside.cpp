@@ -1,5 +1,6 @@
 #include "vismask/outside.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <glm/geometric.hpp>
@@ -21,8 +22,8 @@ bool ParseNumbers(const std::string& text, std::vector<double>* out) {
   size_t start = 0;
   while (true) {
     size_t comma = text.find(',', start);
-    std::string part = text.substr(start, comma == std::string::npos ? std::string::npos
-                                                                     : comma - start);
+    std::string part =
+        text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     if (part.empty()) return false;
     char* end = nullptr;
     double v = std::strtod(part.c_str(), &end);
@@ -59,56 +60,68 @@ bool ParseSun(const std::string& text, OutsideLight* light) {
   return true;
 }
 
-uint32_t OutsideShooters(const EnvGrid& grid, int env, const OutsideLight& light,
-                         OutsideShooter out[kMaxOutsideShooters]) {
-  if (!light.Any()) return 0;
+void OutsideShooters(const EnvGrid& grid, int env, const OutsideLight& light, uint32_t tiles,
+                     std::vector<OutsideShooter>* out) {
+  out->clear();
+  if (!light.Any()) return;
+  tiles = std::max(1u, std::min(tiles, kMaxOutsideTiles));
   int cell[3];
   grid.Cell(env, cell);
   const Bounds box = grid.EnvBox(env);
-  uint32_t count = 0;
   for (int kind = 0; kind < 2; ++kind) {
     if (kind == 0 ? !light.HasSky() : !light.HasSun()) continue;
     for (int axis = 0; axis < 3; ++axis)
       for (int side = 0; side < 2; ++side) {
         if (side == 0 ? cell[axis] != 0 : cell[axis] + 1 != grid.n[axis]) continue;
-        // The face as BoxFace makes it (facing out), turned to face in.
-        const Patch face = BoxFace(box, axis, side);
-        Patch p{};
-        for (int k = 0; k < 4; ++k) p.corner[k] = face.corner[3 - k];
-        p.normal = -face.normal;
         const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-        const double area = (static_cast<double>(box.hi[a1]) - box.lo[a1]) *
-                            (static_cast<double>(box.hi[a2]) - box.lo[a2]);
-        if (!(area > 0.0)) continue;
-        p.area = static_cast<float>(area);
-        p.numCorners = 4;
-        p.globalId = kOutsideIdBase + 16u * static_cast<uint32_t>(env) +
-                     static_cast<uint32_t>(8 * kind + 2 * axis + side);
-        OutsideShooter s;
-        s.patch = p;
-        // The sky: a uniform radiance L through a plane carries pi L a unit
-        // of area. The sun: E on a surface facing it, cos of it on the face.
-        const double cosine = kind == 0 ? 0.0 : -static_cast<double>(light.sunToward[axis]) *
-                                                    static_cast<double>(p.normal[axis]);
+        // The sun: E on a surface facing it, the cosine of it on the face
+        // (between its light and the inward normal).
+        const float inward = side == 0 ? 1.0f : -1.0f;
+        const double cosine =
+            kind == 0 ? 0.0 : -static_cast<double>(light.sunToward[axis]) * inward;
         if (kind == 1 && !(cosine > 0.0)) continue;
-        for (int c = 0; c < 3; ++c) {
-          s.power[c] = kind == 0 ? 3.141592653589793 * light.sky[c] * area
-                                 : static_cast<double>(light.sun[c]) * cosine * area;
-          p.ke[c] = static_cast<float>(s.power[c] / area);
-        }
-        s.patch.ke = p.ke;
-        out[count++] = s;
+        for (uint32_t j = 0; j < tiles; ++j)
+          for (uint32_t i = 0; i < tiles; ++i) {
+            // Tile (i, j) of the face, as BoxFace makes a face (facing
+            // out), turned to face in.
+            Bounds t = box;
+            const float w1 = box.hi[a1] - box.lo[a1], w2 = box.hi[a2] - box.lo[a2];
+            t.lo[a1] = i == 0 ? box.lo[a1] : box.lo[a1] + w1 * i / tiles;
+            t.hi[a1] = i + 1 == tiles ? box.hi[a1] : box.lo[a1] + w1 * (i + 1) / tiles;
+            t.lo[a2] = j == 0 ? box.lo[a2] : box.lo[a2] + w2 * j / tiles;
+            t.hi[a2] = j + 1 == tiles ? box.hi[a2] : box.lo[a2] + w2 * (j + 1) / tiles;
+            const double area = (static_cast<double>(t.hi[a1]) - t.lo[a1]) *
+                                (static_cast<double>(t.hi[a2]) - t.lo[a2]);
+            if (!(area > 0.0)) continue;
+            const Patch face = BoxFace(t, axis, side);
+            OutsideShooter s;
+            Patch& p = s.patch;
+            p = Patch{};
+            for (int k = 0; k < 4; ++k) p.corner[k] = face.corner[3 - k];
+            p.normal = -face.normal;
+            p.area = static_cast<float>(area);
+            p.numCorners = 4;
+            p.globalId = kOutsideIdBase + (static_cast<uint32_t>(env) << 10) +
+                         (static_cast<uint32_t>(8 * kind + 2 * axis + side) << 6) + j * tiles + i;
+            // The sky: a uniform radiance L through a plane carries pi L a
+            // unit of area.
+            for (int c = 0; c < 3; ++c) {
+              s.power[c] = kind == 0 ? 3.141592653589793 * light.sky[c] * area
+                                     : static_cast<double>(light.sun[c]) * cosine * area;
+              p.ke[c] = static_cast<float>(s.power[c] / area);
+            }
+            out->push_back(s);
+          }
       }
   }
-  return count;
 }
 
-double OutsidePower(const EnvGrid& grid, const OutsideLight& light) {
+double OutsidePower(const EnvGrid& grid, const OutsideLight& light, uint32_t tiles) {
   double total = 0.0;
-  OutsideShooter s[kMaxOutsideShooters];
+  std::vector<OutsideShooter> s;
   for (int e = 0; e < grid.count(); ++e) {
-    const uint32_t n = OutsideShooters(grid, e, light, s);
-    for (uint32_t k = 0; k < n; ++k) total += s[k].power[0] + s[k].power[1] + s[k].power[2];
+    OutsideShooters(grid, e, light, tiles, &s);
+    for (const OutsideShooter& o : s) total += o.power[0] + o.power[1] + o.power[2];
   }
   return total;
 }

@@ -330,7 +330,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   double power = 0.0;
   for (const auto& [e, w] : emitted) power += w;
-  power += OutsidePower(p->grid, o.outside);  // --sky, --sun
+  // --sky, --sun: one shooter a face of an environment for Method R, whose
+  // rays carry their own routes; tiles for the hemisphere masks, which judge
+  // a shooter's rays by its centre (docs/DESIGN.md, "Light from outside").
+  const uint32_t outsideTiles = o.maskMethod == MaskMethod::kR ? 1 : kMaxOutsideTiles;
+  power += OutsidePower(p->grid, o.outside, outsideTiles);
 
   // This rank's pieces, by environment (within one, in source order).
   std::stable_sort(own.begin(), own.end(),
@@ -364,6 +368,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   }
   e.seed = o.seed;
   e.outside = o.outside;
+  e.outsideTiles = outsideTiles;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
   e.roundShots = o.roundShots;

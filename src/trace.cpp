@@ -272,6 +272,7 @@ void Environment::Book(const ShotTally& tally) {
   for (int c = 0; c < 3; ++c) {
     ledger_.escaped[c] += tally.lost[c];
     ledger_.absorbed[c] += tally.backHit[c];
+    if (tally.outside) ledger_.outsideLost[c] += tally.lost[c] + tally.backHit[c];
   }
   stats_.rays += tally.traced;
   stats_.hits += tally.hits;
@@ -317,6 +318,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
+  tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
@@ -480,6 +482,7 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
+  tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
   uint64_t left = 0;
   auto trace = [&](uint32_t r, const float u[5]) {
     glm::vec3 local;

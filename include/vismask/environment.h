@@ -45,6 +45,12 @@ struct EnergyLedger {
   // its path, so the sum over environments is the power not yet traced).
   double inFlight[3] = {0, 0, 0};
   double radiosity[3] = {0, 0, 0};  // sum of b * area over local patches (emitted + reflected)
+  // --sky, --sun: of absorbed and escaped, what outside shooters' rays lost
+  // at once, on a back face or crossing the scene without a hit: light
+  // that never lit the scene. The solve's stop rules leave it out of the
+  // emitted and radiosity power (exchange.cpp), so that the sky on the
+  // outside of a closed room's walls does not count as converged power.
+  double outsideLost[3] = {0, 0, 0};
 };
 
 // Counters of one environment's work.
@@ -111,8 +117,10 @@ struct EnvOptions {
   // Method B: which open pixels take a centre ray (--centre-rays; ReadsOnly).
   CentreChoice centreRays = CentreChoice::kAuto;
   ElementOptions elements;
-  // --sky, --sun: the light from outside the scene's box (outside.h).
+  // --sky, --sun: the light from outside the scene's box (outside.h), in
+  // outsideTiles x outsideTiles shooters a face of the box.
   OutsideLight outside;
+  uint32_t outsideTiles = 1;
 };
 
 class Environment {
@@ -385,6 +393,7 @@ class Environment {
     uint64_t traced = 0, hits = 0;
     double lost[3] = {0, 0, 0};     // left the scene
     double backHit[3] = {0, 0, 0};  // absorbed by back faces
+    bool outside = false;           // an outside shooter's rays (EnergyLedger::outsideLost)
   };
   // A ray's first hit here: a front side receives `share`, a back side absorbs it.
   void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
@@ -487,7 +496,7 @@ class Environment {
     double unshot[3];
     uint32_t shots;
   };
-  Outside outside_[kMaxOutsideShooters] = {};
+  std::vector<Outside> outside_;  // sized at Prepare (init)
   uint32_t numOutside_ = 0;
   EnergyLedger ledger_;
   EnvStats stats_;

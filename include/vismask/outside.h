@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <glm/vec3.hpp>
 #include <string>
+#include <vector>
 
 #include "vismask/partition.h"
 #include "vismask/patch.h"
@@ -36,31 +37,34 @@ bool ParseSky(const std::string& text, OutsideLight* light);
 // R, G, B >= 0; 0 <= DEG <= 90) into light->sunToward, sun, sunDegrees.
 bool ParseSun(const std::string& text, OutsideLight* light);
 
-// Outside shooters' global ids: kOutsideIdBase + 16 * environment + slot,
-// slot 0-5 the sky on face 2 * axis + side, 8-13 the sun on that face.
-// Above every patch id (a scene has fewer than kOutsideIdBase patches).
+// Outside shooters' global ids: kOutsideIdBase + (environment << 10) +
+// (slot << 6) + tile, slot 0-5 the sky on face 2 * axis + side, 8-13 the
+// sun on that face, tile < kMaxOutsideTiles^2. Above every patch id (a
+// scene has fewer than kOutsideIdBase patches; environments < 2^18).
 constexpr uint32_t kOutsideIdBase = 0xf0000000u;
-constexpr uint32_t kMaxOutsideShooters = 12;
+constexpr uint32_t kMaxOutsideTiles = 8;
 
 enum class OutsideKind { kNone, kSky, kSun };
 inline OutsideKind OutsideKindOf(uint32_t globalId) {
   if (globalId < kOutsideIdBase) return OutsideKind::kNone;
-  return (globalId & 8u) ? OutsideKind::kSun : OutsideKind::kSky;
+  return ((globalId >> 9) & 1u) ? OutsideKind::kSun : OutsideKind::kSky;
 }
 
 struct OutsideShooter {
-  Patch patch;       // on the face, its normal pointing into the scene
-  double power[3];   // what it shoots in all (W per channel)
+  Patch patch;      // on the face, its normal pointing into the scene
+  double power[3];  // what it shoots in all (W per channel)
 };
 
 // The outside shooters of environment `env` of `grid` (grid.box is the
-// scene's box), into out[0..return): one a face of the scene's box that the
-// environment's box lies on, for the sky, and one for each such face the
-// sun's light enters by (power > 0). A face of zero area has none.
-uint32_t OutsideShooters(const EnvGrid& grid, int env, const OutsideLight& light,
-                         OutsideShooter out[kMaxOutsideShooters]);
+// scene's box), into *out: for each face of the scene's box that the
+// environment's box lies on, `tiles` x `tiles` for the sky, and as many for
+// the sun when its light enters by that face (power > 0). A face of zero
+// area has none. Tiles (1 to kMaxOutsideTiles) serve the hemisphere masks,
+// which judge a shooter's rays from its centre (docs/DESIGN.md).
+void OutsideShooters(const EnvGrid& grid, int env, const OutsideLight& light, uint32_t tiles,
+                     std::vector<OutsideShooter>* out);
 // Their power over every environment, channels summed (as emitted power).
-double OutsidePower(const EnvGrid& grid, const OutsideLight& light);
+double OutsidePower(const EnvGrid& grid, const OutsideLight& light, uint32_t tiles);
 
 // The direction of travel of a sun ray from two uniforms: uniform in solid
 // angle within the sun's cone, about -sunToward.
