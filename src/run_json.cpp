@@ -116,6 +116,20 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     w.Printf("    \"view\": null,\n");
   w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
   w.Printf("    \"camera_from_scene\": %s,\n", r->cameraFromScene ? "true" : "false");
+  // --sky (radiance) and --sun (towards it, irradiance, angular diameter): null without.
+  const OutsideLight& lit = o.outside;
+  if (lit.HasSky())
+    w.Printf("    \"sky\": [%.9g, %.9g, %.9g],\n", lit.sky.x, lit.sky.y, lit.sky.z);
+  else
+    w.Printf("    \"sky\": null,\n");
+  if (lit.HasSun())
+    w.Printf(
+        "    \"sun\": {\"toward\": [%.9g, %.9g, %.9g], \"irradiance\": [%.9g, %.9g, %.9g], "
+        "\"degrees\": %.9g},\n",
+        lit.sunToward.x, lit.sunToward.y, lit.sunToward.z, lit.sun.x, lit.sun.y, lit.sun.z,
+        lit.sunDegrees);
+  else
+    w.Printf("    \"sun\": null,\n");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf(

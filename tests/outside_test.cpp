@@ -5,6 +5,8 @@
 // factor from the floor to the opening (and the sun's E * sin(theta) on the
 // opening's area, all of which lands on the floor). The energy ledger closes
 // with the sky's and sun's power in it.
+#include "vismask/outside.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,7 +15,6 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/outside.h"
 #include "vismask/partition.h"
 
 namespace vismask {
@@ -158,7 +159,8 @@ TEST(OutsideTest, SunThroughTheSkylightLandsOnTheFloor) {
   // Elevation 80 degrees: the opening's light falls on the floor whole
   // (shifted by 3 / tan 80 = 0.53 m), E * sin 80 on 1 m^2 of 16.
   const double theta = 80.0 * kPi / 180.0;
-  const std::string toward = std::to_string(std::cos(theta)) + "," + std::to_string(std::sin(theta));
+  const std::string toward =
+      std::to_string(std::cos(theta)) + "," + std::to_string(std::sin(theta));
   for (const char* how : {"", "--envs 2x1x2 --mask-method B", "--envs 2x1x2 --mask-method R"}) {
     SCOPED_TRACE(how);
     Render(room, dir.File("out"),
