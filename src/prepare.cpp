@@ -289,7 +289,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (o.roundWorkAuto)
     p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2]);
   p->clock.Done("cutting the scene into environments", os::Seconds() - t0);
-  if (probe) p->side = probe->Side();
+  if (probe) {
+    p->view = probe->Choose();
+    p->side = p->view.side;
+    p->viewProbed = true;
+  }
   t0 = os::Seconds();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
