@@ -123,12 +123,12 @@ ViewProbe::ViewProbe(const Bounds& bounds) {
       start(inside_[k], InsideCamera(bounds, k), kInsideProbeRays);
 }
 
-void ViewProbe::Add(uint32_t index, const Polygon& p) {
-  for (Probe& probe : probes_) AddTo(probe, index, p, false);
-  for (Probe& probe : inside_) AddTo(probe, index, p, true);
+void ViewProbe::Add(uint32_t index, const Polygon& p, bool twoSided) {
+  for (Probe& probe : probes_) AddTo(probe, index, p, false, false);
+  for (Probe& probe : inside_) AddTo(probe, index, p, true, twoSided);
 }
 
-void ViewProbe::AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip) {
+void ViewProbe::AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (!probe.ok) return;
   const int n = probe.n;
@@ -218,7 +218,7 @@ void ViewProbe::AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip)
       probe.depth[i] = t;
       probe.nearest[i] = tMin;
       probe.index[i] = index;
-      probe.front[i] = facing < 0.0;
+      probe.front[i] = facing < 0.0 || twoSided;
       probe.plane[i] = plane;
     }
   }
@@ -262,18 +262,30 @@ ViewChoice ViewProbe::Choose() const {
   const uint32_t most = *std::max_element(planes + 1, planes + 7);
   c.sideOneWall = front > 0 && 10 * uint64_t{most} >= 9 * uint64_t{front};
   const bool poor = back > front || c.sideOneWall;
+  // A candidate's score: its front hits off the orientation most of them
+  // share, so that a view of one wall or of a block up close scores little
+  // and one across a room (floor, walls, ceiling) much.
+  double bestScore = -1.0;
   for (int k = 0; k < kInsideCandidates; ++k) {
     const Probe& q = inside_[k];
     if (!q.ok) continue;
-    uint32_t f = 0;
-    for (uint8_t x : q.front) f += x;
-    const double share = f / (static_cast<double>(q.n) * q.n);
-    if (c.candidate < 0 || share > c.candidateFront) {
+    uint32_t f = 0, by[7] = {0, 0, 0, 0, 0, 0, 0};
+    for (size_t i = 0; i < q.front.size(); ++i)
+      if (q.front[i]) {
+        ++f;
+        ++by[q.plane[i]];
+      }
+    const double m2 = static_cast<double>(q.n) * q.n;
+    const double score = (f - *std::max_element(by + 1, by + 7)) / m2;
+    if (score > bestScore) {
+      bestScore = score;
       c.candidate = k;
-      c.candidateFront = share;
+      c.candidateFront = f / m2;
+      c.candidateScore = score;
     }
   }
-  c.inside = poor && c.candidate >= 0 && c.candidateFront > c.sideFront && c.candidateFront >= 0.5;
+  c.inside = poor && c.candidate >= 0 && c.candidateFront > c.sideFront &&
+             c.candidateFront >= 0.5 && c.candidateScore >= 0.1 * c.candidateFront;
   return c;
 }
 

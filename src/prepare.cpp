@@ -236,7 +236,10 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       if (stripFaces++ == 0) stripLine = poly.line, stripCorners = poly.corners.size();
       if (std::fabs(change) > std::fabs(stripChange)) stripChange = change;
     }
-    if (probe) probe->Add(i, poly);
+    if (probe)
+      probe->Add(i, poly,
+                 p->twins.Twins(poly.material,
+                                EmitsAfterOverrides(info.materials[poly.material], o.load)));
     if (check) check->Add(i, poly);
     if (!failed.ok()) return;
     one.polygons.assign(1, poly);

@@ -125,9 +125,9 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     w.Printf(
         "    \"view_choice\": {\"side\": \"%s\", \"side_front_share\": %.6g, "
         "\"side_back_share\": %.6g, \"side_one_wall\": %s, \"inside_candidate\": %d, "
-        "\"inside_front_share\": %.6g, \"inside\": %s},\n",
+        "\"inside_front_share\": %.6g, \"inside_score\": %.6g, \"inside\": %s},\n",
         ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
-        v.candidate, v.candidateFront, v.inside ? "true" : "false");
+        v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false");
   } else {
     w.Printf("    \"view_choice\": null,\n");
   }

@@ -66,7 +66,9 @@ ViewSide ChooseViewSide(const Scene& scene);
 // 0.85 of x and z but the centre) and looks across the middle at the
 // mirrored point at 35% of the height, up +y, 70 degrees; the candidates'
 // images are probed as the sides' are (kInsideProbeRays^2 rays) and the one
-// that shows the most front-facing surface wins, ties to the first.
+// with the most front hits off the orientation most of them share wins
+// (a view across a room, not of one wall or a block up close), ties to the
+// first.
 constexpr int kInsideCandidates = 8;
 constexpr int kInsideProbeRays = 32;
 Camera InsideCamera(const Bounds& bounds, int candidate);
@@ -77,7 +79,8 @@ Camera InsideCamera(const Bounds& bounds, int candidate);
 // whether an inside candidate replaces it (`inside`, `candidate`, its
 // front share). The side's image is poor when back hits outnumber front
 // hits or it shows one wall; an inside candidate then wins when its front
-// share is larger than the side's and at least 1/2.
+// share is larger than the side's and at least 1/2, and at least a tenth of
+// its front hits are off their commonest orientation.
 struct ViewChoice {
   ViewSide side = ViewSide::kFront;
   double sideFront = 0.0, sideBack = 0.0;
@@ -85,6 +88,7 @@ struct ViewChoice {
   bool inside = false;
   int candidate = -1;           // the best inside candidate probed (-1: none)
   double candidateFront = 0.0;  // its front share
+  double candidateScore = 0.0;  // its share of front hits off their commonest orientation
 };
 
 // A camera's derived basis for projection onto a width x height image.
@@ -108,7 +112,10 @@ bool MakeView(const Camera& camera, int width, int height, View* view);
 class ViewProbe {
  public:
   explicit ViewProbe(const Bounds& bounds);
-  void Add(uint32_t index, const Polygon& polygon);
+  // `twoSided`: the polygon shows both sides (--two-sided, a doubleSided
+  // glTF material); the inside candidates count its back as a front (the
+  // sides keep their counts of old).
+  void Add(uint32_t index, const Polygon& polygon, bool twoSided = false);
   void Rays(uint32_t rays[kNumViewSides]) const;  // as VisibleFrontRays
   ViewSide Side() const;                          // as ChooseViewSide
   // The side, and whether an inside candidate replaces it (ViewChoice).
@@ -126,7 +133,7 @@ class ViewProbe {
     std::vector<uint8_t> plane;  // the hit's orientation: 1 + 2 * axis + (normal < 0); 0: none
     int n = kViewProbeRays;
   };
-  void AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip);
+  void AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided);
   Probe probes_[kNumViewSides];
   Probe inside_[kInsideCandidates];
   std::vector<glm::dvec2> poly_;
