@@ -70,7 +70,8 @@ Status SceneTally::Check(const std::string& objPath, const std::vector<Material>
   if (!emits && !lit)
     return Status::At(objPath, 0,
                       "no emitter: no face has a material with Ke > 0 (--emit NAME=R,G,B or "
-                      "NAME=ka makes material NAME one)");
+                      "NAME=ka makes material NAME one; --sky or --sun light a scene from "
+                      "outside)");
   if (!firstBad.ok()) return firstBad;
   // The brightest Ke and the first face (in file order) that has it.
   double maxKd = 0.0, maxKe = 0.0;
