@@ -135,7 +135,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->clock.Done("textures", os::Seconds() - t0,
                 std::to_string(p->textures.images.size()) + " images decoded");
   for (const TextureImage& t : p->textures.images)
-    p->textureBytes += uint64_t{t.width} * t.height * 4;
+    p->textureBytes += uint64_t{t.width} * t.height * 4 + t.pyramid.texels.size() * sizeof(float);
   p->scene.objPath = o.scene;
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
