@@ -13,6 +13,7 @@
 #   make fuzz FUZZ_SECONDS=N   libFuzzer on the scene loader and the image readers (clang)
 #   make fuzz-report    10 M executions of each fuzz target: docs/STABILITY.md
 #   make stability      the stiff and extreme suites: docs/STABILITY.md
+#   make outside-check  --sky and --sun against Cycles on a skylight: docs/OUTSIDE.md
 
 CROSS ?=
 CXX := $(CROSS)g++
@@ -128,7 +129,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability
+.PHONY: all deps demo test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability outside-check
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -470,6 +471,12 @@ fuzz-report: fuzz-deps
 stability: deps
 	$(MAKE) $(BUILD)/vismask
 	VISMASK_BIN=$(BUILD)/vismask tools/stability
+
+# docs/OUTSIDE.md: --sky and --sun against Cycles on scenes/skylight.obj
+# (tools/outside-check; about 5 minutes, the Cycles renders cached).
+outside-check: deps
+	$(MAKE) $(BUILD)/vismask
+	VISMASK_BIN=$(BUILD)/vismask tools/outside-check
 
 clean:
 	rm -rf build out

@@ -265,10 +265,15 @@ int Main(int argc, const char* const* argv) {
   SetPhase(Phase::kDone);
   rc = r->transport->Finish(rc);
   if (rc == kExitOk && !r->options.quiet && r->isRoot()) {
-    char view[64] = "--camera";
+    char view[128] = "--camera";
     if (r->hasSide)
       std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side),
                     r->sideChosen ? " (chosen)" : "");
+    else if (r->inside)
+      std::snprintf(
+          view, sizeof view, "view from inside (chosen: the %s side sees %s)",
+          ViewSideName(r->viewChoice.side),
+          r->viewChoice.sideBack > r->viewChoice.sideFront ? "mostly back faces" : "one wall");
     os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
                  static_cast<unsigned long long>(res.shots), res.seconds, view,
                  r->options.outDir.c_str());

@@ -137,6 +137,73 @@ void Environment::ShootLocal(uint32_t i) {
   --newForwards_;
 }
 
+bool Environment::HasLocalUnshot() const {
+  const uint32_t top = tree_.Top();
+  if (top != kNoPatch && UnshotKey(energy_[top]) > 0.0) return true;
+  return BestOutside() >= 0;
+}
+
+int Environment::BestOutside() const {
+  int best = -1;
+  double key = 0.0;
+  for (uint32_t k = 0; k < numOutside_; ++k) {
+    const double* u = outside_[k].unshot;
+    const double s = u[0] + u[1] + u[2];
+    if (s > key) {
+      key = s;
+      best = static_cast<int>(k);
+    }
+  }
+  return best;
+}
+
+void Environment::ShootOutside(uint32_t k) {
+  Outside& o = outside_[k];
+  const Patch& p = o.shooter.patch;
+  const uint32_t shotIndex = o.shots++;
+  const uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
+  double fraction = 1.0;
+  const uint32_t rays = ShotRays(o.unshot, key, &fraction);
+  double power[3];
+  for (int c = 0; c < 3; ++c) {
+    power[c] = fraction < 1.0 ? o.unshot[c] * fraction : o.unshot[c];
+    ledger_.unshot[c] -= power[c];
+    o.unshot[c] = fraction < 1.0 ? o.unshot[c] - power[c] : 0.0;
+  }
+  ++stats_.shots;
+  // No patch to skip: its rays start outside the box (MakeShotRay), and
+  // Distribute treats them as it does a foreign shooter's, clipped to the box.
+  const Skip skip(kNoPatch);
+  if (numNeighbours_ == 0) {
+    Distribute(p, skip, power, key, rays, nullptr, nullptr);
+    return;
+  }
+  MaskBits out = ScratchMask(0);
+  out.SetAllOpen();
+  PacketHeader shot = ShotHeader(p, power, key, shotIndex, index_, rays);
+  if (options_.maskMethod == MaskMethod::kR) {
+    out.CloseFrom(rays);
+    MaskBits routes[6];
+    for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
+    TraceAlive(p, skip, power, key, rays, false, out, routes);
+    Forward(shot, out, routes);
+  } else {
+    MaskBits read;
+    const bool readOnly = ReadsOnly(rays);
+    if (readOnly) {
+      shot.flags |= kReadsOnly;
+      ++stats_.readShots;
+      read = ScratchMask(2);
+      ReadPixels(shot, &read);
+    }
+    Distribute(p, skip, power, key, rays, nullptr, &out, nullptr, nullptr,
+               readOnly ? &read : nullptr);
+    Forward(shot, out);
+  }
+  ++stats_.forwardsCreated;
+  --newForwards_;
+}
+
 MaskBits Environment::SlotMask(uint32_t slot) const {
   size_t w = shape_.words();
   return MaskBits(slotWords_.subspan(slot * w, w), shape_);
@@ -263,10 +330,23 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
     if (roundWork > 0 && workSteps() - work0 >= roundWork) break;
     uint32_t local = tree_.Top();
     double localKey = local == kNoPatch ? 0.0 : tree_.Key(local);
+    // An outside shooter (--sky, --sun) goes before the patches when it has
+    // more unshot power (ties to the patch).
+    const int outside = numOutside_ > 0 ? BestOutside() : -1;
+    if (outside >= 0) {
+      const double* u = outside_[outside].unshot;
+      const double key = u[0] + u[1] + u[2];
+      if (key > localKey) {
+        localKey = key;
+        local = kOutsideIdBase;
+      }
+    }
     bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newForwards_ > 0);
     int s = numNeighbours_ > 0 ? BestReadySlot() : -1;
     if (s >= 0 && (!localOk || slots_[s].key >= localKey)) {
       ShootForeign(static_cast<uint32_t>(s));
+    } else if (localOk && local == kOutsideIdBase) {
+      ShootOutside(static_cast<uint32_t>(outside));
     } else if (localOk) {
       ShootLocal(local);
     } else {
@@ -335,7 +415,7 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, cons
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
-  const glm::vec3 o = centre + options_.rayEpsilon * f.n;
+  const glm::vec3 o = centre + CentreLift(shooter.globalId) * f.n;
   const double halfPi = 1.5707963267948966;
   const double* colCs = flightCols_.data();
   auto isOpen = [bits](uint32_t p) { return !bits || ((bits[p >> 3] >> (p & 7)) & 1u); };

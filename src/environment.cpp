@@ -44,6 +44,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   twin_ = arena.Alloc<uint32_t>(stagedTwin_.size());
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
+  if (numOutside_ > 0) outside_ = arena.Alloc<Outside>(numOutside_);
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
   elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options_.elements.perPatch));
@@ -131,6 +132,14 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
+  {
+    std::vector<OutsideShooter> shooters;
+    OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
+                    &shooters);
+    stagedOutside_.clear();
+    for (const OutsideShooter& s : shooters) stagedOutside_.push_back(Outside{s, {0, 0, 0}, 0});
+    numOutside_ = static_cast<uint32_t>(stagedOutside_.size());
+  }
 
   // Local copies of the patches and a compact local vertex lattice.
   staged_.clear();
@@ -263,6 +272,7 @@ bool Environment::Build() {
     kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
   }
   for (size_t i = 0; i < stagedTwin_.size(); ++i) twin_[i] = stagedTwin_[i];
+  for (uint32_t k = 0; k < numOutside_; ++k) outside_[k] = stagedOutside_[k];
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = stagedTex_[i];
   for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
   for (size_t v = 0; v < vertexCut_.size(); ++v) vertexCut_[v] = 0;
@@ -303,6 +313,7 @@ bool Environment::Build() {
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);
   std::vector<uint32_t>().swap(stagedTwin_);
+  std::vector<Outside>().swap(stagedOutside_);
   std::vector<PatchTexture>().swap(stagedTex_);
   std::vector<glm::vec3>().swap(stagedVertices_);
   std::vector<uint32_t>().swap(stagedCut_);
@@ -356,6 +367,19 @@ void Environment::Reset() {
     root.child = kNoElement;
   }
   nextElement_ = static_cast<uint32_t>(patches_.size());
+  // The outside shooters emit as patches do; their power counts in the
+  // radiosity power R as an emitter's b * area does (the power shot so far
+  // is R - unshot).
+  for (uint32_t k = 0; k < numOutside_; ++k) {
+    Outside& o = outside_[k];
+    o.shots = 0;
+    for (int c = 0; c < 3; ++c) {
+      o.unshot[c] = o.shooter.power[c];
+      ledger_.emitted[c] += o.unshot[c];
+      ledger_.unshot[c] += o.unshot[c];
+      ledger_.radiosity[c] += o.unshot[c];
+    }
+  }
   for (Slot& s : slots_) s = Slot();
   slotIndex_.Clear();
   readyTree_.Clear(-std::numeric_limits<double>::infinity());

@@ -57,17 +57,17 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
     const EnergyLedger& l = e->ledger();
     r.flight = Sum3(flight);
     r.unshot = Sum3(l.unshot) + r.flight;
-    r.emitted = Sum3(l.emitted);
-    r.lost = r.emitted - Sum3(l.absorbed) - Sum3(l.escaped) - r.unshot;
-    uint32_t top = e->TopShooter();
+    r.lost = Sum3(l.emitted) - Sum3(l.absorbed) - Sum3(l.escaped) - r.unshot;
+    // What --sky and --sun lost at once never lit the scene: the stop rules
+    // count without it (EnergyLedger::outsideLost; 0 without them).
+    r.emitted = Sum3(l.emitted) - Sum3(l.outsideLost);
     r.held = uint64_t(e->queuedCount()) + e->outboxCount();
-    r.shootable = e->queuedCount() + e->outboxCount() +
-                  (top != kNoPatch && Sum3(e->energy()[top].unshot) > 0.0);
+    r.shootable = e->queuedCount() + e->outboxCount() + e->HasLocalUnshot();
     r.shots = e->stats().shots + e->stats().foreignShots;
     r.rays = e->stats().rays;
     r.forwardsCreated = e->stats().forwardsCreated;
     r.foreignShots = e->stats().foreignShots;
-    r.radiosity = Sum3(e->ledger().radiosity);
+    r.radiosity = Sum3(e->ledger().radiosity) - Sum3(l.outsideLost);
     r.area = e->totalArea();
     r.kdArea = e->kdArea();
     r.envCpu = i < x->envCpu.size() ? x->envCpu[i] : 0.0;

@@ -624,7 +624,7 @@ Status LoadGltf(const std::string& path, const LoadOptions& options, Scene* scen
   SceneTally tally;
   for (const Polygon& p : result.polygons) tally.Add(path, result.materials.size(), p);
   bool perfect[3] = {false, false, false};
-  s = tally.Check(path, result.materials, perfect);
+  s = tally.Check(path, result.materials, perfect, options.outsideLight);
   if (!s.ok()) return s;
   for (int c = 0; c < 3; ++c)
     if (perfect[c] && ClosedFacingIn(result.polygons)) return CannotLosePower(path, c);

@@ -19,8 +19,9 @@ usage:
 scenes read: Wavefront OBJ with its MTL files (Kd reflectance, Ke emitted
 exitance, map_Kd textures: PNG, JPEG, BMP, TGA), and glTF 2.0 (.gltf, .glb:
 triangles, base colour and its texture, emission, double-sided materials,
-the first camera). The light is the faces that emit, or those of the
-materials --emit NAME=R,G,B names.
+the first camera). The light is the faces that emit, those of the
+materials --emit NAME=R,G,B names, and the sky and sun outside (--sky,
+--sun), which need no emitter in the scene.
 
 examples:
   vismask render scenes/cornell.obj --out out
@@ -29,8 +30,8 @@ examples:
       a published scene whose light's material its MTL lacks
   vismask render scenes/gltf-cornell/cornell_box.gltf --width 256 --height 256
       a Blender glTF export, its emissive light and double-sided walls
-  vismask render scenes/cornell.obj --envs 4 --ranks 2 --emitted-rays 1e6
-      four local environments on two processes, fewer rays
+  vismask render scenes/skylight.obj --sky 0.3,0.4,0.6 --sun 1,4,0.5,30,28,25
+      a room with no lamp, lit by the sky and the sun through its skylight
   vismask render scenes/cornell.obj --export out/box.glb && vismask view out
       the solved mesh as glTF, to walk through in a browser
 )";
@@ -161,6 +162,16 @@ render options:
                        in a warning when that was not 0); NAME=ka takes the
                        material's Ka (scenes that give the light's strength
                        there); repeatable; a NAME no MTL defines exits 2
+  --sky R,G,B          light from a uniform sky of radiance (R, G, B), each
+                       >= 0 (W/m^2/sr of scene units), in every direction
+                       the scene does not block, as a path tracer's constant
+                       world colour; the scene then need not emit
+  --sun X,Y,Z,R,G,B[,DEG]
+                       light from a sun in direction (X, Y, Z) (towards
+                       it), of irradiance (R, G, B) on a surface facing it,
+                       DEG degrees across (0 to 90; 0.53). Sky and sun shoot
+                       into the scene from its box's faces: the box and the
+                       patch size stay the scene's
   --two-sided          both sides of every polygon receive, reflect and show
                        (for scenes wound inconsistently): each polygon is
                        meshed twice, the copy reversed; patches double.

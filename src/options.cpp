@@ -412,6 +412,15 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     } else if (a == "--correct-unshot") {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->correctUnshot = v == "on";
+    } else if (a == "--sky") {
+      if (!ParseSky(v, &o->outside)) return Bad(a, v, "R,G,B: the sky's radiance, each >= 0");
+      o->load.outsideLight = o->outside.Any();
+    } else if (a == "--sun") {
+      if (!ParseSun(v, &o->outside))
+        return Bad(a, v,
+                   "X,Y,Z,R,G,B[,DEG]: the direction towards the sun (not 0), its irradiance "
+                   "(each >= 0) and angular diameter in degrees (0 to 90, default 0.53)");
+      o->load.outsideLight = o->outside.Any();
     } else if (a == "--emit") {
       const char* expected = "NAME=R,G,B (each a number >= 0) or NAME=ka";
       size_t eq = v.rfind('=');

@@ -135,7 +135,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->clock.Done("textures", os::Seconds() - t0,
                 std::to_string(p->textures.images.size()) + " images decoded");
   for (const TextureImage& t : p->textures.images)
-    p->textureBytes += uint64_t{t.width} * t.height * 4;
+    p->textureBytes += uint64_t{t.width} * t.height * 4 + t.pyramid.texels.size() * sizeof(float);
   p->scene.objPath = o.scene;
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
@@ -236,7 +236,10 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       if (stripFaces++ == 0) stripLine = poly.line, stripCorners = poly.corners.size();
       if (std::fabs(change) > std::fabs(stripChange)) stripChange = change;
     }
-    if (probe) probe->Add(i, poly);
+    if (probe)
+      probe->Add(i, poly,
+                 p->twins.Twins(poly.material,
+                                EmitsAfterOverrides(info.materials[poly.material], o.load)));
     if (check) check->Add(i, poly);
     if (!failed.ok()) return;
     one.polygons.assign(1, poly);
@@ -289,7 +292,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (o.roundWorkAuto)
     p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2]);
   p->clock.Done("cutting the scene into environments", os::Seconds() - t0);
-  if (probe) p->side = probe->Side();
+  if (probe) {
+    p->view = probe->Choose();
+    p->side = p->view.side;
+    p->viewProbed = true;
+  }
   t0 = os::Seconds();
   if (check)
     p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
@@ -330,6 +337,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   double power = 0.0;
   for (const auto& [e, w] : emitted) power += w;
+  // --sky, --sun: one shooter a face of an environment for Method R, whose
+  // rays carry their own routes; tiles for the hemisphere masks, which judge
+  // a shooter's rays by its centre (docs/DESIGN.md, "Light from outside").
+  const uint32_t outsideTiles = o.maskMethod == MaskMethod::kR ? 1 : kMaxOutsideTiles;
+  power += OutsidePower(p->grid, o.outside, outsideTiles);
 
   // This rank's pieces, by environment (within one, in source order).
   std::stable_sort(own.begin(), own.end(),
@@ -362,6 +374,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
     e.minRays = o.minRays;
   }
   e.seed = o.seed;
+  e.outside = o.outside;
+  e.outsideTiles = outsideTiles;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
   e.roundShots = o.roundShots;

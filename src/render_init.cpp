@@ -235,6 +235,14 @@ int Init(RunState* r) {
     r->sideChosen = !o.hasView;
     r->side = o.hasView ? o.view : p.side;
     r->camera = SideCamera(p.scene.bounds, r->side);
+    // Where the sides see mostly back faces or one wall: a view from inside.
+    r->viewProbed = p.viewProbed && !o.hasView;
+    r->viewChoice = p.view;
+    if (r->viewProbed && p.view.inside) {
+      r->hasSide = false;
+      r->inside = true;
+      r->camera = InsideCamera(p.scene.bounds, p.view.candidate);
+    }
   }
   if (!MakeView(r->camera, o.width, o.height, &r->view))
     return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));

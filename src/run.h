@@ -107,6 +107,9 @@ struct RunState {
       initStages;  // InitClock's, for run.json  // the scene file's camera (glTF), no --camera or
                    // --view
   ViewSide side = ViewSide::kFront;
+  bool inside = false;  // the chosen camera is an inside candidate's (InsideCamera)
+  ViewChoice viewChoice;
+  bool viewProbed = false;
   View view;
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
   ExchangeBuffers exchange;
@@ -287,6 +290,8 @@ struct Prepared {
   uint32_t idBase = 0;                       // the global id of this rank's first patch
   uint32_t pieceBase = 0;                    // the index of its first piece in the whole partition
   ViewSide side = ViewSide::kFront;          // chosen (without --camera or --view)
+  ViewChoice view;                           // the probe's choice, inside or a side
+  bool viewProbed = false;                   // whether the probe ran
   std::vector<std::string> emitterWarnings;  // rank 0
   float patchSize = 0.0f;
   float tolerance = 0.0f;                     // points this close are one: cut and smooth vertices

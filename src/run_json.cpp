@@ -112,10 +112,40 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   // The side the camera frames (null with --camera), and whether it was chosen (no --view).
   if (r->hasSide)
     w.Printf("    \"view\": \"%s\",\n", ViewSideName(r->side));
+  else if (r->inside)
+    w.Printf("    \"view\": \"inside\",\n");
   else
     w.Printf("    \"view\": null,\n");
   w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
+  // How the default view was chosen (null when --camera, --view or the
+  // scene's camera decided): the best side's image (its shares of front and
+  // back hits, one wall or not) and the best inside candidate's.
+  if (r->viewProbed) {
+    const ViewChoice& v = r->viewChoice;
+    w.Printf(
+        "    \"view_choice\": {\"side\": \"%s\", \"side_front_share\": %.6g, "
+        "\"side_back_share\": %.6g, \"side_one_wall\": %s, \"inside_candidate\": %d, "
+        "\"inside_front_share\": %.6g, \"inside_score\": %.6g, \"inside\": %s},\n",
+        ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
+        v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false");
+  } else {
+    w.Printf("    \"view_choice\": null,\n");
+  }
   w.Printf("    \"camera_from_scene\": %s,\n", r->cameraFromScene ? "true" : "false");
+  // --sky (radiance) and --sun (towards it, irradiance, angular diameter): null without.
+  const OutsideLight& lit = o.outside;
+  if (lit.HasSky())
+    w.Printf("    \"sky\": [%.9g, %.9g, %.9g],\n", lit.sky.x, lit.sky.y, lit.sky.z);
+  else
+    w.Printf("    \"sky\": null,\n");
+  if (lit.HasSun())
+    w.Printf(
+        "    \"sun\": {\"toward\": [%.9g, %.9g, %.9g], \"irradiance\": [%.9g, %.9g, %.9g], "
+        "\"degrees\": %.9g},\n",
+        lit.sunToward.x, lit.sunToward.y, lit.sunToward.z, lit.sun.x, lit.sun.y, lit.sun.z,
+        lit.sunDegrees);
+  else
+    w.Printf("    \"sun\": null,\n");
   w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
            o.envs[2], MaskMethodName(o.maskMethod));
   w.Printf(

@@ -60,17 +60,18 @@ void SceneTally::Add(const std::string& objPath, size_t numMaterials, const Poly
 }
 
 Status SceneTally::Check(const std::string& objPath, const std::vector<Material>& materials,
-                         bool perfect[3]) const {
+                         bool perfect[3], bool lit) const {
   auto isUsed = [&](size_t m) { return m < used.size() && used[m]; };
   bool emits = false;
   for (size_t m = 0; m < materials.size(); ++m) {
     const glm::vec3& ke = materials[m].ke;
     emits = emits || (isUsed(m) && (ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f));
   }
-  if (!emits)
+  if (!emits && !lit)
     return Status::At(objPath, 0,
                       "no emitter: no face has a material with Ke > 0 (--emit NAME=R,G,B or "
-                      "NAME=ka makes material NAME one)");
+                      "NAME=ka makes material NAME one; --sky or --sun light a scene from "
+                      "outside)");
   if (!firstBad.ok()) return firstBad;
   // The brightest Ke and the first face (in file order) that has it.
   double maxKd = 0.0, maxKe = 0.0;
@@ -108,7 +109,7 @@ Status SceneTally::Check(const std::string& objPath, const std::vector<Material>
     return Status::At(objPath, keLine,
                       "radiosity may reach " + Num(bound) + " (max Ke / (1 - max Kd)), beyond " +
                           Num(kMaxRadiosity) + " that the float image can hold; scale Ke down");
-  if (maxKe < kMinRadiosity)
+  if (maxKe < kMinRadiosity && !lit)  // --sky and --sun bound their own values (outside.h)
     return Status::At(objPath, keLine,
                       "brightest Ke " + Num(maxKe) + " is below " + Num(kMinRadiosity) +
                           " (the float image would underflow); scale Ke up");
@@ -148,7 +149,7 @@ Status ParseObj(const std::string& objPath, LineSource& lines, const ObjCounts* 
   if (!s.ok()) return s;
   s = loader.ApplyEmit();
   if (!s.ok()) return s;
-  s = tally->Check(objPath, *materials, perfect);
+  s = tally->Check(objPath, *materials, perfect, options.outsideLight);
   if (!s.ok()) {
     // "no emitter" because the emitting faces were dropped: said at the face.
     std::vector<uint8_t> used = tally->used;

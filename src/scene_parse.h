@@ -269,8 +269,9 @@ struct SceneTally {
   // a face beyond float's range, far from the origin, the radiosity bound);
   // *perfect[c]: every face has Kd 1 in channel c (then the closed-scene
   // check, ClosedFacingIn, must look at the polygons).
-  Status Check(const std::string& objPath, const std::vector<Material>& materials,
-               bool perfect[3]) const;
+  // `lit`: light comes from outside (--sky, --sun), so no emitter is needed.
+  Status Check(const std::string& objPath, const std::vector<Material>& materials, bool perfect[3],
+               bool lit = false) const;
 };
 
 // Whether the faces close space with their fronts facing in (scene.cpp).

@@ -137,6 +137,71 @@ glm::vec3 Texture::Sample(glm::vec2 uv) const {
   return out;
 }
 
+TexturePyramid BuildPyramid(const Texture& t) {
+  TexturePyramid py;
+  const uint32_t w = t.width, h = t.height;
+  size_t total = 0;
+  for (uint32_t lw = w, lh = h; lw > 1 || lh > 1;) {
+    lw = (lw + 1) / 2;
+    lh = (lh + 1) / 2;
+    TexturePyramid::Level l;
+    l.width = lw;
+    l.height = lh;
+    l.offset = total;
+    total += size_t(lw) * lh * 3;
+    py.levels.push_back(l);
+  }
+  py.texels.assign(total, 0.0f);
+  // Level k's linear texel (x, y), level 0 being the 8-bit texture.
+  auto at = [&](size_t k, uint32_t x, uint32_t y, int c) -> float {
+    if (k == 0) return kSrgbTable[t.texels[(size_t(y) * w + x) * 3 + c]];
+    const TexturePyramid::Level& l = py.levels[k - 1];
+    return py.texels[l.offset + (size_t(y) * l.width + x) * 3 + c];
+  };
+  for (size_t k = 0; k < py.levels.size(); ++k) {
+    const TexturePyramid::Level& l = py.levels[k];
+    const uint32_t bw = k == 0 ? w : py.levels[k - 1].width;
+    const uint32_t bh = k == 0 ? h : py.levels[k - 1].height;
+    for (uint32_t y = 0; y < l.height; ++y)
+      for (uint32_t x = 0; x < l.width; ++x) {
+        const uint32_t x1 = std::min(2 * x + 1, bw - 1), y1 = std::min(2 * y + 1, bh - 1);
+        const float n = static_cast<float>((x1 - 2 * x + 1) * (y1 - 2 * y + 1));
+        for (int c = 0; c < 3; ++c) {
+          float s = at(k, 2 * x, 2 * y, c);
+          if (x1 != 2 * x) s += at(k, x1, 2 * y, c);
+          if (y1 != 2 * y) s += at(k, 2 * x, y1, c);
+          if (x1 != 2 * x && y1 != 2 * y) s += at(k, x1, y1, c);
+          py.texels[l.offset + (size_t(y) * l.width + x) * 3 + c] = s / n;
+        }
+      }
+  }
+  return py;
+}
+
+glm::vec3 TexturePyramid::Sample(size_t k, glm::vec2 uv) const {
+  const Level& l = levels[k - 1];
+  float u = uv.x - std::floor(uv.x), v = uv.y - std::floor(uv.y);
+  if (!(u >= 0.0f && u <= 1.0f)) u = 0.0f;
+  if (!(v >= 0.0f && v <= 1.0f)) v = 0.0f;
+  const float x = u * static_cast<float>(l.width) - 0.5f,
+              y = (1.0f - v) * static_cast<float>(l.height) - 0.5f;
+  const float fx = std::floor(x), fy = std::floor(y);
+  const float ax = x - fx, ay = y - fy;
+  const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+  const int w = static_cast<int>(l.width), h = static_cast<int>(l.height);
+  const size_t i0 = static_cast<size_t>(x0 < 0 ? w - 1 : x0),
+               i1 = static_cast<size_t>(x0 + 1 >= w ? 0 : x0 + 1);
+  const size_t j0 = static_cast<size_t>(y0 < 0 ? h - 1 : y0),
+               j1 = static_cast<size_t>(y0 + 1 >= h ? 0 : y0 + 1);
+  const float* r0 = texels.data() + l.offset + j0 * l.width * 3;
+  const float* r1 = texels.data() + l.offset + j1 * l.width * 3;
+  glm::vec3 out;
+  for (int c = 0; c < 3; ++c)
+    out[c] = (1.0f - ay) * ((1.0f - ax) * r0[i0 * 3 + c] + ax * r0[i1 * 3 + c]) +
+             ay * ((1.0f - ax) * r1[i0 * 3 + c] + ax * r1[i1 * 3 + c]);
+  return out;
+}
+
 Texture TextureImage::View() const {
   Texture t;
   t.width = width;
@@ -361,6 +426,7 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
       img.maxCode = std::max(img.maxCode, img.rgb[i + c]);
     }
   img.mean = sum / (static_cast<double>(w) * static_cast<double>(h));
+  img.pyramid = BuildPyramid(img.View());
   *image = std::move(img);
   return Status::Ok();
 }
@@ -416,7 +482,8 @@ glm::vec2 PatchUv(const PatchTexture& t, bool triangle, glm::vec2 st) {
          st.x * st.y * t.uv[2] + (1.0f - st.x) * st.y * t.uv[3];
 }
 
-glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::vec2 uv[4]) {
+glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::vec2 uv[4],
+                            const TexturePyramid* pyramid, uint64_t* samples) {
   // Two samples a texel along the patch's longest extent in texel units.
   double extent = 0.0;
   for (uint32_t a = 0; a < p.numCorners; ++a)
@@ -427,15 +494,30 @@ glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::v
     }
   int n = 2;
   if (extent > 1.0) n = static_cast<int>(std::min(64.0, std::ceil(2.0 * extent)));
+  // With the pyramid: the level where two samples a texel take at most
+  // kDirectSamples a side (a patch of fewer keeps the texels themselves).
+  size_t level = 0;
+  if (pyramid && 2.0 * extent > kDirectSamples) {
+    double e = extent;
+    while (2.0 * e > kDirectSamples && level < pyramid->levels.size()) {
+      e *= 0.5;
+      ++level;
+    }
+    n = std::max(2, static_cast<int>(std::ceil(2.0 * e)));
+  }
   PatchTexture t;
   for (int k = 0; k < 4; ++k) t.uv[k] = uv[k];
   const bool triangle = p.numCorners == 3;
   glm::dvec3 sum(0.0);
   double weight = 0.0;
+  uint64_t taken = 0;
   ForSamples(p, n, [&](glm::vec2 st, double w) {
-    sum += w * glm::dvec3(texture.Sample(PatchUv(t, triangle, st)));
+    const glm::vec2 at = PatchUv(t, triangle, st);
+    sum += w * glm::dvec3(level > 0 ? pyramid->Sample(level, at) : texture.Sample(at));
     weight += w;
+    ++taken;
   });
+  if (samples) *samples += taken;
   return weight > 0.0 ? sum / weight : glm::dvec3(texture.Sample(uv[0]));
 }
 
@@ -591,7 +673,7 @@ void TextureMesh(const Scene& scene, const SceneTextures& textures, Mesh* mesh) 
     PatchTexture& pt = out[i];
     pt.texture = t;
     for (int k = 0; k < 4; ++k) pt.uv[k] = map.At(p.corner[k]);
-    glm::dvec3 mean = PatchTextureMean(img.View(), p, pt.uv);
+    glm::dvec3 mean = PatchTextureMean(img.View(), p, pt.uv, &img.pyramid);
     for (int c = 0; c < 3; ++c) {
       p.kd[c] = static_cast<float>(kd[c] * mean[c]);
       double kdMaterial = kd[c] * img.mean[c];

@@ -112,6 +112,30 @@ glm::vec3 CentreOf(const Patch& p) {
 
 }  // namespace
 
+Ray Environment::MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
+                             glm::vec3* local) const {
+  const OutsideKind kind = OutsideKindOf(id);
+  if (kind == OutsideKind::kNone) return ShotRay(sampler, u, options_.rayEpsilon, local);
+  const Frame& f = sampler.frame;
+  glm::vec3 d;
+  if (kind == OutsideKind::kSky) {
+    *local = CosineDirection(u[3], u[4]);
+    d = f.ToWorld(*local);
+  } else {
+    d = SunRayDirection(options_.outside, u[3], u[4]);
+    *local = glm::vec3(glm::dot(d, f.t), glm::dot(d, f.b), glm::dot(d, f.n));
+  }
+  // Back along the ray to OutsideLift() off the face (a ray so grazing that
+  // this would take it far: less, from 1e-3 of the way in).
+  const float cosine = FMax(glm::dot(d, f.n), 1e-3f);
+  Ray ray;
+  ray.o = sampler.Point(u[0], u[1], u[2]) - (OutsideLift() / cosine) * d;
+  ray.d = d;
+  ray.tMin = 0.0f;
+  ray.tMax = std::numeric_limits<float>::infinity();
+  return ray;
+}
+
 // auto's costs, in centre rays cast (a centre ray's walk: about 1 200 to
 // 1 600 instructions, callgrind, the Cornell box in 2 environments at the
 // defaults and at R = 100, 4 096 rays). Regenerating a ray downstream (its
@@ -197,7 +221,7 @@ void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const PatchS
     float u[5];
     points.Next(r, u, true);
     glm::vec3 local;
-    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
+    Ray ray = MakeShotRay(sampler, h.shooterId, u, &local);
     float t0, t1;
     if (!Slabs(ray, box, &t0, &t1)) continue;
     visit(EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_));
@@ -249,6 +273,7 @@ void Environment::Book(const ShotTally& tally) {
   for (int c = 0; c < 3; ++c) {
     ledger_.escaped[c] += tally.lost[c];
     ledger_.absorbed[c] += tally.backHit[c];
+    if (tally.outside) ledger_.outsideLost[c] += tally.lost[c] + tally.backHit[c];
   }
   stats_.rays += tally.traced;
   stats_.hits += tally.hits;
@@ -294,6 +319,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
+  tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
@@ -301,7 +327,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     float u[5];
     points.Next(r, u, true);
     glm::vec3 local;
-    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
+    Ray ray = MakeShotRay(sampler, shooter.globalId, u, &local);
     uint32_t pixel = 0;
     if (foreign) {
       float t0, t1;
@@ -399,7 +425,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   glm::vec3 centre(0.0f);
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
-  const CentreRays rays{centre + options_.rayEpsilon * sampler.frame.n, sampler.frame,
+  const CentreRays rays{centre + CentreLift(shooter.globalId) * sampler.frame.n, sampler.frame,
                         &maskDirections_};
   // From inside this box, a direction that cannot leave through a face
   // with a neighbour beyond it reaches no other environment: nobody
@@ -457,10 +483,11 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
+  tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
   uint64_t left = 0;
   auto trace = [&](uint32_t r, const float u[5]) {
     glm::vec3 local;
-    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
+    Ray ray = MakeShotRay(sampler, shooter.globalId, u, &local);
     ++tally.traced;
     Hit hit;
     if (grid_.Intersect(ray, skip, &hit)) {

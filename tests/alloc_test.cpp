@@ -325,6 +325,21 @@ TEST(AllocTest, MethodsCAndRAllocateNothingAfterInit) {
   }
 }
 
+// --sky and --sun: the outside shooters' shots (R with routes, B with tiles
+// and their centre masks, one environment with none).
+TEST(AllocTest, SkyAndSunAllocateNothingAfterInit) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string how :
+       {"--mask-method R --envs 2x1x2", "--mask-method B --envs 2x1x2", "--envs 1"}) {
+    CountedRender run("scenes/skylight.obj",
+                      "--sky 0.3,0.4,0.5 --sun 1,4,0.5,3,3,2.5 --emitted-rays 200000 --width 64 "
+                      "--height 64 --mask-res 24 " +
+                          how);
+    ASSERT_EQ(run.code, 0) << how << ": " << run.err;
+    EXPECT_EQ(run.allocations, 0) << how << ": heap allocations after init";
+  }
+}
+
 TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   // Four processes: this one (rank 0, counted) and three forked ranks, each

@@ -197,6 +197,41 @@ TEST(CameraTest, ClosedBoxKeepsFront) {
   EXPECT_EQ(ChooseViewSide(s), ViewSide::kFront);
 }
 
+// Issue 40: from outside, a closed room shows only the backs of its walls;
+// the default camera goes inside, where every candidate sees walls' fronts.
+// An open box is still seen from outside through its open side.
+ViewChoice Choice(const Scene& s) {
+  ViewProbe probe(s.bounds);
+  for (uint32_t k = 0; k < s.polygons.size(); ++k) probe.Add(k, s.polygons[k]);
+  return probe.Choose();
+}
+
+TEST(CameraTest, ClosedRoomIsSeenFromInside) {
+  ViewChoice closed = Choice(OpenBox(-1));
+  EXPECT_TRUE(closed.inside);
+  EXPECT_EQ(closed.sideFront, 0.0);
+  EXPECT_GT(closed.sideBack, 0.5);
+  EXPECT_GE(closed.candidate, 0);
+  EXPECT_GT(closed.candidateFront, 0.99);  // walls all round
+  for (int open = 0; open < kNumViewSides; ++open) {
+    ViewChoice c = Choice(OpenBox(open));
+    EXPECT_FALSE(c.inside) << ViewSideName(static_cast<ViewSide>(open));
+    EXPECT_EQ(c.side, static_cast<ViewSide>(open));
+  }
+  // A box facing out (a building seen from outside): its fronts are seen
+  // from outside, five walls of them, no view from inside.
+  Scene out = OpenBox(-1);
+  for (Polygon& p : out.polygons) {
+    std::reverse(p.corners.begin(), p.corners.end());
+    p.normal = -p.normal;
+  }
+  ViewChoice c = Choice(out);
+  EXPECT_FALSE(c.inside);
+  EXPECT_GT(c.sideFront, 0.3);
+  // Seen from inside, it is all backs: no candidate reaches half.
+  EXPECT_LT(c.candidateFront, 0.5);
+}
+
 TEST(CameraTest, OccludedFrontFacesAreNotCounted) {
   // A quad facing -z (towards the front camera) behind a larger one facing
   // +z: facing the eye is not enough, the front camera sees only a back.
@@ -281,6 +316,33 @@ TEST(CameraTest, DefaultRenderOfABoxOpenOnPlusZLooksFromPlusZ) {
   ASSERT_EQ(c.size(), 10u) << json;
   EXPECT_GT(c[2], 1.0);  // eye beyond the box's +z face
   EXPECT_EQ(c[5], 1.0);  // looking at that face
+}
+
+TEST(CameraTest, DefaultRenderOfAClosedRoomLooksFromInside) {
+  TempDir dir;
+  WriteOpenBox(dir.path(), "");
+  auto r = RunMain(TinyRender(dir, dir.File("box.obj")));
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string json = ReadFile(dir.File("out/run.json"));
+  EXPECT_NE(json.find("\"view\": \"inside\",\n    \"view_auto\": true,"), std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"inside\": true}"), std::string::npos) << json;
+  std::vector<double> c = JsonCamera(json);
+  ASSERT_EQ(c.size(), 10u) << json;
+  for (int a = 0; a < 3; ++a) {  // the eye and the target in the unit box
+    EXPECT_GT(c[a], 0.0);
+    EXPECT_LT(c[a], 1.0);
+    EXPECT_GT(c[3 + a], 0.0);
+    EXPECT_LT(c[3 + a], 1.0);
+  }
+  // --view keeps its side.
+  auto args = TinyRender(dir, dir.File("box.obj"));
+  args.insert(args.end(), {"--view", "front"});
+  r = RunMain(args);
+  ASSERT_EQ(r.code, 0) << r.err;
+  json = ReadFile(dir.File("out/run.json"));
+  EXPECT_NE(json.find("\"view\": \"front\",\n    \"view_auto\": false,"), std::string::npos);
+  EXPECT_NE(json.find("\"view_choice\": null"), std::string::npos);
 }
 
 TEST(CameraTest, CornellDefaultCameraIsUnchanged) {

@@ -155,6 +155,19 @@ TEST_F(CheckpointTest, LoopKilledAtARandomRoundResumesIdentically) {
   }
 }
 
+// Light from outside (--sky, --sun): the outside shooters' unshot power is
+// part of the state. Killed at the fourth checkpoint's first file, resumed
+// on one process and on two pipe ranks.
+TEST_F(CheckpointTest, SkyAndSunResumeIdentically) {
+  const std::string run =
+      " render scenes/skylight.obj --sky 0.4,0.5,0.7 --sun 0.3,1,0.2,400,380,360 --envs 2x1x2 "
+      "--max-shots 120 --round-shots 4 --width 64 --height 64 --patch-size 0.8 --quiet";
+  std::string log;
+  ASSERT_EQ(RunVismask(run + " --out " + ref() + "s", &log), 0) << log;
+  KillAndResume(dir, ref() + "s", VismaskBin(), "", "write", 3 * kFilesPerCheckpoint + 1,
+                {"", " --ranks 2"}, run);
+}
+
 // Two pipe ranks killed at a random round (whichever rank reaches the call
 // first: rank 0 writes 3 files a checkpoint, rank 1 two), resumed on one
 // process and on three ranks.

@@ -150,6 +150,17 @@ TEST(RanksTest, MethodsCAndRGiveTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("R", {"2", "8"}, {"4"});
 }
 
+// --sky and --sun: outside shooters on the box faces of the environments
+// that lie on them (tiles for B), their packets and routes like a patch's.
+TEST(RanksTest, SkyAndSunGiveTheSameBytesEverywhere) {
+  const std::vector<std::string> lit = test::Words(
+      "render scenes/skylight.obj --sky 0.3,0.4,0.5 --sun 1,4,0.5,3,3,2.5 --envs 2x1x2 "
+      "--emitted-rays 200000 --width 64 --height 64 --mask-res 24 --quiet "
+      "--camera 0.4,2.2,0.4,3,0.3,3,0,1,0,70");
+  ExpectSameBytesEverywhere("R", {"2", "3"}, {"4"}, lit);
+  ExpectSameBytesEverywhere("B", {"4"}, {"2"}, lit);
+}
+
 // Smoothing shares display values between polygons in different
 // environments and ranks, summed in an order that does not depend on them.
 TEST(RanksTest, SmoothingGivesTheSameBytesEverywhere) {

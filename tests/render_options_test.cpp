@@ -121,7 +121,8 @@ TEST(RenderTest, HelpListsEveryOption) {
        {"--out",       "--patch-size",  "--rays",           "--seed",       "--stop-unshot",
         "--max-shots", "--max-seconds", "--width",          "--height",     "--camera",
         "--exposure",  "--quiet",       "--correct-unshot", "--stop-error", "--aa",
-        "--strict",    "--emit",        "--round-shots",    "--round-work", "--envs auto"})
+        "--strict",    "--emit",        "--round-shots",    "--round-work", "--envs auto",
+        "--sky",       "--sun"})
     EXPECT_NE(out.find(flag), std::string::npos) << flag;
 }
 

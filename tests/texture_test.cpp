@@ -145,6 +145,69 @@ TEST(TextureTest, PatchMeanOfACheckerItCoversIsHalf) {
   EXPECT_LT(PatchTextureMean(t, quad, uvb).x, 0.4);
 }
 
+// Issue 40: texture means at init in time proportional to texels + patches.
+// Counted: the pyramid's texels (built once a texture) and the samples a
+// patch takes. A patch over the whole texture takes the same samples at
+// 128^2 and at 1024^2 texels, where without the pyramid the samples grew
+// with the texels it covers up to 4 096: the work is the texels' plus the
+// patches', not their product. The means stay within 2% of the texels'
+// exact mean, as the direct samples' do.
+TEST(TextureTest, PatchMeansTakeWorkInProportionToTexelsPlusPatches) {
+  auto make = [](uint32_t n) {
+    std::vector<uint8_t> texels(size_t(n) * n * 3);
+    for (uint32_t y = 0; y < n; ++y)
+      for (uint32_t x = 0; x < n; ++x)
+        for (int c = 0; c < 3; ++c)
+          texels[(size_t(y) * n + x) * 3 + c] = static_cast<uint8_t>(
+              60 + (x * 7 + y * 3) % 100 + ((x / 4 + y / 4) % 2) * 60 + c * 10);
+    return texels;
+  };
+  // The exact mean of the linear texels over [0, f]^2 of the texture (f
+  // a whole number of texels).
+  auto exact = [](const std::vector<uint8_t>& texels, uint32_t n, uint32_t cols, int c) {
+    double s = 0.0;
+    for (uint32_t y = n - cols; y < n; ++y)  // v in [0, f]: the bottom rows
+      for (uint32_t x = 0; x < cols; ++x) s += SrgbToLinear(texels[(size_t(y) * n + x) * 3 + c]);
+    return s / (double(cols) * cols);
+  };
+  Patch quad = Square();
+  uint64_t perPatch[2] = {0, 0}, pyramidTexels[2] = {0, 0};
+  const uint32_t sizes[2] = {128, 1024};
+  for (int k = 0; k < 2; ++k) {
+    const uint32_t n = sizes[k];
+    std::vector<uint8_t> texels = make(n);
+    Texture t = TexView(texels, n, n);
+    TexturePyramid py = BuildPyramid(t);
+    pyramidTexels[k] = py.texels.size() / 3;
+    for (float f : {1.0f, 0.25f}) {
+      glm::vec2 uv[4] = {{0, 0}, {f, 0}, {f, f}, {0, f}};
+      uint64_t direct = 0, levelled = 0;
+      glm::dvec3 a = PatchTextureMean(t, quad, uv, nullptr, &direct);
+      glm::dvec3 b = PatchTextureMean(t, quad, uv, &py, &levelled);
+      EXPECT_EQ(direct, 4096u) << n;  // the direct cap (n = 64)
+      EXPECT_LE(levelled, uint64_t(kDirectSamples) * kDirectSamples) << n;
+      const uint32_t cols = static_cast<uint32_t>(f * n);
+      for (int c = 0; c < 3; ++c) {
+        const double e = exact(texels, n, cols, c);
+        EXPECT_NEAR(a[c], e, 0.02 * e) << n << " " << f << " direct " << c;
+        EXPECT_NEAR(b[c], e, 0.02 * e) << n << " " << f << " levelled " << c;
+      }
+      if (f == 1.0f) perPatch[k] = levelled;
+    }
+  }
+  EXPECT_EQ(perPatch[0], perPatch[1]);  // independent of the texture's size
+  // The pyramid: a third of the texels, in proportion to them.
+  EXPECT_NEAR(static_cast<double>(pyramidTexels[0]), 128.0 * 128 / 3, 128.0);
+  EXPECT_NEAR(static_cast<double>(pyramidTexels[1]) / pyramidTexels[0], 64.0, 0.5);
+  // A patch of few texels keeps the texels themselves: the bytes of old.
+  std::vector<uint8_t> texels = make(128);
+  Texture t = TexView(texels, 128, 128);
+  TexturePyramid py = BuildPyramid(t);
+  glm::vec2 small[4] = {{0, 0}, {0.1f, 0}, {0.1f, 0.1f}, {0, 0.1f}};
+  glm::dvec3 a = PatchTextureMean(t, quad, small), b = PatchTextureMean(t, quad, small, &py);
+  EXPECT_EQ(a.x, b.x);
+}
+
 TEST(TextureTest, UvMapIsExactForTrianglesAndAffineCornersAndFitsTheRest) {
   Polygon tri;
   tri.corners = {{0, 0, 0}, {2, 0, 0}, {0, 3, 0}};

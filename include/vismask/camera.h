@@ -59,6 +59,38 @@ void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]);
 // front from anywhere and keeps front.
 ViewSide ChooseViewSide(const Scene& scene);
 
+// Inside views (issue 40): where the outside views see mostly back faces or
+// one wall (a closed room, a building, a box whose walls face in), the
+// default camera goes inside. Candidate k (0 to kInsideCandidates - 1)
+// stands at 60% of the box's height over one of the 8 points (0.15, 0.5,
+// 0.85 of x and z but the centre) and looks across the middle at the
+// mirrored point at 35% of the height, up +y, 70 degrees; the candidates'
+// images are probed as the sides' are (kInsideProbeRays^2 rays) and the one
+// with the most front hits off the orientation most of them share wins
+// (a view across a room, not of one wall or a block up close), ties to the
+// first.
+constexpr int kInsideCandidates = 8;
+constexpr int kInsideProbeRays = 32;
+Camera InsideCamera(const Bounds& bounds, int candidate);
+
+// What the probe chose: the best side, how its image fares (the share of
+// its rays whose nearest hit is a front face, of those that hit a back face,
+// and whether one plane's orientation holds 90% of its front hits), and
+// whether an inside candidate replaces it (`inside`, `candidate`, its
+// front share). The side's image is poor when back hits outnumber front
+// hits or it shows one wall; an inside candidate then wins when its front
+// share is larger than the side's and at least 1/2, and at least a tenth of
+// its front hits are off their commonest orientation.
+struct ViewChoice {
+  ViewSide side = ViewSide::kFront;
+  double sideFront = 0.0, sideBack = 0.0;
+  bool sideOneWall = false;
+  bool inside = false;
+  int candidate = -1;           // the best inside candidate probed (-1: none)
+  double candidateFront = 0.0;  // its front share
+  double candidateScore = 0.0;  // its share of front hits off their commonest orientation
+};
+
 // A camera's derived basis for projection onto a width x height image.
 struct View {
   glm::vec3 eye, right, up, forward;  // right is image +x, up is image +y
@@ -80,9 +112,14 @@ bool MakeView(const Camera& camera, int width, int height, View* view);
 class ViewProbe {
  public:
   explicit ViewProbe(const Bounds& bounds);
-  void Add(uint32_t index, const Polygon& polygon);
+  // `twoSided`: the polygon shows both sides (--two-sided, a doubleSided
+  // glTF material); the inside candidates count its back as a front (the
+  // sides keep their counts of old).
+  void Add(uint32_t index, const Polygon& polygon, bool twoSided = false);
   void Rays(uint32_t rays[kNumViewSides]) const;  // as VisibleFrontRays
   ViewSide Side() const;                          // as ChooseViewSide
+  // The side, and whether an inside candidate replaces it (ViewChoice).
+  ViewChoice Choose() const;
   static uint64_t HeapBytes();
 
  private:
@@ -93,8 +130,12 @@ class ViewProbe {
     std::vector<double> depth, nearest;
     std::vector<uint32_t> index;
     std::vector<uint8_t> front;
+    std::vector<uint8_t> plane;  // the hit's orientation: 1 + 2 * axis + (normal < 0); 0: none
+    int n = kViewProbeRays;
   };
+  void AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided);
   Probe probes_[kNumViewSides];
+  Probe inside_[kInsideCandidates];
   std::vector<glm::dvec2> poly_;
 };
 

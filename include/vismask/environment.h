@@ -17,6 +17,7 @@
 #include "vismask/mask.h"
 #include "vismask/max_tree.h"
 #include "vismask/mesh.h"
+#include "vismask/outside.h"
 #include "vismask/packet.h"
 #include "vismask/partition.h"
 #include "vismask/patch.h"
@@ -45,6 +46,12 @@ struct EnergyLedger {
   // its path, so the sum over environments is the power not yet traced).
   double inFlight[3] = {0, 0, 0};
   double radiosity[3] = {0, 0, 0};  // sum of b * area over local patches (emitted + reflected)
+  // --sky, --sun: of absorbed and escaped, what outside shooters' rays lost
+  // at once, on a back face or crossing the scene without a hit: light
+  // that never lit the scene. The solve's stop rules leave it out of the
+  // emitted and radiosity power (exchange.cpp), so that the sky on the
+  // outside of a closed room's walls does not count as converged power.
+  double outsideLost[3] = {0, 0, 0};
 };
 
 // Counters of one environment's work.
@@ -116,6 +123,10 @@ struct EnvOptions {
   // radiosity, direct part included). With N > 0 the environment keeps each
   // patch's indirect radiosity apart and its emitter list.
   uint32_t directSamples = 0;
+  // --sky, --sun: the light from outside the scene's box (outside.h), in
+  // outsideTiles x outsideTiles shooters a face of the box.
+  OutsideLight outside;
+  uint32_t outsideTiles = 1;
 };
 
 // What a checkpoint keeps of an environment beside its arena's bytes (the
@@ -327,6 +338,10 @@ class Environment {
 
   // Test hooks: the shooter a plain progressive-refinement step would take.
   uint32_t TopShooter() const { return tree_.Top(); }
+  // Whether a local patch or an outside shooter (--sky, --sun) has unshot power.
+  bool HasLocalUnshot() const;
+  // The outside shooters this environment holds (outside.h).
+  uint32_t numOutside() const { return numOutside_; }
 
  private:
   // A queued foreign shooter: its packet header, its mask so far (AND of the
@@ -345,6 +360,26 @@ class Environment {
 
   void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
   void ShootLocal(uint32_t i);
+  // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
+  // no patch to skip and no centre-mask cache.
+  void ShootOutside(uint32_t k);
+  // The outside shooter with the most unshot power (ties to the first), or
+  // -1 when none has any.
+  int BestOutside() const;
+  // Ray r of a shot of shooter `id` from its five uniforms: ShotRay for a
+  // patch; for an outside shooter (outside.h) its direction (cosine for the
+  // sky, the sun's cone for the sun) from a point of its face, the origin
+  // moved back along the ray to OutsideLift() outside the scene's box, so
+  // that the ray crosses geometry lying on the box's face (a floor on its
+  // bottom) rather than starting in its plane.
+  Ray MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
+                  glm::vec3* local) const;
+  // How far off its plane a shooter's centre rays start: rayEpsilon in front
+  // of a patch, OutsideLift() behind an outside shooter (outside the box).
+  float CentreLift(uint32_t id) const {
+    return OutsideKindOf(id) == OutsideKind::kNone ? options_.rayEpsilon : -OutsideLift();
+  }
+  float OutsideLift() const { return 4.0f * options_.rayEpsilon; }
   void ShootForeign(uint32_t slot);
   // Traces `rays` rays of one shooter through this environment. Rays whose
   // pixel is closed in `in` are skipped; with a mask method, `out` loses the
@@ -431,6 +466,7 @@ class Environment {
     uint64_t traced = 0, hits = 0;
     double lost[3] = {0, 0, 0};     // left the scene
     double backHit[3] = {0, 0, 0};  // absorbed by back faces
+    bool outside = false;           // an outside shooter's rays (EnergyLedger::outsideLost)
   };
   // A ray's first hit here: a front side receives `share`, a back side absorbs it.
   void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
@@ -537,6 +573,17 @@ class Environment {
   uint32_t outCount_ = 0;
   uint32_t queued_ = 0;
   uint32_t newForwards_ = 0;
+  // --sky, --sun: this environment's outside shooters, staged at Prepare
+  // and kept in the arena (so a checkpoint's arena bytes hold their unshot
+  // power); none laid out when there are none.
+  struct Outside {
+    OutsideShooter shooter;
+    double unshot[3];
+    uint32_t shots;
+  };
+  std::vector<Outside> stagedOutside_;
+  Span<Outside> outside_;
+  uint32_t numOutside_ = 0;
   EnergyLedger ledger_;
   EnvStats stats_;
   uint64_t centreSteps_ = 0;  // grid steps of the centre rays really cast

@@ -9,6 +9,7 @@
 
 #include "vismask/camera.h"
 #include "vismask/mask.h"
+#include "vismask/outside.h"
 #include "vismask/scene.h"
 #include "vismask/status.h"
 #include "vismask/transport.h"
@@ -20,7 +21,8 @@ struct Options {
   bool help = false;
   bool helpAll = false;  // --help all: every option (HelpText); --help alone: UsageText
   std::string scene;
-  LoadOptions load;  // --strict, --emit NAME=R,G,B|ka (repeatable)
+  LoadOptions load;      // --strict, --emit NAME=R,G,B|ka (repeatable)
+  OutsideLight outside;  // --sky R,G,B, --sun X,Y,Z,R,G,B[,DEG] (outside.h)
   std::string outDir = "out";
   std::string
       exportPath;  // --export FILE.glb: the solved mesh as binary glTF (gltf.h); empty: none

@@ -84,6 +84,8 @@ struct LoadOptions {
   // Materials made emitters (or not): each replaces its material's Ke, in
   // order (the last for a name wins).
   std::vector<EmitOverride> emit;
+  // --sky or --sun: the light comes from outside, so a scene need not emit.
+  bool outsideLight = false;
 };
 
 // Loads and validates `objPath` and the MTL files it names (relative to the

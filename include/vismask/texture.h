@@ -45,6 +45,24 @@ struct Texture {
   glm::vec3 Modulation(glm::vec2 uv) const { return Sample(uv) * invMean; }
 };
 
+// A texture's box-filtered levels at init (heap), for the patch means: level
+// k (1, 2, ...) is ceil(w / 2^k) x ceil(h / 2^k) linear texels, each the mean
+// of the (up to) 2 x 2 texels of level k - 1 it covers, down to 1 x 1.
+// Built in time proportional to the texels (a third of them written).
+struct TexturePyramid {
+  struct Level {
+    uint32_t width = 0, height = 0;
+    size_t offset = 0;  // into `texels`, 3 floats a texel, rows top to bottom
+  };
+  std::vector<Level> levels;  // levels[0] is level 1
+  std::vector<float> texels;
+  // The linear value of level k (1 ...) at uv, bilinear and repeating as
+  // Texture::Sample.
+  glm::vec3 Sample(size_t k, glm::vec2 uv) const;
+};
+// The pyramid of a texture (texture.texels must be there).
+TexturePyramid BuildPyramid(const Texture& texture);
+
 // A decoded map_Kd at init (heap).
 struct TextureImage {
   std::string path;  // as resolved by the loader
@@ -53,6 +71,7 @@ struct TextureImage {
   std::vector<uint8_t> rgb;  // sRGB, 3 bytes a texel
   glm::dvec3 mean{0.0};      // mean linear texel per channel
   uint8_t maxCode = 0;       // the largest code of any channel
+  TexturePyramid pyramid;    // for the patch means (PatchTextureMean)
   Texture View() const;      // over `rgb`
 };
 
@@ -92,9 +111,16 @@ glm::vec2 PatchUv(const PatchTexture& t, bool triangle, glm::vec2 st);
 
 // The mean of `texture` over patch `p` whose corners have texture
 // coordinates `uv`: an area-weighted grid of n x n samples (n from the
-// patch's extent in texels, 2 to 64; sub-triangle centroids for a
-// triangle). Deterministic.
-glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::vec2 uv[4]);
+// patch's extent in texels, two a texel, 2 to 64; sub-triangle centroids
+// for a triangle). Deterministic. With `pyramid`, a patch that would take
+// more than kDirectSamples a side samples the level where it does not
+// (level k: 2^k texels a texel), so that a patch costs at most
+// kDirectSamples^2 samples whatever the texture's size: init's texture
+// means take time in proportion to texels + patches, not their product.
+// `samples`, when given, is added the samples taken (a counted measure).
+constexpr int kDirectSamples = 32;
+glm::dvec3 PatchTextureMean(const Texture& texture, const Patch& p, const glm::vec2 uv[4],
+                            const TexturePyramid* pyramid = nullptr, uint64_t* samples = nullptr);
 
 // The scene's textures at init: every distinct map_Kd of a material that
 // some face uses, decoded, and which material uses which.

@@ -7,7 +7,9 @@
 # clockwise seen from the front), face_materials [m...], materials
 # [{"kd":[r,g,b],"ke":[r,g,b]}...], camera {eye,target,up,fovy}, width,
 # height, spp, seed, threads (0: all), work (a scratch directory), pfm, pgm
-# (the paths to write), mask_dilate (pixels).
+# (the paths to write), mask_dilate (pixels), sky (null or [r,g,b]: a world of
+# that radiance, unseen by camera rays), sun (null or {toward, irradiance,
+# degrees}: a Sun lamp of that strength, W/m^2 of irradiance).
 import array
 import json
 import math
@@ -129,11 +131,32 @@ def Settings(job):
     s.view_settings.look = "None"
     s.view_settings.exposure = 0.0
     s.view_settings.gamma = 1.0
-    # A black world: no light from outside the scene.
+    # A black world: no light from outside the scene; with "sky", a world of
+    # constant radiance (Background colour x strength 1), which camera rays do
+    # not see (vismask's image is black where no surface is).
     w = bpy.data.worlds.new("black")
     w.use_nodes = False
     w.color = (0.0, 0.0, 0.0)
+    if job.get("sky"):
+        w.use_nodes = True
+        bg = w.node_tree.nodes["Background"]
+        bg.inputs["Color"].default_value = (job["sky"][0], job["sky"][1], job["sky"][2], 1.0)
+        bg.inputs["Strength"].default_value = 1.0
+        w.cycles_visibility.camera = False
     s.world = w
+    if job.get("sun"):
+        sun = job["sun"]
+        e = max(sun["irradiance"])
+        data = bpy.data.lights.new("sun", "SUN")
+        data.energy = e  # Cycles: a sun's strength is the irradiance (W/m^2) facing it
+        data.color = tuple(c / e if e > 0 else 0.0 for c in sun["irradiance"])
+        data.angle = math.radians(sun["degrees"])
+        data.cycles.cast_shadow = True
+        obj = bpy.data.objects.new("sun", data)
+        # A sun lamp shines along its local -z: local +z towards the sun.
+        obj.rotation_mode = "QUATERNION"
+        obj.rotation_quaternion = Vector(sun["toward"]).to_track_quat("Z", "Y")
+        s.collection.objects.link(obj)
     s.frame_current = 1
     vl = s.view_layers[0]
     vl.use_pass_combined = True

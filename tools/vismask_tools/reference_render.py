@@ -41,13 +41,22 @@ def BlenderVersion():
     return m.group(1) if m else "unknown"
 
 
-def CheckWithVismask(scene):
+def CheckWithVismask(scene, a=None):
     """vismask's own loader on the scene, when the binary is there, so that the
-    reference refuses exactly what vismask refuses."""
+    reference refuses exactly what vismask refuses (lit by --sky and --sun
+    when `a` has them: a scene they light need not emit)."""
     binary = os.environ.get("VISMASK_BIN", os.path.join(ROOT, "build", "vismask"))
     if not os.access(binary, os.X_OK):
         return
-    p = subprocess.run([binary, "footprint", scene, "--json"], capture_output=True, text=True)
+    lit = []
+    if a and a.get("sky") is not None:
+        lit += ["--sky", ",".join(repr(float(v)) for v in a["sky"])]
+    if a and a.get("sun") is not None:
+        s = a["sun"]
+        lit += ["--sun", ",".join(repr(float(v)) for v in
+                                  s["toward"] + s["irradiance"] + [s["degrees"]])]
+    p = subprocess.run([binary, "footprint", scene, "--json"] + lit, capture_output=True,
+                       text=True)
     if p.returncode == 2:
         raise InputError(p.stderr.strip() or scene + ": vismask refuses this scene")
 
@@ -145,8 +154,9 @@ def Cached(a, argvForRecord):
     """The cache directory holding this render (ref.pfm, ref.mask.pgm,
     ref.json), rendered first if it is not there."""
     scene, (w, h) = a["scene"], a["size"]
-    CheckWithVismask(scene)
-    vertices, faces, faceMats, mats, blobs = LoadScene(scene)
+    CheckWithVismask(scene, a)
+    vertices, faces, faceMats, mats, blobs = LoadScene(
+        scene, lit=a.get("sky") is not None or a.get("sun") is not None)
     cam = a["camera"] or DefaultCamera(vertices, faces)
     CheckCamera(cam)
     outDir = os.path.dirname(os.path.abspath(a["out"]))
@@ -156,9 +166,13 @@ def Cached(a, argvForRecord):
     key = hashlib.sha256()
     for b in blobs:
         key.update(hashlib.sha256(b).digest())
-    key.update(json.dumps({"camera": [float(c) for c in cam], "size": [w, h], "spp": a["spp"],
-                           "seed": a["seed"], "version": kVersion, "blender": version},
-                          sort_keys=True).encode())
+    what = {"camera": [float(c) for c in cam], "size": [w, h], "spp": a["spp"],
+            "seed": a["seed"], "version": kVersion, "blender": version}
+    # --sky, --sun: in the key only when given, so the cache of unlit keys stays.
+    for k in ("sky", "sun"):
+        if a.get(k) is not None:
+            what[k] = a[k]
+    key.update(json.dumps(what, sort_keys=True).encode())
     key = key.hexdigest()[:24]
     cache = os.path.join(ROOT, "build", "reference-cache", key)
     if not (a["cache"] and os.path.exists(os.path.join(cache, "ref.json"))):
@@ -222,7 +236,8 @@ def Blend(a, vertices, faces, faceMats, mats, cam, key, version, cache, argvForR
                "camera": {"eye": cam[0:3], "target": cam[3:6], "up": cam[6:9], "fovy": cam[9]},
                "width": w, "height": h, "spp": a["spp"], "seed": a["seed"],
                "threads": a["threads"], "work": work, "pfm": os.path.join(work, "ref.pfm"),
-               "pgm": os.path.join(work, "ref.mask.pgm"), "mask_dilate": kMaskDilate}
+               "pgm": os.path.join(work, "ref.mask.pgm"), "mask_dilate": kMaskDilate,
+               "sky": a.get("sky"), "sun": a.get("sun")}
         with open(os.path.join(work, "job.json"), "w") as f:
             json.dump(job, f)
         # Line-buffered, so that the progress line follows Cycles' own.
@@ -260,6 +275,9 @@ def Blend(a, vertices, faces, faceMats, mats, cam, key, version, cache, argvForR
                 "wall_seconds": round(seconds, 1), "render_seconds": round(stats["render_seconds"], 1),
                 "mask": "Cycles Emit pass > 0 in any channel, dilated %d px (square)" % kMaskDilate,
                 "masked_pixels": stats["masked_pixels"]}
+        for k in ("sky", "sun"):
+            if a.get(k) is not None:
+                meta[k] = a[k]
         with open(os.path.join(work, "ref.json"), "w") as f:
             json.dump(meta, f, indent=1)
             f.write("\n")

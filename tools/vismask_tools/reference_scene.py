@@ -55,7 +55,7 @@ def LoadMtl(path, materials, where):
     return data
 
 
-def LoadScene(obj):
+def LoadScene(obj, lit=False):
     """The scene as vismask's loader reads it (src/scene.cpp): vertices, faces
     (0-based corner lists), each face's material, the materials, and the bytes
     of the OBJ and every MTL (for the cache key). vismask's own loader checks
@@ -108,7 +108,7 @@ def LoadScene(obj):
     mats = [None] * len(order)
     for name, k in order.items():
         mats[k] = materials[name]
-    if not any(max(m["ke"]) > 0 for m in mats):
+    if not lit and not any(max(m["ke"]) > 0 for m in mats):  # lit: --sky or --sun
         raise InputError(obj + ": no emitter: no face has a material with Ke > 0")
     return vertices, faces, faceMats, mats, blobs
 
