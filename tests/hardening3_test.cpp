@@ -856,12 +856,12 @@ TEST(Hardening3Test, ADiscOfManyCornersMakesPatchesByItsArea) {
   WriteFile(dir.File("disc.obj"), obj);
   WriteFile(dir.File("d.mtl"),
             "newmtl white\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0.5 0.5 0.5\nKe 10 10 10\n");
-  const double t0 = os::Seconds();
+  // No time bound here (tests count, benchmarks time): the patch count below
+  // is what a fan of thin triangles used to blow up.
   auto r =
       test::RunMain({"render", dir.File("disc.obj"), "--patch-size", "0.1", "--width", "32",
                      "--height", "32", "--max-shots", "300", "--quiet", "--out", dir.File("out")});
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_LT(os::Seconds() - t0, 30.0);
   const std::string json = ReadFile(dir.File("out/run.json"));
   const size_t at = json.find("\"patches\": ");
   ASSERT_NE(at, std::string::npos);
