@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <glm/geometric.hpp>
 #include <limits>
@@ -313,9 +312,9 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
 void Grid::Layout(Arena& arena, const Plan& plan) {
   plan_ = plan;
   size_t cells = cellCount();
-  CHECK_MSG(cells < 0xffffffffu && plan.subCells < 0xffffffffu &&
+  CHECK_MSG(cells < 0xffffffffu && plan.subCells < 0x7fffffffu &&
                 plan.refs + plan.occupied < 0xffffffffu && plan.planes < kSubGrid &&
-                plan.subGrids < kSubGrid,
+                plan.subGrids < kNoPlane - kSubGrid,
             "grid too large for 32-bit offsets");
   cellStart_ = arena.Alloc<uint32_t>(cells + 1);
   refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs + plan.occupied));
