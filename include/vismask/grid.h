@@ -70,12 +70,14 @@ struct SubGrid {
 // minRefs references (0: none, a uniform grid) that do not all lie on one
 // surface's plane (such a cell is passed whole by a ray leaving the plane,
 // CellPlane), at about `density` cells per reference, at most maxRes cells
-// per axis. Chosen by callgrind's instructions a cosine ray (bench/analysis.md):
-// on the furnished interiors (tools/gen-interior) 16 and 1 walk 2.3 to 4.8
-// times fewer than the uniform grid; lower minRefs or higher density save
-// a few per cent more for many more bytes; the Cornell box keeps its rate.
+// per axis. Chosen by callgrind's instructions a cosine ray and by the bench
+// (bench/analysis.md): on the furnished interiors (tools/gen-interior) 32
+// and 1 walk 2.2 to 4.8 times fewer instructions than the uniform grid; 16
+// saved 1-5% more there but gave the building and the large Cornell boxes
+// thousands of sub-grids, 40% more bytes and a slower walk (memory), where
+// 32 gives them none or a few.
 struct GridNest {
-  uint32_t minRefs = 16;
+  uint32_t minRefs = 32;
   float density = 1.0f;
   int maxRes = 32;
 };
