@@ -16,8 +16,13 @@
 // as in the solver), every ray at tMin = kTMin. Before timing, every ray's
 // hit is compared (patch id and t).
 //
-// Usage: vismask_bench [--md FILE] [--sizes L1,L2,...] [--rays N]
-//                      [--shooters N] [--reps N] [--density D] [google-benchmark flags]
+// Usage: vismask_bench [--md FILE] [--scene FILE[@L1,L2,...]]... [--sizes L1,L2,...]
+//                      [--rays N] [--shooters N] [--reps N] [--density D]
+//                      [--nest-min N] [--nest-density D] [--uniform] [google-benchmark flags]
+// --scene may be given several times, each with its own patch sizes after
+// '@' (else --sizes'); --nest-min 0 builds the uniform grid (no sub-grids);
+// --uniform also times the uniform grid beside the nested one (issue 45's
+// before and after, the same rays).
 #include "ray_bench.h"
 
 #include <benchmark/benchmark.h>
@@ -31,6 +36,17 @@
 
 namespace vismask::bench {
 namespace {
+
+std::vector<float> ParseSizes(const std::string& list) {
+  std::vector<float> sizes;
+  for (size_t p = 0; p < list.size();) {
+    size_t q = list.find(',', p);
+    if (q == std::string::npos) q = list.size();
+    sizes.push_back(std::strtof(list.substr(p, q - p).c_str(), nullptr));
+    p = q + 1;
+  }
+  return sizes;
+}
 
 Args ParseArgs(int* argc, char** argv) {
   Args a;
@@ -47,16 +63,15 @@ Args ParseArgs(int* argc, char** argv) {
     if (s == "--md") {
       a.md = value("--md");
     } else if (s == "--scene") {
-      a.scene = value("--scene");
+      a.scenes.push_back(value("--scene"));
+    } else if (s == "--nest-min") {
+      a.nest.minRefs = static_cast<uint32_t>(std::atoi(value("--nest-min")));
+    } else if (s == "--nest-density") {
+      a.nest.density = std::strtof(value("--nest-density"), nullptr);
+    } else if (s == "--uniform") {
+      a.uniform = true;
     } else if (s == "--sizes") {
-      a.sizes.clear();
-      std::string list = value("--sizes");
-      for (size_t p = 0; p < list.size();) {
-        size_t q = list.find(',', p);
-        if (q == std::string::npos) q = list.size();
-        a.sizes.push_back(std::strtof(list.substr(p, q - p).c_str(), nullptr));
-        p = q + 1;
-      }
+      a.sizes = ParseSizes(value("--sizes"));
     } else if (s == "--rays") {
       a.rays = std::atoi(value("--rays"));
     } else if (s == "--shooters") {
@@ -70,6 +85,12 @@ Args ParseArgs(int* argc, char** argv) {
     }
   }
   *argc = out;
+  if (a.scenes.empty()) a.scenes.push_back("scenes/cornell.obj");
+  for (std::string& scene : a.scenes) {
+    size_t at = scene.rfind('@');
+    a.sceneSizes.push_back(at == std::string::npos ? a.sizes : ParseSizes(scene.substr(at + 1)));
+    if (at != std::string::npos) scene.resize(at);
+  }
   return a;
 }
 
@@ -100,12 +121,6 @@ int main(int argc, char** argv) {
   using namespace vismask::bench;
   Args args = ParseArgs(&argc, argv);
   benchmark::Initialize(&argc, argv);
-  Scene scene;
-  Status st = LoadScene(args.scene, &scene);
-  if (!st.ok()) {
-    std::fprintf(stderr, "%s\n", st.ToString().c_str());
-    return 2;
-  }
   EmbreeDevice dev;
   dev.device = rtcNewDevice("threads=1");  // one build thread: the comparison is single-threaded
   if (!dev.device) {
@@ -115,20 +130,33 @@ int main(int argc, char** argv) {
   rtcSetDeviceMemoryMonitorFunction(dev.device, MemoryMonitor, &dev);
 
   std::vector<std::unique_ptr<Case>> cases;
-  for (float size : args.sizes) {
-    auto c = std::make_unique<Case>();
-    BuildVis(scene, size, args.density, &c->vis);
-    BuildEmbree(&dev, c->vis.patches, false, &c->tri);
-    BuildEmbree(&dev, c->vis.patches, true, &c->quad);
-    UniformRays(c->vis, args.rays, &c->sets[0]);
-    CosineRays(c->vis, args.rays, args.shooters, &c->sets[1]);
-    for (int s = 0; s < 2; ++s) {
-      c->agree[s][0] = Compare(c->vis, c->tri, c->sets[s]);
-      c->agree[s][1] = Compare(c->vis, c->quad, c->sets[s]);
+  for (size_t si = 0; si < args.scenes.size(); ++si) {
+    Scene scene;
+    Status st = LoadScene(args.scenes[si], &scene);
+    if (!st.ok()) {
+      std::fprintf(stderr, "%s\n", st.ToString().c_str());
+      return 2;
     }
-    std::fprintf(stderr, "vismask_bench: patch size %g: %zu patches, grid %dx%dx%d\n", size,
-                 c->vis.patches.size(), c->vis.plan.res[0], c->vis.plan.res[1], c->vis.plan.res[2]);
-    cases.push_back(std::move(c));
+    const std::string& path = args.scenes[si];
+    for (float size : args.sceneSizes[si]) {
+      auto c = std::make_unique<Case>();
+      c->vis.scene = path.substr(path.rfind('/') + 1);
+      BuildVis(scene, size, args.density, args.nest, args.uniform, &c->vis);
+      BuildEmbree(&dev, c->vis.patches, false, &c->tri);
+      BuildEmbree(&dev, c->vis.patches, true, &c->quad);
+      UniformRays(c->vis, args.rays, &c->sets[0]);
+      CosineRays(c->vis, args.rays, args.shooters, &c->sets[1]);
+      for (int s = 0; s < 2; ++s) {
+        c->agree[s][0] = Compare(c->vis, c->tri, c->sets[s]);
+        c->agree[s][1] = Compare(c->vis, c->quad, c->sets[s]);
+      }
+      std::fprintf(
+          stderr,
+          "vismask_bench: %s at patch size %g: %zu patches, grid %dx%dx%d, %llu sub-grids\n",
+          c->vis.scene.c_str(), size, c->vis.patches.size(), c->vis.plan.res[0], c->vis.plan.res[1],
+          c->vis.plan.res[2], static_cast<unsigned long long>(c->vis.plan.subGrids));
+      cases.push_back(std::move(c));
+    }
   }
 
   // One benchmark per (scene, ray set, engine, query); an iteration casts the
@@ -149,6 +177,14 @@ int main(int argc, char** argv) {
       });
       reg("vismask_occluded",
           [c, rays, skip](size_t i) { return c->vis.grid.Occluded(rays[i], skip[i]); });
+      if (args.uniform) {
+        reg("uniform_intersect", [c, rays, skip](size_t i) {
+          Hit hit;
+          return c->vis.uniform.Intersect(rays[i], skip[i], &hit);
+        });
+        reg("uniform_occluded",
+            [c, rays, skip](size_t i) { return c->vis.uniform.Occluded(rays[i], skip[i]); });
+      }
       for (int q = 0; q < 2; ++q) {
         const EmbreeScene* e = q ? &c->quad : &c->tri;
         std::string kind = q ? "embree_quad" : "embree_tri";

@@ -26,8 +26,13 @@ inline constexpr float kLift = 1e-2f;  // cosine rays start this far in front of
 
 struct Args {
   std::string md;
-  std::string scene = "scenes/cornell.obj";
+  // The scenes, each with its patch sizes (--scene FILE[@L1,L2,...]; without
+  // sizes, --sizes').
+  std::vector<std::string> scenes;
+  std::vector<std::vector<float>> sceneSizes;
   std::vector<float> sizes = {80.0f, 19.5f, 4.7f};
+  Grid::Nest nest;       // the grid's sub-grids (--nest-min, --nest-density)
+  bool uniform = false;  // also the uniform grid, for comparison (--uniform)
   int rays = 1 << 17;
   int shooters = 256;
   int reps = 5;
@@ -99,6 +104,7 @@ inline bool EmbreeOccluded(RTCScene s, RTCIntersectContext* ctx, const Ray& r) {
 // ---- vismask: the patches, their ray-test data and the grid ----
 
 struct VisScene {
+  std::string scene;  // its file's name
   float patchSize = 0.0f;
   std::vector<Patch> patches;
   std::vector<PatchGeom> geom;
@@ -106,12 +112,18 @@ struct VisScene {
   std::unique_ptr<Arena> arena;
   Grid grid;
   double buildSeconds = 0.0;
+  // The same patches in a uniform grid (no sub-grids), when asked for.
+  Grid::Plan uniformPlan;
+  std::unique_ptr<Arena> uniformArena;
+  Grid uniform;
   size_t quads = 0, triangles = 0;
   Bounds bounds;
 };
 
-// `scene` meshed at `patchSize`, and the grid over its patches at `density`.
-void BuildVis(const Scene& scene, float patchSize, float density, VisScene* v);
+// `scene` meshed at `patchSize`, and the grid over its patches at `density`
+// with sub-grids by `nest`; with `uniform`, also the grid without them.
+void BuildVis(const Scene& scene, float patchSize, float density, const Grid::Nest& nest,
+              bool uniform, VisScene* v);
 
 // ---- ray sets ----
 
@@ -136,6 +148,7 @@ struct Agreement {
   size_t onlyEmbree = 0;  // Embree hits, the grid misses
   size_t other = 0;       // different patches at different t
   size_t occludedDiffer = 0;
+  size_t uniformDiffer = 0;  // the uniform grid's closest or any hit is not the grid's
   size_t hits = 0;
 };
 

@@ -38,20 +38,26 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
   std::fprintf(
       md,
       "Embree %s (Debian's libembree-dev), device `threads=1`; build quality default. "
-      "Grid cells per patch: %g%s. "
+      "Grid cells per patch: %g%s; a top cell with at least %u references gets a sub-grid "
+      "of about %g cells per reference (at most %d per axis)%s. "
       "%d rays per set, %d repetitions; figures are Mrays/s of CPU time, median (min–max).\n\n",
       RTC_VERSION_STRING, args.density,
-      args.density == EnvOptions().gridDensity ? " (an environment's default)" : "", args.rays,
-      args.reps);
+      args.density == EnvOptions().gridDensity ? " (an environment's default)" : "",
+      args.nest.minRefs, args.nest.density, args.nest.maxRes,
+      args.nest.minRefs == Grid::Nest().minRefs && args.nest.density == Grid::Nest().density
+          ? " (the default)"
+          : "",
+      args.rays, args.reps);
   std::fprintf(md, "### Scenes and memory\n\n");
   std::fprintf(
       md,
-      "| --patch-size | patches (quads + triangles) | Embree triangles | grid cells | "
-      "grid refs | grid bytes | + PatchGeom (%zu B/patch) | **vismask B/patch** | "
+      "| scene | --patch-size | patches (quads + triangles) | Embree triangles | grid cells | "
+      "sub-grids (cells) | grid refs | grid bytes | + PatchGeom (%zu B/patch) | **vismask "
+      "B/patch** | "
       "Embree tri BVH bytes | **B/patch** (B/triangle) | Embree quad BVH bytes | **B/patch** | "
       "vismask ÷ Embree tri | build s (grid / tri / quad) |\n",
       sizeof(PatchGeom));
-  std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& cp : cases) {
     const Case& c = *cp;
     size_t n = c.vis.patches.size();
@@ -59,10 +65,12 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
     double gridBytes = static_cast<double>(c.vis.grid.bytes());
     double visBytes = gridBytes + static_cast<double>(sizeof(PatchGeom)) * n;
     std::fprintf(md,
-                 "| %g | %zu (%zu + %zu) | %zu | %zu | %llu | %.0f | %.0f | **%.1f** | %lld | "
-                 "**%.1f** (%.1f) | "
+                 "| %s | %g | %zu (%zu + %zu) | %zu | %zu | %llu (%llu) | %llu | %.0f | %.0f | "
+                 "**%.1f** | %lld | **%.1f** (%.1f) | "
                  "%lld | **%.1f** | %.2f | %.3f / %.3f / %.3f |\n",
-                 c.vis.patchSize, n, c.vis.quads, c.vis.triangles, tris, c.vis.grid.cellCount(),
+                 c.vis.scene.c_str(), c.vis.patchSize, n, c.vis.quads, c.vis.triangles, tris,
+                 c.vis.grid.cellCount(), static_cast<unsigned long long>(c.vis.plan.subGrids),
+                 static_cast<unsigned long long>(c.vis.plan.subCells),
                  static_cast<unsigned long long>(c.vis.plan.refs), gridBytes, visBytes,
                  visBytes / n, c.tri.bvhBytes, double(c.tri.bvhBytes) / n,
                  double(c.tri.bvhBytes) / tris, c.quad.bvhBytes, double(c.quad.bvhBytes) / n,
@@ -74,25 +82,31 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
       "\n### Same hits\n\nEvery ray of every set, closest hit, grid against Embree "
       "(\"tie\": another patch at the same t, within 1e-4 relative: a ray through a shared "
       "edge or corner, where the grid takes the lower patch index and Embree either one).\n\n");
-  std::fprintf(md,
-               "| patches | rays | Embree geometry | rays | same patch | tie at shared edge | "
-               "only grid hits | only Embree hits | different | any-hit ≠ closest-hit |\n");
-  std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|\n");
+  std::fprintf(
+      md,
+      "| scene | patches | rays | Embree geometry | rays | same patch | tie at shared edge | "
+      "only grid hits | only Embree hits | different | any-hit ≠ closest-hit | "
+      "≠ uniform grid |\n");
+  std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& cp : cases) {
     for (int s = 0; s < 2; ++s) {
       for (int q = 0; q < 2; ++q) {
         const Agreement& a = cp->agree[s][q];
-        std::fprintf(md, "| %zu | %s | %s | %zu | %zu | %zu | %zu | %zu | %zu | %zu |\n",
-                     cp->vis.patches.size(), cp->sets[s].name.c_str(), q ? "quads" : "triangles",
-                     a.rays, a.same, a.tie, a.onlyVis, a.onlyEmbree, a.other, a.occludedDiffer);
+        std::fprintf(md, "| %s | %zu | %s | %s | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %s |\n",
+                     cp->vis.scene.c_str(), cp->vis.patches.size(), cp->sets[s].name.c_str(),
+                     q ? "quads" : "triangles", a.rays, a.same, a.tie, a.onlyVis, a.onlyEmbree,
+                     a.other, a.occludedDiffer,
+                     cp->vis.uniformArena ? std::to_string(a.uniformDiffer).c_str() : "–");
       }
     }
   }
   std::fprintf(md, "\n### Rays per second (single thread)\n\n");
-  std::fprintf(md,
-               "| patches | rays | query | vismask grid | Embree triangles | Embree quads | "
-               "**grid ÷ Embree tri** | grid ÷ Embree quad |\n");
-  std::fprintf(md, "|---|---|---|---|---|---|---|---|\n");
+  std::fprintf(
+      md,
+      "| scene | patches | rays | query | vismask grid | Embree triangles | Embree quads | "
+      "**grid ÷ Embree tri** | grid ÷ Embree quad | uniform grid (before) | "
+      "**grid ÷ uniform** |\n");
+  std::fprintf(md, "|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (size_t ci = 0; ci < cases.size(); ++ci) {
     for (int s = 0; s < 2; ++s) {
       for (const char* query : {"intersect", "occluded"}) {
@@ -100,13 +114,18 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
         Stat v = StatOf(collector.rates[tag + "vismask_" + query]);
         Stat t = StatOf(collector.rates[tag + "embree_tri_" + query]);
         Stat q = StatOf(collector.rates[tag + "embree_quad_" + query]);
-        std::fprintf(md, "| %zu | %s | %s | %s | %s | %s | **%.2f×** | %.2f× |\n",
-                     cases[ci]->vis.patches.size(), cases[ci]->sets[s].name.c_str(),
+        Stat u = StatOf(collector.rates[tag + "uniform_" + query]);
+        char ratio[32] = "–";
+        if (u.median > 0) std::snprintf(ratio, sizeof ratio, "**%.2f×**", v.median / u.median);
+        std::fprintf(md, "| %s | %zu | %s | %s | %s | %s | %s | **%.2f×** | %.2f× | %s | %s |\n",
+                     cases[ci]->vis.scene.c_str(), cases[ci]->vis.patches.size(),
+                     cases[ci]->sets[s].name.c_str(),
                      std::strcmp(query, "intersect") ? "any hit (Occluded / rtcOccluded1)"
                                                      : "closest (Intersect / rtcIntersect1)",
                      Mrays(v).c_str(), Mrays(t).c_str(), Mrays(q).c_str(),
                      t.median > 0 ? v.median / t.median : 0.0,
-                     q.median > 0 ? v.median / q.median : 0.0);
+                     q.median > 0 ? v.median / q.median : 0.0,
+                     u.median > 0 ? Mrays(u).c_str() : "–", ratio);
       }
     }
   }
@@ -132,20 +151,20 @@ void WriteMarkdown(FILE* md, const Args& args, const std::vector<std::unique_ptr
     gridLo = std::min(gridLo, grid);
     gridHi = std::max(gridHi, grid);
   }
-  // Issue 19's targets: at least Embree's rate on every row, and the grid
-  // with its ray-test records in at most half of Embree's BVH bytes.
+  // Issue 45's targets: at least 0.7x Embree's rate on every row, and the
+  // grid with its ray-test records in at most 0.6x Embree's BVH bytes.
   if (hi <= 0.0) {  // Embree filtered out: nothing to judge the rate by
     std::fprintf(md, "\n**Targets.** Rays/s against Embree: not judged (Embree was not run).");
   } else {
     std::fprintf(md,
-                 "\n**Targets.** Rays/s ≥ 1.0× Embree (triangles) on every row: %s, the grid "
+                 "\n**Targets.** Rays/s ≥ 0.7× Embree (triangles) on every row: %s, the grid "
                  "runs at %.2f× to %.2f× of Embree's rate.",
-                 lo >= 1.0 ? "**met**" : "**not met**", lo, hi);
+                 lo >= 0.7 ? "**met**" : "**not met**", lo, hi);
   }
   std::fprintf(md,
-               " Memory ≤ 0.5× Embree's triangle BVH: %s, grid + PatchGeom is %.2f× to %.2f× "
+               " Memory ≤ 0.6× Embree's triangle BVH: %s, grid + PatchGeom is %.2f× to %.2f× "
                "of it (the grid's own arrays alone %.2f× to %.2f×).\n",
-               memHi <= 0.5 ? "**met**" : "**not met**", memLo, memHi, gridLo, gridHi);
+               memHi <= 0.6 ? "**met**" : "**not met**", memLo, memHi, gridLo, gridHi);
 }
 
 }  // namespace vismask::bench

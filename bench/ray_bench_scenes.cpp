@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <glm/geometric.hpp>
 #include <random>
@@ -75,7 +76,23 @@ void BuildEmbree(EmbreeDevice* dev, const std::vector<Patch>& patches, bool quad
   }
 }
 
-void BuildVis(const Scene& scene, float patchSize, float density, VisScene* v) {
+namespace {
+
+// A grid laid out in its own arena (measured first, as an environment does).
+void LayOut(const VisScene& v, const Grid::Plan& plan, std::unique_ptr<Arena>* arena, Grid* grid) {
+  Arena measure = Arena::Measure();
+  Grid probe;
+  probe.Layout(measure, plan);
+  *arena = std::make_unique<Arena>(ArenaRoundUp(measure.used()));
+  grid->Layout(**arena, plan);
+  grid->Build(Span<const Patch>(v.patches.data(), v.patches.size()),
+              Span<const PatchGeom>(v.geom.data(), v.geom.size()));
+}
+
+}  // namespace
+
+void BuildVis(const Scene& scene, float patchSize, float density, const Grid::Nest& nest,
+              bool uniform, VisScene* v) {
   Mesh mesh;
   std::vector<uint32_t> all(scene.polygons.size());
   for (uint32_t i = 0; i < all.size(); ++i) all[i] = i;
@@ -91,14 +108,17 @@ void BuildVis(const Scene& scene, float patchSize, float density, VisScene* v) {
   v->geom.resize(v->patches.size());
   for (size_t i = 0; i < v->patches.size(); ++i) v->geom[i] = MakePatchGeom(v->patches[i]);
   Span<const Patch> ps(v->patches.data(), v->patches.size());
-  v->plan = Grid::MakePlan(ps, density);
-  Arena measure = Arena::Measure();
-  Grid probe;
-  probe.Layout(measure, v->plan);
-  v->arena = std::make_unique<Arena>(ArenaRoundUp(measure.used()));
-  v->grid.Layout(*v->arena, v->plan);
-  v->grid.Build(ps, Span<const PatchGeom>(v->geom.data(), v->geom.size()));
+  v->plan =
+      Grid::MakePlan(ps, Span<const PatchGeom>(v->geom.data(), v->geom.size()), density, nest);
+  LayOut(*v, v->plan, &v->arena, &v->grid);
   v->buildSeconds = Now() - t0;
+  if (uniform) {
+    Grid::Nest none;
+    none.minRefs = 0;
+    v->uniformPlan =
+        Grid::MakePlan(ps, Span<const PatchGeom>(v->geom.data(), v->geom.size()), density, none);
+    LayOut(*v, v->uniformPlan, &v->uniformArena, &v->uniform);
+  }
   v->bounds = scene.bounds;
 }
 
@@ -156,6 +176,14 @@ Agreement Compare(const VisScene& v, const EmbreeScene& e, const RaySet& set) {
     a.hits += hv;
     if (hv != v.grid.Occluded(r, set.skip[i]) || he != EmbreeOccluded(e.scene, &ctx, r))
       ++a.occludedDiffer;  // any-hit disagrees with closest-hit: never expected
+    if (v.uniformArena) {  // the same hit, bit for bit, without sub-grids
+      Hit hu;
+      bool u = v.uniform.Intersect(r, set.skip[i], &hu);
+      if (u != hv || u != v.uniform.Occluded(r, set.skip[i]) ||
+          (u && (hu.patch != hit.patch || std::memcmp(&hu.t, &hit.t, sizeof hu.t) != 0 ||
+                 hu.front != hit.front)))
+        ++a.uniformDiffer;
+    }
     if (!hv && !he) {
       ++a.same;
     } else if (hv && !he) {

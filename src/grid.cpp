@@ -86,18 +86,125 @@ inline bool SamePlane(const CellPlane& a, const CellPlane& b) {
          std::memcmp(&a.dHi, &b.dHi, sizeof a.dHi) == 0;
 }
 
-}  // namespace
+constexpr uint32_t kNoSub = 0xffffffffu;
 
-Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density) {
-  std::vector<PatchGeom> geom(patches.size());
-  for (size_t i = 0; i < patches.size(); ++i) geom[i] = MakePatchGeom(patches[i]);
-  return MakePlan(patches, Span<const PatchGeom>(geom.data(), geom.size()), density);
+// The sub-grids a plan's top cells get (Grid::Nest), decided from the
+// references each top cell counts: MakePlan and Build both run this, so
+// they lay out the same cells.
+struct NestLayout {
+  std::vector<uint32_t> count;     // references per top cell
+  std::vector<uint32_t> sub;       // top cell -> its sub-grid, or kNoSub
+  std::vector<uint32_t> top;       // sub-grid -> its top cell
+  std::vector<int> res;            // sub-grid -> 3 cells per axis
+  std::vector<CellGeometry> geom;  // sub-grid -> its cells, in double
+  std::vector<uint64_t> first;     // sub-grid -> its first cell among all sub-grids' cells
+  uint64_t subCells = 0;
+};
+
+// The cells of top cell c split res[0] x res[1] x res[2].
+CellGeometry SubGeometry(const CellGeometry& top, size_t c, const int res[3]) {
+  const size_t at[3] = {c % top.res[0], (c / top.res[0]) % top.res[1],
+                        c / (static_cast<size_t>(top.res[0]) * top.res[1])};
+  CellGeometry g;
+  for (int a = 0; a < 3; ++a) {
+    g.lo[a] = top.lo[a] + static_cast<double>(at[a]) * top.size[a];
+    g.res[a] = res[a];
+    g.size[a] = top.size[a] / res[a];
+    g.inv[a] = res[a] / top.size[a];
+  }
+  return g;
 }
 
-Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom, float density) {
+void PlanNest(Span<const Patch> patches, Span<const PatchGeom> geom, const Scale& scale,
+              const CellGeometry& top, const Grid::Nest& nest, NestLayout* out) {
+  const size_t cells = static_cast<size_t>(top.res[0]) * top.res[1] * top.res[2];
+  out->count.assign(cells, 0);
+  out->sub.assign(cells, kNoSub);
+  // Each patch's plane run (ForEachPlaneRun), and each cell's: the run all
+  // its patches belong to, kNoSub for none yet, kMixed for several or none.
+  constexpr uint32_t kMixed = kNoSub - 1;
+  std::vector<uint32_t> runOf(nest.minRefs ? patches.size() : 0, kMixed), cellRun;
+  if (nest.minRefs) {
+    uint32_t runs = 0;
+    ForEachPlaneRun(patches, geom, [&](const CellPlane& run) {
+      for (uint32_t k = 0; k < run.count; ++k) runOf[run.first + k] = runs;
+      ++runs;
+    });
+    cellRun.assign(cells, kNoSub);
+  }
+  Shape shape;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    MakeShape(patches[i], geom[i], scale, &shape);
+    ForEachCell(top, shape, [&](size_t c) {
+      ++out->count[c];
+      if (nest.minRefs) {
+        uint32_t& r = cellRun[c];
+        r = r == kNoSub || r == runOf[i] ? runOf[i] : kMixed;
+      }
+    });
+  }
+  if (nest.minRefs == 0) return;
+  // Cleary's rule again, inside the cell: about nest.density cells per
+  // reference, shaped like the cell.
+  const double volume = top.size.x * top.size.y * top.size.z;
+  for (size_t c = 0; c < cells; ++c) {
+    // A cell of one surface's plane is passed whole by a ray leaving it
+    // (CellPlane): it keeps its patches.
+    if (out->count[c] < nest.minRefs || cellRun[c] != kMixed) continue;
+    double k = std::cbrt(nest.density * static_cast<double>(out->count[c]) / volume);
+    int res[3];
+    for (int a = 0; a < 3; ++a)
+      res[a] = static_cast<int>(
+          std::clamp(std::round(top.size[a] * k), 1.0, static_cast<double>(nest.maxRes)));
+    const uint64_t n = static_cast<uint64_t>(res[0]) * res[1] * res[2];
+    if (n == 1) continue;
+    out->sub[c] = static_cast<uint32_t>(out->top.size());
+    out->top.push_back(static_cast<uint32_t>(c));
+    out->res.insert(out->res.end(), res, res + 3);
+    out->geom.push_back(SubGeometry(top, c, res));
+    out->first.push_back(out->subCells);
+    out->subCells += n;
+  }
+}
+
+// Calls top(i, c) for every top cell c without a sub-grid that patch i is
+// registered in, and sub(i, s) for every sub-grid cell s (numbered across
+// all sub-grids) it is registered in; patches in ascending order.
+template <typename Top, typename Sub>
+void ForEachRef(Span<const Patch> patches, Span<const PatchGeom> geom, const Scale& scale,
+                const CellGeometry& topGeom, const NestLayout& nl, Top top, Sub sub) {
+  Shape shape;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    MakeShape(patches[i], geom[i], scale, &shape);
+    ForEachCell(topGeom, shape, [&](size_t c) {
+      const uint32_t s = nl.sub[c];
+      if (s == kNoSub) {
+        top(i, c);
+        return;
+      }
+      const uint64_t first = nl.first[s];
+      ForEachCell(nl.geom[s], shape, [&](size_t l) { sub(i, first + l); });
+    });
+  }
+}
+
+}  // namespace
+
+Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density, Nest nest) {
+  std::vector<PatchGeom> geom(patches.size());
+  for (size_t i = 0; i < patches.size(); ++i) geom[i] = MakePatchGeom(patches[i]);
+  return MakePlan(patches, Span<const PatchGeom>(geom.data(), geom.size()), density, nest);
+}
+
+Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom, float density,
+                          Nest nest) {
   CHECK(patches.size() == geom.size());
   CHECK_MSG(density > 0.0f && std::isfinite(density), "grid density must be positive");
+  CHECK_MSG(nest.minRefs == 0 || (nest.density > 0.0f && std::isfinite(nest.density) &&
+                                  nest.maxRes >= 1 && nest.maxRes <= kMaxRes),
+            "sub-grid density must be positive");
   Plan plan;
+  plan.nest = nest;
   size_t n = patches.size();
   if (n == 0) {
     plan.bounds.hi = glm::vec3(1.0f);
@@ -178,20 +285,24 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
     plan.bounds.hi[a] = std::nextafter(static_cast<float>(inHi + wallHi * size), HUGE_VALF);
   }
 
-  // Exact reference and occupied-cell counts, by the same rule Build uses.
+  // Exact reference and occupied-cell counts, by the same rule Build uses:
+  // the top cells' references, the sub-grids they decide, then the
+  // references in those.
   CellGeometry cellGeom = CellGeometryOf(plan);
-  const size_t cells = static_cast<size_t>(plan.res[0]) * plan.res[1] * plan.res[2];
-  std::vector<uint64_t> touched((cells + 63) / 64, 0);
+  NestLayout nl;
+  PlanNest(patches, geom, scale, cellGeom, nest, &nl);
+  std::vector<uint32_t> subCount(static_cast<size_t>(nl.subCells), 0);
   uint64_t refs = 0, occupied = 0;
-  for (size_t i = 0; i < n; ++i) {
-    MakeShape(patches[i], geom[i], scale, &shape);
-    ForEachCell(cellGeom, shape, [&](size_t c) {
-      ++refs;
-      uint64_t bit = uint64_t{1} << (c & 63);
-      occupied += (touched[c >> 6] & bit) == 0;
-      touched[c >> 6] |= bit;
-    });
+  ForEachRef(
+      patches, geom, scale, cellGeom, nl, [&](size_t, size_t) { ++refs; },
+      [&](size_t, uint64_t c) { ++subCount[c]; });
+  for (uint32_t count : nl.count) occupied += count > 0;
+  for (uint32_t count : subCount) {
+    refs += count;
+    occupied += count > 0;
   }
+  plan.subGrids = nl.top.size();
+  plan.subCells = nl.subCells;
   plan.refs = refs;
   plan.occupied = occupied;
   ForEachPlaneRun(patches, geom, [&plan](const CellPlane&) { ++plan.planes; });
@@ -201,12 +312,24 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
 void Grid::Layout(Arena& arena, const Plan& plan) {
   plan_ = plan;
   size_t cells = cellCount();
-  CHECK_MSG(cells < 0xffffffffu && plan.refs + plan.occupied < 0xffffffffu,
+  CHECK_MSG(cells < 0xffffffffu && plan.subCells < 0x7fffffffu &&
+                plan.refs + plan.occupied < 0xffffffffu && plan.planes < kSubGrid &&
+                plan.subGrids < kNoPlane - kSubGrid,
             "grid too large for 32-bit offsets");
   cellStart_ = arena.Alloc<uint32_t>(cells + 1);
   refs_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.refs + plan.occupied));
   occupied_ = arena.Alloc<uint64_t>((cells + 63) / 64);
   planes_ = arena.Alloc<CellPlane>(static_cast<size_t>(plan.planes));
+  // A uniform grid (no sub-grid) takes no more than it took before nesting.
+  if (plan.subGrids > 0) {
+    subs_ = arena.Alloc<SubGrid>(static_cast<size_t>(plan.subGrids));
+    subStart_ = arena.Alloc<uint32_t>(static_cast<size_t>(plan.subCells) + 1);
+    subOccupied_ = arena.Alloc<uint64_t>(static_cast<size_t>((plan.subCells + 63) / 64));
+  } else {
+    subs_ = Span<SubGrid>();
+    subStart_ = Span<uint32_t>();
+    subOccupied_ = Span<uint64_t>();
+  }
   for (int a = 0; a < 3; ++a) {
     float extent = plan.bounds.hi[a] - plan.bounds.lo[a];
     cellSize_[a] = extent / static_cast<float>(plan.res[a]);
@@ -232,41 +355,62 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
   });
   CHECK_MSG(numPlanes == planes_.size(), "grid plan does not match the patches it is built from");
 
-  // Counting sort: count per cell, exclusive prefix sum (a header word
-  // before each occupied cell's patches), fill advancing each cell's start
-  // to its end, then shift the starts back by one cell.
-  for (size_t c = 0; c <= cells; ++c) start[c] = 0;
-  Shape shape;
-  uint64_t total = 0;
-  for (size_t i = 0; i < patches.size(); ++i) {
-    MakeShape(patches[i], geom[i], scale, &shape);
-    ForEachCell(cellGeom, shape, [&](size_t c) {
-      ++start[c];
-      ++total;
-    });
+  // The sub-grids, as MakePlan decided them.
+  NestLayout nl;
+  PlanNest(patches, geom, scale, cellGeom, plan_.nest, &nl);
+  CHECK_MSG(nl.top.size() == plan_.subGrids && nl.subCells == plan_.subCells,
+            "grid plan does not match the patches it is built from");
+  for (size_t g = 0; g < nl.top.size(); ++g) {
+    SubGrid& sg = subs_[g];
+    for (int a = 0; a < 3; ++a) {
+      sg.lo[a] = static_cast<float>(nl.geom[g].lo[a]);
+      sg.cellSize[a] = static_cast<float>(nl.geom[g].size[a]);
+      sg.invCellSize[a] = static_cast<float>(nl.geom[g].inv[a]);
+      sg.res[a] = nl.res[3 * g + a];
+    }
+    sg.first = static_cast<uint32_t>(nl.first[g]);
   }
+
+  // Counting sort, level by level: the top cells' words (a header before an
+  // occupied cell's patches; a cell with a sub-grid has its header only),
+  // then the sub-grids' cells', each cell filled in patch order.
+  const size_t subCells = static_cast<size_t>(nl.subCells);
+  std::vector<uint32_t> subCount(subCells, 0);
+  uint64_t total = 0;
+  ForEachRef(
+      patches, geom, scale, cellGeom, nl, [&](size_t, size_t) { ++total; },
+      [&](size_t, uint64_t c) {
+        ++subCount[c];
+        ++total;
+      });
   CHECK_MSG(total == plan_.refs, "grid plan does not match the patches it is built from");
+  uint32_t* refs = refs_.data();
+  std::vector<uint32_t> fillTop(cells), fillSub(subCells);
   uint32_t sum = 0;
   for (size_t c = 0; c < cells; ++c) {
-    uint32_t count = start[c];
-    uint32_t header = count > 0;
-    start[c] = sum + header;
-    sum += count + header;
+    start[c] = sum;
+    fillTop[c] = sum + 1;
+    if (nl.sub[c] != kNoSub)
+      sum += 1;
+    else if (nl.count[c] > 0)
+      sum += 1 + nl.count[c];
   }
+  start[cells] = sum;
+  for (size_t c = 0; c < subCells; ++c) {
+    subStart_[c] = sum;
+    fillSub[c] = sum + 1;
+    if (subCount[c] > 0) sum += 1 + subCount[c];
+  }
+  if (subCells) subStart_[subCells] = sum;
   CHECK_MSG(sum == plan_.refs + plan_.occupied,
             "grid plan does not match the patches it is built from");
-  start[cells] = sum;
-  uint32_t* refs = refs_.data();
-  for (size_t i = 0; i < patches.size(); ++i) {
-    MakeShape(patches[i], geom[i], scale, &shape);
-    uint32_t index = static_cast<uint32_t>(i);
-    ForEachCell(cellGeom, shape, [&](size_t c) { refs[start[c]++] = index; });
-  }
-  for (size_t c = cells; c > 0; --c) start[c] = start[c - 1];
-  start[0] = 0;
-  uint64_t* occupied = occupied_.data();
-  for (size_t w = 0; w < occupied_.size(); ++w) occupied[w] = 0;
-  // Each occupied cell's header: the plane record all its patches share, if any.
+  ForEachRef(
+      patches, geom, scale, cellGeom, nl,
+      [&](size_t i, size_t c) { refs[fillTop[c]++] = static_cast<uint32_t>(i); },
+      [&](size_t i, uint64_t c) { refs[fillSub[c]++] = static_cast<uint32_t>(i); });
+
+  // Each occupied cell's header: the plane record all its patches share, if
+  // any; a top cell's sub-grid.
   const CellPlane* planes = planes_.data();
   auto recordOf = [&](uint32_t p) -> const CellPlane* {
     const CellPlane* r = std::upper_bound(
@@ -275,15 +419,30 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
     --r;
     return p - r->first < r->count ? r : nullptr;
   };
-  for (size_t c = 0; c < cells; ++c) {
-    if (start[c + 1] == start[c]) continue;
-    occupied[c >> 6] |= uint64_t{1} << (c & 63);
-    const CellPlane* shared = recordOf(refs[start[c] + 1]);
-    for (uint32_t k = start[c] + 2; k < start[c + 1] && shared; ++k) {
+  auto header = [&](uint32_t b, uint32_t e) {
+    const CellPlane* shared = recordOf(refs[b + 1]);
+    for (uint32_t k = b + 2; k < e && shared; ++k) {
       const CellPlane* r = recordOf(refs[k]);
       if (!r || !SamePlane(*r, *shared)) shared = nullptr;
     }
-    refs[start[c]] = shared ? static_cast<uint32_t>(shared - planes) : kNoPlane;
+    refs[b] = shared ? static_cast<uint32_t>(shared - planes) : kNoPlane;
+  };
+  uint64_t* occupied = occupied_.data();
+  for (size_t w = 0; w < occupied_.size(); ++w) occupied[w] = 0;
+  for (size_t c = 0; c < cells; ++c) {
+    if (start[c + 1] == start[c]) continue;
+    occupied[c >> 6] |= uint64_t{1} << (c & 63);
+    if (nl.sub[c] != kNoSub)
+      refs[start[c]] = kSubGrid | nl.sub[c];
+    else
+      header(start[c], start[c + 1]);
+  }
+  uint64_t* subOccupied = subOccupied_.data();
+  for (size_t w = 0; w < subOccupied_.size(); ++w) subOccupied[w] = 0;
+  for (size_t c = 0; c < subCells; ++c) {
+    if (subStart_[c + 1] == subStart_[c]) continue;
+    subOccupied[c >> 6] |= uint64_t{1} << (c & 63);
+    header(subStart_[c], subStart_[c + 1]);
   }
 }
 
@@ -382,94 +541,199 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   float kx = 0.0f, ky = 0.0f, kz = 0.0f;
 
   const uint32_t* start = cellStart_.data();
-  const uint32_t* refs = refs_.data();
-  const PatchGeom* geom = geom_.data();
-  const CellPlane* planes = planes_.data();
-  Ray r = ray;       // tMax shrinks to just past the best hit so far
-  float limit = t1;  // no step into a cell beyond this: the ray's end or the best hit
-  uint32_t bestPatch = kNoPatch;
-  float bestT = r.tMax;  // every hit is nearer than the ray's end
-  bool bestFront = false;
   const uint64_t* occupied = occupied_.data();
-  uint64_t tests = 0;
+  WalkState st;
+  st.r = ray;  // tMax shrinks to just past the best hit so far
+  st.t1 = t1;
+  st.limit = t1;          // no step into a cell beyond this: the ray's end or the best hit
+  st.bestT = ray.tMax;    // every hit is nearer than the ray's end
+  uint64_t subSteps = 0;  // sub-grid cells entered
+  auto done = [&] { steps_ += st.tests + subSteps + static_cast<uint64_t>(kx + ky + kz) + 1; };
   for (;;) {
     // Most cells a ray crosses are empty: one bit in a small bitmap says so,
     // where their offsets (32 times larger, strided by rows and slices) cost
     // a cache miss each in a large grid.
     if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0) {
-      uint32_t begin = start[index] + 1, end = start[index + 1];
-      const uint32_t header = refs[begin - 1];
-      if (header != kNoPlane) {
-        // The cell's patches share a plane (CellPlane). Each patch test
-        // divides num = d - n.o by denom = n.dir; if num is never of
-        // denom's sign over the range of d, every t is <= 0 and, with
-        // tMin >= 0, every test below would fail its range check: the
-        // cell is passed without reading a patch. The products and sums
-        // are IntersectPatch's, on the other sign of the normal for some
-        // patches, which negates them exactly; no division is needed.
-        const CellPlane& pl = planes[header];
-        float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
-        float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
-        float numLo = pl.dLo - s, numHi = pl.dHi - s;
-        if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f))) {
-          tests += end - begin;
-          begin = end;
-        }
-      }
-      // Ask for every patch of the cell at once: their cache misses overlap
-      // instead of coming one test at a time.
-      for (uint32_t k = begin; k < end; ++k) {
-        const char* g = reinterpret_cast<const char*>(geom + refs[k]);
-        __builtin_prefetch(g);
-        __builtin_prefetch(g + sizeof(PatchGeom) - 1);
-      }
-      for (uint32_t k = begin; k < end; ++k) {
-        uint32_t p = refs[k];
-        float t;
-        bool front;
-        ++tests;
-        if (p == skip.patch || !IntersectPatch(geom[p], r, &t, &front) || p == skip.twin) continue;
-        if (kAnyHit) {
-          if (hit) hit->patch = p;
-          steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
+      const uint32_t b = start[index];
+      const uint32_t header = refs_.data()[b];
+      // kSubGrid .. kNoPlane - 1: a sub-grid.
+      if (__builtin_expect(header - kSubGrid < kNoPlane - kSubGrid, 0)) {
+        // Where the ray entered the top cell: the last plane it crossed, by
+        // the steps' own formula (t0 if none); and where it leaves it.
+        float tEnter = t0;
+        if (kx > 0.0f) tEnter = std::max(tEnter, fx + (kx - 1.0f) * dx);
+        if (ky > 0.0f) tEnter = std::max(tEnter, fy + (ky - 1.0f) * dy);
+        if (kz > 0.0f) tEnter = std::max(tEnter, fz + (kz - 1.0f) * dz);
+        const float tLeave = std::min(std::min(tx, ty), tz);
+        // A copy goes out of line: the walk's own state never leaves this
+        // function, so it stays in registers.
+        WalkState sub = st;
+        const bool found = WalkSub<kAnyHit>(subs_.data()[header - kSubGrid], invD, tEnter, tLeave,
+                                            skip, hit, &sub, &subSteps);
+        st = sub;
+        if (found) {
+          done();
           return true;
         }
-        // t <= bestT here. On a tie a front side, then the lower index, so
-        // that of two coplanar twins the ray lands on the one it faces.
-        if (t < bestT || TieWins(p, front, bestPatch, bestFront)) {
-          bestPatch = p;
-          bestT = t;
-          bestFront = front;
-          r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
-          limit = std::min(t1, t);
-        }
+      } else if (TestCell<kAnyHit>(b, start[index + 1], skip, hit, &st)) {
+        done();
+        return true;
       }
     }
     // Step across the plane that comes first (ties: y before x, z before
     // both), unless the ray ends, or its best hit is, before that plane.
     if (tx < ty && tx < tz) {
-      if (!(tx < limit)) break;
+      if (!(tx < st.limit)) break;
       index += move[0];
       kx += 1.0f;
       tx = fx + kx * dx;
     } else if (ty < tz) {
-      if (!(ty < limit)) break;
+      if (!(ty < st.limit)) break;
       index += move[1];
       ky += 1.0f;
       ty = fy + ky * dy;
     } else {
-      if (!(tz < limit)) break;
+      if (!(tz < st.limit)) break;
       index += move[2];
       kz += 1.0f;
       tz = fz + kz * dz;
     }
   }
-  steps_ += tests + static_cast<uint64_t>(kx + ky + kz) + 1;
-  if (bestPatch == kNoPatch) return false;
-  hit->patch = bestPatch;
-  hit->t = bestT;
-  hit->front = bestFront;
+  done();
+  if (st.bestPatch == kNoPatch) return false;
+  hit->patch = st.bestPatch;
+  hit->t = st.bestT;
+  hit->front = st.bestFront;
   return true;
+}
+
+template <bool kAnyHit>
+inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e, Skip skip,
+                                                          Hit* hit, WalkState* st) const {
+  const uint32_t* refs = refs_.data();
+  const PatchGeom* geom = geom_.data();
+  const uint32_t header = refs[b];
+  uint32_t begin = b + 1, end = e;
+  if (header != kNoPlane) {
+    // The cell's patches share a plane (CellPlane). Each patch test
+    // divides num = d - n.o by denom = n.dir; if num is never of
+    // denom's sign over the range of d, every t is <= 0 and, with
+    // tMin >= 0, every test below would fail its range check: the
+    // cell is passed without reading a patch. The products and sums
+    // are IntersectPatch's, on the other sign of the normal for some
+    // patches, which negates them exactly; no division is needed.
+    const CellPlane& pl = planes_.data()[header];
+    const Ray& r = st->r;
+    float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
+    float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
+    float numLo = pl.dLo - s, numHi = pl.dHi - s;
+    if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f))) {
+      st->tests += end - begin;
+      return false;
+    }
+  }
+  // Ask for every patch of the cell at once: their cache misses overlap
+  // instead of coming one test at a time.
+  for (uint32_t k = begin; k < end; ++k) {
+    const char* g = reinterpret_cast<const char*>(geom + refs[k]);
+    __builtin_prefetch(g);
+    __builtin_prefetch(g + sizeof(PatchGeom) - 1);
+  }
+  for (uint32_t k = begin; k < end; ++k) {
+    uint32_t p = refs[k];
+    float t;
+    bool front;
+    ++st->tests;
+    if (p == skip.patch || !IntersectPatch(geom[p], st->r, &t, &front) || p == skip.twin) continue;
+    if (kAnyHit) {
+      if (hit) hit->patch = p;
+      return true;
+    }
+    // t <= bestT here. On a tie a front side, then the lower index, so
+    // that of two coplanar twins the ray lands on the one it faces.
+    if (t < st->bestT || TieWins(p, front, st->bestPatch, st->bestFront)) {
+      st->bestPatch = p;
+      st->bestT = t;
+      st->bestFront = front;
+      st->r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+      st->limit = std::min(st->t1, t);
+    }
+  }
+  return false;
+}
+
+// A top cell's sub-grid, from where the ray entered the top cell to where it
+// leaves it (or to the best hit): the same DDA on the sub-grid's cells, its
+// end bounded by the sub-grid's last planes (the same formula, so no step
+// leaves it). The sub-grid's planes and the top cell's differ by rounding
+// only, far inside the registration padding. Out of line, with its own copy
+// of the walk's state, so that the top walk keeps its own in registers.
+template <bool kAnyHit>
+__attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const float invD[3], float tEnter,
+                                             float tLeave, Skip skip, Hit* hit, WalkState* state,
+                                             uint64_t* steps) const {
+  WalkState st = *state;
+  const float o[3] = {st.r.o.x, st.r.o.y, st.r.o.z};
+  const float d[3] = {st.r.d.x, st.r.d.y, st.r.d.z};
+  const int32_t* res = sg.res;
+  const int32_t stride[3] = {1, res[0], res[0] * res[1]};
+  float first[3], delta[3];
+  int32_t move[3];
+  int32_t index = static_cast<int32_t>(sg.first);
+  float tEnd = tLeave;
+  for (int a = 0; a < 3; ++a) {
+    float p = d[a] == 0.0f ? o[a] : o[a] + tEnter * d[a];
+    float f = (p - sg.lo[a]) * sg.invCellSize[a];
+    int c = f >= 0.0f ? (f < static_cast<float>(res[a]) ? static_cast<int>(f) : res[a] - 1) : 0;
+    index += c * stride[a];
+    if (d[a] == 0.0f) {
+      first[a] = std::numeric_limits<float>::infinity();
+      delta[a] = 0.0f;
+      move[a] = 0;
+      continue;
+    }
+    bool up = d[a] > 0.0f;
+    first[a] = (sg.lo[a] + static_cast<float>(up ? c + 1 : c) * sg.cellSize[a] - o[a]) * invD[a];
+    delta[a] = sg.cellSize[a] * std::fabs(invD[a]);
+    move[a] = up ? stride[a] : -stride[a];
+    float exit = first[a] + static_cast<float>(up ? res[a] - 1 - c : c) * delta[a];
+    if (exit < tEnd) tEnd = exit;
+  }
+  const float fx = first[0], fy = first[1], fz = first[2];
+  const float dx = delta[0], dy = delta[1], dz = delta[2];
+  float tx = fx, ty = fy, tz = fz;
+  float kx = 0.0f, ky = 0.0f, kz = 0.0f;
+  const uint32_t* start = subStart_.data();
+  const uint64_t* occupied = subOccupied_.data();
+  bool done = false;
+  for (;;) {
+    const uint32_t u = static_cast<uint32_t>(index);
+    if (((occupied[u >> 6] >> (u & 63)) & 1) != 0 &&
+        TestCell<kAnyHit>(start[u], start[u + 1], skip, hit, &st)) {
+      done = true;
+      break;
+    }
+    const float bound = std::min(tEnd, st.limit);
+    if (tx < ty && tx < tz) {
+      if (!(tx < bound)) break;
+      index += move[0];
+      kx += 1.0f;
+      tx = fx + kx * dx;
+    } else if (ty < tz) {
+      if (!(ty < bound)) break;
+      index += move[1];
+      ky += 1.0f;
+      ty = fy + ky * dy;
+    } else {
+      if (!(tz < bound)) break;
+      index += move[2];
+      kz += 1.0f;
+      tz = fz + kz * dz;
+    }
+  }
+  *steps += static_cast<uint64_t>(kx + ky + kz) + 1;
+  *state = st;
+  return done;
 }
 
 bool Grid::Intersect(const Ray& ray, Skip skip, Hit* hit) const {

@@ -100,66 +100,74 @@ TEST(GridTest, SharedPlanesSkipCellsExactly) {
     s.patches.push_back(t);
     s.geom.push_back(TwinGeom(s.geom[i]));
   }
-  BuiltGrid b;
-  BuildGrid(s, 4.0f, &b);
-  Span<const CellPlane> planes = b.grid.planes();
-  ASSERT_EQ(planes.size(), b.plan.planes);
-  ASSERT_EQ(planes.size(), 6u);  // five walls, and the tilted wall with its twins
-
-  // Every record covers its run: the same normal up to sign, every offset in range.
-  bool spread = false;
-  for (const CellPlane& r : planes) {
-    spread |= r.dLo < r.dHi;
-    for (uint32_t p = r.first; p < r.first + r.count; ++p) {
-      const PatchGeom& g = s.geom[p];
-      float sign = g.n == r.n ? 1.0f : -1.0f;
-      ASSERT_EQ(sign * g.n, r.n) << "patch " << p;
-      ASSERT_GE(sign * g.d, r.dLo) << "patch " << p;
-      ASSERT_LE(sign * g.d, r.dHi) << "patch " << p;
+  // The uniform grid, and the same scene with sub-grids in most cells
+  // (their cells carry plane records the same way).
+  for (const Grid::Nest& nest : {UniformNest(), DenseNest()}) {
+    SCOPED_TRACE(nest.minRefs ? "nested" : "uniform");
+    BuiltGrid b;
+    BuildGrid(s, 4.0f, &b, nest);
+    if (nest.minRefs) {
+      EXPECT_GT(b.plan.subGrids, 0u);
     }
-  }
-  EXPECT_TRUE(spread);  // the tilted wall's offsets round apart
-  // Cells with a plane: every patch in a run with that record; one holds a patch and its twin.
-  size_t withPlane = 0, occupied = 0, twinned = 0;
-  for (size_t c = 0; c < b.grid.cellCount(); ++c) {
-    Span<const uint32_t> refs = b.grid.CellRefs(c);
-    occupied += !refs.empty();
-    uint32_t h = b.grid.CellPlaneOf(c);
-    if (h == Grid::kNoPlane) continue;
-    ++withPlane;
-    ASSERT_LT(h, planes.size());
-    bool orig = false, twin = false;
-    for (uint32_t p : refs) {
-      const PatchGeom& g = s.geom[p];
-      float sign = g.n == planes[h].n ? 1.0f : -1.0f;
-      ASSERT_EQ(sign * g.n, planes[h].n) << "cell " << c << " patch " << p;
-      ASSERT_GE(sign * g.d, planes[h].dLo);
-      ASSERT_LE(sign * g.d, planes[h].dHi);
-      orig |= p >= tiltFirst && p < tiltEnd;
-      twin |= p >= tiltEnd;
-    }
-    twinned += orig && twin;
-  }
-  EXPECT_GT(withPlane * 2, occupied) << withPlane << " of " << occupied;
-  EXPECT_GT(twinned, 0u);
+    Span<const CellPlane> planes = b.grid.planes();
+    ASSERT_EQ(planes.size(), b.plan.planes);
+    ASSERT_EQ(planes.size(), 6u);  // five walls, and the tilted wall with its twins
 
-  Checker ck{s, b.grid};
-  std::mt19937 rng(23);
-  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
-  for (int i = 0; i < 6000; ++i) {
-    uint32_t p = static_cast<uint32_t>(rng() % s.patches.size());
-    glm::vec3 n = glm::normalize(s.geom[p].n);
-    float offsets[3] = {0.0f, 1e-6f, -1e-6f};
-    glm::vec3 o = PointOnPatch(rng, s.patches[p]) + offsets[i % 3] * n;
-    glm::vec3 d = UnitVector(rng);
-    if (i % 5 == 0) d = glm::normalize(d - glm::dot(d, n) * n + 1e-4f * n);  // grazing
-    float tMin = i % 4 == 0 ? -0.5f : 0.0f;
-    ck.Check(Ray{o, d, tMin, kInf}, i % 2 ? p : kNoPatch, "plane");
-    ck.Check(Ray{o, -d, tMin, 0.3f + u01(rng)}, kNoPatch, "plane-reverse");
+    // Every record covers its run: the same normal up to sign, every offset in range.
+    bool spread = false;
+    for (const CellPlane& r : planes) {
+      spread |= r.dLo < r.dHi;
+      for (uint32_t p = r.first; p < r.first + r.count; ++p) {
+        const PatchGeom& g = s.geom[p];
+        float sign = g.n == r.n ? 1.0f : -1.0f;
+        ASSERT_EQ(sign * g.n, r.n) << "patch " << p;
+        ASSERT_GE(sign * g.d, r.dLo) << "patch " << p;
+        ASSERT_LE(sign * g.d, r.dHi) << "patch " << p;
+      }
+    }
+    EXPECT_TRUE(spread);  // the tilted wall's offsets round apart
+    // Cells with a plane: every patch in a run with that record; one holds a patch and its twin.
+    size_t withPlane = 0, occupied = 0, twinned = 0;
+    ForEachLeafCell(b.grid, [&](Span<const uint32_t> refs, uint32_t h) {
+      ++occupied;
+      if (h == Grid::kNoPlane) return;
+      ++withPlane;
+      ASSERT_LT(h, planes.size());
+      bool orig = false, twin = false;
+      for (uint32_t p : refs) {
+        const PatchGeom& g = s.geom[p];
+        float sign = g.n == planes[h].n ? 1.0f : -1.0f;
+        ASSERT_EQ(sign * g.n, planes[h].n) << "patch " << p;
+        ASSERT_GE(sign * g.d, planes[h].dLo);
+        ASSERT_LE(sign * g.d, planes[h].dHi);
+        orig |= p >= tiltFirst && p < tiltEnd;
+        twin |= p >= tiltEnd;
+      }
+      twinned += orig && twin;
+    });
+    // Most cells of the uniform grid; of the nested one's, a third at least
+    // (a cell of one plane keeps its patches, the cells split are mixed ones).
+    EXPECT_GT(withPlane * (nest.minRefs ? 3 : 2), occupied) << withPlane << " of " << occupied;
+    EXPECT_GT(twinned, 0u);
+
+    Checker ck{s, b.grid};
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+    for (int i = 0; i < 6000; ++i) {
+      uint32_t p = static_cast<uint32_t>(rng() % s.patches.size());
+      glm::vec3 n = glm::normalize(s.geom[p].n);
+      float offsets[3] = {0.0f, 1e-6f, -1e-6f};
+      glm::vec3 o = PointOnPatch(rng, s.patches[p]) + offsets[i % 3] * n;
+      glm::vec3 d = UnitVector(rng);
+      if (i % 5 == 0) d = glm::normalize(d - glm::dot(d, n) * n + 1e-4f * n);  // grazing
+      float tMin = i % 4 == 0 ? -0.5f : 0.0f;
+      ck.Check(Ray{o, d, tMin, kInf}, i % 2 ? p : kNoPatch, "plane");
+      ck.Check(Ray{o, -d, tMin, 0.3f + u01(rng)}, kNoPatch, "plane-reverse");
+    }
+    CheckRays(s, b, 29, 300, &ck);
+    EXPECT_EQ(ck.failures, 0) << ck.rays << " rays";
+    EXPECT_GT(ck.hits, ck.rays / 3);
   }
-  CheckRays(s, b, 29, 300, &ck);
-  EXPECT_EQ(ck.failures, 0) << ck.rays << " rays";
-  EXPECT_GT(ck.hits, ck.rays / 3);
 }
 
 TEST(GridTest, FlatScenes) {

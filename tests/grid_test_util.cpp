@@ -133,9 +133,9 @@ Grid::Plan AnchoredPlan(std::mt19937& rng, int count, float sizeLo, float sizeHi
   return ::testing::AssertionSuccess();
 }
 
-void BuildGrid(const TestScene& s, float density, BuiltGrid* b) {
+void BuildGrid(const TestScene& s, float density, BuiltGrid* b, Grid::Nest nest) {
   Span<const Patch> patches(s.patches.data(), s.patches.size());
-  b->plan = Grid::MakePlan(patches, density);
+  b->plan = Grid::MakePlan(patches, density, nest);
   Arena measure = Arena::Measure();
   Grid probe;
   probe.Layout(measure, b->plan);

@@ -71,7 +71,35 @@ struct BuiltGrid {
   Grid grid;
 };
 
-void BuildGrid(const TestScene& s, float density, BuiltGrid* b);
+// At `density` cells per patch, dense cells nested by `nest` (Grid::Nest's
+// default, as an environment builds it, unless given).
+void BuildGrid(const TestScene& s, float density, BuiltGrid* b, Grid::Nest nest = Grid::Nest());
+
+// No sub-grids: the uniform grid.
+inline Grid::Nest UniformNest() {
+  Grid::Nest n;
+  n.minRefs = 0;
+  return n;
+}
+// Sub-grids in every cell with two references or more, up to 8 cells an
+// axis: small test scenes then walk sub-grids on most rays.
+inline Grid::Nest DenseNest() {
+  Grid::Nest n;
+  n.minRefs = 2;
+  n.density = 2.0f;
+  n.maxRes = 8;
+  return n;
+}
+
+// Calls visit(refs, header) for every cell that holds patches itself: the
+// top cells without a sub-grid and every sub-grid's cells.
+template <typename Visit>
+void ForEachLeafCell(const Grid& g, Visit visit) {
+  for (size_t c = 0; c < g.cellCount(); ++c)
+    if (!g.SubGridOf(c) && !g.CellRefs(c).empty()) visit(g.CellRefs(c), g.CellPlaneOf(c));
+  for (size_t c = 0; c < g.plan().subCells; ++c)
+    if (!g.SubCellRefs(c).empty()) visit(g.SubCellRefs(c), g.SubCellPlaneOf(c));
+}
 
 // The reference: every patch, the same tie rule (a front side, then the
 // lower index: grid.h).

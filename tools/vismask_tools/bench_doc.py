@@ -40,12 +40,13 @@ def density_rows(d, paths):
         with open(path) as f:
             for line in f:
                 cells = [c.strip() for c in line.rstrip("\n").split("|")[1:-1]]
-                if len(cells) > 8 and line.startswith("| ") and "(" in cells[1] and cells[0][:1].isdigit():
-                    patches = cells[1].split("(")[0].strip()
-                    bytes_[patches] = [cells[5], cells[7]]
-                elif len(cells) > 3 and cells[1] in ("uniform", "cosine") and cells[2].startswith(("closest", "any")):
-                    rates.setdefault(cells[0], {}).setdefault((cells[1], cells[2]), []).append(
-                        float(cells[3].split()[0]))
+                # vismask_bench's tables start with the scene's name.
+                if len(cells) > 10 and line.startswith("| ") and "(" in cells[2] and cells[1][:1].isdigit():
+                    patches = cells[2].split("(")[0].strip()
+                    bytes_[patches] = [cells[7], cells[9]]
+                elif len(cells) > 4 and cells[2] in ("uniform", "cosine") and cells[3].startswith(("closest", "any")):
+                    rates.setdefault(cells[1], {}).setdefault((cells[2], cells[3]), []).append(
+                        float(cells[4].split()[0]))
 
     def fmt(v):
         return f"{statistics.median(v):.2f} ({min(v):.2f}–{max(v):.2f})"
@@ -57,21 +58,29 @@ def rays_section(s):
     with open(s.dir("rays.md")) as f:
         rays_md = f.read().rstrip("\n")
     L = ["", "## 1. Ray casting: the grid against Embree", "",
-         f"`{s.build}/vismask_bench --md FILE {s.rayargs}` (bench/ray_bench.cpp),",
-         """one thread. The Cornell box meshed by vismask's own mesher
-(`--patch-size` 80, 19.5 and 4.7: about 500, 8 000 and 130 000 patches).
+         f"`{s.build}/vismask_bench --md FILE {s.rayscenes} --uniform {s.rayargs}` (bench/ray_bench.cpp),",
+         f"""one thread. The Cornell box meshed by vismask's own mesher
+(`--patch-size` {s.cornell_sizes}: from about 500 to 1 million patches); the
+building of the parallel section (`tools/gen-building --rooms {s.brooms} --floors 2`) at
+patch size {s.building_size}; and two furnished interiors of very uneven density
+(`tools/gen-interior --kind living` and `--kind library`: large bare floors and
+walls, and small dense props: tables with tessellated bowls, cups and vases,
+shelves full of books) at patch sizes {s.interior_sizes}.
 Embree gets the same patches twice: as triangles (a quad patch is 2
 triangles, a triangle patch 1) and as Embree quads (1 per patch); rates and
 bytes are per patch unless marked. The grid is built as an environment builds
-it (`Grid::MakePlan` at an environment's cells per patch, given below).
+it (`Grid::MakePlan` at an environment's cells per patch and its default
+sub-grids, given below); `--uniform` times the same rays through the grid
+without sub-grids too (*uniform grid (before)*: the grid before issue 45),
+and the hit table counts the rays whose hit differs between the two.
 Ray sets: *uniform*, origins uniform in the scene's bounding box and
 directions uniform on the sphere; *cosine*, rays as the solver shoots them
 (256 shooters drawn by index, `ShotKey` streams, `MakePatchSampler` and
 `CosineDirection`), lifted 0.01 mm off the shooter so that Embree, which
 cannot skip it, does not hit it; tMin = 0.001 mm for both.
 
-Bytes: vismask's grid is `cellStart` + `refs` (what `Grid::bytes()`
-reports); its ray-test data (`PatchGeom`: the plane and the corners
+Bytes: vismask's grid is `cellStart` + `refs` + its bitmaps, plane records
+and sub-grids (what `Grid::bytes()` reports); its ray-test data (`PatchGeom`: the plane and the corners
 projected on it, its size in the table's header) is counted with it,
 as Embree's BVH holds its own copy of the triangles. Embree's bytes are what
 its memory monitor (`rtcSetDeviceMemoryMonitorFunction`) saw the scene's

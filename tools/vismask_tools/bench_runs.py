@@ -34,8 +34,20 @@ class Settings:
         self.build, self.out, self.quick = build, out or os.path.join(build, "bench"), quick
         self.parts = list(parts)
         self.reps = 2 if quick else reps
-        self.rayargs = ("--sizes 80 --rays 4096 --reps 2 --benchmark_min_time=0.01" if quick
+        self.rayargs = ("--rays 4096 --reps 2 --benchmark_min_time=0.01" if quick
                         else "--benchmark_min_time=0.2")
+        # The ray-casting scenes (issue 45): the Cornell box from 500 to a
+        # million patches, the building, and two furnished interiors of
+        # uneven density (tools/gen-interior), written into OUT by rays().
+        self.cornell_sizes = "80" if quick else "80, 19.5, 4.7 and 1.66"
+        self.building_size = "1" if quick else "0.25"
+        self.interior_sizes = "0.5" if quick else "0.25 and 0.1"
+        sizes = lambda text: text.replace(" and ", ",").replace(", ", ",")
+        self.rayscenes = " ".join([
+            f"--scene {SCENE}@{sizes(self.cornell_sizes)}",
+            f"--scene {self.out}/building.obj@{self.building_size}",
+            f"--scene {self.out}/living.obj@{sizes(self.interior_sizes)}",
+            f"--scene {self.out}/library.obj@{sizes(self.interior_sizes)}"])
         stop1, stop2, mshots, bstop, self.brooms = (("0.3", "0.5", 10, "0.7", "4x4") if quick else
                                                     ("2e-2", "5e-2", 200, "0.55", "8x8"))
         self.dens = [2, 4] if quick else [1, 2, 4, 8]
@@ -100,13 +112,12 @@ def rays(s):
     """vismask_bench: the grid against Embree (OUT/rays.md), and the grid
     alone at each cell density (OUT/densD.md)."""
     say("ray casting (vismask_bench)")
-    bench(s, "rays", ["--md", s.dir("rays.md")] + s.rayargs.split())
+    gen_scenes(s)
+    bench(s, "rays", ["--md", s.dir("rays.md")] + s.rayscenes.split() + ["--uniform"] +
+          s.rayargs.split())
     # Cell size: the grid alone at 1, 2, 4 and 8 cells per patch.
     base = s.rayargs.split()
-    if "--sizes" in base:
-        i = base.index("--sizes")
-        base = base[:i] + base[i + 2:]
-    more = s.densargs.split()
+    more = s.densargs.split() or ["--sizes", "80"]
     # The densities in turn, s.reps rounds of them, so that the machine's
     # drift falls on every density alike (run one after another, the first
     # and the last density saw different machines).
@@ -114,6 +125,15 @@ def rays(s):
         for d in s.dens:
             bench(s, f"dens{d}.{r}", ["--md", s.dir(f"dens{d}.{r}.md"), "--density", str(d),
                                       "--benchmark_filter=vismask"] + base + more)
+
+
+def gen_scenes(s):
+    """The building and the two furnished interiors, into OUT."""
+    subprocess.run(["tools/gen-building", "--rooms", s.brooms, "--floors", "2", "--out",
+                    s.dir("building.obj")], check=True, stdout=subprocess.DEVNULL)
+    for kind in ("living", "library"):
+        subprocess.run(["tools/gen-interior", "--kind", kind, "--out", s.dir(kind + ".obj")],
+                       check=True, stdout=subprocess.DEVNULL)
 
 
 def bench(s, name, args):
