@@ -129,7 +129,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability outside-check
+.PHONY: all deps demo demo-image test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability outside-check
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -279,6 +279,13 @@ uninstall:
 demo: deps
 	$(MAKE) $(BUILD)/vismask
 	$(BUILD)/vismask render scenes/cornell.obj --out out
+
+# docs/img/cornell.png, the README's picture: the demo's render (default
+# options), written by this target, never by hand.
+demo-image: deps
+	$(MAKE) $(BUILD)/vismask
+	$(BUILD)/vismask render scenes/cornell.obj --out $(BUILD)/demo-image --quiet
+	cp $(BUILD)/demo-image/image.png docs/img/cornell.png
 
 # The bench binary too, when its libraries are there (tools/install-deps
 # --bench), so that make test keeps it compiling; make bench runs it.
