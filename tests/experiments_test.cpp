@@ -104,6 +104,8 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
       {"gt-renderpark.csv", 3, {1, 2, 3}},
       {"gt-references.csv", 1, {2, 3, 4}},
       {"gt-experiments.csv", 1, {1, 2, 3, 4}},
+      {"gt-silhouette-mask.csv", 3, {1, 2}},    // emitter, silhouettes, both
+      {"gt-silhouettes.csv", 5, {3, 5, 6, 7}},  // --max-seconds at 2 budgets, 3 fixed settings
   };
   for (const GtTable& t : gtTables) {
     auto rows = ReadCsv(dir.File(t.file));
@@ -136,8 +138,8 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   for (const char* heading :
        {"### Error against solve time", "### The goals of issue 15", "### RenderPark, quoted",
         "not rerun by make experiments", "### Where the error comes from",
-        "### Two environments against one", "(gt-error-time.png)", "(img/gt-diff-default.png)",
-        "Ground truth (c)"})
+        "### Two environments against one", "### Without the 1-px silhouettes",
+        "(gt-error-time.png)", "(img/gt-diff-default.png)", "Ground truth (c)"})
     EXPECT_NE(doc.find(heading), std::string::npos) << heading;
 }
 
