@@ -20,11 +20,12 @@
   reference_scene, reference_render   tools/reference: the scene and cameras, Blender runs
   blender_render, scale      run by tools/reference: inside Blender, and its check
   silhouette  tools/silhouette-mask: the pixels within 1 px of a geometric edge
+  renderpark  tools/renderpark-run: a scene as MGF for rpkCpp, its RGBE image as PFM
 
 Scripts in tools/ import it as `from vismask_tools import ...` (Python puts
 the script's own directory first on sys.path; bench/run, outside tools/,
 adds it); it needs only Python 3's
-standard library, except scale.py and silhouette.py (numpy, /usr/bin/python3)."""
+standard library, except scale.py, silhouette.py and renderpark.py (numpy, /usr/bin/python3)."""
 import os
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
