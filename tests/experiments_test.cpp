@@ -117,6 +117,16 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
             << t.file << " row " << r << " col " << c << ": '" << rows[r][c] << "'";
       }
   }
+  // RenderPark measured (make renderpark built it) or a line saying it was not built.
+  if (FileExists(dir.File("gt-renderpark-measured.csv"))) {
+    auto rp = ReadCsv(dir.File("gt-renderpark-measured.csv"));
+    ASSERT_GE(rp.size(), 2u);
+    for (int c : {2, 3, 4}) EXPECT_TRUE(IsNumber(rp[1][c])) << rp[1][c];
+  } else {
+    EXPECT_NE(ReadFile(dir.File("gt-renderpark-skipped.txt")).find("make renderpark RPK_SRC="),
+              std::string::npos);
+    EXPECT_NE(doc.find("**Skipped**: RenderPark not built"), std::string::npos);
+  }
   // The ground-truth columns beside reference (b)'s.
   auto fig2 = ReadCsv(dir.File("fig2-quality.csv"));
   ASSERT_GE(fig2[0].size(), 11u);
@@ -139,7 +149,8 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
        {"### Error against solve time", "### The goals of issue 15", "### RenderPark, quoted",
         "not rerun by make experiments", "### Where the error comes from",
         "### Two environments against one", "### Without the 1-px silhouettes",
-        "(gt-error-time.png)", "(img/gt-diff-default.png)", "Ground truth (c)"})
+        "RenderPark measured in this run", "(gt-error-time.png)", "(img/gt-diff-default.png)",
+        "Ground truth (c)"})
     EXPECT_NE(doc.find(heading), std::string::npos) << heading;
 }
 

@@ -104,6 +104,15 @@ def report_section(ctx, w, link, table_md):
           "`best_fixed_within`: the fixed setting with the lowest `vs_gt` among those whose "
           "solve took at most T; issue 41's anytime goal is `anytime_over_best_fixed` <= 1.25.\n")
         w(table_md(ctx.result("gt-silhouettes.csv")) + "\n")
+        w("RenderPark measured in this run: rpkCpp's hierarchical Galerkin "
+          "(tools/renderpark-run: the scene in metres, a one-ray-per-pixel raycast of the "
+          "solution), by its own CPU seconds, after the vismask runs above (not interleaved):\n")
+        skipped = ctx.result("gt-renderpark-skipped.txt")
+        if os.path.exists(ctx.result("gt-renderpark-measured.csv")):
+            w(table_md(ctx.result("gt-renderpark-measured.csv")) + "\n")
+        else:
+            w("**Skipped**: " + (open(skipped).read().strip() if os.path.exists(skipped)
+                                 else "no results") + ".\n")
 
     w("### Where the error comes from\n")
     w("Per configuration, from three runs: seed 1 (`total_vs_gt`), seed 2, and seed 1 drawn with "

@@ -3,7 +3,9 @@ Cycles ground truth at the original camera with the emitter's pixels left out
 (REF.mask.pgm) and with the 1-px silhouettes left out as well
 (tools/silhouette-mask, run as a command since it needs numpy): `--max-seconds
 T` at otherwise default options, and the fixed settings of the
-error-against-time runs. Writes gt-silhouette-mask.csv and gt-silhouettes.csv."""
+error-against-time runs; and RenderPark (rpkCpp's hierarchical Galerkin, by
+tools/renderpark-run) when make renderpark has built it. Writes
+gt-silhouette-mask.csv, gt-silhouettes.csv and gt-renderpark-measured.csv."""
 
 import os
 import subprocess
@@ -11,7 +13,7 @@ import sys
 
 from . import ROOT
 from .cornell import SCENE
-from .files import load_json, read_pgm
+from .files import load_json, read_pfm, read_pgm
 from .gt_references import ORIGINAL
 from .runner import log
 
@@ -75,3 +77,39 @@ def silhouettes(ctx, ref, fixed, run, image, write_csv):
               ["run", "options", "max_seconds", "solve_seconds", "stop", "shots", "vs_gt",
                "vs_gt_no_silhouettes", "best_fixed_within", "best_fixed_vs_gt",
                "anytime_over_best_fixed"], rows + fixed_rows)
+    renderpark(ctx, ref, keep, write_csv)
+
+
+def rpk_binary():
+    """$RPK_BIN, else make renderpark's build/renderpark/build/rpk, or None."""
+    b = os.environ.get("RPK_BIN") or os.path.join(ROOT, "build", "renderpark", "build", "rpk")
+    return b if os.access(b, os.X_OK) else None
+
+
+def renderpark(ctx, ref, keep, write_csv):
+    """rpkCpp at each of gt.rpk's option lists: its CPU seconds (its own last
+    "CPU time" line) and errors, or a note that it is not built."""
+    out = ctx.result("gt-renderpark-measured.csv")
+    note = ctx.result("gt-renderpark-skipped.txt")
+    for p in (out, note):
+        if os.path.exists(p):
+            os.remove(p)
+    rpk = rpk_binary()
+    if rpk is None:
+        with open(note, "w") as f:
+            f.write("RenderPark not built (make renderpark RPK_SRC=DIR, a checkout of "
+                    "github.com/OscarChavarro/rpkCpp 37e5ff4e; or RPK_BIN=BINARY)\n")
+        log("experiments: RenderPark not built, its measured rows skipped")
+        return
+    rows = []
+    for k, opts in enumerate(ctx.s["gt"]["rpk"]):
+        pfm = os.path.join(ctx.runs, "gt", f"renderpark-{k}.pfm")
+        cmd = [os.path.join(ROOT, "tools", "renderpark-run"), "render", "--rpk", rpk, SCENE,
+               "--camera", ORIGINAL, "--size", str(ref.w), str(ref.h), "--out", pfm, "--"] + opts
+        log("  " + " ".join(os.path.relpath(c, ROOT) if c.startswith(ROOT) else c for c in cmd))
+        r = subprocess.run(cmd, check=True, capture_output=True, text=True)
+        cpu = float(r.stdout.split("CPU time ")[1].split()[0])
+        img = read_pfm(pfm)[2]
+        rows.append(["rpkCpp hierarchical Galerkin", " ".join(opts), cpu, ref.error(img),
+                     ref.error(img, keep)])
+    write_csv(out, ["renderpark", "options", "cpu_seconds", "vs_gt", "vs_gt_no_silhouettes"], rows)
