@@ -9,6 +9,7 @@
 #   make CROSS=arm-linux-gnueabihf- 32-bit ARM, into build/armhf
 #   make test-cross     the aarch64 tests and a render under qemu, compared with native
 #   make experiments    the paper's figures and table as numbers: docs/RESULTS.md
+#   make renderpark RPK_SRC=DIR  rpkCpp (RenderPark) built from DIR, for issue 41's comparison
 #   make cluster-experiments  (root) simulated Pi clusters, docs/CLUSTER.md
 #   make fuzz FUZZ_SECONDS=N   libFuzzer on the scene loader and the image readers (clang)
 #   make fuzz-report    10 M executions of each fuzz target: docs/STABILITY.md
@@ -129,7 +130,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo demo-image test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability outside-check
+.PHONY: all deps demo demo-image test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments renderpark parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability outside-check
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -325,6 +326,13 @@ experiments: deps
 	@tools/install-deps --reference
 	$(MAKE) $(BUILD)/vismask
 	VISMASK_BIN=$(BUILD)/vismask tools/experiments
+
+# RenderPark's C++ port (issue 41): RPK_SRC=DIR, a checkout of
+# github.com/OscarChavarro/rpkCpp snapshot 37e5ff4e (nothing is fetched);
+# its integer-option parsing fixed in the copy, built Release into
+# build/renderpark/build/rpk. Without RPK_SRC it says so and does nothing.
+renderpark:
+	RPK_SRC=$(RPK_SRC) tools/renderpark-build
 
 # docs/PARALLEL.md: does splitting pay? Each split run (Cornell --ranks 2,
 # the pillared room in 3x1x3, the building in 4x1x4, Cornell in 5x5x5)

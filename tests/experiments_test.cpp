@@ -104,6 +104,8 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
       {"gt-renderpark.csv", 3, {1, 2, 3}},
       {"gt-references.csv", 1, {2, 3, 4}},
       {"gt-experiments.csv", 1, {1, 2, 3, 4}},
+      {"gt-silhouette-mask.csv", 3, {1, 2}},    // emitter, silhouettes, both
+      {"gt-silhouettes.csv", 5, {3, 5, 6, 7}},  // --max-seconds at 2 budgets, 3 fixed settings
   };
   for (const GtTable& t : gtTables) {
     auto rows = ReadCsv(dir.File(t.file));
@@ -114,6 +116,16 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
         EXPECT_TRUE(IsNumber(rows[r][c]))
             << t.file << " row " << r << " col " << c << ": '" << rows[r][c] << "'";
       }
+  }
+  // RenderPark measured (make renderpark built it) or a line saying it was not built.
+  if (FileExists(dir.File("gt-renderpark-measured.csv"))) {
+    auto rp = ReadCsv(dir.File("gt-renderpark-measured.csv"));
+    ASSERT_GE(rp.size(), 2u);
+    for (int c : {2, 3, 4}) EXPECT_TRUE(IsNumber(rp[1][c])) << rp[1][c];
+  } else {
+    EXPECT_NE(ReadFile(dir.File("gt-renderpark-skipped.txt")).find("make renderpark RPK_SRC="),
+              std::string::npos);
+    EXPECT_NE(doc.find("**Skipped**: RenderPark not built"), std::string::npos);
   }
   // The ground-truth columns beside reference (b)'s.
   auto fig2 = ReadCsv(dir.File("fig2-quality.csv"));
@@ -136,7 +148,8 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   for (const char* heading :
        {"### Error against solve time", "### The goals of issue 15", "### RenderPark, quoted",
         "not rerun by make experiments", "### Where the error comes from",
-        "### Two environments against one", "(gt-error-time.png)", "(img/gt-diff-default.png)",
+        "### Two environments against one", "### Without the 1-px silhouettes",
+        "RenderPark measured in this run", "(gt-error-time.png)", "(img/gt-diff-default.png)",
         "Ground truth (c)"})
     EXPECT_NE(doc.find(heading), std::string::npos) << heading;
 }

@@ -11,18 +11,21 @@
   machine    facts about the machine and the commit, for reports
   cornell    the Cornell box's shadow region (the experiments' leak figures)
   experiments, groundtruth   the steps of make experiments (docs/RESULTS.md);
-             results_report writes it, gt_references and gt_report the ground truth's part
+             results_report writes it, gt_references and gt_report the ground truth's part,
+             gt_silhouettes its errors without the 1-px silhouettes
   checks     the checks of one output directory (make stability)
   fuzz       the Fuzzing section of docs/STABILITY.md (make fuzz-report)
   bench_runs, bench_parallel, bench_doc   make bench (bench/run): docs/BENCHMARKS.md
   cluster, cluster_doc   make cluster-experiments: docs/CLUSTER.md
   reference_scene, reference_render   tools/reference: the scene and cameras, Blender runs
   blender_render, scale      run by tools/reference: inside Blender, and its check
+  silhouette  tools/silhouette-mask: the pixels within 1 px of a geometric edge
+  renderpark  tools/renderpark-run: a scene as MGF for rpkCpp, its RGBE image as PFM
 
 Scripts in tools/ import it as `from vismask_tools import ...` (Python puts
 the script's own directory first on sys.path; bench/run, outside tools/,
 adds it); it needs only Python 3's
-standard library, except scale.py (numpy, /usr/bin/python3)."""
+standard library, except scale.py, silhouette.py and renderpark.py (numpy, /usr/bin/python3)."""
 import os
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))

@@ -9,6 +9,7 @@ import os
 
 from .files import load_json, read_csv, read_pfm, write_csv as write_csv_, write_png
 from .gt_references import ORIGINAL, demo_reference, have_blender, original_reference
+from .gt_silhouettes import silhouettes
 from .images import rel_rmse
 from .plot import gnuplot
 from .runner import log
@@ -225,6 +226,7 @@ def ground_truth(ctx):
 
     decomposition(ctx, ref)
     environments(ctx, ref)
+    silhouettes(ctx, ref, settings, run, image, write_csv)
 
 
 def decomposition(ctx, ref):

@@ -90,6 +90,30 @@ def report_section(ctx, w, link, table_md):
     w("vismask's front (this run) at the same solve times:\n")
     w(table_md(ctx.result("gt-renderpark.csv")) + "\n")
 
+    if os.path.exists(ctx.result("gt-silhouettes.csv")):
+        w("### Without the 1-px silhouettes (issue 41)\n")
+        w("A one-sample-per-pixel raycast (RenderPark's image) aliases on the geometric edges of "
+          "the image. tools/silhouette-mask marks the pixels within 1 px of one: one ray through "
+          "each pixel centre with vismask's camera, and a pixel whose 3x3 neighbourhood sees more "
+          "than one surface (a plane with one material) or misses the scene. `vs_gt` leaves out "
+          "the emitter's pixels as above; `vs_gt_no_silhouettes` leaves out the emitter's and "
+          "the silhouettes' (runs/gt/original-silhouettes.pgm, for `vismask compare --exclude`):\n")
+        w(table_md(ctx.result("gt-silhouette-mask.csv")) + "\n")
+        w(f"`--max-seconds T` at otherwise default options (`anytime-T`), and the fixed "
+          "settings of the error-against-time runs above (read, not rerun). "
+          "`best_fixed_within`: the fixed setting with the lowest `vs_gt` among those whose "
+          "solve took at most T; issue 41's anytime goal is `anytime_over_best_fixed` <= 1.25.\n")
+        w(table_md(ctx.result("gt-silhouettes.csv")) + "\n")
+        w("RenderPark measured in this run: rpkCpp's hierarchical Galerkin "
+          "(tools/renderpark-run: the scene in metres, a one-ray-per-pixel raycast of the "
+          "solution), by its own CPU seconds, after the vismask runs above (not interleaved):\n")
+        skipped = ctx.result("gt-renderpark-skipped.txt")
+        if os.path.exists(ctx.result("gt-renderpark-measured.csv")):
+            w(table_md(ctx.result("gt-renderpark-measured.csv")) + "\n")
+        else:
+            w("**Skipped**: " + (open(skipped).read().strip() if os.path.exists(skipped)
+                                 else "no results") + ".\n")
+
     w("### Where the error comes from\n")
     w("Per configuration, from three runs: seed 1 (`total_vs_gt`), seed 2, and seed 1 drawn with "
       "the other `--aa` (the same seed gives the same solve: `same_solve_aa_on_off` says whether "
