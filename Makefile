@@ -24,7 +24,7 @@ MPI ?= 1
 MPICXX ?= mpicxx
 
 # V=1 shows the full compiler and linker lines; by default make says
-# "CXX src/foo.cpp" and "LD build/vismask".
+# "CXX src/scene/foo.cpp" and "LD build/vismask".
 V ?= 0
 ifeq ($(V),1)
   Q :=
@@ -90,8 +90,8 @@ endif
 TRANSPORT_SRC := platform/transport_posix.cpp platform/transport_loop.cpp platform/transport_pipe.cpp \
                  platform/transport_pipe_process.cpp platform/transport_pipe_frames.cpp \
                  platform/transport_mpi.cpp
-LIB_SRC := $(wildcard src/*.cpp) $(wildcard platform/*.cpp)
-LIB_SRC := $(filter-out src/main.cpp $(TRANSPORT_SRC),$(LIB_SRC))
+LIB_SRC := $(wildcard src/*/*.cpp) $(wildcard platform/*.cpp)
+LIB_SRC := $(filter-out src/app/main.cpp $(TRANSPORT_SRC),$(LIB_SRC))
 LIB_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(LIB_SRC))
 POSIX_OBJ := $(BUILD)/obj/platform/transport_posix.o $(BUILD)/obj/platform/transport_loop.o \
              $(BUILD)/obj/platform/transport_pipe.o $(BUILD)/obj/platform/transport_pipe_process.o \
@@ -99,7 +99,7 @@ POSIX_OBJ := $(BUILD)/obj/platform/transport_posix.o $(BUILD)/obj/platform/trans
 MPI_OBJ := $(BUILD)/obj/platform/transport_mpi.o
 TEST_SRC := $(wildcard tests/*.cpp)
 TEST_OBJ := $(patsubst %.cpp,$(BUILD)/obj/%.o,$(TEST_SRC))
-HEADERS := $(wildcard include/vismask/*.h)
+HEADERS := $(wildcard include/vismask/*/*.h)
 
 # MPI=1 without mpicxx (tools/install-deps installs it) builds as MPI=0.
 # A cross build has no mpicxx for the target: it compiles and links against
@@ -153,10 +153,10 @@ $(BUILD)/obj/%.o: %.cpp $(SYSROOT_DEP)
 # JPEGs (its DC prediction: fixed upstream in 2.28): -fwrapv makes them wrap,
 # as the hardware does, instead of undefined behaviour (the texture fuzz
 # target, issue 42).
-$(BUILD)/obj/src/texture.o build/fuzz/obj/src/texture.o: CXXFLAGS += -fwrapv
-build/fuzz/obj/src/texture.o: FUZZ_CXXFLAGS += -fwrapv
+$(BUILD)/obj/src/scene/texture.o build/fuzz/obj/src/scene/texture.o: CXXFLAGS += -fwrapv
+build/fuzz/obj/src/scene/texture.o: FUZZ_CXXFLAGS += -fwrapv
 
-$(BUILD)/vismask: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(POSIX_OBJ)
+$(BUILD)/vismask: $(BUILD)/obj/src/app/main.o $(LIB_OBJ) $(POSIX_OBJ)
 	$(SAY) LD $@
 	$(Q)$(CXX) $(LDFLAGS) $^ -o $@ $(LDLIBS)
 
@@ -168,7 +168,7 @@ $(MPI_OBJ): platform/transport_mpi.cpp
 	$(SAY) CXX $<
 	$(Q)OMPI_CXX=$(CXX) $(MPICXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -c $< -o $@
 
-$(BUILD)/vismask-mpi: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(MPI_OBJ)
+$(BUILD)/vismask-mpi: $(BUILD)/obj/src/app/main.o $(LIB_OBJ) $(MPI_OBJ)
 	$(SAY) LD $@
 	$(Q)OMPI_CXX=$(CXX) $(MPICXX) $(LDFLAGS) $^ -o $@ $(LDLIBS)
 else
@@ -181,7 +181,7 @@ $(MPI_OBJ): platform/transport_mpi.cpp | $(SYSROOT)/.base-ok $(SYSROOT)/.mpi-ok
 	$(SAY) CXX $<
 	$(Q)$(CXX) $(CXXFLAGS) -DOMPI_SKIP_MPICXX -isystem $(MPI_INC) -c $< -o $@
 
-$(BUILD)/vismask-mpi: $(BUILD)/obj/src/main.o $(LIB_OBJ) $(MPI_OBJ)
+$(BUILD)/vismask-mpi: $(BUILD)/obj/src/app/main.o $(LIB_OBJ) $(MPI_OBJ)
 	$(SAY) LD $@
 	$(Q)$(CXX) $(LDFLAGS) -L$(MPI_LIBDIR) -Wl,--allow-shlib-undefined $^ -o $@ $(LDLIBS) -lmpi
 endif

@@ -8,7 +8,7 @@
 // is 1) and Embree's native quads (one per patch). Two ray sets:
 //   uniform - origins uniform in the scene's bounding box, directions uniform
 //             on the sphere;
-//   cosine  - rays as a shot casts them (src/trace.cpp): shooters drawn
+//   cosine  - rays as a shot casts them (src/solve/trace.cpp): shooters drawn
 //             uniformly by patch index, each shot's stream from ShotKey, a
 //             uniform point on the patch and a cosine-distributed direction.
 // Cosine rays start kLift in front of their shooter (Embree cannot skip the

@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "vismask/arena.h"
-#include "vismask/environment.h"
-#include "vismask/grid.h"
-#include "vismask/scene.h"
+#include "vismask/accel/grid.h"
+#include "vismask/core/arena.h"
+#include "vismask/scene/scene.h"
+#include "vismask/solve/environment.h"
 
 namespace vismask::bench {
 

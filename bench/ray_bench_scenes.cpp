@@ -10,9 +10,9 @@
 #include <random>
 
 #include "ray_bench.h"
-#include "vismask/mesh.h"
-#include "vismask/rng.h"
-#include "vismask/sampling.h"
+#include "vismask/scene/mesh.h"
+#include "vismask/solve/rng.h"
+#include "vismask/solve/sampling.h"
 
 namespace vismask::bench {
 

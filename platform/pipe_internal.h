@@ -35,9 +35,9 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "vismask/span.h"
-#include "vismask/status.h"
-#include "vismask/transport.h"
+#include "vismask/core/span.h"
+#include "vismask/core/status.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 

@@ -11,7 +11,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "vismask/os.h"
+#include "vismask/core/os.h"
 
 namespace vismask::os {
 

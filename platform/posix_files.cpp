@@ -1,4 +1,4 @@
-// POSIX implementation of include/vismask/os.h's files and directories:
+// POSIX implementation of include/vismask/core/os.h's files and directories:
 // InFile, OutFile and their all-or-nothing commit, DirLock, MakeDirs.
 #include <dirent.h>
 #include <errno.h>
@@ -16,7 +16,7 @@
 #include <string>
 
 #include "posix_internal.h"
-#include "vismask/os.h"
+#include "vismask/core/os.h"
 
 namespace vismask::os {
 

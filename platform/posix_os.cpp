@@ -1,4 +1,4 @@
-// POSIX implementation of include/vismask/os.h: signals and the temporary
+// POSIX implementation of include/vismask/core/os.h: signals and the temporary
 // files they remove, clocks, standard streams, memory figures (files and
 // directories: posix_files.cpp).
 #include <errno.h>
@@ -15,7 +15,7 @@
 #include <cstring>
 
 #include "posix_internal.h"
-#include "vismask/os.h"
+#include "vismask/core/os.h"
 
 namespace vismask::os {
 

@@ -3,8 +3,8 @@
 #pragma once
 #include <cstdio>
 
-#include "vismask/os.h"
-#include "vismask/transport.h"
+#include "vismask/core/os.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 

@@ -3,8 +3,8 @@
 #pragma once
 #include <memory>
 
-#include "vismask/status.h"
-#include "vismask/transport.h"
+#include "vismask/core/status.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 

@@ -3,8 +3,8 @@
 #include <memory>
 
 #include "transport_local.h"
-#include "vismask/check.h"
-#include "vismask/transport.h"
+#include "vismask/core/check.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 namespace {

@@ -41,9 +41,9 @@
 #include <string>
 
 #include "rank_wait.h"
-#include "vismask/check.h"
-#include "vismask/os.h"
-#include "vismask/transport.h"
+#include "vismask/core/check.h"
+#include "vismask/core/os.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 namespace {

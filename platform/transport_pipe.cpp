@@ -10,10 +10,10 @@
 
 #include "pipe_internal.h"
 #include "transport_local.h"
-#include "vismask/check.h"
-#include "vismask/span.h"
-#include "vismask/status.h"
-#include "vismask/transport.h"
+#include "vismask/core/check.h"
+#include "vismask/core/span.h"
+#include "vismask/core/status.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 

@@ -12,8 +12,8 @@
 
 #include "pipe_internal.h"
 #include "rank_wait.h"
-#include "vismask/check.h"
-#include "vismask/os.h"
+#include "vismask/core/check.h"
+#include "vismask/core/os.h"
 
 namespace vismask {
 namespace {

@@ -22,10 +22,10 @@
 
 #include "pipe_internal.h"
 #include "rank_wait.h"
-#include "vismask/check.h"
-#include "vismask/os.h"
-#include "vismask/status.h"
-#include "vismask/transport.h"
+#include "vismask/core/check.h"
+#include "vismask/core/os.h"
+#include "vismask/core/status.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 namespace {

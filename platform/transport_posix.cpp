@@ -5,7 +5,7 @@
 #include <string>
 
 #include "transport_local.h"
-#include "vismask/transport.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 

@@ -10,7 +10,7 @@
 #include <cstdlib>
 
 #include "test_util.h"
-#include "vismask/phase.h"
+#include "vismask/core/phase.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #define VISMASK_ALLOC_HOOKS 0  // ASan owns malloc; the test is skipped there

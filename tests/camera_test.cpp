@@ -1,6 +1,6 @@
 // The default camera's side (occlusion included), the --view presets, and
 // the warning for an image that shows nothing.
-#include "vismask/camera.h"
+#include "vismask/display/camera.h"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +11,8 @@
 #include <sstream>
 
 #include "test_util.h"
-#include "vismask/options.h"
-#include "vismask/scene.h"
+#include "vismask/app/options.h"
+#include "vismask/scene/scene.h"
 
 namespace vismask {
 namespace {

@@ -1,7 +1,7 @@
 // Method B's centre mask by patch (RasterCentres) against the grid's walk
 // (WalkCentres), bit for bit; and KeepExits keeping every pixel that a
 // direction able to leave through an exit falls in.
-#include "vismask/centre_raster.h"
+#include "vismask/solve/centre_raster.h"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +13,7 @@
 
 #include "grid_test_util.h"
 #include "mask_test_util.h"
-#include "vismask/sampling.h"
+#include "vismask/solve/sampling.h"
 
 namespace vismask {
 namespace {

@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "env_test_util.h"
-#include "vismask/environment.h"
-#include "vismask/packet.h"
-#include "vismask/partition.h"
+#include "vismask/solve/environment.h"
+#include "vismask/solve/packet.h"
+#include "vismask/solve/partition.h"
 
 namespace vismask {
 namespace {

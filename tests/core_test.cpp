@@ -10,14 +10,14 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/arena.h"
-#include "vismask/check.h"
-#include "vismask/fminmax.h"
-#include "vismask/max_tree.h"
-#include "vismask/patch.h"
-#include "vismask/rng.h"
-#include "vismask/sampling.h"
-#include "vismask/slot_index.h"
+#include "vismask/core/arena.h"
+#include "vismask/core/check.h"
+#include "vismask/core/fminmax.h"
+#include "vismask/solve/max_tree.h"
+#include "vismask/solve/patch.h"
+#include "vismask/solve/rng.h"
+#include "vismask/solve/sampling.h"
+#include "vismask/solve/slot_index.h"
 
 namespace vismask {
 namespace {

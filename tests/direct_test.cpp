@@ -4,7 +4,7 @@
 // closed form, a hard shadow edge is as sharp as its geometry, the
 // indirect part has no step at patch edges, a quarter of the rays gives
 // the converged image's mean.
-#include "vismask/direct.h"
+#include "vismask/display/direct.h"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 
 #include "grid_test_util.h"
 #include "test_util.h"
-#include "vismask/image_io.h"
+#include "vismask/output/image_io.h"
 
 namespace vismask {
 namespace {

@@ -1,5 +1,5 @@
 // The emitter check: a light facing a surface just beyond it is warned of.
-#include "vismask/emitter_check.h"
+#include "vismask/scene/emitter_check.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 
 #include "test_util.h"
 #include "twosided_test_util.h"
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
 
 namespace vismask {
 namespace {

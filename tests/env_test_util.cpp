@@ -2,8 +2,8 @@
 
 #include <gtest/gtest.h>
 
-#include "vismask/mesh.h"
-#include "vismask/scene.h"
+#include "vismask/scene/mesh.h"
+#include "vismask/scene/scene.h"
 
 namespace vismask::test {
 

@@ -4,9 +4,9 @@
 #include <memory>
 #include <vector>
 
-#include "vismask/environment.h"
-#include "vismask/partition.h"
-#include "vismask/span.h"
+#include "vismask/core/span.h"
+#include "vismask/solve/environment.h"
+#include "vismask/solve/partition.h"
 
 namespace vismask::test {
 

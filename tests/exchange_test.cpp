@@ -1,7 +1,7 @@
 // The exchange between rounds (exchange.h): one collective a round carries
 // the packets and the reports, and the reports, made before delivery, give
 // the totals a gather after the delivery would.
-#include "vismask/exchange.h"
+#include "vismask/solve/exchange.h"
 
 #include <gtest/gtest.h>
 
@@ -11,11 +11,11 @@
 
 #include "env_test_util.h"
 #include "test_util.h"
-#include "vismask/environment.h"
-#include "vismask/packet.h"
-#include "vismask/partition.h"
-#include "vismask/solver.h"
-#include "vismask/transport.h"
+#include "vismask/parallel/transport.h"
+#include "vismask/solve/environment.h"
+#include "vismask/solve/packet.h"
+#include "vismask/solve/partition.h"
+#include "vismask/solve/solver.h"
 
 namespace vismask {
 namespace {

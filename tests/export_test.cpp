@@ -1,4 +1,4 @@
-// --export FILE.glb (gltf.h, src/export.cpp): the file's structure, its
+// --export FILE.glb (gltf.h, src/output/export.cpp): the file's structure, its
 // colours against image.pfm, its options, and Khronos' glTF-Validator on
 // real exports (when node is installed: tools/install-deps).
 #include <gtest/gtest.h>
@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/arena.h"
-#include "vismask/gltf.h"
-#include "vismask/options.h"
+#include "vismask/app/options.h"
+#include "vismask/core/arena.h"
+#include "vismask/output/gltf.h"
 
 namespace vismask {
 namespace {

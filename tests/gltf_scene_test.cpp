@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/scene.h"
-#include "vismask/texture.h"
+#include "vismask/scene/scene.h"
+#include "vismask/scene/texture.h"
 
 namespace vismask {
 namespace {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "grid_test_util.h"
-#include "vismask/grid.h"
+#include "vismask/accel/grid.h"
 
 namespace vismask {
 namespace {

@@ -1,6 +1,6 @@
 // The grid against brute force: every kind of ray through random, flat,
 // cell-aligned, sliver, edge-hugging and long scenes gets the same hit.
-#include "vismask/grid.h"
+#include "vismask/accel/grid.h"
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "test_util.h"
-#include "vismask/sampling.h"
+#include "vismask/solve/sampling.h"
 
 namespace vismask::gridtest {
 

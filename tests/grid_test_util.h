@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "vismask/arena.h"
-#include "vismask/grid.h"
+#include "vismask/accel/grid.h"
+#include "vismask/core/arena.h"
 
 namespace vismask::gridtest {
 

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/os.h"
-#include "vismask/texture.h"
+#include "vismask/core/os.h"
+#include "vismask/scene/texture.h"
 
 namespace vismask {
 namespace {

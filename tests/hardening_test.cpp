@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/check.h"
-#include "vismask/os.h"
+#include "vismask/core/check.h"
+#include "vismask/core/os.h"
 
 namespace vismask {
 namespace {

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/image_io.h"
-#include "vismask/raster.h"
+#include "vismask/display/raster.h"
+#include "vismask/output/image_io.h"
 
 namespace vismask {
 namespace {

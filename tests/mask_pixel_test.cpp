@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "mask_test_util.h"
-#include "vismask/mask.h"
-#include "vismask/sampling.h"
+#include "vismask/solve/mask.h"
+#include "vismask/solve/sampling.h"
 
 namespace vismask {
 namespace {

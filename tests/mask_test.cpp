@@ -1,5 +1,5 @@
 // Visibility masks and packets (the admission rule and shot budget: solver_test.cpp).
-#include "vismask/mask.h"
+#include "vismask/solve/mask.h"
 
 #include <gtest/gtest.h>
 
@@ -10,11 +10,11 @@
 #include <random>
 #include <vector>
 
-#include "vismask/mesh.h"
-#include "vismask/packet.h"
-#include "vismask/rng.h"
-#include "vismask/sampling.h"
-#include "vismask/scene.h"
+#include "vismask/scene/mesh.h"
+#include "vismask/scene/scene.h"
+#include "vismask/solve/packet.h"
+#include "vismask/solve/rng.h"
+#include "vismask/solve/sampling.h"
 
 namespace vismask {
 namespace {

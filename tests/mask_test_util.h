@@ -3,8 +3,8 @@
 #pragma once
 #include <cstdint>
 
-#include "vismask/arena.h"
-#include "vismask/mask.h"
+#include "vismask/core/arena.h"
+#include "vismask/solve/mask.h"
 
 namespace vismask::test {
 

@@ -1,4 +1,4 @@
-#include "vismask/mesh.h"
+#include "vismask/scene/mesh.h"
 
 #include <gtest/gtest.h>
 

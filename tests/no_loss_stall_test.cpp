@@ -8,7 +8,7 @@
 #include <string>
 
 #include "test_util.h"
-#include "vismask/solver.h"
+#include "vismask/solve/solver.h"
 
 namespace vismask {
 namespace {

@@ -5,7 +5,7 @@
 // factor from the floor to the opening (and the sun's E * sin(theta) on the
 // opening's area, all of which lands on the floor). The energy ledger closes
 // with the sky's and sun's power in it.
-#include "vismask/outside.h"
+#include "vismask/solve/outside.h"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/partition.h"
+#include "vismask/solve/partition.h"
 
 namespace vismask {
 namespace {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "partition_test_util.h"
-#include "vismask/partition.h"
+#include "vismask/solve/partition.h"
 
 namespace vismask {
 namespace {

@@ -1,6 +1,6 @@
 // Partitioning a scene into environments: parsing grids, planes and boxes,
 // polygons cut at the planes, and the invariants on random polygons.
-#include "vismask/partition.h"
+#include "vismask/solve/partition.h"
 
 #include <gtest/gtest.h>
 

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "vismask/partition.h"
+#include "vismask/solve/partition.h"
 
 namespace vismask::parttest {
 

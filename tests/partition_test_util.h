@@ -6,8 +6,8 @@
 #include <glm/vec3.hpp>
 #include <vector>
 
-#include "vismask/partition.h"
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
+#include "vismask/solve/partition.h"
 
 namespace vismask::parttest {
 

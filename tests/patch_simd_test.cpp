@@ -11,7 +11,7 @@
 #include <utility>
 
 #include "test_util.h"
-#include "vismask/patch.h"
+#include "vismask/solve/patch.h"
 
 namespace vismask {
 namespace {

@@ -12,11 +12,11 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/environment.h"
-#include "vismask/image_io.h"
-#include "vismask/mesh.h"
-#include "vismask/scene.h"
-#include "vismask/sobol.h"
+#include "vismask/output/image_io.h"
+#include "vismask/scene/mesh.h"
+#include "vismask/scene/scene.h"
+#include "vismask/solve/environment.h"
+#include "vismask/solve/sobol.h"
 
 namespace vismask {
 namespace {

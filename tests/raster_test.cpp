@@ -1,7 +1,7 @@
 // Raster: exact pixel coverage (a 1-pixel box filter), pieces that tile a
 // patch or a plane, bilinear interpolation in a quad's own parameters, and
 // the composite's independence of grouping and order.
-#include "vismask/raster.h"
+#include "vismask/display/raster.h"
 
 #include <gtest/gtest.h>
 

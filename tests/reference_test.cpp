@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/image_io.h"
+#include "vismask/output/image_io.h"
 
 namespace vismask {
 namespace {

@@ -12,9 +12,9 @@
 
 #include "render_test_util.h"
 #include "test_util.h"
-#include "vismask/options.h"
-#include "vismask/packet.h"
-#include "vismask/work.h"
+#include "vismask/app/options.h"
+#include "vismask/solve/packet.h"
+#include "vismask/solve/work.h"
 
 namespace vismask {
 namespace {
@@ -353,7 +353,7 @@ TEST(RenderTest, RanksWithoutEnvsMeanOneBalancedEnvironmentARank) {
 }  // namespace
 }  // namespace vismask
 
-#include "../src/run.h"
+#include "../src/app/run.h"
 
 namespace vismask {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "render_test_util.h"
 #include "test_util.h"
-#include "vismask/options.h"
+#include "vismask/app/options.h"
 
 namespace vismask {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "render_test_util.h"
 #include "test_util.h"
-#include "vismask/packet.h"
+#include "vismask/solve/packet.h"
 
 namespace vismask {
 namespace {

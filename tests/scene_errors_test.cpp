@@ -4,7 +4,7 @@
 #include <string>
 
 #include "scene_test_util.h"
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
 
 namespace vismask {
 namespace {

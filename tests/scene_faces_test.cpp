@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "scene_test_util.h"
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
 
 namespace vismask {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "scene_test_util.h"
 #include "test_util.h"
-#include "vismask/texture.h"
+#include "vismask/scene/texture.h"
 
 namespace vismask {
 namespace {

@@ -2,7 +2,7 @@
 // (LoadScene + PartitionScene): the same polygons, pieces, warnings and
 // errors on every scene of scenes/; the streamed emitter check and camera
 // probe against their whole-scene forms.
-#include "vismask/scene_stream.h"
+#include "vismask/scene/scene_stream.h"
 
 #include <gtest/gtest.h>
 
@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/camera.h"
-#include "vismask/emitter_check.h"
-#include "vismask/partition.h"
-#include "vismask/scene.h"
+#include "vismask/display/camera.h"
+#include "vismask/scene/emitter_check.h"
+#include "vismask/scene/scene.h"
+#include "vismask/solve/partition.h"
 
 namespace vismask {
 namespace {

@@ -1,6 +1,6 @@
 // Loading OBJ and MTL files: the Cornell box, the statements and corner
 // forms read, materials, and warnings.
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
 
 #include <gtest/gtest.h>
 

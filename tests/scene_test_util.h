@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
 
 namespace vismask::test {
 

@@ -1,7 +1,7 @@
 // Smoothing across polygons (issue 16): smoothing groups and vertex normals
 // share display values at the points where polygons meet, within the
 // crease angle; hard edges and scenes without either are untouched.
-#include "vismask/smoothing.h"
+#include "vismask/display/smoothing.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/image_io.h"
+#include "vismask/output/image_io.h"
 
 namespace vismask {
 namespace {

@@ -1,6 +1,6 @@
 // The solver's scheduling rules: the exchange's admission of records
 // (AdmittedForwards) and the shot budget of a round (ShotBudget).
-#include "vismask/solver.h"
+#include "vismask/solve/solver.h"
 
 #include <gtest/gtest.h>
 

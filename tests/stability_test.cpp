@@ -11,10 +11,10 @@
 
 #include "env_test_util.h"
 #include "test_util.h"
-#include "vismask/environment.h"
-#include "vismask/partition.h"
-#include "vismask/solver.h"
-#include "vismask/transport.h"
+#include "vismask/parallel/transport.h"
+#include "vismask/solve/environment.h"
+#include "vismask/solve/partition.h"
+#include "vismask/solve/solver.h"
 
 namespace vismask {
 namespace {

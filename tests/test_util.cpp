@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "vismask/app.h"
+#include "vismask/app/app.h"
 
 namespace vismask::test {
 

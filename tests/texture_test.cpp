@@ -1,7 +1,7 @@
 // Textures (map_Kd): decoding, the patch mean the solve uses, uv maps, the
 // loader's warnings and errors, and the image, which shows the texture
 // modulating the solved irradiance.
-#include "vismask/texture.h"
+#include "vismask/scene/texture.h"
 
 #include <gtest/gtest.h>
 
@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "test_util.h"
-#include "vismask/camera.h"
-#include "vismask/image_io.h"
-#include "vismask/partition.h"
+#include "vismask/display/camera.h"
+#include "vismask/output/image_io.h"
+#include "vismask/solve/partition.h"
 
 // stb_image_write for this test's own images (static: image_io.cpp has its own).
 #define STB_IMAGE_WRITE_STATIC

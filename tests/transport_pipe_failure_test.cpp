@@ -20,8 +20,8 @@
 
 #include "test_util.h"
 #include "transport_test_util.h"
-#include "vismask/os.h"
-#include "vismask/transport.h"
+#include "vismask/core/os.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask {
 namespace {

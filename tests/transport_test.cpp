@@ -2,7 +2,7 @@
 // from a process forked by the test, so the gtest process is never a rank.
 // Each rank reports pass/fail through its Finish code; rank 0's exit status
 // is the run's result.
-#include "vismask/transport.h"
+#include "vismask/parallel/transport.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -24,7 +24,7 @@
 
 #include "test_util.h"
 #include "transport_test_util.h"
-#include "vismask/os.h"
+#include "vismask/core/os.h"
 
 namespace vismask {
 namespace {

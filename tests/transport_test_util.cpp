@@ -9,7 +9,7 @@
 #include <memory>
 
 #include "test_util.h"
-#include "vismask/os.h"
+#include "vismask/core/os.h"
 
 namespace vismask::test {
 

@@ -4,7 +4,7 @@
 #include <functional>
 #include <string>
 
-#include "vismask/transport.h"
+#include "vismask/parallel/transport.h"
 
 namespace vismask::test {
 

@@ -12,14 +12,14 @@
 #include <vector>
 
 #include "twosided_test_util.h"
-#include "vismask/camera.h"
-#include "vismask/display.h"
-#include "vismask/environment.h"
-#include "vismask/grid.h"
-#include "vismask/image_io.h"
-#include "vismask/mesh.h"
-#include "vismask/rng.h"
-#include "vismask/scene.h"
+#include "vismask/accel/grid.h"
+#include "vismask/display/camera.h"
+#include "vismask/display/display.h"
+#include "vismask/output/image_io.h"
+#include "vismask/scene/mesh.h"
+#include "vismask/scene/scene.h"
+#include "vismask/solve/environment.h"
+#include "vismask/solve/rng.h"
 
 namespace vismask {
 namespace {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
 
 namespace vismask::twosided {
 

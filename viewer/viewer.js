@@ -2,7 +2,7 @@
 // --export`: POSITION and COLOR_0, linear display radiance) and shows it as
 // vismask's image.png shows the solution: radiance interpolated linearly
 // across each triangle, times the exposure, clamped to [0, 1] and
-// sRGB-encoded per pixel (src/image_io.cpp ToneMap), back faces black,
+// sRGB-encoded per pixel (src/output/image_io.cpp ToneMap), back faces black,
 // background black. The first view is run.json's camera, framed as vismask
 // frames its image (vertical field of view; a window narrower than the image
 // widens it so the image's whole width stays in view).
@@ -29,7 +29,7 @@ function Fail(text) {
   console.error('vismask viewer: ' + text);
 }
 
-// The tone map of src/image_io.cpp: v = radiance * exposure; NaN or <= 0 -> 0,
+// The tone map of src/output/image_io.cpp: v = radiance * exposure; NaN or <= 0 -> 0,
 // >= 1 -> 1; the sRGB transfer (IEC 61966-2-1). The framebuffer is 8-bit
 // and takes the encoded value as it is (no further conversion: a raw shader
 // gets none from three.js).
@@ -254,7 +254,7 @@ function FromRun(run) {
 
 // Without run.json: vismask's front camera (from -z looking +z, up +y, the
 // box's larger extent filling 39.3 degrees with a 4% margin; SideCamera in
-// src/camera.cpp) and an exposure mapping the log-average vertex luminance
+// src/display/camera.cpp) and an exposure mapping the log-average vertex luminance
 // to middle grey (vismask takes it over pixels, so it may differ a little).
 function FromBounds(box, colors) {
   const centre = box.getCenter(new THREE.Vector3());

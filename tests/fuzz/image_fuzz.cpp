@@ -11,7 +11,7 @@
 #include <cstdint>
 #include <string>
 
-#include "vismask/image_io.h"
+#include "vismask/output/image_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string bytes(reinterpret_cast<const char*>(data), size);

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "vismask/scene.h"
+#include "vismask/scene/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string all(reinterpret_cast<const char*>(data), size);

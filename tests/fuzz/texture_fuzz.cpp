@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <string>
 
-#include "vismask/texture.h"
+#include "vismask/scene/texture.h"
 
 namespace {
 // What the fuzzer's inputs may decode into (some 58,000 texels): the

@@ -143,7 +143,7 @@ time a rank is descheduled, so the machine's other load does not enter it).
 *work bound*: the 1-rank run's `work` over this run's
 `critical_rank_work` (the sum over rounds of the most work any rank did, in
 the units rounds are sized by: grid steps plus a ray's, a hit's and a shot's
-charge, include/vismask/work.h): the same bound in work, counted, so it is
+charge, include/vismask/solve/work.h): the same bound in work, counted, so it is
 the same on every run.""", ""]
     L += table(["run", "solve s", "CPU s", "wait s (rank 0)", "max wait s (any rank)", "critical CPU s",
                 "work bound", "shots", "rounds", "packets", "packets/shot", "bytes/shot"], rows)

@@ -278,7 +278,7 @@ def reading(c, add, refs, results):
     add("")
     add("**Latency per round** (not emulated here, see above). A round has one exchange: an"
         " AllToAll that carries the round's packets and every environment's report, made before"
-        " its packets are delivered (src/exchange.cpp; the solve adds one AllGather before its"
+        " its packets are delivered (src/solve/exchange.cpp; the solve adds one AllGather before its"
         " first round). It is a message"
         " from every rank to every other, posted at once with MPI_Isend and MPI_Irecv (the"
         " packets' sizes travel with them), so it costs at least one node-to-node latency"

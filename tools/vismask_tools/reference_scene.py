@@ -1,5 +1,5 @@
 """tools/reference's reading of a scene: OBJ + MTL as vismask's loader reads
-them (src/scene.cpp), with the same refusals, and vismask's cameras."""
+them (src/scene/scene.cpp), with the same refusals, and vismask's cameras."""
 
 import math
 import os
@@ -56,7 +56,7 @@ def LoadMtl(path, materials, where):
 
 
 def LoadScene(obj, lit=False):
-    """The scene as vismask's loader reads it (src/scene.cpp): vertices, faces
+    """The scene as vismask's loader reads it (src/scene/scene.cpp): vertices, faces
     (0-based corner lists), each face's material, the materials, and the bytes
     of the OBJ and every MTL (for the cache key). vismask's own loader checks
     it first when build/vismask exists (exact same errors)."""
@@ -114,7 +114,7 @@ def LoadScene(obj, lit=False):
 
 
 def DefaultCamera(vertices, faces):
-    """vismask's DefaultCamera (src/camera.cpp: the front side's camera, not
+    """vismask's DefaultCamera (src/display/camera.cpp: the front side's camera, not
     the side vismask may choose) over the bounds of all polygon corners, in
     float32 arithmetic as far as it matters here."""
     used = [vertices[i] for f in faces for i in f]

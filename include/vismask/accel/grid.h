@@ -1,0 +1,225 @@
+// Grid: the SEADS-style grid over one environment's patches: a uniform
+// grid whose dense cells hold grids of their own (two levels, Ize et al.'s
+// nested grids; Kalojanov et al.'s two-level grids), each walked by the same
+// 3D-DDA. Two flat arrays built once at init: cellStart (numCells + 1 offsets) and
+// refs (cell by cell: a header word, then the patch indices), a bitmap of
+// the cells that hold any patch (so the walk reads an empty cell's bit, not
+// its offsets), and a small table of planes (CellPlane) that lets a ray
+// pass a cell whose patches all lie in one plane without reading them. Rays walk it with a 3D-DDA
+// (Amanatides & Woo). Intersect finds the closest hit, Occluded stops at the first. The resolution
+// follows the patch count and the extent (Cleary et al.: cells per axis = extent * cbrt(density * N
+// / volume)); a face of the box that walls lie on is placed just inside an outer layer of cells.
+// A top cell that many references fall in (a cluster of small props on a large bare floor) gets a
+// sub-grid of its own, its resolution from its own reference count (Nest): its header word then
+// names the sub-grid (kSubGrid | index), whose cells are laid out like the top ones (subStart,
+// the same refs array after the top cells', a bitmap of their own). The walk enters it between
+// the top cell's entry and exit and steps its cells the same way, so it visits every cell of
+// either level that a ray crosses, and the closest hit is the uniform grid's: the hit with the
+// least t, ties broken by a total order (TieWins), whatever the order the cells came in.
+#pragma once
+#include <cstdint>
+#include <glm/vec3.hpp>
+
+#include "vismask/core/arena.h"
+#include "vismask/core/span.h"
+#include "vismask/scene/scene.h"
+#include "vismask/solve/patch.h"
+
+namespace vismask {
+
+// The patches a ray ignores: the one it was shot from and, in a two-sided
+// mesh, that patch's twin (coplanar, behind the origin: mesh.h). Either may
+// be kNoPatch; a plain index converts.
+struct Skip {
+  uint32_t patch = kNoPatch;
+  uint32_t twin = kNoPatch;
+  Skip(uint32_t p = kNoPatch, uint32_t t = kNoPatch) : patch(p), twin(t) {}  // NOLINT: implicit
+};
+
+// A plane shared by a run of patches: consecutive in index order, of one
+// source surface, with the same normal up to its sign (a twin's is
+// negated, TwinGeom). `n` is the normal with its first non-zero component
+// positive, [dLo, dHi] the range of the patches' plane offsets (PatchGeom::d)
+// on that side. A cell whose patches all belong to runs with the same
+// record keeps its index in its header word. A ray that meets the plane
+// behind its origin, for every offset in the range, meets every patch of
+// the cell at t <= 0 (float subtraction is monotonic, and IntersectPatch's
+// sign of t is that of d - n.o over n.dir), so with tMin >= 0 the walk
+// passes the cell without reading its patches, and finds what testing them
+// would have found. A ray leaving a wall, or running beside one, does.
+struct CellPlane {
+  glm::vec3 n{0.0f};
+  float dLo = 0.0f;
+  float dHi = 0.0f;
+  uint32_t first = 0;  // the run: patches first .. first + count - 1
+  uint32_t count = 0;
+};
+
+// A top cell's own grid: its box (the top cell's, in float as the walk
+// computes it), resolution, and where its cells start in the sub-grids'
+// offsets and bitmap (cell x, y, z is first + (z * res[1] + y) * res[0] + x).
+struct SubGrid {
+  glm::vec3 lo{0.0f};
+  glm::vec3 cellSize{1.0f};
+  glm::vec3 invCellSize{1.0f};
+  int32_t res[3] = {1, 1, 1};
+  uint32_t first = 0;
+};
+
+// Which top cells get a sub-grid (Grid::MakePlan): those with at least
+// minRefs references (0: none, a uniform grid) that do not all lie on one
+// surface's plane (such a cell is passed whole by a ray leaving the plane,
+// CellPlane), at about `density` cells per reference, at most maxRes cells
+// per axis. Chosen by callgrind's instructions a cosine ray and by the bench
+// (bench/analysis.md): on the furnished interiors (tools/gen-interior) 32
+// and 1 walk 2.2 to 4.8 times fewer instructions than the uniform grid; 16
+// saved 1-5% more there but gave the building and the large Cornell boxes
+// thousands of sub-grids, 40% more bytes and a slower walk (memory), where
+// 32 gives them none or a few.
+struct GridNest {
+  uint32_t minRefs = 32;
+  float density = 1.0f;
+  int maxRes = 32;
+};
+
+class Grid {
+ public:
+  // A cell's header word when its patches share no plane record.
+  static constexpr uint32_t kNoPlane = 0xffffffffu;
+  // A top cell's header word with this bit names its sub-grid (the rest of
+  // the word is its index); plane records are numbered below it.
+  static constexpr uint32_t kSubGrid = 0x80000000u;
+  using Nest = GridNest;
+  // What the grid needs, decided at init before any arena exists.
+  struct Plan {
+    int res[3] = {1, 1, 1};
+    uint64_t refs = 0;      // total (cell, patch) references, both levels
+    uint64_t occupied = 0;  // cells holding a reference (a header word each), both levels
+    uint64_t planes = 0;    // CellPlane records: runs of two or more patches
+    uint64_t subGrids = 0;  // top cells with a grid of their own
+    uint64_t subCells = 0;  // the cells of all sub-grids
+    Nest nest;              // the rule that chose them
+    Bounds bounds;          // padded box the top cells cover
+  };
+  // Plans the grid for `patches` with about `density` cells per patch.
+  static Plan MakePlan(Span<const Patch> patches, float density, Nest nest = Nest());
+  // The same, for patches whose ray-test data is `geom` (what Build will
+  // be given), rather than MakePatchGeom of each (twins: TwinGeom).
+  static Plan MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom, float density,
+                       Nest nest = Nest());
+
+  // Carves cellStart, refs and the planes from `arena` (also from a measuring arena).
+  void Layout(Arena& arena, const Plan& plan);
+  // Fills the arrays. `geom` must outlive the grid; indices are into it.
+  void Build(Span<const Patch> patches, Span<const PatchGeom> geom);
+
+  // Closest hit in (ray.tMin, ray.tMax), ignoring the patches in `skip`.
+  // Front and back sides both count. Of hits at the same t, a front side
+  // wins, then the lower index: of two coplanar twins (TwinGeom) the one
+  // the ray faces.
+  bool Intersect(const Ray& ray, Skip skip, Hit* hit) const;
+  // True if anything is hit in (ray.tMin, ray.tMax), ignoring `skip`.
+  bool Occluded(const Ray& ray, Skip skip) const;
+  // The same, for coherent rays (Method B's centre rays, all from one
+  // point): patch *hint (kNoPatch: none) is tried before the walk, and the
+  // patch that occluded the ray is left in *hint for the next one. The
+  // answer is Occluded's wherever the walk agrees with testing every patch
+  // (tests/grid_test.cpp), because a hit on any patch is a hit.
+  bool Occluded(const Ray& ray, Skip skip, uint32_t* hint) const;
+
+  const Plan& plan() const { return plan_; }
+  size_t cellCount() const {
+    return static_cast<size_t>(plan_.res[0]) * plan_.res[1] * plan_.res[2];
+  }
+  size_t bytes() const {
+    return cellStart_.bytes() + refs_.bytes() + occupied_.bytes() + planes_.bytes() +
+           subs_.bytes() + subStart_.bytes() + subOccupied_.bytes();
+  }
+  // The built arrays, read-only (tests, statistics): a top cell that holds
+  // patches takes words cellStart()[c] .. cellStart()[c + 1] - 1 of the
+  // references: its header (CellPlaneOf), then its patches in ascending
+  // order (CellRefs); an empty cell takes none. A top cell with a sub-grid
+  // takes its header only (SubGridOf); the sub-grid's cells are laid out the
+  // same way in subStart() (SubCellRefs, SubCellPlaneOf).
+  Span<const uint32_t> cellStart() const { return cellStart_; }
+  Span<const uint32_t> CellRefs(size_t c) const {
+    uint32_t b = cellStart_[c], e = cellStart_[c + 1];
+    return b == e ? Span<const uint32_t>() : Span<const uint32_t>(refs_.data() + b + 1, e - b - 1);
+  }
+  uint32_t CellPlaneOf(size_t c) const {
+    return cellStart_[c] == cellStart_[c + 1] ? kNoPlane : refs_[cellStart_[c]];
+  }
+  Span<const CellPlane> planes() const { return planes_; }
+  // The sub-grid of top cell c, or nullptr.
+  const SubGrid* SubGridOf(size_t c) const {
+    uint32_t h = CellPlaneOf(c);
+    return h != kNoPlane && (h & kSubGrid) ? &subs_[h & ~kSubGrid] : nullptr;
+  }
+  Span<const SubGrid> subGrids() const { return subs_; }
+  // Sub-grid cell s (SubGrid::first + its index in the sub-grid).
+  Span<const uint32_t> SubCellRefs(size_t s) const {
+    uint32_t b = subStart_[s], e = subStart_[s + 1];
+    return b == e ? Span<const uint32_t>() : Span<const uint32_t>(refs_.data() + b + 1, e - b - 1);
+  }
+  uint32_t SubCellPlaneOf(size_t s) const {
+    return subStart_[s] == subStart_[s + 1] ? kNoPlane : refs_[subStart_[s]];
+  }
+  Span<const uint64_t> subOccupied() const { return subOccupied_; }
+  // Bit c of word c / 64: cell c holds at least one reference.
+  Span<const uint64_t> occupied() const { return occupied_; }
+
+ private:
+  // A walk's state between its levels: the ray (tMax just past the best hit
+  // so far), where the walk stops (the ray's end t1 or the best hit), the
+  // best hit, and the patches tested.
+  struct WalkState {
+    Ray r;
+    float t1 = 0.0f;
+    float limit = 0.0f;
+    uint32_t bestPatch = kNoPatch;
+    float bestT = 0.0f;
+    bool bestFront = false;
+    uint64_t tests = 0;
+  };
+  // The DDA walk behind Intersect (kAnyHit false) and Occluded (true).
+  template <bool kAnyHit>
+  bool Walk(const Ray& ray, Skip skip, Hit* hit) const;
+  // The patches of one cell (refs[b] its header, refs[b + 1 .. e) its
+  // patches): true when an any-hit walk is done.
+  template <bool kAnyHit>
+  bool TestCell(uint32_t b, uint32_t e, Skip skip, Hit* hit, WalkState* st) const;
+  // A top cell's sub-grid between t = tEnter and tLeave; adds the cells it
+  // entered to *steps.
+  template <bool kAnyHit>
+  bool WalkSub(const SubGrid& sg, const float invD[3], float tEnter, float tLeave, Skip skip,
+               Hit* hit, WalkState* st, uint64_t* steps) const;
+  // Every patch, for rays whose origin is too far away for the grid's padding.
+  template <bool kAnyHit>
+  bool TestAll(const Ray& ray, Skip skip, Hit* hit) const;
+
+  Plan plan_;
+  glm::vec3 cellSize_{1.0f};
+  glm::vec3 invCellSize_{1.0f};
+  Span<uint32_t> cellStart_;
+  Span<uint32_t> refs_;
+  Span<uint64_t> occupied_;  // bit c: cell c holds a patch
+  Span<CellPlane> planes_;
+  Span<SubGrid> subs_;
+  Span<uint32_t> subStart_;     // the sub-grids' cells' offsets into refs_, subCells + 1
+  Span<uint64_t> subOccupied_;  // bit s: sub-grid cell s holds a patch
+
+ public:
+  // Work done by the walks so far: cells entered plus patches tested or
+  // ruled out by their cell's plane (a deterministic count, the same on
+  // every machine).
+  uint64_t steps() const { return steps_; }
+  // Resume (checkpoint.h): the count a checkpoint saved.
+  void SetSteps(uint64_t steps) { steps_ = steps; }
+
+ private:
+  mutable uint64_t steps_ = 0;
+  Span<const PatchGeom> geom_;
+  float farLimit_ = 0.0f;  // origins with a coordinate beyond this skip the grid
+};
+
+}  // namespace vismask

@@ -1,0 +1,142 @@
+// Camera: a pinhole looking from `eye` at `target`. Without --camera the
+// camera frames the scene's bounding box from one of its six sides (--view,
+// or the side chosen by ChooseViewSide).
+#pragma once
+#include <cstdint>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <vector>
+
+#include "vismask/scene/scene.h"
+
+namespace vismask {
+
+struct Camera {
+  glm::vec3 eye{0.0f, 0.0f, -1.0f};
+  glm::vec3 target{0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  float fovyDeg = 39.3f;
+};
+
+// The side of the bounding box the eye is on. front is the Cornell box's
+// original camera (-z side, looking +z, up +y), whose image has +x on the
+// left; left and right are named as in that image: left is the +x side,
+// right the -x side; the four horizontal views have up +y. top (+y side)
+// and bottom (-y side) are the front camera turned about x over the box and
+// under it: up is +z and -z, and +x stays on the image's left.
+enum class ViewSide : uint8_t { kFront, kBack, kLeft, kRight, kTop, kBottom };
+constexpr int kNumViewSides = 6;
+
+// "front", "back", "left", "right", "top", "bottom".
+const char* ViewSideName(ViewSide side);
+// The side named `name` (as ViewSideName spells it); false for any other.
+bool ParseViewSide(const char* name, ViewSide* side);
+
+// The camera for `side` of `bounds`: looking along the axis through the
+// box's centre at the face on that side, far enough back that the face's
+// larger extent fills the vertical field of view (39.3 degrees) with a 4%
+// margin. kFront is the camera vismask always used before --view.
+Camera SideCamera(const Bounds& bounds, ViewSide side);
+
+// SideCamera(bounds, ViewSide::kFront).
+Camera DefaultCamera(const Bounds& bounds);
+
+// How much of each side's image shows the front of a polygon: the rays, out
+// of kViewProbeRays^2 through the image's pixel centres (a square image),
+// whose nearest hit is a polygon's front side. Occlusion counts: a ray that
+// meets the back of a wall first sees nothing, whatever lies beyond. Indexed
+// by ViewSide. Deterministic (no random numbers), init-time (heap allowed);
+// each ray tests only the polygons whose projected bounds hold it.
+constexpr int kViewProbeRays = 64;
+void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]);
+
+// The default camera's side: the one whose image shows the most front-facing
+// surface (VisibleFrontRays), a side within 1% of the best count counting
+// as tied with it, ties going to the first of front, back, left, right,
+// top, bottom. From outside, a polygon facing into the box shows its back,
+// so an open box is seen through its open side (the Cornell box from -z,
+// McGuire's CornellBox-Sphere from +z); a box closed on every side shows no
+// front from anywhere and keeps front.
+ViewSide ChooseViewSide(const Scene& scene);
+
+// Inside views (issue 40): where the outside views see mostly back faces or
+// one wall (a closed room, a building, a box whose walls face in), the
+// default camera goes inside. Candidate k (0 to kInsideCandidates - 1)
+// stands at 60% of the box's height over one of the 8 points (0.15, 0.5,
+// 0.85 of x and z but the centre) and looks across the middle at the
+// mirrored point at 35% of the height, up +y, 70 degrees; the candidates'
+// images are probed as the sides' are (kInsideProbeRays^2 rays) and the one
+// with the most front hits off the orientation most of them share wins
+// (a view across a room, not of one wall or a block up close), ties to the
+// first.
+constexpr int kInsideCandidates = 8;
+constexpr int kInsideProbeRays = 32;
+Camera InsideCamera(const Bounds& bounds, int candidate);
+
+// What the probe chose: the best side, how its image fares (the share of
+// its rays whose nearest hit is a front face, of those that hit a back face,
+// and whether one plane's orientation holds 90% of its front hits), and
+// whether an inside candidate replaces it (`inside`, `candidate`, its
+// front share). The side's image is poor when back hits outnumber front
+// hits or it shows one wall; an inside candidate then wins when its front
+// share is larger than the side's and at least 1/2, and at least a tenth of
+// its front hits are off their commonest orientation.
+struct ViewChoice {
+  ViewSide side = ViewSide::kFront;
+  double sideFront = 0.0, sideBack = 0.0;
+  bool sideOneWall = false;
+  bool inside = false;
+  int candidate = -1;           // the best inside candidate probed (-1: none)
+  double candidateFront = 0.0;  // its front share
+  double candidateScore = 0.0;  // its share of front hits off their commonest orientation
+};
+
+// A camera's derived basis for projection onto a width x height image.
+struct View {
+  glm::vec3 eye, right, up, forward;  // right is image +x, up is image +y
+  float focal;                        // pixels: (height / 2) / tan(fovy / 2)
+  float nearZ;                        // near clipping distance: 1e-3 * |target - eye|
+  int width, height;
+};
+
+// False if the camera is degenerate (eye == target, up parallel to the view
+// direction, fov outside (0, 180)).
+bool MakeView(const Camera& camera, int width, int height, View* view);
+
+// ChooseViewSide fed one polygon at a time, in file order, once the scene's
+// bounds are known (the streaming loader's later pass, scene_stream.h): it
+// holds per probe ray the nearest hit so far, never the polygons, and gives
+// the same counts and side as the near-to-far sweep over the whole scene
+// (of polygons a ray meets at one depth, the one with the nearer corner,
+// then the earlier in the file, is seen). Init-time (heap: HeapBytes()).
+class ViewProbe {
+ public:
+  explicit ViewProbe(const Bounds& bounds);
+  // `twoSided`: the polygon shows both sides (--two-sided, a doubleSided
+  // glTF material); the inside candidates count its back as a front (the
+  // sides keep their counts of old).
+  void Add(uint32_t index, const Polygon& polygon, bool twoSided = false);
+  void Rays(uint32_t rays[kNumViewSides]) const;  // as VisibleFrontRays
+  ViewSide Side() const;                          // as ChooseViewSide
+  // The side, and whether an inside candidate replaces it (ViewChoice).
+  ViewChoice Choose() const;
+  static uint64_t HeapBytes();
+
+ private:
+  struct Probe {
+    bool ok = false;
+    View view;
+    std::vector<glm::dvec3> dir;
+    std::vector<double> depth, nearest;
+    std::vector<uint32_t> index;
+    std::vector<uint8_t> front;
+    std::vector<uint8_t> plane;  // the hit's orientation: 1 + 2 * axis + (normal < 0); 0: none
+    int n = kViewProbeRays;
+  };
+  void AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided);
+  Probe probes_[kNumViewSides];
+  Probe inside_[kInsideCandidates];
+  std::vector<glm::dvec2> poly_;
+};
+
+}  // namespace vismask

@@ -1,0 +1,129 @@
+// Direct light gathered per pixel (the two-pass method: Wallace, Cohen and
+// Greenberg 1987). The solve keeps, per leaf element, the part of its
+// received radiosity that did not come straight from an emitter's own
+// emission (its indirect radiosity, Environment::Indirect); the display
+// interpolates that as it did the whole, and adds, at each point the raster
+// shades, the irradiance from the emitters gathered there (this file).
+//
+// The estimate at a point x is E0(x) * V(x): E0 the unoccluded irradiance,
+// exact (Lambert's formula for a polygon of uniform exitance: E = Ke/(2 pi)
+// * sum over its edges of the angle they subtend times the cosine of their
+// plane with the normal), and V the visible share, estimated with shadow
+// rays to sample points on the emitters weighted by what each would bring
+// (a ratio estimator). Where every sample agrees (fully lit, or umbra) V is
+// 1 or 0 exactly, so the noise is only in penumbrae. The shadow rays are
+// adaptive: one to each corner of the emitters' outlines and the first
+// kFirstDirectSamples; the rest of the N only where those disagree. (A
+// straight silhouette edge across a convex emitter leaves a corner on each
+// side, so a penumbra of such an edge always disagrees at the corners; an
+// occluder seen wholly inside an emitter's outline, missed by the corners
+// and by all the first samples, is missed: the bias of this shortcut.)
+//
+// The emitters are a list of area sources: today the environment's patches
+// with Ke > 0, grouped by polygon (the patches of one polygon: for E0 only
+// its outline edges count, the shared inner edges cancel). A sample point
+// is chosen by a 2D point u: u.x picks an emitter patch in proportion to
+// its power (area times Ke, channels summed) and is stretched back to
+// [0, 1) within it; the point is uniform over the patch (a quad as two
+// triangles by area). The sun and the sky plug in as more kinds of source
+// (DESIGN, Direct light per pixel): a direction (the sun: E0 = its
+// irradiance times the cosine, V from rays along directions in its disc
+// that must leave the scene) and a hemisphere (the sky: E0 the unoccluded
+// sky's, V from cosine-weighted rays that leave the scene).
+#pragma once
+#include <cstdint>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "vismask/accel/grid.h"
+#include "vismask/core/arena.h"
+#include "vismask/core/span.h"
+#include "vismask/solve/patch.h"
+
+namespace vismask {
+
+constexpr uint32_t kFirstDirectSamples = 4;
+// The most outline corners GatherDirect sends a ray to (more: it samples
+// every point fully).
+constexpr uint32_t kMaxCornerRays = 16;
+
+class DirectLight {
+ public:
+  // One emitter patch: sampled for V.
+  struct Emitter {
+    uint32_t patch;  // local index
+    float cdfHi;     // the cumulative share of the power up to and including this one
+    float split;     // a quad: the share of its area in triangle (0, 1, 2); a triangle: 1
+    glm::vec3
+        scale;  // Ke / pi over the pdf per unit area: Ke * (total weight) / (weight / area) / pi
+  };
+  // One emitting polygon (its patches, coplanar, one Ke): E0 from its edges
+  // that no other of its patches shares.
+  struct Group {
+    glm::vec3 normal;  // the patches' (unit)
+    glm::vec3 point;   // one of its corners
+    glm::vec3 ke;
+    uint32_t firstEdge, numEdges;
+    uint32_t firstPatch, numPatches;  // in patchIndex_
+  };
+  struct Edge {
+    glm::vec3 a, b;  // in the winding of the patch it came from
+  };
+  struct Corner {
+    glm::vec3 point;
+    uint32_t group;
+  };
+  struct Counts {
+    uint32_t emitters = 0, groups = 0, edges = 0, corners = 0;
+  };
+
+  // What `patches` need (init: uses the heap).
+  static Counts Count(Span<const Patch> patches);
+  // Carves the lists from `arena` (also a measuring one).
+  void Layout(Arena& arena, const Counts& counts);
+  // Fills them from `patches` (which must outlive this; init: uses the heap).
+  void Build(Span<const Patch> patches);
+  bool empty() const { return emitters_.empty(); }
+
+  // The unoccluded irradiance at x (unit normal n), per channel.
+  glm::vec3 Unoccluded(const glm::vec3& x, const glm::vec3& n) const;
+  // One shadow sample from x toward the emitter point u picks: what it
+  // would bring (*weight, per channel; 0 when the point faces away or lies
+  // below x's horizon) and whether the ray reaches it (through `grid`,
+  // ends excluded by `epsilon` scene units, receiver and `twin` skipped;
+  // *hint: Grid::Occluded's, or null). Allocates nothing.
+  bool Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+              const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
+              glm::vec3* weight) const;
+
+  // The emitters' outline corners (each polygon's, where its outline turns), and whether the ray
+  // from x (normal n) to corner k reaches it
+  // (*usable false when the corner lies on or below x's horizon, or x
+  // behind its polygon: the ray tells nothing).
+  uint32_t numCorners() const { return static_cast<uint32_t>(corners_.size()); }
+  bool CornerVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                     const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
+                     bool* usable) const;
+
+  // A point of emitter patch `p` from u in [0, 1)^2, uniform in area
+  // (`split`: Emitter::split).
+  static glm::vec3 PointOn(const Patch& p, float split, glm::vec2 u);
+
+ private:
+  Span<Emitter> emitters_;
+  Span<Group> groups_;
+  Span<Edge> edges_;
+  Span<Corner> corners_;
+  Span<uint32_t> patchIndex_;  // the groups' patches (local indices)
+  Span<const Patch> patches_;
+};
+
+// The k-th sample of pixel `pixel` (row-major index) of the per-pixel
+// gather: the light point (Halton bases 2 and 3, so every prefix is spread,
+// rotated per pixel by a hash of the index: Cranley-Patterson) and the
+// sub-pixel offset (bases 5 and 7, another rotation). From the pixel index
+// alone, so every rank and transport draws the same.
+glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k);
+glm::vec2 DirectPixelOffset(uint32_t pixel, uint32_t k);
+
+}  // namespace vismask

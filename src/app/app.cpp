@@ -1,0 +1,284 @@
+#include "vismask/app/app.h"
+
+#include "run.h"
+#include "vismask/app/viewer.h"
+
+namespace vismask {
+namespace run {
+namespace {
+
+// --reference: the image of the solution so far against the reference, on
+// rank 0 (the other ranks only help draw it).
+class ReferenceProbe : public ErrorProbe {
+ public:
+  explicit ReferenceProbe(RunState* r) : r_(r) {}
+  double Measure() override {
+    RenderImage(r_);
+    if (!r_->isRoot()) return 0.0;
+    static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "colour is packed RGB floats");
+    Span<const float> image(reinterpret_cast<const float*>(r_->fb.color.data()),
+                            r_->fb.color.size() * 3);
+    return CompareImages(image, r_->reference, r_->exclude).relativeRmse;
+  }
+
+ private:
+  RunState* r_;
+};
+
+// --max-seconds's plan: the rays timed through the grid at init, and the
+// share of the budget's rays (at that rate) the plan gives the solve: a
+// solve's ray also lands, books and splits elements, and its shots' tail
+// of small shots costs more than its rays (measured on the Cornell box:
+// DESIGN, Anytime).
+constexpr uint32_t kPlanRays = 20000;
+constexpr double kPlanShare = 0.25;
+
+// --max-seconds T without --emitted-rays (one rank, power allocation):
+// the emitted rays a solve that converges within about T can afford, from
+// the rays per second this machine traces through the scene's grids now,
+// and the rays a solve traces for each emitted one (1 / (1 - mean kd)).
+// The solve then ends converged, or nearly, rather than cut off early in
+// a plan made for a longer one. Only ever fewer rays than the default.
+void PlanBudget(RunState* r) {
+  Options& o = r->options;
+  if (!(o.maxSeconds > 0.0) || o.hasEmittedRays || o.rayAlloc != Options::RayAlloc::kPower ||
+      r->transport->size() != 1 || r->envPtrs.empty())
+    return;
+  double seconds = 0.0, area = 0.0, kdArea = 0.0;
+  uint64_t rays = 0;
+  for (Environment* env : r->envPtrs) {
+    seconds += env->TimeRays(kPlanRays);
+    rays += kPlanRays;
+    area += env->totalArea();
+    kdArea += env->kdArea();
+  }
+  if (!(seconds > 0.0) || !(area > 0.0)) return;
+  const double rho = std::fmin(kdArea / area, 0.95);
+  const double emitted =
+      kPlanShare * (static_cast<double>(rays) / seconds) * o.maxSeconds * (1.0 - rho);
+  const uint64_t planned = static_cast<uint64_t>(std::fmax(emitted, 10000.0));
+  if (planned >= o.emittedRays) return;
+  for (Environment* env : r->envPtrs)
+    env->SetRayQuantum(env->rayQuantum() * static_cast<double>(o.emittedRays) /
+                       static_cast<double>(planned));
+  o.emittedRays = planned;
+  o.emittedRaysPlanned = true;
+}
+
+}  // namespace
+
+// vismask compare A.pfm B.pfm: the relative RMSE of A against B over all
+// pixels and channels, sqrt(sum (a - b)^2 / sum b^2), and the largest
+// absolute difference.
+int Compare(const Options& o) {
+  PfmImage a, b;
+  Status s = ReadPfm(o.compareA, &a);
+  if (s.ok()) s = ReadPfm(o.compareB, &b);
+  if (!s.ok()) return Fail(s);
+  if (a.width != b.width || a.height != b.height)
+    return Fail(Status::Error("vismask: compare: the images differ in size (" +
+                              std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
+                              std::to_string(b.width) + "x" + std::to_string(b.height) + ")"));
+  PgmImage mask;  // --exclude: its nonzero pixels are left out
+  if (!o.exclude.empty()) {
+    s = ReadPgm(o.exclude, &mask);
+    if (!s.ok()) return Fail(Status::Error("vismask: --exclude: " + s.ToString()));
+    if (mask.width != a.width || mask.height != a.height)
+      return Fail(Status::Error("vismask: --exclude: " + o.exclude + ": is " +
+                                std::to_string(mask.width) + "x" + std::to_string(mask.height) +
+                                ", the images are " + std::to_string(a.width) + "x" +
+                                std::to_string(a.height)));
+  }
+  if (!mask.pixels.empty() &&
+      std::all_of(mask.pixels.begin(), mask.pixels.end(), [](uint8_t m) { return m != 0; }))
+    return Fail(Status::Error("vismask: --exclude: " + o.exclude +
+                              ": every pixel is excluded: nothing is left to compare"));
+  ImageError e = CompareImages(Span<const float>(a.pixels.data(), a.pixels.size()),
+                               Span<const float>(b.pixels.data(), b.pixels.size()),
+                               Span<const uint8_t>(mask.pixels.data(), mask.pixels.size()));
+  char line[256];
+  int n = std::snprintf(line, sizeof line, "relative_rmse %.9g\nmax_abs_error %.9g\n",
+                        e.relativeRmse, e.maxAbs);
+  if (!o.exclude.empty())
+    n +=
+        std::snprintf(line + n, sizeof line - size_t(n), "excluded_pixels %zu\n", e.excludedPixels);
+  return WriteStdout(line, static_cast<size_t>(n)) ? kExitOk : kExitOutput;
+}
+
+}  // namespace run
+
+using namespace run;
+
+int Main(int argc, const char* const* argv) {
+  SetPhase(Phase::kInit);
+  double start = os::Seconds();
+  auto r = std::make_unique<RunState>();
+  Status s = ParseArgs(argc, argv, &r->options);
+  if (!s.ok()) return Fail(s);
+  if (r->options.help) {
+    const char* text = r->options.command == "view" ? ViewHelpText()
+                       : r->options.helpAll         ? HelpText()
+                                                    : UsageText();
+    return WriteStdout(text, std::strlen(text)) ? kExitOk : kExitOutput;
+  }
+  if (r->options.command == "compare") return Compare(r->options);
+  if (r->options.command == "verify") return Verify(r->options);
+  if (r->options.command == "footprint") return Footprint(r->options);
+  if (r->options.command == "view") return View(r->options);
+  // --resume without --envs: the checkpoint's environments (a run of 16
+  // ranks, resumed on 15, keeps its 16 environments).
+  if (!r->options.resumeDir.empty() && !r->options.hasEnvs) {
+    const std::string spec = ManifestValue(r->options.resumeDir, "environments");
+    if (!spec.empty()) {
+      std::vector<const char*> args(argv, argv + argc);
+      args.push_back("--envs");
+      args.push_back(spec.c_str());
+      s = ParseArgs(static_cast<int>(args.size()), args.data(), &r->options);
+      if (!s.ok()) return Fail(s);
+    }
+  }
+  // The pipe transport forks here: every rank carries on from this point.
+  r->transport = MakeTransport(
+      TransportRequest{r->options.transport, r->options.ranks, r->options.rankTimeout}, &s);
+  // An error with no text: another rank (rank 0) reports it.
+  if (!r->transport) return s.message().empty() ? kExitUsage : Fail(s);
+  // Under mpirun without --envs: one balanced environment a rank.
+  SetWorldSize(r->transport->size(), &r->options);
+  int rc = kExitUsage;
+  try {
+    rc = Init(r.get());
+  } catch (const std::bad_alloc&) {
+    // Init's peak is in the budget, but the system may still refuse it
+    // (ulimit -v, overcommit off): refused here, with what this process
+    // had reached.
+    os::PrintErr(
+        "vismask: rank %d: out of memory at init, loading and meshing the scene (peak "
+        "resident %llu bytes); a larger --patch-size, fewer ranks on this host or more "
+        "memory\n",
+        r->transport->rank(), static_cast<unsigned long long>(os::PeakRssBytes()));
+  }
+  // Every rank learns whether every rank's init succeeded (rank 0 alone
+  // opens the outputs) before anyone starts the solve's collectives.
+  int32_t mine = rc, all[kMaxRanks] = {};
+  CHECK_LE(r->transport->size(), kMaxRanks);  // MakeTransport refuses more
+  r->transport->AllGather(&mine, sizeof mine, all);
+  for (int k = 0; k < r->transport->size(); ++k) rc = std::max(rc, static_cast<int>(all[k]));
+  if (rc != kExitOk) return r->transport->Finish(rc);
+  // --checkpoint, --resume: the directory, and the state resumed from.
+  const bool checkpointing = !r->options.checkpointDir.empty();
+  if (checkpointing) {
+    std::string identity;
+    if (r->isRoot()) {
+      uint64_t bytes = 0;
+      uint32_t crc = 0;
+      std::string why;
+      if (!SizeAndCrc(r->options.scene, &bytes, &crc, &why)) {
+        os::PrintErr("vismask: %s: %s\n", r->options.scene.c_str(), why.c_str());
+        bytes = crc = 0;  // the scene was read at init: seen only if it went since
+      }
+      identity = CheckpointIdentity(bytes, crc, EnvSpec(r->options), r->options.resultArgs);
+    }
+    Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
+    s = r->checkpoints.Setup(r->options.checkpointDir, r->options.checkpointEvery, envs,
+                             r->rankEnvs.total, r->transport.get(), identity);
+    if (s.ok() && !r->options.resumeDir.empty()) s = r->checkpoints.Resume(&r->resumeState);
+    if (!s.ok()) {
+      if (!s.message().empty()) Fail(s);
+      return r->transport->Finish(kExitUsage);
+    }
+    os::DeferInterrupts(true);
+  }
+  r->initSeconds = os::Seconds() - start;
+
+  PlanBudget(r.get());
+
+  SetPhase(Phase::kSolve);
+  SolveOptions so;
+  so.roundShots = r->options.roundShots;
+  so.roundWork = r->options.roundWork;
+  so.queueCapacity = r->options.queue;
+  so.routed = r->options.maskMethod == MaskMethod::kR;
+  so.order = Span<const uint32_t>(r->options.envOrder.data(), r->options.envOrder.size());
+  so.stopUnshot = r->options.stopUnshot;
+  so.maxShots = r->options.maxShots;
+  so.rayBudget = r->options.rayBudget;
+  so.maxSeconds = r->options.maxSeconds;
+  so.stopError = r->options.stopError;
+  so.correctUnshot = r->options.correctUnshot;
+  so.quiet = r->options.quiet;
+  ReferenceProbe probe(r.get());
+  if (!r->options.reference.empty()) so.probe = &probe;
+  so.errorEvery = r->options.errorEvery;
+  if (checkpointing) so.hook = &r->checkpoints;
+  if (r->checkpoints.resumed()) so.resume = &r->resumeState;
+  SolveResult res =
+      Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->rankEnvs,
+            r->transport.get(), &r->exchange, so, r->isRoot() ? &r->convergence : nullptr);
+  // Past the solve a signal ends the run at once again (the outputs' commit defers it).
+  if (checkpointing) os::DeferInterrupts(false);
+  if (res.reason == StopReason::kInterrupted) {  // a signal: the checkpoint holds the solve
+    const int sig = r->checkpoints.interrupt();
+    if (r->isRoot()) {
+      for (auto& f : r->files) f.Discard();
+      r->exportFile.Discard();
+      if (r->checkpoints.written() > 0 || r->checkpoints.resumed())
+        os::PrintErr(
+            "vismask: ended by signal %d after %llu shots; the checkpoint in %s holds round %llu: "
+            "the same command with --resume %s instead of --checkpoint goes on from there\n",
+            sig, static_cast<unsigned long long>(res.shots), r->options.checkpointDir.c_str(),
+            static_cast<unsigned long long>(r->checkpoints.checkpointRounds()),
+            r->options.checkpointDir.c_str());
+      else
+        os::PrintErr("vismask: ended by signal %d after %llu shots; no checkpoint was written\n",
+                     sig, static_cast<unsigned long long>(res.shots));
+    }
+    return r->transport->Finish(128 + sig);
+  }
+  if (res.reason == StopReason::kStalled) {  // no outputs: the solve did not finish
+    if (r->isRoot()) {
+      for (auto& f : r->files) f.Discard();
+      os::PrintErr(
+          "vismask: the solve stalled after %llu shots: %llu rounds without a shot "
+          "while %.3g of the emitted power was unshot or in flight (the admission of "
+          "new records let no environment shoot; try a larger --queue)\n",
+          static_cast<unsigned long long>(res.shots),
+          static_cast<unsigned long long>(r->rankEnvs.total), res.unshotFraction);
+    }
+    return r->transport->Finish(kExitStalled);
+  }
+  if (res.reason == StopReason::kNoLoss) {  // no outputs: the solve would never finish
+    if (r->isRoot()) {
+      for (auto& f : r->files) f.Discard();
+      os::PrintErr(
+          "vismask: the solve stalled after %llu shots: the unshot power went from %.4g%% to "
+          "%.4g%% of the emitted, not down by %g%% of itself, while %g times as much power was "
+          "shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
+          "give them a Kd below 1, or stop sooner with --max-shots or --max-seconds)\n",
+          static_cast<unsigned long long>(res.shots), 100.0 * res.stallFrom, 100.0 * res.stallTo,
+          100.0 * kStallFall, kStallShot);
+    }
+    return r->transport->Finish(kExitStalled);
+  }
+
+  SetPhase(Phase::kOutput);
+  rc = WriteOutputs(r.get(), res);
+  SetPhase(Phase::kDone);
+  rc = r->transport->Finish(rc);
+  if (rc == kExitOk && !r->options.quiet && r->isRoot()) {
+    char view[128] = "--camera";
+    if (r->hasSide)
+      std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side),
+                    r->sideChosen ? " (chosen)" : "");
+    else if (r->inside)
+      std::snprintf(
+          view, sizeof view, "view from inside (chosen: the %s side sees %s)",
+          ViewSideName(r->viewChoice.side),
+          r->viewChoice.sideBack > r->viewChoice.sideFront ? "mostly back faces" : "one wall");
+    os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
+                 static_cast<unsigned long long>(res.shots), res.seconds, view,
+                 r->options.outDir.c_str());
+  }
+  return rc;
+}
+
+}  // namespace vismask

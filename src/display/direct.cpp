@@ -1,0 +1,327 @@
+// Direct light gathered per pixel (direct.h): the emitter lists, the exact
+// unoccluded irradiance, and the shadow samples of its visible share.
+#include "vismask/display/direct.h"
+
+#include <algorithm>
+#include <cmath>
+#include <glm/geometric.hpp>
+#include <map>
+#include <tuple>
+#include <vector>
+
+#include "vismask/core/check.h"
+#include "vismask/solve/rng.h"
+
+namespace vismask {
+
+namespace {
+
+bool Emits(const Patch& p) {
+  return p.ke.r > 0.0f || p.ke.g > 0.0f || p.ke.b > 0.0f;
+}
+
+float TriangleArea(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
+  return 0.5f * glm::length(glm::cross(b - a, c - a));
+}
+
+// Radical inverse in base b of k.
+float RadicalInverse(uint32_t k, uint32_t b) {
+  float inv = 1.0f / static_cast<float>(b), f = inv, r = 0.0f;
+  while (k > 0) {
+    r += f * static_cast<float>(k % b);
+    k /= b;
+    f *= inv;
+  }
+  return r;
+}
+
+float Rotate(float x, uint64_t bits) {
+  float s = static_cast<float>(bits >> 40) * (1.0f / 16777216.0f);
+  float y = x + s;
+  y = y >= 1.0f ? y - 1.0f : y;
+  return y < 1.0f ? y : 0.99999994f;
+}
+
+// The emitting patches grouped by polygon (surface, normal, Ke), each
+// group's patches in index order, and the edges of each that no other
+// patch of the group has the other way round.
+struct Plan {
+  std::vector<std::vector<uint32_t>> groups;
+  std::vector<std::vector<std::pair<glm::vec3, glm::vec3>>> edges;
+  std::vector<glm::vec3> corners;  // where the outline turns (every group's)
+  std::vector<uint32_t> cornerGroup;
+};
+
+Plan MakePlan(Span<const Patch> patches) {
+  using Key = std::tuple<uint32_t, float, float, float, float, float, float>;
+  std::map<Key, size_t> index;
+  Plan plan;
+  for (uint32_t i = 0; i < patches.size(); ++i) {
+    const Patch& p = patches[i];
+    if (!Emits(p)) continue;
+    Key key{p.surface, p.normal.x, p.normal.y, p.normal.z, p.ke.r, p.ke.g, p.ke.b};
+    auto it = index.find(key);
+    if (it == index.end()) {
+      it = index.emplace(key, plan.groups.size()).first;
+      plan.groups.emplace_back();
+    }
+    plan.groups[it->second].push_back(i);
+  }
+  using Point = std::tuple<float, float, float>;
+  auto pt = [](const glm::vec3& v) { return Point{v.x, v.y, v.z}; };
+  for (const std::vector<uint32_t>& g : plan.groups) {
+    std::map<std::pair<Point, Point>, int> count;
+    for (uint32_t i : g) {
+      const Patch& p = patches[i];
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        const glm::vec3& a = p.corner[k];
+        const glm::vec3& b = p.corner[(k + 1) % p.numCorners];
+        if (a == b) continue;
+        auto back = count.find({pt(b), pt(a)});
+        if (back != count.end() && back->second > 0)
+          --back->second;
+        else
+          ++count[{pt(a), pt(b)}];
+      }
+    }
+    plan.edges.emplace_back();
+    for (const auto& e : count)
+      for (int k = 0; k < e.second; ++k) {
+        const Point& a = e.first.first;
+        const Point& b = e.first.second;
+        plan.edges.back().push_back({glm::vec3(std::get<0>(a), std::get<1>(a), std::get<2>(a)),
+                                     glm::vec3(std::get<0>(b), std::get<1>(b), std::get<2>(b))});
+      }
+  }
+  // The outline's corners: the ends of edges where the next edge turns.
+  for (size_t g = 0; g < plan.edges.size(); ++g) {
+    const auto& edges = plan.edges[g];
+    for (const auto& e : edges) {
+      glm::vec3 d = e.second - e.first;
+      for (const auto& f : edges) {
+        if (f.first != e.second) continue;
+        glm::vec3 d2 = f.second - f.first;
+        float c = glm::length(glm::cross(d, d2));
+        if (c > 1e-4f * glm::length(d) * glm::length(d2)) {
+          plan.corners.push_back(e.second);
+          plan.cornerGroup.push_back(static_cast<uint32_t>(g));
+        }
+        break;
+      }
+    }
+  }
+  return plan;
+}
+
+// The signed sum over edges a -> b (relative to the receiving point) of
+// the angle they subtend times the cosine of their plane with n.
+double EdgeTerm(const glm::vec3& a, const glm::vec3& b, const glm::vec3& n) {
+  glm::dvec3 da(a), db(b);
+  double la = glm::length(da), lb = glm::length(db);
+  if (!(la > 0.0) || !(lb > 0.0)) return 0.0;
+  da /= la;
+  db /= lb;
+  glm::dvec3 c = glm::cross(da, db);
+  double s = glm::length(c);
+  if (!(s > 0.0)) return 0.0;
+  double theta = std::atan2(s, glm::dot(da, db));
+  return theta * glm::dot(glm::dvec3(n), c) / s;
+}
+
+}  // namespace
+
+DirectLight::Counts DirectLight::Count(Span<const Patch> patches) {
+  Counts c;
+  Plan plan = MakePlan(patches);
+  c.groups = static_cast<uint32_t>(plan.groups.size());
+  for (size_t g = 0; g < plan.groups.size(); ++g) {
+    c.emitters += static_cast<uint32_t>(plan.groups[g].size());
+    c.edges += static_cast<uint32_t>(plan.edges[g].size());
+  }
+  c.corners = static_cast<uint32_t>(plan.corners.size());
+  return c;
+}
+
+void DirectLight::Layout(Arena& arena, const Counts& counts) {
+  emitters_ = arena.Alloc<Emitter>(counts.emitters);
+  patchIndex_ = arena.Alloc<uint32_t>(counts.emitters);
+  groups_ = arena.Alloc<Group>(counts.groups);
+  edges_ = arena.Alloc<Edge>(counts.edges);
+  corners_ = arena.Alloc<Corner>(counts.corners);
+}
+
+void DirectLight::Build(Span<const Patch> patches) {
+  patches_ = patches;
+  Plan plan = MakePlan(patches);
+  CHECK(plan.groups.size() == groups_.size());
+  uint32_t np = 0, ne = 0;
+  for (size_t g = 0; g < plan.groups.size(); ++g) {
+    Group& gr = groups_[g];
+    const Patch& first = patches[plan.groups[g][0]];
+    gr.normal = first.normal;
+    gr.point = first.corner[0];
+    gr.ke = first.ke;
+    gr.firstPatch = np;
+    gr.numPatches = static_cast<uint32_t>(plan.groups[g].size());
+    for (uint32_t i : plan.groups[g]) {
+      CHECK(np < patchIndex_.size());
+      patchIndex_[np++] = i;
+    }
+    gr.firstEdge = ne;
+    gr.numEdges = static_cast<uint32_t>(plan.edges[g].size());
+    for (const auto& e : plan.edges[g]) {
+      CHECK(ne < edges_.size());
+      edges_[ne++] = Edge{e.first, e.second};
+    }
+  }
+  CHECK(np == patchIndex_.size() && ne == edges_.size());
+  CHECK(plan.corners.size() == corners_.size());
+  for (size_t k = 0; k < corners_.size(); ++k)
+    corners_[k] = Corner{plan.corners[k], plan.cornerGroup[k]};
+  // The sampling list in patch index order.
+  double total = 0.0;
+  uint32_t n = 0;
+  for (uint32_t i = 0; i < patches.size(); ++i) {
+    const Patch& p = patches[i];
+    if (!Emits(p)) continue;
+    CHECK(n < emitters_.size());
+    Emitter& e = emitters_[n++];
+    e = Emitter{};
+    e.patch = i;
+    float a0 = TriangleArea(p.corner[0], p.corner[1], p.corner[2]);
+    float a1 = p.numCorners == 4 ? TriangleArea(p.corner[0], p.corner[2], p.corner[3]) : 0.0f;
+    e.split = a0 + a1 > 0.0f ? a0 / (a0 + a1) : 1.0f;
+    total += static_cast<double>(p.area) * (p.ke.r + p.ke.g + p.ke.b);
+    e.cdfHi = static_cast<float>(total);
+  }
+  CHECK(n == emitters_.size());
+  constexpr double kInvPi = 0.318309886183790672;
+  for (Emitter& e : emitters_) {
+    const Patch& p = patches[e.patch];
+    double w = static_cast<double>(p.area) * (p.ke.r + p.ke.g + p.ke.b);
+    // pdf per unit area of a point on e: (w / total) / area.
+    double k = w > 0.0 ? total / w * p.area * kInvPi : 0.0;
+    e.scale = glm::vec3(static_cast<float>(p.ke.r * k), static_cast<float>(p.ke.g * k),
+                        static_cast<float>(p.ke.b * k));
+    e.cdfHi = total > 0.0 ? static_cast<float>(e.cdfHi / total) : 1.0f;
+  }
+  if (!emitters_.empty()) emitters_[emitters_.size() - 1].cdfHi = 1.0f;
+}
+
+glm::vec3 DirectLight::PointOn(const Patch& p, float split, glm::vec2 u) {
+  // Which triangle, then u.x stretched back to [0, 1) within it.
+  glm::vec3 a = p.corner[0], b = p.corner[1], c = p.corner[2];
+  float x = u.x;
+  if (x >= split) {
+    b = p.corner[2];
+    c = p.corner[3];
+    x = split < 1.0f ? (x - split) / (1.0f - split) : 0.0f;
+  } else {
+    x = split > 0.0f ? x / split : 0.0f;
+  }
+  // Uniform in the triangle.
+  float s = std::sqrt(std::fmin(x, 1.0f));
+  float b1 = 1.0f - s, b2 = s * u.y;
+  return (1.0f - b1 - b2) * c + b1 * a + b2 * b;
+}
+
+glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n) const {
+  constexpr double kInv2Pi = 0.159154943091895336;
+  glm::dvec3 sum(0.0);
+  for (const Group& g : groups_) {
+    // Only the front of an emitter emits.
+    if (!(glm::dot(g.normal, x - g.point) > 0.0f)) continue;
+    // Wholly above x's horizon: its outline edges.
+    bool above = true;
+    for (uint32_t k = g.firstEdge; k < g.firstEdge + g.numEdges && above; ++k)
+      above = glm::dot(n, edges_[k].a - x) > 0.0f;
+    double s = 0.0;
+    if (above) {
+      for (uint32_t k = g.firstEdge; k < g.firstEdge + g.numEdges; ++k)
+        s += EdgeTerm(edges_[k].a - x, edges_[k].b - x, n);
+    } else {
+      // Across the horizon: each patch clipped to the part above it.
+      for (uint32_t j = g.firstPatch; j < g.firstPatch + g.numPatches; ++j) {
+        const Patch& p = patches_[patchIndex_[j]];
+        glm::vec3 in[4], out[8];
+        int m = 0;
+        for (uint32_t k = 0; k < p.numCorners; ++k) in[k] = p.corner[k] - x;
+        for (uint32_t k = 0; k < p.numCorners; ++k) {
+          const glm::vec3& a = in[k];
+          const glm::vec3& b = in[(k + 1) % p.numCorners];
+          float fa = glm::dot(n, a), fb = glm::dot(n, b);
+          if (fa > 0.0f) out[m++] = a;
+          if ((fa > 0.0f) != (fb > 0.0f)) out[m++] = a + (fa / (fa - fb)) * (b - a);
+        }
+        for (int k = 0; k < m; ++k) s += EdgeTerm(out[k], out[(k + 1) % m], n);
+      }
+    }
+    sum += std::fabs(s) * kInv2Pi * glm::dvec3(g.ke);
+  }
+  return glm::vec3(sum);
+}
+
+bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                         const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
+                         glm::vec3* weight) const {
+  *weight = glm::vec3(0.0f);
+  if (emitters_.empty()) return false;
+  // The emitter: the first whose cumulative share exceeds u.x.
+  size_t lo = 0, hi = emitters_.size() - 1;
+  while (lo < hi) {
+    size_t mid = (lo + hi) / 2;
+    if (u.x < emitters_[mid].cdfHi)
+      hi = mid;
+    else
+      lo = mid + 1;
+  }
+  const Emitter& e = emitters_[lo];
+  float below = lo > 0 ? emitters_[lo - 1].cdfHi : 0.0f;
+  float width = e.cdfHi - below;
+  float sx = width > 0.0f ? (u.x - below) / width : 0.0f;
+  sx = std::fmin(std::fmax(sx, 0.0f), 0.99999994f);
+  const Patch& p = patches_[e.patch];
+  glm::vec3 y = PointOn(p, e.split, glm::vec2(sx, u.y));
+  glm::vec3 d = y - x;
+  float r2 = glm::dot(d, d);
+  if (!(r2 > 0.0f)) return false;
+  float cosX = glm::dot(n, d), cosY = -glm::dot(p.normal, d);
+  if (!(cosX > 0.0f) || !(cosY > 0.0f)) return false;
+  *weight = e.scale * (cosX * cosY / (r2 * r2));
+  float t = epsilon / std::sqrt(r2);
+  if (!(t < 0.5f)) return true;
+  Ray ray{x, d, t, 1.0f - t};
+  const Skip skip(receiver, twin);
+  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+}
+
+bool DirectLight::CornerVisible(const Grid& grid, uint32_t receiver, uint32_t twin,
+                                const glm::vec3& x, const glm::vec3& n, uint32_t k, float epsilon,
+                                uint32_t* hint, bool* usable) const {
+  *usable = false;
+  const glm::vec3 y = corners_[k].point;
+  glm::vec3 d = y - x;
+  float r2 = glm::dot(d, d);
+  if (!(glm::dot(n, d) > 0.0f) || !(r2 > 0.0f)) return false;
+  // x in front of the corner's polygon.
+  const Group& g = groups_[corners_[k].group];
+  if (!(glm::dot(g.normal, x - g.point) > 0.0f)) return false;
+  *usable = true;
+  float t = epsilon / std::sqrt(r2);
+  if (!(t < 0.5f)) return true;
+  Ray ray{x, d, t, 1.0f - t};
+  const Skip skip(receiver, twin);
+  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+}
+
+glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k) {
+  uint64_t h = Mix64(0x9e3779b97f4a7c15ull ^ (uint64_t(pixel) * 0x2545f4914f6cdd1dull));
+  return glm::vec2(Rotate(RadicalInverse(k, 2), h), Rotate(RadicalInverse(k, 3), Mix64(h)));
+}
+
+glm::vec2 DirectPixelOffset(uint32_t pixel, uint32_t k) {
+  uint64_t h = Mix64(0xd1b54a32d192ed03ull ^ (uint64_t(pixel) * 0x9e3779b97f4a7c15ull));
+  return glm::vec2(Rotate(RadicalInverse(k, 5), h), Rotate(RadicalInverse(k, 7), Mix64(h)));
+}
+
+}  // namespace vismask

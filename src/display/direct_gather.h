@@ -1,0 +1,62 @@
+// The per-pixel direct light of a piece (raster.h's DirectHook, direct.h),
+// shared by the two rasters (internal to raster_aa.cpp and
+// raster_point.cpp).
+#pragma once
+#include <cstdint>
+#include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+
+#include "vismask/display/direct.h"
+#include "vismask/display/raster.h"
+
+namespace vismask {
+
+// The radiance hook `h` adds for pixel index `pixel` at the shaded point
+// `centre`; pointOf(k) gives the point sample k's shadow ray leaves from
+// (points are projected onto the receiver's plane). E0 at the centre times
+// the visible share of the samples, weighted by what each would bring: a
+// ray from the centre to each outline corner and the first
+// kFirstDirectSamples, and the rest of h.samples only where those disagree
+// (some reach the emitters, some do not). Allocates nothing.
+template <class PointOf>
+glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, PointOf pointOf) {
+  auto onPlane = [&](glm::vec3 x) { return x - h.normal * glm::dot(h.normal, x - h.planePoint); };
+  const glm::vec3 x0 = onPlane(centre);
+  const glm::vec3 e0 = h.light->Unoccluded(x0, h.normal);
+  if (!(e0.x > 0.0f || e0.y > 0.0f || e0.z > 0.0f)) return glm::vec3(0.0f);
+  // The outline corners, from the centre.
+  const uint32_t corners = h.light->numCorners();
+  bool cornersTell = corners > 0 && corners <= kMaxCornerRays;
+  uint32_t cornersSeen = 0;
+  for (uint32_t k = 0; k < corners && cornersTell; ++k) {
+    bool usable;
+    cornersSeen += h.light->CornerVisible(*h.grid, h.patch, h.twin, x0, h.normal, k, h.epsilon,
+                                          h.hint, &usable)
+                       ? 1u
+                       : 0u;
+    cornersTell = usable;
+  }
+  glm::vec3 all(0.0f), seen(0.0f);
+  uint32_t counted = 0, visible = 0;
+  for (uint32_t k = 0; k < h.samples; ++k) {
+    if (k == kFirstDirectSamples && cornersTell && counted > 0 &&
+        ((visible == 0 && cornersSeen == 0) || (visible == counted && cornersSeen == corners)))
+      break;
+    glm::vec3 w;
+    bool vis = h.light->Sample(*h.grid, h.patch, h.twin, onPlane(pointOf(k)), h.normal,
+                               DirectLightSample(pixel, k), h.epsilon, h.hint, &w);
+    if (!(w.x > 0.0f || w.y > 0.0f || w.z > 0.0f)) continue;
+    ++counted;
+    all += w;
+    if (vis) {
+      ++visible;
+      seen += w;
+    }
+  }
+  glm::vec3 share(1.0f);  // no sample saw the emitters in front: unoccluded
+  for (int c = 0; c < 3; ++c)
+    if (all[c] > 0.0f) share[c] = seen[c] / all[c];
+  return h.scale * e0 * share;
+}
+
+}  // namespace vismask

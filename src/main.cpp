@@ -1,7 +1,0 @@
-#include "vismask/app.h"
-#include "vismask/os.h"
-
-int main(int argc, char** argv) {
-  vismask::os::GuardStandardDescriptors();
-  return vismask::Main(argc, argv);
-}

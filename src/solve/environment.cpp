@@ -1,0 +1,422 @@
+// Environment, its memory and init: the arena layout (Layout), what one
+// environment holds and needs (Prepare, Build) and a solve's start (Reset).
+// The rest of Environment is in env_receive.cpp (receiving, elements,
+// display values), trace.cpp (rays) and env_queue.cpp (shots and the queue).
+#include "vismask/solve/environment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <limits>
+#include <unordered_map>
+
+#include "vismask/solve/centre_raster.h"
+#include "vismask/solve/rng.h"
+
+namespace vismask {
+
+uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* fraction) const {
+  *fraction = 1.0;
+  if (options_.rayQuantum <= 0.0) return options_.rays;
+  double x = (power[0] + power[1] + power[2]) / options_.rayQuantum;
+  if (x > options_.rays) {
+    *fraction = options_.rays / x;
+    return options_.rays;
+  }
+  // Stochastic rounding from the shot's own stream: the same on every rank.
+  double whole = std::floor(x);
+  Rng rng(Mix64(shotKey ^ 0x5851f42d4c957f2dull), shotKey);
+  uint32_t n = static_cast<uint32_t>(whole) + (rng.NextFloat() < x - whole ? 1u : 0u);
+  return n < options_.minRays ? options_.minRays : n;
+}
+
+void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices,
+                         const Grid::Plan& plan) {
+  size_t mark = arena.used();
+  auto part = [&](uint64_t* bytes) {
+    *bytes = arena.used() - mark;
+    mark = arena.used();
+  };
+  patches_ = arena.Alloc<Patch>(numPatches);
+  geom_ = arena.Alloc<PatchGeom>(numPatches);
+  twin_ = arena.Alloc<uint32_t>(stagedTwin_.size());
+  energy_ = arena.Alloc<PatchEnergy>(numPatches);
+  shotCount_ = arena.Alloc<uint32_t>(numPatches);
+  if (numOutside_ > 0) outside_ = arena.Alloc<Outside>(numOutside_);
+  tree_.Layout(arena, numPatches);
+  part(&footprint_.patches);
+  elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options_.elements.perPatch));
+  // Per-pixel direct light: the indirect radiosity and unshot emission per
+  // patch, and the emitter list (counted from the staged patches, which
+  // Build copies in unchanged).
+  const bool direct = options_.directSamples > 0;
+  indirect_ =
+      arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
+  emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
+  smoothPatch_ = arena.Alloc<uint8_t>(direct && !stagedSmooth_.empty() ? numPatches : 0);
+  direct_.Layout(arena, direct
+                            ? DirectLight::Count(Span<const Patch>(staged_.data(), staged_.size()))
+                            : DirectLight::Counts{});
+  part(&footprint_.elements);
+  vertices_ = arena.Alloc<glm::vec3>(numVertices);
+  vertexB_ = arena.Alloc<glm::vec3>(numVertices);
+  vertexWeight_ = arena.Alloc<float>(numVertices);
+  cutVertex_ = arena.Alloc<uint32_t>(stagedCut_.size());
+  vertexCut_ = arena.Alloc<uint8_t>(numVertices);
+  vertexOutline_ = arena.Alloc<uint8_t>(numVertices);
+  vertexFrac_ = arena.Alloc<float>(numVertices);
+  vertexInward_ = arena.Alloc<glm::vec3>(numVertices);
+  cutNormal_ = arena.Alloc<glm::vec3>(stagedCut_.size());
+  smooth_ = arena.Alloc<SmoothVertex>(stagedSmooth_.size());
+  smoothMatched_ = arena.Alloc<uint8_t>(stagedSmooth_.size());
+  patchSmoothEdges_ = arena.Alloc<uint8_t>(stagedSmoothEdges_.size());
+  part(&footprint_.vertices);
+  patchTex_ = arena.Alloc<PatchTexture>(stagedTex_.empty() ? 0 : numPatches);
+  part(&footprint_.textures);
+  grid_.Layout(arena, plan);
+  part(&footprint_.grid);
+  // Exchange buffers only where there is someone to exchange with.
+  uint32_t q = numNeighbours_ > 0 ? options_.queueCapacity : 0;
+  slots_ = arena.Alloc<Slot>(q);
+  slotIndex_.Layout(arena, q);
+  readyTree_.Layout(arena, q, true);
+  slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
+  part(&footprint_.queue);
+  FillReadCosts(numPatches);
+  // Out and incoming; C's hit and passed, or B's read and decide; R's six route masks.
+  size_t scratchMasks = numNeighbours_ == 0                     ? 0
+                        : options_.maskMethod == MaskMethod::kR ? 8
+                        : PartCentres()                         ? 4
+                                                                : 2;
+  scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
+  const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
+                                                 options_.maskMethod == MaskMethod::kC);
+  // The pixels' centre directions: B's and C's centre rays, and FlightShare for A, B and C.
+  maskDirections_.Layout(arena, numNeighbours_ > 0 ? shape_.res : 0);
+  // FlightShare's column directions: (cos, sin) of each column's phi.
+  const bool flight = numNeighbours_ > 0 && options_.maskMethod != MaskMethod::kR;
+  flightCols_ = arena.Alloc<double>(flight ? 2 * 4 * size_t(FlightRes()) : 0);
+  // The centre-mask cache: a slot per patch while they fit (C: a second
+  // mask per slot, the pixels whose centre ray is known).
+  size_t cacheSlots = 0, perSlot = (PartCentres() ? 2 : 1) * shape_.words();
+  if (centreRays && perSlot > 0)
+    cacheSlots = std::min<uint64_t>(numPatches, options_.maskCacheBytes / (8 * perSlot));
+  cacheWords_ = arena.Alloc<uint64_t>(cacheSlots * perSlot);
+  cacheTag_ = arena.Alloc<uint32_t>(cacheSlots);
+  outbox_ = arena.Alloc<uint8_t>(size_t(outCapacity_) * packetBytes_);
+  part(&footprint_.packets);
+  footprint_.total = ArenaRoundUp(arena.used());
+  footprint_.numPatches = numPatches;
+  footprint_.gridCells = uint64_t(plan.res[0]) * plan.res[1] * plan.res[2];
+}
+
+const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
+                                         const std::vector<uint32_t>& ids,
+                                         const EnvOptions& options) {
+  index_ = index;
+  options_ = options;
+  envGrid_ = grid;
+  grid.Cell(static_cast<int>(index), cell_);
+  box_ = grid.EnvBox(static_cast<int>(index));
+  numNeighbours_ = 0;
+  for (int a = 0; a < 3; ++a) numNeighbours_ += (cell_[a] > 0) + (cell_[a] + 1 < grid.n[a]);
+  numExits_ = 0;
+  for (int a = 0; a < 3; ++a)
+    for (int side = 0; side < 2; ++side) {
+      if (side == 0 ? cell_[a] == 0 : cell_[a] + 1 == grid.n[a]) continue;
+      exits_[numExits_++] = BoxFace(box_, a, side);
+    }
+  shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
+                              : MaskShape{};
+  packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
+  outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
+  {
+    std::vector<OutsideShooter> shooters;
+    OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
+                    &shooters);
+    stagedOutside_.clear();
+    for (const OutsideShooter& s : shooters) stagedOutside_.push_back(Outside{s, {0, 0, 0}, 0});
+    numOutside_ = static_cast<uint32_t>(stagedOutside_.size());
+  }
+
+  // Local copies of the patches and a compact local vertex lattice.
+  staged_.clear();
+  stagedVertices_.clear();
+  stagedTex_.clear();
+  staged_.reserve(ids.size());
+  bool textured = false;
+  std::unordered_map<uint32_t, uint32_t> vertexMap;
+  for (uint32_t id : ids) {
+    Patch p = mesh.patches[id];
+    for (int k = 0; k < 4; ++k) {
+      auto it = vertexMap.find(p.vertex[k]);
+      if (it == vertexMap.end()) {
+        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(stagedVertices_.size())).first;
+        stagedVertices_.push_back(mesh.vertices[p.vertex[k]]);
+      }
+      p.vertex[k] = it->second;
+    }
+    staged_.push_back(p);
+    if (!mesh.textures.empty()) {
+      stagedTex_.push_back(mesh.textures[id]);
+      textured |= mesh.textures[id].texture != kNoTexture;
+    }
+  }
+  // Ray-test data; a twin's from its original's (TwinGeom), and the pairs.
+  stagedGeom_.clear();
+  stagedTwin_.clear();
+  numTwins_ = 0;
+  for (uint32_t id : ids) {
+    bool copy = !mesh.twin.empty() && mesh.twin[id] != kNoPatch && mesh.twin[id] < id;
+    stagedGeom_.push_back(copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[id]]))
+                               : MakePatchGeom(mesh.patches[id]));
+    numTwins_ += copy;
+  }
+  if (!mesh.twin.empty()) {
+    std::unordered_map<uint32_t, uint32_t> local;
+    for (uint32_t i = 0; i < ids.size(); ++i) local.emplace(ids[i], i);
+    for (uint32_t id : ids) {
+      auto it = mesh.twin[id] == kNoPatch ? local.end() : local.find(mesh.twin[id]);
+      stagedTwin_.push_back(it == local.end() ? kNoPatch : it->second);
+    }
+  }
+  if (!textured) stagedTex_.clear();
+  // Lattice vertices on a face shared with a neighbour.
+  stagedCut_.clear();
+  stagedCutNormal_.clear();
+  {
+    glm::vec3 extent = grid.box.hi - grid.box.lo;
+    float tol = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
+    std::vector<char> seen(stagedVertices_.size(), 0);
+    for (const Patch& p : staged_) {
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        uint32_t v = p.vertex[k];
+        if (seen[v]) continue;
+        seen[v] = 1;
+        const glm::vec3& x = stagedVertices_[v];
+        bool cut = false;
+        for (int a = 0; a < 3; ++a) {
+          cut |= cell_[a] > 0 && std::fabs(x[a] - box_.lo[a]) <= tol;
+          cut |= cell_[a] + 1 < grid.n[a] && std::fabs(x[a] - box_.hi[a]) <= tol;
+        }
+        if (!cut) continue;
+        stagedCut_.push_back(v);
+        stagedCutNormal_.push_back(p.normal);
+      }
+    }
+  }
+  numCut_ = static_cast<uint32_t>(stagedCut_.size());
+  // Smooth vertices (local ids, by vertex), and the patch edges between two
+  // on one outline edge of their polygon.
+  stagedSmooth_.clear();
+  stagedSmoothEdges_.clear();
+  if (!mesh.smooth.empty()) {
+    std::vector<uint32_t> at(stagedVertices_.size(), kNoPatch);  // local vertex -> stagedSmooth_
+    for (const SmoothVertex& s : mesh.smooth) {
+      auto it = vertexMap.find(s.vertex);
+      if (it == vertexMap.end()) continue;
+      stagedSmooth_.push_back(s);
+      stagedSmooth_.back().vertex = it->second;
+    }
+    std::sort(stagedSmooth_.begin(), stagedSmooth_.end(),
+              [](const SmoothVertex& a, const SmoothVertex& b) { return a.vertex < b.vertex; });
+    for (uint32_t k = 0; k < stagedSmooth_.size(); ++k) at[stagedSmooth_[k].vertex] = k;
+    if (!stagedSmooth_.empty()) {
+      stagedSmoothEdges_.assign(staged_.size(), 0);
+      for (size_t i = 0; i < staged_.size(); ++i) {
+        const Patch& p = staged_[i];
+        for (uint32_t k = 0; k < p.numCorners; ++k) {
+          uint32_t a = at[p.vertex[k]], b = at[p.vertex[(k + 1) % p.numCorners]];
+          if (a == kNoPatch || b == kNoPatch) continue;
+          const SmoothVertex &sa = stagedSmooth_[a], &sb = stagedSmooth_[b];
+          bool common = false;
+          for (uint32_t ea : sa.edge)
+            for (uint32_t eb : sb.edge) common |= ea == eb;
+          if (common) stagedSmoothEdges_[i] |= static_cast<uint8_t>(1u << k);
+        }
+      }
+    }
+  }
+  numShared_ = numCut_;
+  {
+    std::vector<char> cut(stagedVertices_.size(), 0);
+    for (uint32_t v : stagedCut_) cut[v] = 1;
+    for (const SmoothVertex& s : stagedSmooth_) numShared_ += cut[s.vertex] ? 0 : 1;
+  }
+  uint32_t n = static_cast<uint32_t>(staged_.size());
+  plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n),
+                         Span<const PatchGeom>(stagedGeom_.data(), n), options.gridDensity);
+  Arena measure = Arena::Measure();
+  Layout(measure, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  // What --export will write of this environment (src/output/export.cpp).
+  footprint_.numVertices = stagedVertices_.size();
+  footprint_.numTriangles = 0;
+  for (const Patch& p : staged_) footprint_.numTriangles += p.numCorners == 4 ? 2 : 1;
+  return footprint_;
+}
+
+bool Environment::Build() {
+  uint32_t n = static_cast<uint32_t>(staged_.size());
+  if (!Arena::Reserve(footprint_.total, &arena_)) return false;
+  Layout(arena_, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
+  totalArea_ = 0.0;
+  kdArea_ = 0.0;
+  for (uint32_t i = 0; i < n; ++i) {
+    patches_[i] = staged_[i];
+    geom_[i] = stagedGeom_[i];
+    totalArea_ += staged_[i].area;
+    const glm::vec3& kd = staged_[i].kd;
+    kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
+  }
+  for (size_t i = 0; i < stagedTwin_.size(); ++i) twin_[i] = stagedTwin_[i];
+  for (uint32_t k = 0; k < numOutside_; ++k) outside_[k] = stagedOutside_[k];
+  for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = stagedTex_[i];
+  for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
+  for (size_t v = 0; v < vertexCut_.size(); ++v) vertexCut_[v] = 0;
+  for (size_t k = 0; k < stagedCut_.size(); ++k) {
+    vertexCut_[stagedCut_[k]] = 1;
+    cutVertex_[k] = stagedCut_[k];
+    cutNormal_[k] = stagedCutNormal_[k];
+  }
+  // The outline vertices to extrapolate: touched by one or two quads (and
+  // no triangle), not on a cut, and every touching quad's opposite corner an
+  // interior vertex (four quads), else the outline is too ragged or narrow
+  // to tell inward from along.
+  {
+    std::vector<uint8_t> quads(vertexOutline_.size(), 0), inward(vertexOutline_.size(), 0);
+    for (const Patch& p : staged_)
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        uint8_t& q = quads[p.vertex[k]];
+        q = p.numCorners == 4 && q != 0xff ? q + 1 : 0xff;
+      }
+    for (const Patch& p : staged_)
+      if (p.numCorners == 4)
+        for (uint32_t k = 0; k < 4; ++k) inward[p.vertex[k]] += quads[p.vertex[(k + 2) % 4]] == 4;
+    for (size_t v = 0; v < vertexOutline_.size(); ++v) {
+      uint8_t q = quads[v];
+      bool outline = q >= 1 && q <= 2 && !vertexCut_[v] && inward[v] == q;
+      vertexOutline_[v] = outline ? q : 0;
+    }
+  }
+  grid_.Build(patches_, geom_);
+  if (options_.directSamples > 0) direct_.Build(patches_);
+  centreStepsPerRay_ = 1;
+  while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
+         grid_.cellCount())
+    ++centreStepsPerRay_;
+  maskDirections_.Fill();
+  FillFlightCols();
+  for (uint32_t& tag : cacheTag_) tag = kNoPatch;
+  std::vector<Patch>().swap(staged_);
+  std::vector<PatchGeom>().swap(stagedGeom_);
+  std::vector<uint32_t>().swap(stagedTwin_);
+  std::vector<Outside>().swap(stagedOutside_);
+  std::vector<PatchTexture>().swap(stagedTex_);
+  std::vector<glm::vec3>().swap(stagedVertices_);
+  std::vector<uint32_t>().swap(stagedCut_);
+  std::vector<glm::vec3>().swap(stagedCutNormal_);
+  for (size_t k = 0; k < stagedSmooth_.size(); ++k) smooth_[k] = stagedSmooth_[k];
+  for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i)
+    patchSmoothEdges_[i] = stagedSmoothEdges_[i];
+  // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
+  // patch of theirs) as they were: their patches show the solved whole.
+  if (!smoothPatch_.empty()) {
+    std::vector<uint32_t> smoothed;
+    for (const Patch& p : patches_)
+      for (uint32_t k = 0; k < p.numCorners; ++k)
+        if (FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
+    std::sort(smoothed.begin(), smoothed.end());
+    for (uint32_t i = 0; i < patches_.size(); ++i)
+      smoothPatch_[i] =
+          std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
+  }
+  std::vector<SmoothVertex>().swap(stagedSmooth_);
+  std::vector<uint8_t>().swap(stagedSmoothEdges_);
+  Reset();
+  return true;
+}
+
+void Environment::Reset() {
+  ledger_ = EnergyLedger();
+  stats_ = EnvStats();
+  tree_.Clear();
+  for (uint32_t i = 0; i < patches_.size(); ++i) {
+    const Patch& p = patches_[i];
+    PatchEnergy& e = energy_[i];
+    for (int c = 0; c < 3; ++c) {
+      e.b[c] = p.ke[c];
+      e.var[c] = 0.0;
+      e.unshot[c] = static_cast<double>(p.ke[c]) * p.area;
+      ledger_.emitted[c] += e.unshot[c];
+      ledger_.unshot[c] += e.unshot[c];
+      ledger_.radiosity[c] += e.unshot[c];
+    }
+    shotCount_[i] = 0;
+    if (!indirect_.empty())
+      for (int c = 0; c < 3; ++c) {
+        indirect_[3 * i + c] = 0.0;
+        emitLeft_[3 * i + c] = e.unshot[c];
+      }
+    tree_.Set(i, UnshotKey(e));
+    Element& root = elements_[i];
+    root = Element{};
+    root.area = p.area;
+    root.child = kNoElement;
+  }
+  nextElement_ = static_cast<uint32_t>(patches_.size());
+  // The outside shooters emit as patches do; their power counts in the
+  // radiosity power R as an emitter's b * area does (the power shot so far
+  // is R - unshot).
+  for (uint32_t k = 0; k < numOutside_; ++k) {
+    Outside& o = outside_[k];
+    o.shots = 0;
+    for (int c = 0; c < 3; ++c) {
+      o.unshot[c] = o.shooter.power[c];
+      ledger_.emitted[c] += o.unshot[c];
+      ledger_.unshot[c] += o.unshot[c];
+      ledger_.radiosity[c] += o.unshot[c];
+    }
+  }
+  for (Slot& s : slots_) s = Slot();
+  slotIndex_.Clear();
+  readyTree_.Clear(-std::numeric_limits<double>::infinity());
+  queued_ = 0;
+  outCount_ = 0;
+}
+
+EnvState Environment::SaveState() const {
+  EnvState s;
+  std::memset(static_cast<void*>(&s), 0, sizeof s);  // padding too: the same bytes every time
+  s.arenaUsed = arena_.used();
+  s.numPatches = patches_.size();
+  s.gridSteps = grid_.steps();
+  s.centreSteps = centreSteps_;
+  s.centreWork = centreWork_;
+  s.nextElement = nextElement_;
+  s.queued = queued_;
+  s.outCount = outCount_;
+  s.index = index_;
+  s.ledger = ledger_;
+  s.stats = stats_;
+  return s;
+}
+
+bool Environment::RestoreState(const EnvState& s) {
+  if (s.index != index_ || s.numPatches != patches_.size() || s.arenaUsed != arena_.used() ||
+      s.outCount != 0 || s.nextElement > elements_.size())
+    return false;
+  grid_.SetSteps(s.gridSteps);
+  centreSteps_ = s.centreSteps;
+  centreWork_ = s.centreWork;
+  nextElement_ = s.nextElement;
+  queued_ = s.queued;
+  outCount_ = 0;
+  ledger_ = s.ledger;
+  stats_ = s.stats;
+  return true;
+}
+
+}  // namespace vismask
