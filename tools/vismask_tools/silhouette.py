@@ -1,7 +1,7 @@
 """The 1-px silhouette mask (issue 41): the pixels within 1 px of a
 geometric edge of the image, where a one-sample-per-pixel raycast (such as
 RenderPark's) aliases. One ray through each pixel centre, with vismask's
-camera (src/camera.cpp MakeView), finds the surface it sees: faces on one
+camera (src/display/camera.cpp MakeView), finds the surface it sees: faces on one
 plane with one material are one surface (the left wall's two triangles are
 one). A pixel is marked when its 3x3 neighbourhood of centre rays sees more
 than one surface or misses the scene: silhouettes, occlusions, creases and
