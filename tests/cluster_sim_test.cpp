@@ -15,25 +15,10 @@ namespace vismask {
 namespace {
 
 using test::ReadFile;
+using test::RunShell;
+using test::Shell;
 using test::TempDir;
 using test::WriteFile;
-
-struct Shell {
-  int code = -1;
-  std::string out;  // stdout and stderr
-};
-
-Shell RunShell(const std::string& cmd) {
-  Shell r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 TEST(ClusterSimTest, HelpSaysHowToRunIt) {
   Shell r = RunShell("tools/cluster-sim --help");

@@ -16,13 +16,10 @@ namespace vismask {
 namespace {
 
 using test::FileExists;
+using test::HaveNumpy;
 using test::ReadFile;
 using test::TempDir;
 using test::WriteFile;
-
-bool HaveNumpy() {
-  return std::system("/usr/bin/python3 -c 'import numpy' 2> /dev/null") == 0;
-}
 
 int RunCommand(const std::string& cmd) {
   int status = std::system(cmd.c_str());

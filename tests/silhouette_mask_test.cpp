@@ -15,30 +15,12 @@ namespace vismask {
 namespace {
 
 using test::FileExists;
+using test::HaveNumpy;
 using test::ReadFile;
+using test::RunShell;
+using test::Shell;
 using test::TempDir;
 using test::WriteFile;
-
-struct Shell {
-  int code = -1;
-  std::string out;  // stdout and stderr
-};
-
-Shell RunShell(const std::string& cmd) {
-  Shell r;
-  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-bool HaveNumpy() {
-  return std::system("/usr/bin/python3 -c 'import numpy' 2> /dev/null") == 0;
-}
 
 // A 16x16 view from the origin down +z, 90 degrees: pixel x's centre ray
 // crosses z = 10 at x = 1.25 (x + 0.5 - 8). The back wall (z = 20, two

@@ -76,6 +76,22 @@ std::string VismaskBin() {
   return b ? b : "build/vismask";
 }
 
+bool HaveNumpy() {
+  return std::system("/usr/bin/python3 -c 'import numpy' 2> /dev/null") == 0;
+}
+
+Shell RunShell(const std::string& cmd) {
+  Shell r;
+  FILE* p = popen((cmd + " 2>&1").c_str(), "r");
+  if (!p) return r;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
+  int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
 int ShellOutput(const std::string& cmd, int timeoutSeconds, std::string* out) {
   FILE* p = popen(("timeout " + std::to_string(timeoutSeconds) + " " + cmd + " 2>&1").c_str(), "r");
   if (!p) return -1;

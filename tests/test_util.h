@@ -45,6 +45,15 @@ std::string VismaskBin();
 // stderr together appended to *out; returns its exit status, or -1 when it
 // could not start or did not exit normally.
 int ShellOutput(const std::string& cmd, int timeoutSeconds, std::string* out);
+// `cmd` run by the shell to its end, stderr joined to stdout: its exit
+// status (-1 if it did not exit) and its output.
+struct Shell {
+  int code = -1;
+  std::string out;  // stdout and stderr
+};
+Shell RunShell(const std::string& cmd);
+// Whether /usr/bin/python3 has numpy (the report tools' tests need it).
+bool HaveNumpy();
 
 struct RunResult {
   int code = -1;
