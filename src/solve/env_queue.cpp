@@ -100,7 +100,15 @@ void Environment::ShootLocal(uint32_t i) {
   tree_.Set(i, fraction < 1.0 ? UnshotKey(src) : 0.0);
   ++stats_.shots;
   // The shooter's rays ignore it and its twin (coplanar, behind them).
-  const Skip skip(i, twinOf(i));
+  ShootOwn(p, Skip(i, twinOf(i)), power, key, shotIndex, rays, i);
+}
+
+// A shot made here (a local patch's, or an outside shooter's): its rays
+// traced, and with neighbours its packets made and forwarded. `cached`:
+// the local patch whose centre mask B and C may take from the cache
+// (kNoPatch: none).
+void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uint64_t key,
+                           uint32_t shotIndex, uint32_t rays, uint32_t cached) {
   if (numNeighbours_ == 0) {
     Distribute(p, skip, power, key, rays, nullptr, nullptr);
     return;
@@ -114,14 +122,11 @@ void Environment::ShootLocal(uint32_t i) {
     for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
     TraceAlive(p, skip, power, key, rays, false, out, routes);
     Forward(shot, out, routes);
-    ++stats_.forwardsCreated;
-    --newForwards_;
-    return;
   } else {
-    // B and C: the shooter's centre mask from the cache (cast on a miss).
+    // B and C: a local shooter's centre mask from the cache (cast on a miss).
     MaskBits centre, known, read;
-    bool cached = CachedCentre(i, &centre, &known);
-    MaskBits* knownPixels = cached && PartCentres() ? &known : nullptr;
+    const bool hit = cached != kNoPatch && CachedCentre(cached, &centre, &known);
+    MaskBits* knownPixels = hit && PartCentres() ? &known : nullptr;
     const bool readOnly = ReadsOnly(rays);
     if (readOnly) {
       shot.flags |= kReadsOnly;
@@ -129,10 +134,10 @@ void Environment::ShootLocal(uint32_t i) {
       read = ScratchMask(2);
       ReadPixels(shot, &read);
     }
-    Distribute(p, skip, power, key, rays, nullptr, &out, cached ? &centre : nullptr, knownPixels,
+    Distribute(p, skip, power, key, rays, nullptr, &out, hit ? &centre : nullptr, knownPixels,
                readOnly ? &read : nullptr);
+    Forward(shot, out);
   }
-  Forward(shot, out);
   ++stats_.forwardsCreated;
   --newForwards_;
 }
@@ -173,35 +178,7 @@ void Environment::ShootOutside(uint32_t k) {
   ++stats_.shots;
   // No patch to skip: its rays start outside the box (MakeShotRay), and
   // Distribute treats them as it does a foreign shooter's, clipped to the box.
-  const Skip skip(kNoPatch);
-  if (numNeighbours_ == 0) {
-    Distribute(p, skip, power, key, rays, nullptr, nullptr);
-    return;
-  }
-  MaskBits out = ScratchMask(0);
-  out.SetAllOpen();
-  PacketHeader shot = ShotHeader(p, power, key, shotIndex, index_, rays);
-  if (options_.maskMethod == MaskMethod::kR) {
-    out.CloseFrom(rays);
-    MaskBits routes[6];
-    for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
-    TraceAlive(p, skip, power, key, rays, false, out, routes);
-    Forward(shot, out, routes);
-  } else {
-    MaskBits read;
-    const bool readOnly = ReadsOnly(rays);
-    if (readOnly) {
-      shot.flags |= kReadsOnly;
-      ++stats_.readShots;
-      read = ScratchMask(2);
-      ReadPixels(shot, &read);
-    }
-    Distribute(p, skip, power, key, rays, nullptr, &out, nullptr, nullptr,
-               readOnly ? &read : nullptr);
-    Forward(shot, out);
-  }
-  ++stats_.forwardsCreated;
-  --newForwards_;
+  ShootOwn(p, Skip(kNoPatch), power, key, shotIndex, rays, kNoPatch);
 }
 
 MaskBits Environment::SlotMask(uint32_t slot) const {

@@ -363,6 +363,8 @@ class Environment {
   // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
   // no patch to skip and no centre-mask cache.
   void ShootOutside(uint32_t k);
+  void ShootOwn(const Patch& p, Skip skip, const double power[3], uint64_t key, uint32_t shotIndex,
+                uint32_t rays, uint32_t cached);
   // The outside shooter with the most unshot power (ties to the first), or
   // -1 when none has any.
   int BestOutside() const;
