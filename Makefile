@@ -36,7 +36,7 @@ endif
 
 CXXFLAGS := -std=c++17 -O2 -Wall -Wextra -Werror -ffp-contract=off -fno-plt \
             -Iinclude -Iplatform -MMD -MP
-LDLIBS := -lz
+LDLIBS := -lz -ljpeg
 
 # Cross builds (docs/DEPLOY.md). Objects and binaries go to build/aarch64 or
 # build/armhf, so the native ones are untouched. The target's zlib, GoogleTest,
@@ -59,7 +59,8 @@ else
   endif
   SYSROOT := build/sysroot-$(DEB_ARCH)
   SYSROOT_LIB := $(SYSROOT)/usr/lib/$(TRIPLET)
-  CXXFLAGS += -I$(SYSROOT)/usr/include/stb -isystem $(SYSROOT)/usr/include
+  CXXFLAGS += -I$(SYSROOT)/usr/include/stb -isystem $(SYSROOT)/usr/include \
+              -isystem $(SYSROOT)/usr/include/$(TRIPLET)
   # 32-bit ARM: GCC notes that passing some structs changed ABI in GCC 7.1;
   # everything here is built by one compiler, so the note is noise.
   ifeq ($(DEB_ARCH),armhf)
@@ -149,10 +150,10 @@ $(BUILD)/obj/%.o: %.cpp $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
 	$(SAY) CXX $<
 	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
-# stb_image 2.27, compiled into texture.cpp, overflows signed ints on corrupt
-# JPEGs (its DC prediction: fixed upstream in 2.28): -fwrapv makes them wrap,
-# as the hardware does, instead of undefined behaviour (the texture fuzz
-# target, issue 42).
+# stb_image 2.27, compiled into texture.cpp, may overflow signed ints on
+# corrupt input (it did in its JPEG DC prediction, before JPEG went to
+# libjpeg-turbo): -fwrapv makes them wrap, as the hardware does, instead of
+# undefined behaviour.
 $(BUILD)/obj/src/scene/texture.o build/fuzz/obj/src/scene/texture.o: CXXFLAGS += -fwrapv
 build/fuzz/obj/src/scene/texture.o: FUZZ_CXXFLAGS += -fwrapv
 

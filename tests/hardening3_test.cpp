@@ -835,6 +835,27 @@ TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   EXPECT_TRUE(ReadTexture("tests/data/flat-8x4.jpg", "m.mtl:2", &image).ok());
 }
 
+// The texture fuzz target's ninth find: a corrupt Huffman stream on which
+// stb_image 2.27 shifted a 32-bit value by 32 (undefined behaviour, which
+// no check of the headers rules out). JPEG goes through libjpeg-turbo now,
+// which refuses it with its own message; a truncated copy too.
+TEST(Hardening3Test, ACorruptJpegHuffmanStreamIsRefusedByTheDecoder) {
+  const std::string path = "tests/data/jpeg-code-bits-shift-32.jpg";
+  TextureImage image;
+  Status s = ReadTexture(path, "m.mtl:3", &image);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.ToString().find("m.mtl:3: cannot read texture '" + path + "': corrupt JPEG: "),
+            std::string::npos)
+      << s.ToString();
+  std::string bytes = test::ReadFile("tests/data/flat-8x4.jpg");
+  ASSERT_TRUE(DecodeTexture(bytes, "f.jpg", "m.mtl:4", &image).ok());
+  bytes.resize(bytes.size() - 40);  // cut inside the scan
+  s = DecodeTexture(bytes, "f.jpg", "m.mtl:4", &image);
+  EXPECT_NE(s.ToString().find("m.mtl:4: cannot read texture 'f.jpg': corrupt JPEG: "),
+            std::string::npos)
+      << s.ToString();
+}
+
 // Item 3: a planar convex disc of 10,000 corners became over a million
 // patches (36 s, 1.9 GB). It is meshed in strips now: its patches follow
 // its area and outline, with one warning line that says so.

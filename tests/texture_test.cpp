@@ -442,7 +442,8 @@ TEST(TextureTest, TheImageShowsTheCheckerWhileTheSolveUsesItsMean) {
 }
 
 // The texture fuzz target's seeds (tests/fuzz/texture-corpus, make fuzz):
-// each decodes, from its bytes as from its file, to the same image.
+// each decodes, from its bytes as from its file, to the same image; except
+// jpeg-dc-overflow, a corrupt JPEG kept as a seed, which is refused.
 TEST(TextureTest, TextureFuzzSeedsDecode) {
   int seen = 0;
   for (const auto& entry : std::filesystem::directory_iterator("tests/fuzz/texture-corpus")) {
@@ -450,6 +451,13 @@ TEST(TextureTest, TextureFuzzSeedsDecode) {
     TextureImage fromFile, fromBytes;
     Status a = ReadTexture(path, "m.mtl:1", &fromFile);
     Status b = DecodeTexture(test::ReadFile(path), path, "m.mtl:1", &fromBytes, uint64_t{64} << 20);
+    if (entry.path().filename() == "jpeg-dc-overflow") {
+      EXPECT_NE(a.ToString().find("': corrupt JPEG: Corrupt JPEG data"), std::string::npos)
+          << a.ToString();
+      EXPECT_EQ(a.ToString(), b.ToString());
+      ++seen;
+      continue;
+    }
     ASSERT_TRUE(a.ok()) << a.ToString();
     ASSERT_TRUE(b.ok()) << b.ToString();
     EXPECT_EQ(fromFile.rgb, fromBytes.rgb) << path;

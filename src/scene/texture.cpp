@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "vismask/core/os.h"
+#include "vismask/scene/jpeg.h"
 
 // stb_image, compiled here only, for init: it allocates with malloc, which
 // is allowed before the solve starts. Memory in, so the file is read (and a
@@ -21,7 +22,6 @@
 #define STB_IMAGE_IMPLEMENTATION
 #define STBI_NO_STDIO
 #define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
 #define STBI_ONLY_BMP
 #define STBI_ONLY_TGA
 #pragma GCC diagnostic push
@@ -392,10 +392,16 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
   if (!corrupt.empty()) return fail("corrupt PNG: " + corrupt);
   corrupt = BadBmpPalette(encoded, bytes.size());
   if (!corrupt.empty()) return fail("unsupported BMP: " + corrupt);
+  // JPEG through libjpeg-turbo (jpeg.h says why), the rest through stb_image.
+  const bool jpeg = IsJpeg(encoded, bytes.size());
   // The size first, from the header alone: the decoded bytes are judged
   // against the budget before any is made.
-  if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp))
+  if (jpeg) {
+    const std::string why = JpegSize(encoded, bytes.size(), &w, &h);
+    if (!why.empty()) return fail("corrupt JPEG: " + why);
+  } else if (!stbi_info_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp)) {
     return decodeError();
+  }
   // stb_image 2.27 takes a BMP of width 0: no texels, a mean of NaN.
   auto noTexels = [&]() {
     return fail("the image is " + std::to_string(w) + "x" + std::to_string(h) +
@@ -407,18 +413,24 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
   if (budget > 0 && need > budget)
     return overBudget(need,
                       "decoding its " + std::to_string(w) + "x" + std::to_string(h) + " texels");
-  stbi_uc* data = stbi_load_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp, 3);
-  if (!data) return decodeError();
-  if (w <= 0 || h <= 0) {
-    stbi_image_free(data);
-    return noTexels();
-  }
   TextureImage img;
+  if (jpeg) {
+    const std::string why = DecodeJpeg(encoded, bytes.size(), &w, &h, &img.rgb);
+    if (!why.empty()) return fail("corrupt JPEG: " + why);
+  } else {
+    stbi_uc* data =
+        stbi_load_from_memory(encoded, static_cast<int>(bytes.size()), &w, &h, &comp, 3);
+    if (!data) return decodeError();
+    if (w <= 0 || h <= 0) {
+      stbi_image_free(data);
+      return noTexels();
+    }
+    img.rgb.assign(data, data + size_t(w) * size_t(h) * 3);
+    stbi_image_free(data);
+  }
   img.path = path;
   img.width = static_cast<uint32_t>(w);
   img.height = static_cast<uint32_t>(h);
-  img.rgb.assign(data, data + size_t(w) * size_t(h) * 3);
-  stbi_image_free(data);
   glm::dvec3 sum(0.0);
   for (size_t i = 0; i < img.rgb.size(); i += 3)
     for (int c = 0; c < 3; ++c) {

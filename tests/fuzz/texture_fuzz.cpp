@@ -1,5 +1,6 @@
-// libFuzzer target for the texture reader (`make fuzz`): stb_image through
-// vismask's checks (DecodeTexture: the dimensions read first and judged
+// libFuzzer target for the texture reader (`make fuzz`): stb_image (PNG, BMP,
+// TGA) and libjpeg-turbo (JPEG; not instrumented, so its own code adds no
+// coverage) through vismask's checks (DecodeTexture: the dimensions read first and judged
 // against a budget, then the decoding), as ReadTexture runs it on a file's
 // bytes. It must return a Status for anything: no crash, no sanitizer
 // report, no hang, no decoding beyond the budget (a small file that claims
@@ -8,9 +9,8 @@
 // is not printable ASCII (a PNG chunk named ESC [ 2 J once cleared the
 // terminal).
 // tests/fuzz/texture-corpus/ holds the seeds: small PNG (8-bit, 16-bit,
-// grey with alpha), JPEG, BMP and TGA images, and jpeg-dc-overflow, whose
-// DC terms overflow stb_image 2.27's int (UBSan stops there unless
-// texture.cpp is compiled with -fwrapv, as the Makefile does).
+// grey with alpha), JPEG, BMP and TGA images, and jpeg-dc-overflow, a
+// corrupt JPEG whose DC terms overflowed stb_image 2.27's int.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
