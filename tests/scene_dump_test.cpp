@@ -2,7 +2,10 @@
 // polygons as mended, their materials, Kd and Ke after --emit, glTF's
 // two-sided materials), the camera `render` uses with the same options (as
 // run.json records it), and --sky and --sun; it refuses what render refuses,
-// with the same message and nothing written.
+// with the same message and nothing written. The tools that read scenes
+// through it (tools/silhouette-mask, tools/renderpark-run, tools/reference)
+// refuse what vismask refuses, with vismask's message, and accept what it
+// accepts.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -16,6 +19,7 @@ namespace vismask {
 namespace {
 
 using test::FileExists;
+using test::HaveNumpy;
 using test::ReadFile;
 using test::RunMain;
 using test::RunShell;
@@ -81,8 +85,8 @@ void ExpectRenderCamera(const nlohmann::json& d, const std::string& runJson) {
   for (const auto& v : o["camera"]) want.push_back(v.get<float>());
   ASSERT_EQ(want.size(), 10u);
   const glm::vec3 eye = Vec(c["eye"]), target = Vec(c["target"]), up = Vec(c["up"]);
-  const std::vector<float> got{eye.x, eye.y, eye.z,  target.x,           target.y,
-                               target.z, up.x, up.y, up.z, c["fovy"].get<float>()};
+  const std::vector<float> got{eye.x,    eye.y, eye.z, target.x, target.y,
+                               target.z, up.x,  up.y,  up.z,     c["fovy"].get<float>()};
   EXPECT_EQ(got, want);
   const std::string view = o["view"].is_null() ? "" : o["view"].get<std::string>();
   if (view == "inside") {
@@ -97,8 +101,8 @@ void ExpectRenderCamera(const nlohmann::json& d, const std::string& runJson) {
 
 std::string TinyRunJson(const TempDir& dir, std::vector<std::string> args) {
   args.insert(args.begin(), "render");
-  args.insert(args.end(), {"--out", dir.File("run"), "--max-shots", "2", "--rays", "16",
-                           "--width", "16", "--height", "16", "--quiet"});
+  args.insert(args.end(), {"--out", dir.File("run"), "--max-shots", "2", "--rays", "16", "--width",
+                           "16", "--height", "16", "--quiet"});
   test::RunResult r = RunMain(args);
   EXPECT_EQ(r.code, 0) << r.err;
   return ReadFile(dir.File("run/run.json"));
@@ -214,6 +218,54 @@ TEST(SceneDumpTest, RefusesWhatRenderRefusesAndWritesNothing) {
   Shell h = RunShell(test::VismaskBin() + " scene-dump --help");
   EXPECT_EQ(h.code, 0) << h.out;
   EXPECT_EQ(h.out.rfind("usage: vismask scene-dump SCENE", 0), 0u) << h.out;
+}
+
+// What the tools refuse is vismask's refusal, word for word (a negative Ka,
+// which only vismask's loader checks), and what vismask mends they accept
+// (a face before any 'usemtl', which the loader gives a made-up material).
+TEST(SceneDumpTest, ToolsRefuseWhatVismaskRefuses) {
+  if (!HaveNumpy()) GTEST_SKIP() << "numpy missing (tools/install-deps --reference)";
+  TempDir dir;
+  WriteFile(dir.File("bad.mtl"), "newmtl a\nKd 0.5 0.5 0.5\nKe 1 1 1\nKa -1 0 0\n");
+  WriteFile(dir.File("bad.obj"),
+            "mtllib bad.mtl\nusemtl a\nv -1 -1 5\nv 1 -1 5\nv 1 1 5\nv -1 1 5\nf 1 2 3 4\n");
+  WriteFile(dir.File("ok.mtl"), "newmtl a\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+  WriteFile(dir.File("ok.obj"),
+            "mtllib ok.mtl\nv -9 -9 9\nv 9 -9 9\nv 9 9 9\nv -9 9 9\nf 1 2 3 4\n"
+            "usemtl a\nv -1 -1 5\nv 1 -1 5\nv 1 1 5\nv -1 1 5\nf 5 6 7 8\n");
+  test::RunResult v = RunMain({"render", dir.File("bad.obj"), "--out", dir.File("r")});
+  ASSERT_EQ(v.code, 2) << v.err;
+  const std::string refusal = v.err.substr(0, v.err.find('\n'));
+  ASSERT_NE(refusal.find(dir.File("bad.mtl") + ":4:"), std::string::npos) << refusal;
+  const std::string env = "VISMASK_BIN=" + test::VismaskBin() + " ";
+  const std::string camera = " --camera 0,0,0,0,0,1,0,1,0,90 --size 16 16 ";
+  for (const std::string& tool :
+       {env + "tools/silhouette-mask SCENE" + camera + "--out " + dir.File("m.pgm"),
+        env + "tools/renderpark-run mgf SCENE --out " + dir.File("s.mgf"),
+        env + "tools/reference SCENE --size 16 16 --spp 2 --no-cache --quiet --out " +
+            dir.File("ref.pfm")}) {
+    auto at = [&](const std::string& scene) {
+      std::string cmd = tool;
+      cmd.replace(cmd.find("SCENE"), 5, scene);
+      return cmd;
+    };
+    Shell r = RunShell(at(dir.File("bad.obj")));
+    EXPECT_EQ(r.code, 2) << tool << "\n" << r.out;
+    EXPECT_NE(r.out.find(refusal), std::string::npos) << tool << "\n" << r.out;
+    if (tool.find("tools/reference") != std::string::npos) continue;  // Blender: not here
+    r = RunShell(at(dir.File("ok.obj")));
+    EXPECT_EQ(r.code, 0) << tool << "\n" << r.out;
+  }
+  // The mesh the tools build: ok.obj's two faces, the made-up material first.
+  std::string mgf = ReadFile(dir.File("s.mgf"));
+  EXPECT_NE(mgf.find("m m0\nf v0 v1 v2 v3\nm m1\nf v4 v5 v6 v7\n"), std::string::npos) << mgf;
+  EXPECT_NE(mgf.find("\ted "), std::string::npos) << mgf;  // material a emits
+  // A camera vismask refuses (eye at the target) is refused as vismask words it.
+  Shell r = RunShell(env + "tools/silhouette-mask " + dir.File("ok.obj") +
+                     " --camera 0,0,5,0,0,5,0,1,0,90 --size 16 16 --out " + dir.File("m2.pgm"));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--camera"), std::string::npos) << r.out;
+  EXPECT_FALSE(FileExists(dir.File("m2.pgm")));
 }
 
 }  // namespace
