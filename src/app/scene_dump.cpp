@@ -96,8 +96,9 @@ std::string FileOf(const std::string& where) {
 int SceneDump(const Options& o) {
   const std::string& out = o.outDir;
   if (out.size() < 6 || out.compare(out.size() - 5, 5, ".json") != 0)
-    return Fail(Status::Error("vismask: scene-dump: --out FILE.json is needed (a name ending in .json; '" +
-                              out + "' given or the default)"));
+    return Fail(
+        Status::Error("vismask: scene-dump: --out FILE.json is needed (a name ending in .json; '" +
+                      out + "' given or the default)"));
   Prepared p;
   Status s = CountScene(o, &p);
   if (!s.ok()) return Fail(s);
@@ -107,8 +108,7 @@ int SceneDump(const Options& o) {
   // The polygons as the passes give them (every one, in file order).
   std::vector<Polygon> polygons;
   polygons.reserve(p.info.numPolygons);
-  s = StreamObj(p.info, o.load,
-                [&](uint32_t, const Polygon& poly) { polygons.push_back(poly); });
+  s = StreamObj(p.info, o.load, [&](uint32_t, const Polygon& poly) { polygons.push_back(poly); });
   if (!s.ok()) return Fail(s);
 
   // The camera, as render_init.cpp chooses it.
