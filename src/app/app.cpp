@@ -116,15 +116,17 @@ int Main(int argc, const char* const* argv) {
   Status s = ParseArgs(argc, argv, &r->options);
   if (!s.ok()) return Fail(s);
   if (r->options.help) {
-    const char* text = r->options.command == "view" ? ViewHelpText()
-                       : r->options.helpAll         ? HelpText()
-                                                    : UsageText();
+    const char* text = r->options.command == "view"         ? ViewHelpText()
+                       : r->options.command == "scene-dump" ? SceneDumpHelpText()
+                       : r->options.helpAll                 ? HelpText()
+                                                            : UsageText();
     return WriteStdout(text, std::strlen(text)) ? kExitOk : kExitOutput;
   }
   if (r->options.command == "compare") return Compare(r->options);
   if (r->options.command == "verify") return Verify(r->options);
   if (r->options.command == "footprint") return Footprint(r->options);
   if (r->options.command == "view") return View(r->options);
+  if (r->options.command == "scene-dump") return SceneDump(r->options);
   // --resume without --envs: the checkpoint's environments (a run of 16
   // ranks, resumed on 15, keeps its 16 environments).
   if (!r->options.resumeDir.empty() && !r->options.hasEnvs) {

@@ -58,6 +58,10 @@ usage:
                                          --export) in the viewer page on
                                          localhost and print its URL
                                          ('vismask view --help')
+  vismask scene-dump SCENE [options] --out FILE.json
+                                         the scene as vismask loads it, with
+                                         the camera render would use, as JSON
+                                         ('vismask scene-dump --help')
   vismask --help                         this text
 
 render options:

@@ -157,7 +157,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
           "vismask: view: usage: vismask view OUT_DIR [--glb NAME.glb] [--port P]");
     return Status::Ok();
   }
-  if (args[0] != "render" && args[0] != "footprint")
+  if (args[0] != "render" && args[0] != "footprint" && args[0] != "scene-dump")
     return Status::Error("vismask: unknown command '" + args[0] + "' (try 'vismask --help')");
   o->command = args[i++];
   for (; i < args.size(); ++i) {

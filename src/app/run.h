@@ -352,6 +352,9 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
 void RenderImage(RunState* r);
 int WriteOutputs(RunState* r, const SolveResult& res);
 int Footprint(const Options& o);
+// `vismask scene-dump` (scene_dump.cpp): the loaded scene as JSON, and its --help.
+int SceneDump(const Options& o);
+const char* SceneDumpHelpText();
 int Compare(const Options& o);
 int Verify(const Options& o);
 // The size and CRC-32 of a file; false (with *why) if it cannot be read.

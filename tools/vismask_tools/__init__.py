@@ -17,7 +17,8 @@
   fuzz       the Fuzzing section of docs/STABILITY.md (make fuzz-report)
   bench_runs, bench_parallel, bench_doc   make bench (bench/run): docs/BENCHMARKS.md
   cluster, cluster_doc   make cluster-experiments: docs/CLUSTER.md
-  reference_scene, reference_render   tools/reference: the scene and cameras, Blender runs
+  scene_dump  a scene as vismask loads it (vismask scene-dump): mesh, materials, cameras
+  reference_render   tools/reference: the cache, Blender runs
   blender_render, scale      run by tools/reference: inside Blender, and its check
   silhouette  tools/silhouette-mask: the pixels within 1 px of a geometric edge
   renderpark  tools/renderpark-run: a scene as MGF for rpkCpp, its RGBE image as PFM

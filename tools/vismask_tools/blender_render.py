@@ -5,7 +5,7 @@
 #
 # Job (JSON): vertices [[x,y,z]...], faces [[i,j,k,...]...] (0-based, counter-
 # clockwise seen from the front), face_materials [m...], materials
-# [{"kd":[r,g,b],"ke":[r,g,b]}...], camera {eye,target,up,fovy}, width,
+# [{"kd":[r,g,b],"ke":[r,g,b],"two_sided":bool}...], camera {eye,target,up,fovy}, width,
 # height, spp, seed, threads (0: all), work (a scratch directory), pfm, pgm
 # (the paths to write), mask_dilate (pixels), sky (null or [r,g,b]: a world of
 # that radiance, unseen by camera rays), sun (null or {toward, irradiance,
@@ -34,13 +34,15 @@ def ClearScene():
             coll.remove(d)
 
 
-def MakeMaterial(name, kd, ke):
+def MakeMaterial(name, kd, ke, two_sided=False):
     """Front side: Lambertian diffuse with reflectance kd, plus, when ke > 0, an
     Emission of colour ke/pi and strength 1 (Cycles' emission closure gives
     radiance colour x strength, which the unit-emitter self-test checks: an
     exitance ke is a radiance ke/pi). Back side (Geometry.Backfacing = 1): a
     black diffuse, so a back face absorbs every ray and emits nothing, like a
-    vismask patch seen from behind."""
+    vismask patch seen from behind. Two-sided (glTF doubleSided): both sides
+    are the front, as a vismask patch and its twin (Cycles' diffuse and
+    emission act on whichever side a ray meets)."""
     m = bpy.data.materials.new(name)
     m.use_nodes = True
     nt = m.node_tree
@@ -60,6 +62,9 @@ def MakeMaterial(name, kd, ke):
         nt.links.new(diffuse.outputs["BSDF"], add.inputs[0])
         nt.links.new(emission.outputs["Emission"], add.inputs[1])
         front = add.outputs["Shader"]
+    if two_sided:
+        nt.links.new(front, out.inputs["Surface"])
+        return m
     black = nt.nodes.new("ShaderNodeBsdfDiffuse")
     black.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
     geometry = nt.nodes.new("ShaderNodeNewGeometry")
@@ -241,7 +246,7 @@ def Main():
         job = json.load(f)
     ClearScene()
     Settings(job)
-    mats = [MakeMaterial("m%d" % i, m["kd"], m["ke"]) for i, m in enumerate(job["materials"])]
+    mats = [MakeMaterial("m%d" % i, m["kd"], m["ke"], m.get("two_sided", False)) for i, m in enumerate(job["materials"])]
     mesh = bpy.data.meshes.new("scene")
     mesh.from_pydata([tuple(v) for v in job["vertices"]], [], [tuple(f) for f in job["faces"]])
     for m in mats:

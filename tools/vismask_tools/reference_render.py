@@ -18,7 +18,7 @@ import time
 
 from . import ROOT
 from .files import read_pfm
-from .reference_scene import CheckCamera, DefaultCamera, InputError, LoadScene
+from .scene_dump import Blobs, Camera, CameraArgs, Dump, InputError, LightArgs, Mesh
 
 kVersion = 1  # of the conventions and the Blender script: part of the cache key
 kMaskDilate = 2
@@ -41,24 +41,22 @@ def BlenderVersion():
     return m.group(1) if m else "unknown"
 
 
-def CheckWithVismask(scene, a=None):
-    """vismask's own loader on the scene, when the binary is there, so that the
-    reference refuses exactly what vismask refuses (lit by --sky and --sun
-    when `a` has them: a scene they light need not emit)."""
-    binary = os.environ.get("VISMASK_BIN", os.path.join(ROOT, "build", "vismask"))
-    if not os.access(binary, os.X_OK):
-        return
-    lit = []
-    if a and a.get("sky") is not None:
-        lit += ["--sky", ",".join(repr(float(v)) for v in a["sky"])]
-    if a and a.get("sun") is not None:
-        s = a["sun"]
-        lit += ["--sun", ",".join(repr(float(v)) for v in
-                                  s["toward"] + s["irradiance"] + [s["degrees"]])]
-    p = subprocess.run([binary, "footprint", scene, "--json"] + lit, capture_output=True,
-                       text=True)
-    if p.returncode == 2:
-        raise InputError(p.stderr.strip() or scene + ": vismask refuses this scene")
+def LoadScene(a):
+    """The scene as vismask loads it (vismask scene-dump): refused as vismask
+    refuses it (lit by --sky and --sun when given: a scene they light need
+    not emit; --camera checked as render checks it at --size). Returns the
+    dump, its mesh (Mesh) and the camera: --camera's numbers as given, else
+    the front side's (vismask render --view front; scene-dump's
+    front_camera), which is vismask's own default where it chooses front
+    (scene-dump's camera says which it chooses)."""
+    args = LightArgs(a.get("sky"), a.get("sun"))
+    if a.get("camera") is not None:
+        args += CameraArgs(a["camera"], *a["size"])
+    else:
+        args += ["--width", str(a["size"][0]), "--height", str(a["size"][1])]
+    d = Dump(a["scene"], args)
+    cam = [float(c) for c in a["camera"]] if a.get("camera") is not None else Camera(d["front_camera"])
+    return d, Mesh(d), cam
 
 
 def Render(a, argvForRecord):
@@ -154,18 +152,22 @@ def Cached(a, argvForRecord):
     """The cache directory holding this render (ref.pfm, ref.mask.pgm,
     ref.json), rendered first if it is not there."""
     scene, (w, h) = a["scene"], a["size"]
-    CheckWithVismask(scene, a)
-    vertices, faces, faceMats, mats, blobs = LoadScene(
-        scene, lit=a.get("sky") is not None or a.get("sun") is not None)
-    cam = a["camera"] or DefaultCamera(vertices, faces)
-    CheckCamera(cam)
+    d, (vertices, faces, faceMats, mats), cam = LoadScene(a)
+    for m in mats:
+        if m["texture"] and not a["quiet"]:
+            print("tools/reference: warning: material '%s': its texture %s is not rendered "
+                  "(Kd alone)" % (m["name"], m["texture"]), file=sys.stderr)
     outDir = os.path.dirname(os.path.abspath(a["out"]))
     if not os.path.isdir(outDir):
         raise InputError("--out: directory '%s' does not exist" % outDir)
     version = BlenderVersion()
     key = hashlib.sha256()
-    for b in blobs:
+    for b in Blobs(d):
         key.update(hashlib.sha256(b).digest())
+    if not scene.lower().endswith(".obj"):
+        # A glTF's buffers and images may be files beside it: the scene as
+        # loaded stands for them.
+        key.update(hashlib.sha256(json.dumps([faces, faceMats, vertices, mats]).encode()).digest())
     what = {"camera": [float(c) for c in cam], "size": [w, h], "spp": a["spp"],
             "seed": a["seed"], "version": kVersion, "blender": version}
     # --sky, --sun: in the key only when given, so the cache of unlit keys stays.

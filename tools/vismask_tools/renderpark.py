@@ -11,7 +11,7 @@ which gives radiance Ke/pi in rpkCpp's image, as in vismask's."""
 
 import numpy as np
 
-from .reference_scene import LoadScene
+from .scene_dump import Dump, Mesh
 
 PRIMARIES = ((0.640, 0.330), (0.290, 0.600), (0.150, 0.060))
 WHITE = (1.0 / 3.0, 1.0 / 3.0)
@@ -34,9 +34,10 @@ def xy_and_luminance(rgb):
     return (X / s, Y / s, Y) if s > 0 else (WHITE[0], WHITE[1], 0.0)
 
 
-def scene_to_mgf(obj, scale):
-    """The MGF text of scene `obj` (OBJ + MTL as vismask reads them)."""
-    vertices, faces, face_mats, mats, _ = LoadScene(obj)
+def scene_to_mgf(obj, scale, args=()):
+    """The MGF text of scene `obj` as vismask loads it (vismask scene-dump
+    with its options `args`; InputError when vismask refuses them)."""
+    vertices, faces, face_mats, mats = Mesh(Dump(obj, args))
     out = []
     for k, m in enumerate(mats):
         x, y, Y = xy_and_luminance(m["kd"])

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .reference_scene import LoadScene
+from .scene_dump import CameraArgs, Dump, Mesh
 
 
 # Faces are one surface when their normals are within about 0.8 degrees and
@@ -121,7 +121,9 @@ def write_pgm(path, mask):
 
 
 def silhouette_mask(obj, camera, width, height):
-    vertices, faces, face_mats, _, _ = LoadScene(obj)
+    # The scene and the camera as vismask loads and checks them (InputError
+    # when it refuses either).
+    vertices, faces, face_mats, _ = Mesh(Dump(obj, CameraArgs(camera, width, height)))
     return edge_mask(surface_map(vertices, faces, face_mats, camera, width, height))
 
 

@@ -17,7 +17,8 @@
 namespace vismask {
 
 struct Options {
-  std::string command;  // "render", "footprint", "compare", "verify" or "view"; empty with --help
+  std::string command;  // "render", "footprint", "scene-dump", "compare", "verify" or "view"; empty
+                        // with --help
   bool help = false;
   bool helpAll = false;  // --help all: every option (HelpText); --help alone: UsageText
   std::string scene;
