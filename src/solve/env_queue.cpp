@@ -181,17 +181,12 @@ void Environment::ShootOutside(uint32_t k) {
   ShootOwn(p, Skip(kNoPatch), power, key, shotIndex, rays, kNoPatch);
 }
 
-MaskBits Environment::SlotMask(uint32_t slot) const {
-  size_t w = shape_.words();
-  return MaskBits(slotWords_.subspan(slot * w, w), shape_);
-}
-
 void Environment::ShootForeign(uint32_t s) {
   // A foreign shot's light is indirect here (per-pixel direct light runs
   // with one environment only: DESIGN, Direct light per pixel).
   for (double& d : shotDirect_) d = 0.0;
-  Slot& slot = slots_[s];
-  MaskBits in = SlotMask(s);
+  const ForeignQueue::Slot& slot = queue_.slot(s);
+  MaskBits in = queue_.Mask(s);
   MaskBits out = ScratchMask(0);
   if (options_.maskMethod != MaskMethod::kR) out.CopyFrom(in);  // R routes its rays instead
   Patch shooter = PatchFromHeader(slot.header);
@@ -217,85 +212,23 @@ void Environment::ShootForeign(uint32_t s) {
   }
   ++stats_.foreignShots;
   if (forward) Forward(slot.header, out, options_.maskMethod == MaskMethod::kR ? routes : nullptr);
-  slotIndex_.Release(static_cast<int>(s), slot.header.shooterId, slot.header.shotIndex);
-  readyTree_.Set(s, -std::numeric_limits<double>::infinity());
-  slot = Slot();
-  --queued_;
-}
-
-int Environment::FindSlot(uint32_t shooterId, uint32_t shotIndex) const {
-  return slotIndex_.Find(shooterId, shotIndex);
-}
-
-int Environment::BestReadySlot() const {
-  // The largest key, ties to the lower shooter id and shot (readyTree_'s ties).
-  const uint32_t s = readyTree_.Top();
-  if (s == kNoPatch || readyTree_.Key(s) == -std::numeric_limits<double>::infinity()) return -1;
-  return static_cast<int>(s);
+  queue_.Release(s);
 }
 
 void Environment::Deliver(const uint8_t* packet) {
   PacketHeader h = ReadHeader(packet);
   CHECK(h.toEnv == index_ && numNeighbours_ > 0);
-  int s = FindSlot(h.shooterId, h.shotIndex);
-  bool fresh = s < 0;
-  if (fresh) {
-    s = slotIndex_.Take(h.shooterId, h.shotIndex);  // the lowest free slot
-    CHECK_MSG(s >= 0, "foreign-shooter queue full: the admission rule failed");
-    Slot& slot = slots_[s];
-    slot = Slot();
-    slot.header = h;
-    slot.used = 1;
-    // A hemisphere mask waits for every upstream neighbour's. R's packets
-    // come only from neighbours that send rays here, each ready at once;
-    // those of one round for one shot go into one slot (Or, below).
-    if (options_.maskMethod == MaskMethod::kR) {
-      slot.expected = 1;
-    } else {
-      int source[3];
-      envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
-      for (int a = 0; a < 3; ++a) slot.expected += cell_[a] != source[a];
-    }
-    ++queued_;
+  // A hemisphere mask waits for every upstream neighbour's. R's packets
+  // come only from neighbours that send rays here, each ready at once;
+  // those of one round for one shot go into one slot (ForeignQueue::Deliver).
+  uint32_t expected = 1;
+  if (options_.maskMethod != MaskMethod::kR) {
+    int source[3];
+    envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
+    expected = 0;
+    for (int a = 0; a < 3; ++a) expected += cell_[a] != source[a];
   }
-  Slot& slot = slots_[s];
-  MaskBits mask = SlotMask(static_cast<uint32_t>(s));
-  if (!shape_.empty()) {
-    const uint32_t rayBits = options_.maskMethod == MaskMethod::kR ? h.rays : ~0u;
-    if (fresh) {
-      mask.Unpack(MaskBytes(packet), rayBits);
-    } else {
-      // A hemisphere's pixels pass only where every upstream mask has them
-      // open; R's rays each come from the one neighbour they left for.
-      MaskBits incoming = ScratchMask(1);
-      incoming.Unpack(MaskBytes(packet), rayBits);
-      if (options_.maskMethod == MaskMethod::kR)
-        mask.OrPrefix(incoming, rayBits);
-      else
-        mask.And(incoming);
-    }
-  }
-  ++slot.received;
-  if (options_.maskMethod != MaskMethod::kR)                 // R books its flight in the ledger
-    slot.flightShare += static_cast<double>(h.flightShare);  // by the sender (Forward)
-  double power = h.power[0] + h.power[1] + h.power[2];
-  // Method R's open share is of the shot's own rays (bits past them are closed).
-  if (shape_.empty())
-    slot.key = power;
-  else if (options_.maskMethod == MaskMethod::kR) {
-    // The share of the shot's rays that entered here. A slot no ray entered
-    // (yet) is only passed on, at once: its neighbours downstream wait for it.
-    const uint32_t entered = mask.CountOpen(0, std::min(h.rays, mask.bits()));
-    slot.key = entered > 0 ? power * entered / (h.rays > 0 ? h.rays : 1)
-                           : std::numeric_limits<double>::infinity();
-  } else if (h.flags & kReadsOnly)
-    slot.key = power * slot.flightShare;  // ReadShare: the share of its rays that pass
-  else
-    slot.key = power * mask.OpenFraction();
-  readyTree_.Set(
-      static_cast<uint32_t>(s),
-      slot.received < slot.expected ? -std::numeric_limits<double>::infinity() : slot.key,
-      (uint64_t(h.shooterId) << 32) | h.shotIndex);
+  queue_.Deliver(packet, h, options_.maskMethod, expected, ScratchMask(1));
 }
 
 void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork) {
@@ -319,8 +252,8 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
       }
     }
     bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newForwards_ > 0);
-    int s = numNeighbours_ > 0 ? BestReadySlot() : -1;
-    if (s >= 0 && (!localOk || slots_[s].key >= localKey)) {
+    int s = numNeighbours_ > 0 ? queue_.BestReady() : -1;
+    if (s >= 0 && (!localOk || queue_.slot(static_cast<uint32_t>(s)).key >= localKey)) {
       ShootForeign(static_cast<uint32_t>(s));
     } else if (localOk && local == kOutsideIdBase) {
       ShootOutside(static_cast<uint32_t>(outside));
@@ -337,9 +270,7 @@ void Environment::FlightPower(double power[3]) const {
   const bool methodR = options_.maskMethod == MaskMethod::kR;
   for (int c = 0; c < 3; ++c) power[c] = methodR ? ledger_.inFlight[c] : 0.0;
   if (methodR) return;
-  for (const Slot& s : slots_)
-    if (s.used)
-      for (int c = 0; c < 3; ++c) power[c] += s.header.power[c] * s.flightShare;
+  queue_.AddFlightPower(power);
   // The packets not yet delivered: their receivers' shares (Forward).
   for (uint32_t k = 0; k < outCount_; ++k) {
     PacketHeader h = ReadHeader(OutboxPacket(k));

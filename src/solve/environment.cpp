@@ -79,10 +79,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   part(&footprint_.grid);
   // Exchange buffers only where there is someone to exchange with.
   uint32_t q = numNeighbours_ > 0 ? options_.queueCapacity : 0;
-  slots_ = arena.Alloc<Slot>(q);
-  slotIndex_.Layout(arena, q);
-  readyTree_.Layout(arena, q, true);
-  slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
+  queue_.Layout(arena, q, shape_);
   part(&footprint_.queue);
   FillReadCosts(numPatches);
   // Out and incoming; C's hit and passed, or B's read and decide; R's six route masks.
@@ -380,10 +377,7 @@ void Environment::Reset() {
       ledger_.radiosity[c] += o.unshot[c];
     }
   }
-  for (Slot& s : slots_) s = Slot();
-  slotIndex_.Clear();
-  readyTree_.Clear(-std::numeric_limits<double>::infinity());
-  queued_ = 0;
+  queue_.Clear();
   outCount_ = 0;
 }
 
@@ -396,7 +390,7 @@ EnvState Environment::SaveState() const {
   s.centreSteps = centreSteps_;
   s.centreWork = centreWork_;
   s.nextElement = nextElement_;
-  s.queued = queued_;
+  s.queued = queue_.count();
   s.outCount = outCount_;
   s.index = index_;
   s.ledger = ledger_;
@@ -412,7 +406,7 @@ bool Environment::RestoreState(const EnvState& s) {
   centreSteps_ = s.centreSteps;
   centreWork_ = s.centreWork;
   nextElement_ = s.nextElement;
-  queued_ = s.queued;
+  queue_.SetCount(s.queued);
   outCount_ = 0;
   ledger_ = s.ledger;
   stats_ = s.stats;

@@ -16,13 +16,13 @@
 #include "vismask/display/direct.h"
 #include "vismask/scene/mesh.h"
 #include "vismask/solve/element.h"
+#include "vismask/solve/foreign_queue.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/max_tree.h"
 #include "vismask/solve/outside.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
-#include "vismask/solve/slot_index.h"
 #include "vismask/solve/work.h"
 
 namespace vismask {
@@ -213,7 +213,7 @@ class Environment {
   double FlightShareAt(const uint8_t* packet) const;
 
   // How many foreign shooters are held.
-  uint32_t queuedCount() const { return queued_; }
+  uint32_t queuedCount() const { return queue_.count(); }
   // The power, per channel, this environment books as shot but not yet
   // delivered (docs/DESIGN.md, "Power in flight"), so that the sum over
   // environments counts each watt once: Method R's ledger().inFlight; for
@@ -344,20 +344,6 @@ class Environment {
   uint32_t numOutside() const { return numOutside_; }
 
  private:
-  // A queued foreign shooter: its packet header, its mask so far (AND of the
-  // upstream masks received), and how many of those have arrived.
-  struct Slot {
-    PacketHeader header;
-    double key;  // power * open share, channels summed
-    uint8_t used;
-    uint8_t received;
-    uint8_t expected;
-    // Of the power, booked here as in flight: the sum of the packets'
-    // shares (FlightShare), in double as the report sums them from the
-    // outbox before delivery (exchange.h), so both agree to double rounding.
-    double flightShare;
-  };
-
   void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
   void ShootLocal(uint32_t i);
   // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
@@ -506,9 +492,6 @@ class Environment {
   uint32_t FlightRes() const;
   void FillFlightCols();
   Span<double> flightCols_;  // per column: cos(phi), sin(phi) of its centre
-  int FindSlot(uint32_t shooterId, uint32_t shotIndex) const;
-  int BestReadySlot() const;
-  MaskBits SlotMask(uint32_t slot) const;
 
   uint32_t index_ = 0;
   EnvGrid envGrid_;  // the environment partition (grid_ is the ray-casting grid)
@@ -563,17 +546,13 @@ class Environment {
   Grid grid_;
   MaxTree tree_;
   // Exchange state: empty for an environment without neighbours.
-  Span<Slot> slots_;
-  SlotIndex slotIndex_;          // which slot holds a shot, which are free
-  MaxTree readyTree_;            // the ready slots by key (-inf: not ready or free)
-  Span<uint64_t> slotWords_;     // slot s's mask: words [s * shape_.words(), ...)
+  ForeignQueue queue_;
   Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
   Span<uint64_t> cacheWords_;    // B, C: cached centre masks of local shooters, slot by slot
   Span<uint32_t> cacheTag_;      // the local patch each slot holds, or kNoPatch
   Span<uint8_t> outbox_;
   uint32_t outCapacity_ = 0;
   uint32_t outCount_ = 0;
-  uint32_t queued_ = 0;
   uint32_t newForwards_ = 0;
   // --sky, --sun: this environment's outside shooters, staged at Prepare
   // and kept in the arena (so a checkpoint's arena bytes hold their unshot
