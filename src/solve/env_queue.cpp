@@ -52,10 +52,8 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask, const MaskBits* 
     for (int a = 0; a < 3; ++a)
       if (c[a] != cell_[a]) face = 2 * a + (c[a] > cell_[a]);
     if (routes && routes[face].CountOpen(0, h.rays) == 0) continue;
-    CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
-    uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
+    uint8_t* packet = outbox_.Add();
     h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
-    ++outCount_;
     if (routes) {
       routes[face].Pack(MaskBytes(packet), h.rays);
     } else if (!shape_.empty()) {
@@ -272,8 +270,8 @@ void Environment::FlightPower(double power[3]) const {
   if (methodR) return;
   queue_.AddFlightPower(power);
   // The packets not yet delivered: their receivers' shares (Forward).
-  for (uint32_t k = 0; k < outCount_; ++k) {
-    PacketHeader h = ReadHeader(OutboxPacket(k));
+  for (uint32_t k = 0; k < outbox_.count(); ++k) {
+    PacketHeader h = ReadHeader(outbox_.Packet(k));
     for (int c = 0; c < 3; ++c) power[c] += h.power[c] * h.flightShare;
   }
 }

@@ -102,7 +102,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
     cacheSlots = std::min<uint64_t>(numPatches, options_.maskCacheBytes / (8 * perSlot));
   cacheWords_ = arena.Alloc<uint64_t>(cacheSlots * perSlot);
   cacheTag_ = arena.Alloc<uint32_t>(cacheSlots);
-  outbox_ = arena.Alloc<uint8_t>(size_t(outCapacity_) * packetBytes_);
+  outbox_.Layout(arena, numNeighbours_ > 0 ? 6 * options_.roundShots : 0, packetBytes_);
   part(&footprint_.packets);
   footprint_.total = ArenaRoundUp(arena.used());
   footprint_.numPatches = numPatches;
@@ -128,7 +128,6 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
-  outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
   {
     std::vector<OutsideShooter> shooters;
     OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
@@ -378,7 +377,7 @@ void Environment::Reset() {
     }
   }
   queue_.Clear();
-  outCount_ = 0;
+  outbox_.Clear();
 }
 
 EnvState Environment::SaveState() const {
@@ -391,7 +390,7 @@ EnvState Environment::SaveState() const {
   s.centreWork = centreWork_;
   s.nextElement = nextElement_;
   s.queued = queue_.count();
-  s.outCount = outCount_;
+  s.outCount = outbox_.count();
   s.index = index_;
   s.ledger = ledger_;
   s.stats = stats_;
@@ -407,7 +406,7 @@ bool Environment::RestoreState(const EnvState& s) {
   centreWork_ = s.centreWork;
   nextElement_ = s.nextElement;
   queue_.SetCount(s.queued);
-  outCount_ = 0;
+  outbox_.Clear();
   ledger_ = s.ledger;
   stats_ = s.stats;
   return true;

@@ -19,6 +19,7 @@
 #include "vismask/solve/foreign_queue.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/max_tree.h"
+#include "vismask/solve/outbox.h"
 #include "vismask/solve/outside.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
@@ -199,11 +200,8 @@ class Environment {
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
   // The packets this round produced, `packetBytes()` each, in send order.
-  uint32_t outboxCount() const { return outCount_; }
-  const uint8_t* OutboxPacket(uint32_t i) const {
-    return outbox_.data() + size_t(i) * packetBytes_;
-  }
-  void ClearOutbox() { outCount_ = 0; }
+  const Outbox& outbox() const { return outbox_; }
+  void ClearOutbox() { outbox_.Clear(); }
   // Takes a packet addressed to this environment. Packets must be delivered
   // in a fixed order (sender, then send order) for results to be reproducible.
   void Deliver(const uint8_t* packet);
@@ -550,9 +548,7 @@ class Environment {
   Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
   Span<uint64_t> cacheWords_;    // B, C: cached centre masks of local shooters, slot by slot
   Span<uint32_t> cacheTag_;      // the local patch each slot holds, or kNoPatch
-  Span<uint8_t> outbox_;
-  uint32_t outCapacity_ = 0;
-  uint32_t outCount_ = 0;
+  Outbox outbox_;
   uint32_t newForwards_ = 0;
   // --sky, --sun: this environment's outside shooters, staged at Prepare
   // and kept in the arena (so a checkpoint's arena bytes hold their unshot
