@@ -95,13 +95,8 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   // FlightShare's column directions: (cos, sin) of each column's phi.
   const bool flight = numNeighbours_ > 0 && options_.maskMethod != MaskMethod::kR;
   flightCols_ = arena.Alloc<double>(flight ? 2 * 4 * size_t(FlightRes()) : 0);
-  // The centre-mask cache: a slot per patch while they fit (C: a second
-  // mask per slot, the pixels whose centre ray is known).
-  size_t cacheSlots = 0, perSlot = (PartCentres() ? 2 : 1) * shape_.words();
-  if (centreRays && perSlot > 0)
-    cacheSlots = std::min<uint64_t>(numPatches, options_.maskCacheBytes / (8 * perSlot));
-  cacheWords_ = arena.Alloc<uint64_t>(cacheSlots * perSlot);
-  cacheTag_ = arena.Alloc<uint32_t>(cacheSlots);
+  // The centre-mask cache: a slot per patch while they fit.
+  cache_.Layout(arena, centreRays, numPatches, options_.maskCacheBytes, shape_, PartCentres());
   outbox_.Layout(arena, numNeighbours_ > 0 ? 6 * options_.roundShots : 0, packetBytes_);
   part(&footprint_.packets);
   footprint_.total = ArenaRoundUp(arena.used());
@@ -305,7 +300,7 @@ bool Environment::Build() {
     ++centreStepsPerRay_;
   maskDirections_.Fill();
   FillFlightCols();
-  for (uint32_t& tag : cacheTag_) tag = kNoPatch;
+  cache_.Clear();
   std::vector<Patch>().swap(staged_);
   std::vector<PatchGeom>().swap(stagedGeom_);
   std::vector<uint32_t>().swap(stagedTwin_);

@@ -456,19 +456,9 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
 }
 
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
-  if (cacheTag_.empty()) return false;
-  const bool methodC = PartCentres();
-  size_t slot = i % cacheTag_.size(), w = shape_.words(), per = methodC ? 2 : 1;
-  *centre = MaskBits(cacheWords_.subspan(slot * per * w, w), shape_);
-  if (methodC) *known = MaskBits(cacheWords_.subspan((slot * per + 1) * w, w), shape_);
-  if (cacheTag_[slot] != i) {
-    centre->SetAllOpen();
-    if (methodC)
-      known->SetAllClosed();
-    else
-      CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
-    cacheTag_[slot] = i;
-  }
+  bool miss = false;
+  if (!cache_.Find(i, centre, known, &miss)) return false;
+  if (miss && !PartCentres()) CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
   return true;
 }
 

@@ -15,6 +15,7 @@
 #include "vismask/core/span.h"
 #include "vismask/display/direct.h"
 #include "vismask/scene/mesh.h"
+#include "vismask/solve/centre_mask_cache.h"
 #include "vismask/solve/element.h"
 #include "vismask/solve/foreign_queue.h"
 #include "vismask/solve/mask.h"
@@ -546,8 +547,7 @@ class Environment {
   // Exchange state: empty for an environment without neighbours.
   ForeignQueue queue_;
   Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
-  Span<uint64_t> cacheWords_;    // B, C: cached centre masks of local shooters, slot by slot
-  Span<uint32_t> cacheTag_;      // the local patch each slot holds, or kNoPatch
+  CentreMaskCache cache_;        // B, C: centre masks of local shooters
   Outbox outbox_;
   uint32_t newForwards_ = 0;
   // --sky, --sun: this environment's outside shooters, staged at Prepare
