@@ -21,23 +21,24 @@ bool Inside(bool triangle, glm::vec2 st) {
 // The display radiosity at parameters `st` of patch `i`.
 glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const double ambient[3]) {
   const Patch& p = env.patches()[i];
+  const DisplayLattice& lattice = env.lattice();
   const bool triangle = p.numCorners == 3;
   glm::vec2 roots[4];
   int n = RootCorners(triangle, roots);
   for (int k = 0; k < n; ++k)
-    if (st == roots[k]) return env.vertexRadiosity()[p.vertex[k]];
+    if (st == roots[k]) return lattice.radiosity()[p.vertex[k]];
   // On an edge of the patch along a cut: the line between the edge's two
   // lattice vertices, whose values are shared with the other side (ShareVertices).
   // Likewise along an outline edge whose ends are shared with other
   // polygons (smoothing).
   for (int k = 0; k < n; ++k) {
     uint32_t a = p.vertex[k], b = p.vertex[(k + 1) % n];
-    bool cut = env.IsCutVertex(a) && env.IsCutVertex(b);
-    if (!cut && !env.IsSmoothEdge(i, static_cast<uint32_t>(k))) continue;
+    bool cut = lattice.IsCutVertex(a) && lattice.IsCutVertex(b);
+    if (!cut && !lattice.IsSmoothEdge(i, static_cast<uint32_t>(k))) continue;
     glm::vec2 e = roots[(k + 1) % n] - roots[k], q = st - roots[k];
     if (std::fabs(e.x * q.y - e.y * q.x) > 1e-6f) continue;  // not on this edge
     float f = glm::dot(q, e) / glm::dot(e, e);
-    return (1.0f - f) * env.vertexRadiosity()[a] + f * env.vertexRadiosity()[b];
+    return (1.0f - f) * lattice.radiosity()[a] + f * lattice.radiosity()[b];
   }
   // The leaves touching `st`: probes a hair away in eight directions.
   constexpr float e = 1e-5f;
@@ -152,8 +153,9 @@ namespace {
 VertexRecord MakeRecord(const Environment& env, uint32_t v, const glm::vec3& normal, uint32_t flags,
                         const SmoothVertex* s) {
   VertexRecord r{};
-  float w = env.vertexWeights()[v];
-  glm::vec3 x = env.vertices()[v], b = env.vertexRadiosity()[v];
+  const DisplayLattice& lattice = env.lattice();
+  float w = lattice.weights()[v];
+  glm::vec3 x = lattice.vertices()[v], b = lattice.radiosity()[v];
   for (int a = 0; a < 3; ++a) {
     r.pos[a] = x[a];
     r.normal[a] = normal[a];
@@ -191,15 +193,16 @@ uint64_t CellKey(uint32_t kx, uint32_t ky, uint32_t kz) {
 void CollectShared(Span<Environment* const> envs, Span<VertexRecord> out) {
   size_t n = 0;
   for (const Environment* env : envs) {
-    Span<const uint32_t> cut = env->cutVertices();
+    const DisplayLattice& lattice = env->lattice();
+    Span<const uint32_t> cut = lattice.cutVertices();
     for (size_t k = 0; k < cut.size(); ++k) {
       CHECK(n < out.size());
-      int64_t s = env->FindSmooth(cut[k]);
-      out[n++] = MakeRecord(*env, cut[k], env->cutNormals()[k], kRecordCut,
-                            s < 0 ? nullptr : &env->smoothVertices()[size_t(s)]);
+      int64_t s = lattice.FindSmooth(cut[k]);
+      out[n++] = MakeRecord(*env, cut[k], lattice.cutNormals()[k], kRecordCut,
+                            s < 0 ? nullptr : &lattice.smoothVertices()[size_t(s)]);
     }
-    for (const SmoothVertex& s : env->smoothVertices()) {
-      if (env->IsCutVertex(s.vertex)) continue;
+    for (const SmoothVertex& s : lattice.smoothVertices()) {
+      if (lattice.IsCutVertex(s.vertex)) continue;
       CHECK(n < out.size());
       out[n++] = MakeRecord(*env, s.vertex, s.normal, 0, &s);
     }
@@ -240,9 +243,10 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
   // Vertex v of `env`: on a cut (normal n) and/or smooth (s).
   // Returns whether a smooth record of another polygon was taken in.
   auto share = [&](Environment* env, uint32_t v, bool isCut, glm::vec3 n, const SmoothVertex* s) {
-    glm::vec3 x = env->vertices()[v];
-    float w = env->vertexWeights()[v];
-    glm::vec3 sum = env->vertexRadiosity()[v] * w;
+    DisplayLattice& lattice = env->lattice();
+    glm::vec3 x = lattice.vertices()[v];
+    float w = lattice.weights()[v];
+    glm::vec3 sum = lattice.radiosity()[v] * w;
     float weight = w;
     bool shared = false, matched = false;
     const VertexRecord* below = nullptr;
@@ -354,22 +358,23 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
         shared = matched = true;
       }
     }
-    if (shared && weight > 0.0f) env->SetVertexRadiosity(v, sum / weight);
+    if (shared && weight > 0.0f) lattice.SetRadiosity(v, sum / weight);
     return matched;
   };
 
   for (Environment* env : envs) {
-    Span<const uint32_t> cut = env->cutVertices();
-    Span<const SmoothVertex> sv = env->smoothVertices();
+    DisplayLattice& lattice = env->lattice();
+    Span<const uint32_t> cut = lattice.cutVertices();
+    Span<const SmoothVertex> sv = lattice.smoothVertices();
     for (size_t k = 0; k < cut.size(); ++k) {
-      int64_t s = env->FindSmooth(cut[k]);
+      int64_t s = lattice.FindSmooth(cut[k]);
       bool matched =
-          share(env, cut[k], true, env->cutNormals()[k], s < 0 ? nullptr : &sv[size_t(s)]);
-      if (s >= 0) env->SetSmoothMatched(size_t(s), matched);
+          share(env, cut[k], true, lattice.cutNormals()[k], s < 0 ? nullptr : &sv[size_t(s)]);
+      if (s >= 0) lattice.SetSmoothMatched(size_t(s), matched);
     }
     for (size_t k = 0; k < sv.size(); ++k)
-      if (!env->IsCutVertex(sv[k].vertex))
-        env->SetSmoothMatched(k, share(env, sv[k].vertex, false, sv[k].normal, &sv[k]));
+      if (!lattice.IsCutVertex(sv[k].vertex))
+        lattice.SetSmoothMatched(k, share(env, sv[k].vertex, false, sv[k].normal, &sv[k]));
     // A smooth vertex inside an outline edge that met no other polygon's
     // there (the polygons along the edge are subdivided differently): the
     // line between the nearest vertices of its edge on either side that
@@ -377,14 +382,14 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
     // vertices are consecutive in sv.
     for (size_t k = 0; k < sv.size(); ++k) {
       const SmoothVertex& s = sv[k];
-      if (env->smoothMatched(k) || s.edge[0] != s.edge[1]) continue;
-      const glm::vec3 x = env->vertices()[s.vertex];
+      if (lattice.smoothMatched(k) || s.edge[0] != s.edge[1]) continue;
+      const glm::vec3 x = lattice.vertices()[s.vertex];
       int64_t below = -1, above = -1;
       float tBelow = 0.0f, tAbove = 0.0f;
       auto consider = [&](size_t j) {
         const SmoothVertex& o = sv[j];
-        if (!env->smoothMatched(j) || (o.edge[0] != s.edge[0] && o.edge[1] != s.edge[0])) return;
-        float t = glm::dot(env->vertices()[o.vertex] - x, s.dir);
+        if (!lattice.smoothMatched(j) || (o.edge[0] != s.edge[0] && o.edge[1] != s.edge[0])) return;
+        float t = glm::dot(lattice.vertices()[o.vertex] - x, s.dir);
         if (t < -tolerance && (below < 0 || t > tBelow)) {
           below = static_cast<int64_t>(j);
           tBelow = t;
@@ -398,9 +403,8 @@ void ShareVertices(Span<Environment* const> envs, Span<VertexRecord> all, Span<u
       for (size_t j = k + 1; j < sv.size() && sv[j].polygon == s.polygon; ++j) consider(j);
       if (below < 0 || above < 0) continue;
       float f = -tBelow / (tAbove - tBelow);
-      env->SetVertexRadiosity(s.vertex,
-                              (1.0f - f) * env->vertexRadiosity()[sv[size_t(below)].vertex] +
-                                  f * env->vertexRadiosity()[sv[size_t(above)].vertex]);
+      lattice.SetRadiosity(s.vertex, (1.0f - f) * lattice.radiosity()[sv[size_t(below)].vertex] +
+                                         f * lattice.radiosity()[sv[size_t(above)].vertex]);
     }
   }
 }

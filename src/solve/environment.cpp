@@ -32,8 +32,7 @@ uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* 
   return n < options_.minRays ? options_.minRays : n;
 }
 
-void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices,
-                         const Grid::Plan& plan) {
+void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan) {
   size_t mark = arena.used();
   auto part = [&](uint64_t* bytes) {
     *bytes = arena.used() - mark;
@@ -55,23 +54,12 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   indirect_ =
       arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
   emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
-  smoothPatch_ = arena.Alloc<uint8_t>(direct && !stagedSmooth_.empty() ? numPatches : 0);
+  smoothPatch_ = arena.Alloc<uint8_t>(direct && !stagedLattice_.smooth.empty() ? numPatches : 0);
   direct_.Layout(arena, direct
                             ? DirectLight::Count(Span<const Patch>(staged_.data(), staged_.size()))
                             : DirectLight::Counts{});
   part(&footprint_.elements);
-  vertices_ = arena.Alloc<glm::vec3>(numVertices);
-  vertexB_ = arena.Alloc<glm::vec3>(numVertices);
-  vertexWeight_ = arena.Alloc<float>(numVertices);
-  cutVertex_ = arena.Alloc<uint32_t>(stagedCut_.size());
-  vertexCut_ = arena.Alloc<uint8_t>(numVertices);
-  vertexOutline_ = arena.Alloc<uint8_t>(numVertices);
-  vertexFrac_ = arena.Alloc<float>(numVertices);
-  vertexInward_ = arena.Alloc<glm::vec3>(numVertices);
-  cutNormal_ = arena.Alloc<glm::vec3>(stagedCut_.size());
-  smooth_ = arena.Alloc<SmoothVertex>(stagedSmooth_.size());
-  smoothMatched_ = arena.Alloc<uint8_t>(stagedSmooth_.size());
-  patchSmoothEdges_ = arena.Alloc<uint8_t>(stagedSmoothEdges_.size());
+  lattice_.Layout(arena, stagedLattice_);
   part(&footprint_.vertices);
   patchTex_ = arena.Alloc<PatchTexture>(stagedTex_.empty() ? 0 : numPatches);
   part(&footprint_.textures);
@@ -134,7 +122,7 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
 
   // Local copies of the patches and a compact local vertex lattice.
   staged_.clear();
-  stagedVertices_.clear();
+  stagedLattice_.vertices.clear();
   stagedTex_.clear();
   staged_.reserve(ids.size());
   bool textured = false;
@@ -144,8 +132,9 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     for (int k = 0; k < 4; ++k) {
       auto it = vertexMap.find(p.vertex[k]);
       if (it == vertexMap.end()) {
-        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(stagedVertices_.size())).first;
-        stagedVertices_.push_back(mesh.vertices[p.vertex[k]]);
+        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(stagedLattice_.vertices.size()))
+                 .first;
+        stagedLattice_.vertices.push_back(mesh.vertices[p.vertex[k]]);
       }
       p.vertex[k] = it->second;
     }
@@ -175,74 +164,76 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   }
   if (!textured) stagedTex_.clear();
   // Lattice vertices on a face shared with a neighbour.
-  stagedCut_.clear();
-  stagedCutNormal_.clear();
+  stagedLattice_.cut.clear();
+  stagedLattice_.cutNormal.clear();
   {
     glm::vec3 extent = grid.box.hi - grid.box.lo;
     float tol = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
-    std::vector<char> seen(stagedVertices_.size(), 0);
+    std::vector<char> seen(stagedLattice_.vertices.size(), 0);
     for (const Patch& p : staged_) {
       for (uint32_t k = 0; k < p.numCorners; ++k) {
         uint32_t v = p.vertex[k];
         if (seen[v]) continue;
         seen[v] = 1;
-        const glm::vec3& x = stagedVertices_[v];
+        const glm::vec3& x = stagedLattice_.vertices[v];
         bool cut = false;
         for (int a = 0; a < 3; ++a) {
           cut |= cell_[a] > 0 && std::fabs(x[a] - box_.lo[a]) <= tol;
           cut |= cell_[a] + 1 < grid.n[a] && std::fabs(x[a] - box_.hi[a]) <= tol;
         }
         if (!cut) continue;
-        stagedCut_.push_back(v);
-        stagedCutNormal_.push_back(p.normal);
+        stagedLattice_.cut.push_back(v);
+        stagedLattice_.cutNormal.push_back(p.normal);
       }
     }
   }
-  numCut_ = static_cast<uint32_t>(stagedCut_.size());
   // Smooth vertices (local ids, by vertex), and the patch edges between two
   // on one outline edge of their polygon.
-  stagedSmooth_.clear();
-  stagedSmoothEdges_.clear();
+  stagedLattice_.smooth.clear();
+  stagedLattice_.smoothEdges.clear();
   if (!mesh.smooth.empty()) {
-    std::vector<uint32_t> at(stagedVertices_.size(), kNoPatch);  // local vertex -> stagedSmooth_
+    std::vector<uint32_t> at(stagedLattice_.vertices.size(),
+                             kNoPatch);  // local vertex -> stagedLattice_.smooth
     for (const SmoothVertex& s : mesh.smooth) {
       auto it = vertexMap.find(s.vertex);
       if (it == vertexMap.end()) continue;
-      stagedSmooth_.push_back(s);
-      stagedSmooth_.back().vertex = it->second;
+      stagedLattice_.smooth.push_back(s);
+      stagedLattice_.smooth.back().vertex = it->second;
     }
-    std::sort(stagedSmooth_.begin(), stagedSmooth_.end(),
+    std::sort(stagedLattice_.smooth.begin(), stagedLattice_.smooth.end(),
               [](const SmoothVertex& a, const SmoothVertex& b) { return a.vertex < b.vertex; });
-    for (uint32_t k = 0; k < stagedSmooth_.size(); ++k) at[stagedSmooth_[k].vertex] = k;
-    if (!stagedSmooth_.empty()) {
-      stagedSmoothEdges_.assign(staged_.size(), 0);
+    for (uint32_t k = 0; k < stagedLattice_.smooth.size(); ++k)
+      at[stagedLattice_.smooth[k].vertex] = k;
+    if (!stagedLattice_.smooth.empty()) {
+      stagedLattice_.smoothEdges.assign(staged_.size(), 0);
       for (size_t i = 0; i < staged_.size(); ++i) {
         const Patch& p = staged_[i];
         for (uint32_t k = 0; k < p.numCorners; ++k) {
           uint32_t a = at[p.vertex[k]], b = at[p.vertex[(k + 1) % p.numCorners]];
           if (a == kNoPatch || b == kNoPatch) continue;
-          const SmoothVertex &sa = stagedSmooth_[a], &sb = stagedSmooth_[b];
+          const SmoothVertex &sa = stagedLattice_.smooth[a], &sb = stagedLattice_.smooth[b];
           bool common = false;
           for (uint32_t ea : sa.edge)
             for (uint32_t eb : sb.edge) common |= ea == eb;
-          if (common) stagedSmoothEdges_[i] |= static_cast<uint8_t>(1u << k);
+          if (common) stagedLattice_.smoothEdges[i] |= static_cast<uint8_t>(1u << k);
         }
       }
     }
   }
-  numShared_ = numCut_;
+  stagedLattice_.numShared = static_cast<uint32_t>(stagedLattice_.cut.size());
   {
-    std::vector<char> cut(stagedVertices_.size(), 0);
-    for (uint32_t v : stagedCut_) cut[v] = 1;
-    for (const SmoothVertex& s : stagedSmooth_) numShared_ += cut[s.vertex] ? 0 : 1;
+    std::vector<char> cut(stagedLattice_.vertices.size(), 0);
+    for (uint32_t v : stagedLattice_.cut) cut[v] = 1;
+    for (const SmoothVertex& s : stagedLattice_.smooth)
+      stagedLattice_.numShared += cut[s.vertex] ? 0 : 1;
   }
   uint32_t n = static_cast<uint32_t>(staged_.size());
   plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n),
                          Span<const PatchGeom>(stagedGeom_.data(), n), options.gridDensity);
   Arena measure = Arena::Measure();
-  Layout(measure, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  Layout(measure, n, plan_);
   // What --export will write of this environment (src/output/export.cpp).
-  footprint_.numVertices = stagedVertices_.size();
+  footprint_.numVertices = stagedLattice_.vertices.size();
   footprint_.numTriangles = 0;
   for (const Patch& p : staged_) footprint_.numTriangles += p.numCorners == 4 ? 2 : 1;
   return footprint_;
@@ -251,7 +242,7 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
 bool Environment::Build() {
   uint32_t n = static_cast<uint32_t>(staged_.size());
   if (!Arena::Reserve(footprint_.total, &arena_)) return false;
-  Layout(arena_, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  Layout(arena_, n, plan_);
   CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
   totalArea_ = 0.0;
   kdArea_ = 0.0;
@@ -265,33 +256,7 @@ bool Environment::Build() {
   for (size_t i = 0; i < stagedTwin_.size(); ++i) twin_[i] = stagedTwin_[i];
   for (uint32_t k = 0; k < numOutside_; ++k) outside_[k] = stagedOutside_[k];
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = stagedTex_[i];
-  for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
-  for (size_t v = 0; v < vertexCut_.size(); ++v) vertexCut_[v] = 0;
-  for (size_t k = 0; k < stagedCut_.size(); ++k) {
-    vertexCut_[stagedCut_[k]] = 1;
-    cutVertex_[k] = stagedCut_[k];
-    cutNormal_[k] = stagedCutNormal_[k];
-  }
-  // The outline vertices to extrapolate: touched by one or two quads (and
-  // no triangle), not on a cut, and every touching quad's opposite corner an
-  // interior vertex (four quads), else the outline is too ragged or narrow
-  // to tell inward from along.
-  {
-    std::vector<uint8_t> quads(vertexOutline_.size(), 0), inward(vertexOutline_.size(), 0);
-    for (const Patch& p : staged_)
-      for (uint32_t k = 0; k < p.numCorners; ++k) {
-        uint8_t& q = quads[p.vertex[k]];
-        q = p.numCorners == 4 && q != 0xff ? q + 1 : 0xff;
-      }
-    for (const Patch& p : staged_)
-      if (p.numCorners == 4)
-        for (uint32_t k = 0; k < 4; ++k) inward[p.vertex[k]] += quads[p.vertex[(k + 2) % 4]] == 4;
-    for (size_t v = 0; v < vertexOutline_.size(); ++v) {
-      uint8_t q = quads[v];
-      bool outline = q >= 1 && q <= 2 && !vertexCut_[v] && inward[v] == q;
-      vertexOutline_[v] = outline ? q : 0;
-    }
-  }
+  lattice_.Build(stagedLattice_, patches_);
   grid_.Build(patches_, geom_);
   if (options_.directSamples > 0) direct_.Build(patches_);
   centreStepsPerRay_ = 1;
@@ -306,26 +271,19 @@ bool Environment::Build() {
   std::vector<uint32_t>().swap(stagedTwin_);
   std::vector<Outside>().swap(stagedOutside_);
   std::vector<PatchTexture>().swap(stagedTex_);
-  std::vector<glm::vec3>().swap(stagedVertices_);
-  std::vector<uint32_t>().swap(stagedCut_);
-  std::vector<glm::vec3>().swap(stagedCutNormal_);
-  for (size_t k = 0; k < stagedSmooth_.size(); ++k) smooth_[k] = stagedSmooth_[k];
-  for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i)
-    patchSmoothEdges_[i] = stagedSmoothEdges_[i];
   // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
   // patch of theirs) as they were: their patches show the solved whole.
   if (!smoothPatch_.empty()) {
     std::vector<uint32_t> smoothed;
     for (const Patch& p : patches_)
       for (uint32_t k = 0; k < p.numCorners; ++k)
-        if (FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
+        if (lattice_.FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
     std::sort(smoothed.begin(), smoothed.end());
     for (uint32_t i = 0; i < patches_.size(); ++i)
       smoothPatch_[i] =
           std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
   }
-  std::vector<SmoothVertex>().swap(stagedSmooth_);
-  std::vector<uint8_t>().swap(stagedSmoothEdges_);
+  stagedLattice_ = DisplayLattice::Staged();
   Reset();
   return true;
 }

@@ -16,6 +16,7 @@
 #include "vismask/display/direct.h"
 #include "vismask/scene/mesh.h"
 #include "vismask/solve/centre_mask_cache.h"
+#include "vismask/solve/display_lattice.h"
 #include "vismask/solve/element.h"
 #include "vismask/solve/foreign_queue.h"
 #include "vismask/solve/mask.h"
@@ -264,32 +265,13 @@ class Environment {
   }
   // The emitted power not yet shot (per channel; 0 without directPerPixel()).
   void EmissionUnshot(double out[3]) const;
-  // The lattice vertices on a face this environment shares with a neighbour
-  // (where the partition cut a polygon), and their surface's normal: the
-  // display shares their values across the cut (display.h).
-  Span<const uint32_t> cutVertices() const { return cutVertex_; }
-  uint32_t numCutVertices() const { return numCut_; }  // known from Prepare on
-  Span<const glm::vec3> cutNormals() const { return cutNormal_; }
-  Span<const float> vertexWeights() const { return vertexWeight_; }
-  bool IsCutVertex(uint32_t v) const { return vertexCut_[v] != 0; }
-  // The lattice vertices that may share their value with other polygons'
-  // (Mesh::smooth, local vertex ids, by vertex), and how many vertices the
-  // display exchanges: cut or smooth, each once (known from Prepare on).
-  Span<const SmoothVertex> smoothVertices() const { return smooth_; }
-  uint32_t numSharedVertices() const { return numShared_; }
-  // The index in smoothVertices() of lattice vertex v, or -1.
-  int64_t FindSmooth(uint32_t v) const;
-  // Whether smooth vertex k shared its value with another polygon's at the
-  // same point in the last ShareVertices (display scratch).
-  bool smoothMatched(size_t k) const { return smoothMatched_[k] != 0; }
-  void SetSmoothMatched(size_t k, bool matched) { smoothMatched_[k] = matched ? 1 : 0; }
-  // Whether edge k (corner k to k+1) of patch i lies on an outline edge of
-  // its polygon whose ends are both smooth vertices: the display
-  // interpolates their shared values along it.
-  bool IsSmoothEdge(uint32_t i, uint32_t k) const {
-    return !patchSmoothEdges_.empty() && ((patchSmoothEdges_[i] >> k) & 1u);
-  }
-  void SetVertexRadiosity(uint32_t v, const glm::vec3& b) { vertexB_[v] = b; }
+  // The display lattice (display.h shares its cut and smooth vertices).
+  const DisplayLattice& lattice() const { return lattice_; }
+  DisplayLattice& lattice() { return lattice_; }
+  Span<const glm::vec3> vertices() const { return lattice_.vertices(); }
+  Span<const glm::vec3> vertexRadiosity() const { return lattice_.radiosity(); }
+  Span<const SmoothVertex> smoothVertices() const { return lattice_.smoothVertices(); }
+  uint32_t numSharedVertices() const { return lattice_.numShared(); }
   uint32_t elementsUsed() const { return nextElement_; }
 
   uint32_t index() const { return index_; }
@@ -301,8 +283,6 @@ class Environment {
   uint32_t twinOf(uint32_t i) const { return twin_.empty() ? kNoPatch : twin_[i]; }
   uint32_t numTwins() const { return numTwins_; }  // patches that are a twin copy
   Span<const PatchEnergy> energy() const { return energy_; }
-  Span<const glm::vec3> vertices() const { return vertices_; }
-  Span<const glm::vec3> vertexRadiosity() const { return vertexB_; }
   // Patch i's texture data, or null when it is not textured.
   const PatchTexture* patchTexture(uint32_t i) const {
     return patchTex_.empty() || patchTex_[i].texture == kNoTexture ? nullptr : &patchTex_[i];
@@ -343,7 +323,7 @@ class Environment {
   uint32_t numOutside() const { return numOutside_; }
 
  private:
-  void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
+  void Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan);
   void ShootLocal(uint32_t i);
   // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
   // no patch to skip and no centre-mask cache.
@@ -523,24 +503,7 @@ class Environment {
   Span<uint8_t> smoothPatch_;  // directPerPixel(): 1 for a patch of a smoothed polygon
   DirectLight direct_;
   uint32_t nextElement_ = 0;
-  Span<glm::vec3> vertices_;
-  Span<glm::vec3> vertexB_;
-  Span<float> vertexWeight_;
-  Span<uint32_t> cutVertex_;
-  Span<uint8_t> vertexCut_;  // 1 for a cut vertex
-  // Outline vertices of quad lattices that ComputeVertexRadiosity
-  // extrapolates: how many quads touch them (1 or 2; 0: not extrapolated),
-  // fixed at Build. Its scratch: the corner leaves' edge shares, the inward value.
-  Span<uint8_t> vertexOutline_;
-  Span<float> vertexFrac_;
-  Span<glm::vec3> vertexInward_;
-  Span<glm::vec3> cutNormal_;
-  uint32_t numCut_ = 0;
-  Span<SmoothVertex> smooth_;
-  Span<uint8_t> smoothMatched_;
-  Span<uint8_t>
-      patchSmoothEdges_;  // bit k: edge k is smooth (IsSmoothEdge); empty without smooth vertices
-  uint32_t numShared_ = 0;
+  DisplayLattice lattice_;
   Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
   Grid grid_;
   MaxTree tree_;
@@ -574,11 +537,7 @@ class Environment {
   std::vector<PatchGeom> stagedGeom_;
   std::vector<uint32_t> stagedTwin_;     // empty without twins
   std::vector<PatchTexture> stagedTex_;  // empty when no patch is textured
-  std::vector<glm::vec3> stagedVertices_;
-  std::vector<uint32_t> stagedCut_;
-  std::vector<glm::vec3> stagedCutNormal_;
-  std::vector<SmoothVertex> stagedSmooth_;
-  std::vector<uint8_t> stagedSmoothEdges_;
+  DisplayLattice::Staged stagedLattice_;
   Grid::Plan plan_;
 };
 
