@@ -18,7 +18,9 @@
 #include "vismask/solve/centre_mask_cache.h"
 #include "vismask/solve/display_lattice.h"
 #include "vismask/solve/element.h"
+#include "vismask/solve/env_options.h"
 #include "vismask/solve/foreign_queue.h"
+#include "vismask/solve/ledger.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/max_tree.h"
 #include "vismask/solve/outbox.h"
@@ -31,124 +33,6 @@
 namespace vismask {
 
 struct PatchSampler;
-
-// Per-channel energy bookkeeping, in W (double). For one environment with no
-// neighbours, emitted == absorbed + escaped + unshot up to rounding; with
-// several, the difference is the power still in flight between environments
-// plus what the masks lost or let leak. Method R books its power in flight
-// exactly (summed over all environments, emitted == absorbed + escaped +
-// unshot + inFlight up to rounding); the hemisphere masks cannot, and leave
-// inFlight at 0.
-struct EnergyLedger {
-  double emitted[3] = {0, 0, 0};
-  double absorbed[3] = {0, 0, 0};  // by receivers (1 - kd) and by back faces
-  double escaped[3] = {0, 0, 0};   // rays that left the scene
-  double unshot[3] = {0, 0, 0};    // local patches' unshot power, kept current
-  // Method R: + the rays that left this environment for a neighbour, - those
-  // that entered it from one (a ray enters exactly the next environment on
-  // its path, so the sum over environments is the power not yet traced).
-  double inFlight[3] = {0, 0, 0};
-  double radiosity[3] = {0, 0, 0};  // sum of b * area over local patches (emitted + reflected)
-  // --sky, --sun: of absorbed and escaped, what outside shooters' rays lost
-  // at once, on a back face or crossing the scene without a hit: light
-  // that never lit the scene. The solve's stop rules leave it out of the
-  // emitted and radiosity power (exchange.cpp), so that the sky on the
-  // outside of a closed room's walls does not count as converged power.
-  double outsideLost[3] = {0, 0, 0};
-};
-
-// Counters of one environment's work.
-struct EnvStats {
-  uint64_t shots = 0;            // local shots
-  uint64_t foreignShots = 0;     // queued foreign shooters distributed here
-  uint64_t rays = 0;             // form-factor rays traced
-  uint64_t maskRays = 0;         // Method B's and C's centre rays (pixels decided)
-  uint64_t maskRaysByPatch = 0;  // those decided patch by patch (RasterCentres)
-  uint64_t maskNoExit = 0;       // pixels closed because they lead to no neighbour (KeepExits)
-  uint64_t readShots = 0;        // B's local shots deciding only the pixels read (ReadsOnly)
-  uint64_t readRays = 0;         // rays regenerated for it (ReadPixels, ReadShare)
-  uint64_t gridSteps = 0;        // their walks' cells entered and patches tested (Grid::steps)
-  uint64_t hits = 0;
-  uint64_t packetsSent = 0;
-  uint64_t forwardsCreated = 0;  // local shots that went on to neighbours
-  uint64_t splits = 0;           // elements split into four
-  uint64_t refusedSplits = 0;    // splits refused because the element pool was used up
-};
-
-// What an environment's arena holds, in bytes, by part (from the measuring
-// pass of its layout; the parts sum to `total`).
-struct EnvFootprint {
-  uint64_t patches = 0;   // Patch, PatchGeom, PatchEnergy, shot counts, selection tree
-  uint64_t vertices = 0;  // display lattice and its radiosity
-  uint64_t textures = 0;  // textured patches' uv and display scale (0 with none textured)
-  uint64_t elements = 0;  // the element pool (roots and children)
-  uint64_t grid = 0;      // cell offsets and patch references
-  uint64_t queue = 0;     // foreign-shooter slots and their masks
-  uint64_t packets = 0;   // outbox, working masks and the centre-mask cache
-  uint64_t total = 0;     // the arena's size (rounded up to Arena::kAlign)
-  uint64_t numPatches = 0;
-  uint64_t gridCells = 0;
-  uint64_t numVertices = 0;   // display lattice vertices
-  uint64_t numTriangles = 0;  // the patches as triangles (a quad is two): --export's
-};
-
-struct EnvOptions {
-  // Grid cells per patch (Cleary's lambda). One: on the 130 000-patch box
-  // 1.17-1.24x the rays per second of 4 (median of 6 alternated bench
-  // pairs, docs/BENCHMARKS.md's cell-size table), the same within noise at
-  // 8 000, and 16 B a patch less.
-  float gridDensity = 1.0f;
-  float rayEpsilon = 0.0f;  // ray origins lifted this far off the shooter's plane (scene units)
-  // Rays per shot. With rayQuantum == 0 every shot traces `rays` rays.
-  // With rayQuantum > 0 (power allocation) a shot of power P (channels
-  // summed) traces P / rayQuantum rays, rounded stochastically from the
-  // shot's own stream, at least minRays; a shot that would need more than
-  // `rays` shoots only rays * rayQuantum of its power and keeps the rest
-  // unshot (a partial shot), so `rays` is also the most any shot traces.
-  uint32_t rays = 4096;
-  double rayQuantum = 0.0;
-  uint32_t minRays = 1;
-  bool sobol = true;  // scrambled Sobol' points; false: independent PCG32 draws
-  uint64_t seed = 1;  // run seed
-  MaskMethod maskMethod = MaskMethod::kB;
-  uint32_t maskRes = 50;
-  uint32_t roundShots = 1;      // shots per environment per round
-  uint32_t queueCapacity = 64;  // foreign shooters held at once
-  // Methods B and C: bytes for the centre masks of local shooters, one slot
-  // per patch (direct-mapped) while they fit; kept for the patch's later
-  // shots, since a local shooter's centre mask depends only on its geometry.
-  uint64_t maskCacheBytes = uint64_t{8} << 20;
-  // Method B: which open pixels take a centre ray (--centre-rays; ReadsOnly).
-  CentreChoice centreRays = CentreChoice::kAuto;
-  ElementOptions elements;
-  // --direct-samples: shadow rays a shaded point sends to the emitters
-  // (direct.h); 0: no per-pixel direct light (the display shows the solved
-  // radiosity, direct part included). With N > 0 the environment keeps each
-  // patch's indirect radiosity apart and its emitter list.
-  uint32_t directSamples = 0;
-  // --sky, --sun: the light from outside the scene's box (outside.h), in
-  // outsideTiles x outsideTiles shooters a face of the box.
-  OutsideLight outside;
-  uint32_t outsideTiles = 1;
-};
-
-// What a checkpoint keeps of an environment beside its arena's bytes (the
-// patches' energy, elements, shot counts, queue, slots and selection trees
-// all live there): the counters and the ledger held in the object. Trivially
-// copyable, written as it is (checkpoint.h).
-struct EnvState {
-  uint64_t arenaUsed;  // the arena's bytes (checked on resume: the same layout)
-  uint64_t numPatches;
-  uint64_t gridSteps;
-  uint64_t centreSteps;
-  uint64_t centreWork;
-  uint32_t nextElement;
-  uint32_t queued;
-  uint32_t outCount;  // 0 at a round's end (the outbox is delivered)
-  uint32_t index;
-  EnergyLedger ledger;
-  EnvStats stats;
-};
 
 class Environment {
  public:
