@@ -25,6 +25,8 @@ void Environment::FlightPower(double power[3]) const {
 // Without a mask, FlightShare looks at directions on a hemisphere of this resolution.
 constexpr uint32_t kNoMaskRes = 16;
 
+// FlightShare's hemisphere resolution (the mask's, or kNoMaskRes without
+// one) and its table of column directions, made once.
 uint32_t Environment::FlightRes() const {
   return shape_.empty() ? kNoMaskRes : shape_.res;
 }
@@ -51,6 +53,12 @@ double Environment::FlightShareAt(const uint8_t* packet) const {
   return FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet), box_, cell_);
 }
 
+// The cosine-weighted share of h's hemisphere whose centre rays are open
+// in the packet's mask `bits` (null: no mask, all open) and cross the face
+// from h.fromEnv into the receiver's `box` (at grid cell `to`). Worked out
+// by the sender (Forward), with the receiver's box as the receiver makes
+// it (EnvGrid::EnvBox); every environment has the same tables
+// (maskDirections_, flightCols_).
 double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
                                 const int to[3]) const {
   const uint32_t res = FlightRes(), cols = 4 * res;

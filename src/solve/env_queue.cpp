@@ -17,11 +17,15 @@
 
 namespace vismask {
 
+// Method C's two working masks: pixels some ray hit in, and pixels some ray
+// passed unoccluded.
 MaskBits Environment::ScratchMask(uint32_t k) const {
   size_t w = shape_.words();
   return MaskBits(scratchWords_.subspan(k * w, w), shape_);
 }
 
+// The grid cells downstream of this environment for a shooter from
+// `sourceEnv` (at most 6, into `next`), and how many there are.
 int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
   int source[3];
   envGrid_.Cell(static_cast<int>(sourceEnv), source);
@@ -40,6 +44,9 @@ int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
   return count;
 }
 
+// Sends the shooter's packet header and `mask` to the neighbours downstream from
+// the source environment; Method R sends each neighbour its face's route
+// mask (`routes`, TraceAlive) instead.
 void Environment::Forward(PacketHeader h, const MaskBits& mask, const MaskBits* routes) {
   int next[6][3];
   int count = Downstream(h.sourceEnv, next);
@@ -147,6 +154,8 @@ bool Environment::HasLocalUnshot() const {
   return BestOutside() >= 0;
 }
 
+// The outside shooter with the most unshot power (ties to the first), or
+// -1 when none has any.
 int Environment::BestOutside() const {
   int best = -1;
   double key = 0.0;
@@ -161,6 +170,8 @@ int Environment::BestOutside() const {
   return best;
 }
 
+// Outside shooter k (--sky, --sun) shoots, as a local patch does but with
+// no patch to skip and no centre-mask cache.
 void Environment::ShootOutside(uint32_t k) {
   Outside& o = outside_[k];
   const Patch& p = o.shooter.patch;

@@ -28,6 +28,13 @@ constexpr double kCastShare = 0.4;
 constexpr double kPatchCast = 4.0;
 constexpr int kReadEnvs = 8;
 
+// auto's counts for shots from here, in centre rays cast, from the grid
+// and the patch count (Layout): per ray of a shot, what reading costs
+// (every ray regenerated for each environment beyond a forwarding one
+// and for each packet's share, and the read pixels' casts); what casting
+// every open pixel costs, here and in each forwarding environment
+// downstream; and whether any shot from here, of the fewest rays a shot
+// may have, reads.
 void Environment::FillReadCosts(uint32_t numPatches) {
   readPerRay_ = 0.0;
   allCost_ = 0.0;
@@ -81,12 +88,22 @@ void Environment::FillReadCosts(uint32_t numPatches) {
   mayRead_ = ReadsOnly(fewest);
 }
 
+// Method B: whether local patch i's shot of `rays` rays decides only the
+// pixels its rays will read downstream (ReadPixels), its packets carrying
+// the share of the receiver's rays that pass (ReadShare) as their power in
+// flight and priority, rather than every open pixel that leads to a
+// neighbour. The source decides and says so in the packets' flags, which
+// every environment downstream follows. auto: whichever costs fewer
+// centre rays' worth by FillReadCosts' counts.
 bool Environment::ReadsOnly(uint32_t rays) const {
   if (options_.maskMethod != MaskMethod::kB || numNeighbours_ == 0) return false;
   if (options_.centreRays != CentreChoice::kAuto) return options_.centreRays == CentreChoice::kRead;
   return rays * readPerRay_ < allCost_;
 }
 
+// Calls visit(pixel) with the entry pixel (Distribute's: where the ray
+// enters the box, seen from the shooter's centre) of every ray of h that
+// environment `env` traces for it: its stream (ForeignStream), its box.
 template <typename Visit>
 void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
                                     const glm::vec3& centre, Visit visit) const {
@@ -103,6 +120,10 @@ void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const PatchS
   }
 }
 
+// --centre-rays read: opens in *read (closed first) the pixel of every ray
+// that an environment downstream of this one will trace for the shot `h`
+// (Distribute's foreign rays: its stream, its box, the pixel of where the
+// ray enters it seen from the shooter's centre), every one it may reach.
 void Environment::ReadPixels(const PacketHeader& h, MaskBits* read) {
   read->SetAllClosed();
   const Patch shooter = PatchFromHeader(h);  // as the receivers make it
@@ -125,6 +146,8 @@ void Environment::ReadPixels(const PacketHeader& h, MaskBits* read) {
   }
 }
 
+// --centre-rays read: the share of h's rays that environment `to` will
+// trace through pixels open in `mask` (its rays regenerated here).
 double Environment::ReadShare(const PacketHeader& h, const MaskBits& mask, int to) {
   const Patch shooter = PatchFromHeader(h);
   const PatchSampler sampler = MakePatchSampler(shooter);

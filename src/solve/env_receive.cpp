@@ -13,6 +13,7 @@
 
 namespace vismask {
 
+// Patch j receives `share` (W per channel) at point `x`.
 void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x) {
   const Patch& p = patches_[j];
   PatchEnergy& e = energy_[j];
@@ -47,6 +48,8 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
     MaybeSplit(j, leaf, path, depth);
 }
 
+// Splits leaf `e` of patch `j` (reached from the root by the children
+// `path[0..depth)`) if its quarters differ beyond noise.
 void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth) {
   const Patch& p = patches_[j];
   const bool triangle = p.numCorners == 3;
@@ -112,6 +115,9 @@ void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32
   el.child = first;
 }
 
+// The leaf of patch `patch` holding `st`, which is left in the leaf's own
+// parameters; with `path`, the children taken are appended there (*depth
+// of them, at most the element depth).
 uint32_t Environment::Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const {
   const bool triangle = patches_[patch].numCorners == 3;
   uint32_t e = patch;

@@ -17,6 +17,21 @@
 
 namespace vismask {
 
+// What Prepare copies from the mesh for Build (on the heap, init only).
+struct Environment::Staged {
+  std::vector<Patch> patches;
+  std::vector<PatchGeom> geom;
+  std::vector<uint32_t> twin;     // empty without twins
+  std::vector<PatchTexture> tex;  // empty when no patch is textured
+  std::vector<Outside> outside;
+  DisplayLattice::Staged lattice;
+};
+
+Environment::Environment() = default;
+Environment::~Environment() = default;
+
+// How many rays a local shot of `power` traces and what share of the
+// power it carries (1 unless the shot is partial).
 uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* fraction) const {
   *fraction = 1.0;
   if (options_.rayQuantum <= 0.0) return options_.rays;
@@ -40,7 +55,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   };
   patches_ = arena.Alloc<Patch>(numPatches);
   geom_ = arena.Alloc<PatchGeom>(numPatches);
-  twin_ = arena.Alloc<uint32_t>(stagedTwin_.size());
+  twin_ = arena.Alloc<uint32_t>(staged_->twin.size());
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
   if (numOutside_ > 0) outside_ = arena.Alloc<Outside>(numOutside_);
@@ -54,14 +69,14 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   indirect_ =
       arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
   emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
-  smoothPatch_ = arena.Alloc<uint8_t>(direct && !stagedLattice_.smooth.empty() ? numPatches : 0);
-  direct_.Layout(arena, direct
-                            ? DirectLight::Count(Span<const Patch>(staged_.data(), staged_.size()))
-                            : DirectLight::Counts{});
+  smoothPatch_ = arena.Alloc<uint8_t>(direct && !staged_->lattice.smooth.empty() ? numPatches : 0);
+  direct_.Layout(arena, direct ? DirectLight::Count(Span<const Patch>(staged_->patches.data(),
+                                                                      staged_->patches.size()))
+                               : DirectLight::Counts{});
   part(&footprint_.elements);
-  lattice_.Layout(arena, stagedLattice_);
+  lattice_.Layout(arena, staged_->lattice);
   part(&footprint_.vertices);
-  patchTex_ = arena.Alloc<PatchTexture>(stagedTex_.empty() ? 0 : numPatches);
+  patchTex_ = arena.Alloc<PatchTexture>(staged_->tex.empty() ? 0 : numPatches);
   part(&footprint_.textures);
   grid_.Layout(arena, plan);
   part(&footprint_.grid);
@@ -92,6 +107,85 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   footprint_.gridCells = uint64_t(plan.res[0]) * plan.res[1] * plan.res[2];
 }
 
+namespace {
+
+// The staged lattice's vertices on a face environment cell `cell` (box
+// `box`) shares with a neighbour, and their surface's normal.
+void StageCuts(const EnvGrid& grid, const int cell[3], const Bounds& box,
+               const std::vector<Patch>& patches, DisplayLattice::Staged* lattice) {
+  // Lattice vertices on a face shared with a neighbour.
+  lattice->cut.clear();
+  lattice->cutNormal.clear();
+  {
+    glm::vec3 extent = grid.box.hi - grid.box.lo;
+    float tol = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
+    std::vector<char> seen(lattice->vertices.size(), 0);
+    for (const Patch& p : patches) {
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        uint32_t v = p.vertex[k];
+        if (seen[v]) continue;
+        seen[v] = 1;
+        const glm::vec3& x = lattice->vertices[v];
+        bool cut = false;
+        for (int a = 0; a < 3; ++a) {
+          cut |= cell[a] > 0 && std::fabs(x[a] - box.lo[a]) <= tol;
+          cut |= cell[a] + 1 < grid.n[a] && std::fabs(x[a] - box.hi[a]) <= tol;
+        }
+        if (!cut) continue;
+        lattice->cut.push_back(v);
+        lattice->cutNormal.push_back(p.normal);
+      }
+    }
+  }
+}
+
+// The staged lattice's smooth vertices (local ids, by vertex: `vertexMap`
+// from the mesh's), the patch edges between two on one outline edge of
+// their polygon, and how many vertices the display shares.
+void StageSmooth(const Mesh& mesh, const std::unordered_map<uint32_t, uint32_t>& vertexMap,
+                 const std::vector<Patch>& patches, DisplayLattice::Staged* lattice) {
+  // Smooth vertices (local ids, by vertex), and the patch edges between two
+  // on one outline edge of their polygon.
+  lattice->smooth.clear();
+  lattice->smoothEdges.clear();
+  if (!mesh.smooth.empty()) {
+    std::vector<uint32_t> at(lattice->vertices.size(),
+                             kNoPatch);  // local vertex -> lattice->smooth
+    for (const SmoothVertex& s : mesh.smooth) {
+      auto it = vertexMap.find(s.vertex);
+      if (it == vertexMap.end()) continue;
+      lattice->smooth.push_back(s);
+      lattice->smooth.back().vertex = it->second;
+    }
+    std::sort(lattice->smooth.begin(), lattice->smooth.end(),
+              [](const SmoothVertex& a, const SmoothVertex& b) { return a.vertex < b.vertex; });
+    for (uint32_t k = 0; k < lattice->smooth.size(); ++k) at[lattice->smooth[k].vertex] = k;
+    if (!lattice->smooth.empty()) {
+      lattice->smoothEdges.assign(patches.size(), 0);
+      for (size_t i = 0; i < patches.size(); ++i) {
+        const Patch& p = patches[i];
+        for (uint32_t k = 0; k < p.numCorners; ++k) {
+          uint32_t a = at[p.vertex[k]], b = at[p.vertex[(k + 1) % p.numCorners]];
+          if (a == kNoPatch || b == kNoPatch) continue;
+          const SmoothVertex &sa = lattice->smooth[a], &sb = lattice->smooth[b];
+          bool common = false;
+          for (uint32_t ea : sa.edge)
+            for (uint32_t eb : sb.edge) common |= ea == eb;
+          if (common) lattice->smoothEdges[i] |= static_cast<uint8_t>(1u << k);
+        }
+      }
+    }
+  }
+  lattice->numShared = static_cast<uint32_t>(lattice->cut.size());
+  {
+    std::vector<char> cut(lattice->vertices.size(), 0);
+    for (uint32_t v : lattice->cut) cut[v] = 1;
+    for (const SmoothVertex& s : lattice->smooth) lattice->numShared += cut[s.vertex] ? 0 : 1;
+  }
+}
+
+}  // namespace
+
 const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                                          const std::vector<uint32_t>& ids,
                                          const EnvOptions& options) {
@@ -111,20 +205,21 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
+  staged_ = std::make_unique<Staged>();
   {
     std::vector<OutsideShooter> shooters;
     OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
                     &shooters);
-    stagedOutside_.clear();
-    for (const OutsideShooter& s : shooters) stagedOutside_.push_back(Outside{s, {0, 0, 0}, 0});
-    numOutside_ = static_cast<uint32_t>(stagedOutside_.size());
+    staged_->outside.clear();
+    for (const OutsideShooter& s : shooters) staged_->outside.push_back(Outside{s, {0, 0, 0}, 0});
+    numOutside_ = static_cast<uint32_t>(staged_->outside.size());
   }
 
   // Local copies of the patches and a compact local vertex lattice.
-  staged_.clear();
-  stagedLattice_.vertices.clear();
-  stagedTex_.clear();
-  staged_.reserve(ids.size());
+  staged_->patches.clear();
+  staged_->lattice.vertices.clear();
+  staged_->tex.clear();
+  staged_->patches.reserve(ids.size());
   bool textured = false;
   std::unordered_map<uint32_t, uint32_t> vertexMap;
   for (uint32_t id : ids) {
@@ -132,26 +227,26 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     for (int k = 0; k < 4; ++k) {
       auto it = vertexMap.find(p.vertex[k]);
       if (it == vertexMap.end()) {
-        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(stagedLattice_.vertices.size()))
+        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(staged_->lattice.vertices.size()))
                  .first;
-        stagedLattice_.vertices.push_back(mesh.vertices[p.vertex[k]]);
+        staged_->lattice.vertices.push_back(mesh.vertices[p.vertex[k]]);
       }
       p.vertex[k] = it->second;
     }
-    staged_.push_back(p);
+    staged_->patches.push_back(p);
     if (!mesh.textures.empty()) {
-      stagedTex_.push_back(mesh.textures[id]);
+      staged_->tex.push_back(mesh.textures[id]);
       textured |= mesh.textures[id].texture != kNoTexture;
     }
   }
   // Ray-test data; a twin's from its original's (TwinGeom), and the pairs.
-  stagedGeom_.clear();
-  stagedTwin_.clear();
+  staged_->geom.clear();
+  staged_->twin.clear();
   numTwins_ = 0;
   for (uint32_t id : ids) {
     bool copy = !mesh.twin.empty() && mesh.twin[id] != kNoPatch && mesh.twin[id] < id;
-    stagedGeom_.push_back(copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[id]]))
-                               : MakePatchGeom(mesh.patches[id]));
+    staged_->geom.push_back(copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[id]]))
+                                 : MakePatchGeom(mesh.patches[id]));
     numTwins_ += copy;
   }
   if (!mesh.twin.empty()) {
@@ -159,104 +254,52 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     for (uint32_t i = 0; i < ids.size(); ++i) local.emplace(ids[i], i);
     for (uint32_t id : ids) {
       auto it = mesh.twin[id] == kNoPatch ? local.end() : local.find(mesh.twin[id]);
-      stagedTwin_.push_back(it == local.end() ? kNoPatch : it->second);
+      staged_->twin.push_back(it == local.end() ? kNoPatch : it->second);
     }
   }
-  if (!textured) stagedTex_.clear();
-  // Lattice vertices on a face shared with a neighbour.
-  stagedLattice_.cut.clear();
-  stagedLattice_.cutNormal.clear();
-  {
-    glm::vec3 extent = grid.box.hi - grid.box.lo;
-    float tol = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
-    std::vector<char> seen(stagedLattice_.vertices.size(), 0);
-    for (const Patch& p : staged_) {
-      for (uint32_t k = 0; k < p.numCorners; ++k) {
-        uint32_t v = p.vertex[k];
-        if (seen[v]) continue;
-        seen[v] = 1;
-        const glm::vec3& x = stagedLattice_.vertices[v];
-        bool cut = false;
-        for (int a = 0; a < 3; ++a) {
-          cut |= cell_[a] > 0 && std::fabs(x[a] - box_.lo[a]) <= tol;
-          cut |= cell_[a] + 1 < grid.n[a] && std::fabs(x[a] - box_.hi[a]) <= tol;
-        }
-        if (!cut) continue;
-        stagedLattice_.cut.push_back(v);
-        stagedLattice_.cutNormal.push_back(p.normal);
-      }
-    }
-  }
-  // Smooth vertices (local ids, by vertex), and the patch edges between two
-  // on one outline edge of their polygon.
-  stagedLattice_.smooth.clear();
-  stagedLattice_.smoothEdges.clear();
-  if (!mesh.smooth.empty()) {
-    std::vector<uint32_t> at(stagedLattice_.vertices.size(),
-                             kNoPatch);  // local vertex -> stagedLattice_.smooth
-    for (const SmoothVertex& s : mesh.smooth) {
-      auto it = vertexMap.find(s.vertex);
-      if (it == vertexMap.end()) continue;
-      stagedLattice_.smooth.push_back(s);
-      stagedLattice_.smooth.back().vertex = it->second;
-    }
-    std::sort(stagedLattice_.smooth.begin(), stagedLattice_.smooth.end(),
-              [](const SmoothVertex& a, const SmoothVertex& b) { return a.vertex < b.vertex; });
-    for (uint32_t k = 0; k < stagedLattice_.smooth.size(); ++k)
-      at[stagedLattice_.smooth[k].vertex] = k;
-    if (!stagedLattice_.smooth.empty()) {
-      stagedLattice_.smoothEdges.assign(staged_.size(), 0);
-      for (size_t i = 0; i < staged_.size(); ++i) {
-        const Patch& p = staged_[i];
-        for (uint32_t k = 0; k < p.numCorners; ++k) {
-          uint32_t a = at[p.vertex[k]], b = at[p.vertex[(k + 1) % p.numCorners]];
-          if (a == kNoPatch || b == kNoPatch) continue;
-          const SmoothVertex &sa = stagedLattice_.smooth[a], &sb = stagedLattice_.smooth[b];
-          bool common = false;
-          for (uint32_t ea : sa.edge)
-            for (uint32_t eb : sb.edge) common |= ea == eb;
-          if (common) stagedLattice_.smoothEdges[i] |= static_cast<uint8_t>(1u << k);
-        }
-      }
-    }
-  }
-  stagedLattice_.numShared = static_cast<uint32_t>(stagedLattice_.cut.size());
-  {
-    std::vector<char> cut(stagedLattice_.vertices.size(), 0);
-    for (uint32_t v : stagedLattice_.cut) cut[v] = 1;
-    for (const SmoothVertex& s : stagedLattice_.smooth)
-      stagedLattice_.numShared += cut[s.vertex] ? 0 : 1;
-  }
-  uint32_t n = static_cast<uint32_t>(staged_.size());
-  plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n),
-                         Span<const PatchGeom>(stagedGeom_.data(), n), options.gridDensity);
+  if (!textured) staged_->tex.clear();
+  StageCuts(grid, cell_, box_, staged_->patches, &staged_->lattice);
+  StageSmooth(mesh, vertexMap, staged_->patches, &staged_->lattice);
+  uint32_t n = static_cast<uint32_t>(staged_->patches.size());
+  plan_ = Grid::MakePlan(Span<const Patch>(staged_->patches.data(), n),
+                         Span<const PatchGeom>(staged_->geom.data(), n), options.gridDensity);
   Arena measure = Arena::Measure();
   Layout(measure, n, plan_);
   // What --export will write of this environment (src/output/export.cpp).
-  footprint_.numVertices = stagedLattice_.vertices.size();
+  footprint_.numVertices = staged_->lattice.vertices.size();
   footprint_.numTriangles = 0;
-  for (const Patch& p : staged_) footprint_.numTriangles += p.numCorners == 4 ? 2 : 1;
+  for (const Patch& p : staged_->patches) footprint_.numTriangles += p.numCorners == 4 ? 2 : 1;
   return footprint_;
 }
 
 bool Environment::Build() {
-  uint32_t n = static_cast<uint32_t>(staged_.size());
+  uint32_t n = static_cast<uint32_t>(staged_->patches.size());
   if (!Arena::Reserve(footprint_.total, &arena_)) return false;
   Layout(arena_, n, plan_);
   CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
   totalArea_ = 0.0;
   kdArea_ = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
-    patches_[i] = staged_[i];
-    geom_[i] = stagedGeom_[i];
-    totalArea_ += staged_[i].area;
-    const glm::vec3& kd = staged_[i].kd;
-    kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
+    patches_[i] = staged_->patches[i];
+    geom_[i] = staged_->geom[i];
+    totalArea_ += staged_->patches[i].area;
+    const glm::vec3& kd = staged_->patches[i].kd;
+    kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_->patches[i].area;
   }
-  for (size_t i = 0; i < stagedTwin_.size(); ++i) twin_[i] = stagedTwin_[i];
-  for (uint32_t k = 0; k < numOutside_; ++k) outside_[k] = stagedOutside_[k];
-  for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = stagedTex_[i];
-  lattice_.Build(stagedLattice_, patches_);
+  for (size_t i = 0; i < staged_->twin.size(); ++i) twin_[i] = staged_->twin[i];
+  // Field by field, so the padding keeps the arena's zeros (a checkpoint
+  // holds the arena's bytes).
+  for (uint32_t k = 0; k < numOutside_; ++k) {
+    const Outside& o = staged_->outside[k];
+    outside_[k].shooter.patch = o.shooter.patch;
+    outside_[k].shots = o.shots;
+    for (int c = 0; c < 3; ++c) {
+      outside_[k].shooter.power[c] = o.shooter.power[c];
+      outside_[k].unshot[c] = o.unshot[c];
+    }
+  }
+  for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
+  lattice_.Build(staged_->lattice, patches_);
   grid_.Build(patches_, geom_);
   if (options_.directSamples > 0) direct_.Build(patches_);
   centreStepsPerRay_ = 1;
@@ -266,11 +309,6 @@ bool Environment::Build() {
   maskDirections_.Fill();
   FillFlightCols();
   cache_.Clear();
-  std::vector<Patch>().swap(staged_);
-  std::vector<PatchGeom>().swap(stagedGeom_);
-  std::vector<uint32_t>().swap(stagedTwin_);
-  std::vector<Outside>().swap(stagedOutside_);
-  std::vector<PatchTexture>().swap(stagedTex_);
   // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
   // patch of theirs) as they were: their patches show the solved whole.
   if (!smoothPatch_.empty()) {
@@ -283,7 +321,7 @@ bool Environment::Build() {
       smoothPatch_[i] =
           std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
   }
-  stagedLattice_ = DisplayLattice::Staged();
+  staged_.reset();  // the heap copies, no longer needed
   Reset();
   return true;
 }

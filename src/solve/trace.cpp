@@ -21,6 +21,21 @@
 
 namespace vismask {
 
+// What a shot's rays did here, summed in ray order and booked once a shot
+// (Distribute and TraceAlive share it).
+struct Environment::ShotTally {
+  uint64_t traced = 0, hits = 0;
+  double lost[3] = {0, 0, 0};     // left the scene
+  double backHit[3] = {0, 0, 0};  // absorbed by back faces
+  bool outside = false;           // an outside shooter's rays (EnergyLedger::outsideLost)
+};
+
+// Ray r of a shot of shooter `id` from its five uniforms: ShotRay for a
+// patch; for an outside shooter (outside.h) its direction (cosine for the
+// sky, the sun's cone for the sun) from a point of its face, the origin
+// moved back along the ray to OutsideLift() outside the scene's box, so
+// that the ray crosses geometry lying on the box's face (a floor on its
+// bottom) rather than starting in its plane.
 Ray Environment::MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
                              glm::vec3* local) const {
   const OutsideKind kind = OutsideKindOf(id);
@@ -45,6 +60,7 @@ Ray Environment::MakeShotRay(const PatchSampler& sampler, uint32_t id, const flo
   return ray;
 }
 
+// A ray's first hit here: a front side receives `share`, a back side absorbs it.
 void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally) {
   ++tally->hits;
   if (!hit.front) {
@@ -54,6 +70,7 @@ void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], Sh
   Receive(hit.patch, share, ray.o + hit.t * ray.d);
 }
 
+// The tally into the ledger and the statistics.
 void Environment::Book(const ShotTally& tally) {
   for (int c = 0; c < 3; ++c) {
     ledger_.escaped[c] += tally.lost[c];
@@ -64,6 +81,9 @@ void Environment::Book(const ShotTally& tally) {
   stats_.hits += tally.hits;
 }
 
+// The face by which a ray from inside leaves this environment's box (the
+// nearest far plane: 2 * axis + (step > 0)), or -1 if beyond it lies no
+// environment: the ray leaves the scene.
 int Environment::ExitFace(const Ray& ray) const {
   // The face through which the ray leaves this box: the nearest far plane.
   float best = std::numeric_limits<float>::infinity();
@@ -82,6 +102,15 @@ int Environment::ExitFace(const Ray& ray) const {
   return 2 * axis + (step > 0);
 }
 
+// Traces `rays` rays of one shooter through this environment. Rays whose
+// pixel is closed in `in` are skipped; with a mask method, `out` loses the
+// pixels of rays that hit here (A), of centre rays that hit (B), or of
+// pixels the rays only hit and those whose centre ray hits (C).
+// `centre`, when given, is this shooter's slot of the centre-mask cache
+// (CachedCentre): B reads every pixel from it; C reads the pixels set in
+// *known, and casts the others it needs into it.
+// `read` (--centre-rays read, B): the pixels downstream will read; B
+// decides only those (ReadPixels).
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out,
                              MaskBits* centreMask, MaskBits* known, MaskBits* read) {
@@ -205,6 +234,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   }
 }
 
+// Casts the centre ray of every pixel open in *mask and closes those that
+// hit, after closing those that lead to no neighbour (KeepExits).
 void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   PatchSampler sampler = MakePatchSampler(shooter);
   glm::vec3 centre(0.0f);
@@ -240,6 +271,11 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   if (skip.patch == kNoPatch || shotCount_[skip.patch] == 1) centreWork_ += work;
 }
 
+// Local patch i's slot of the centre-mask cache: false when the cache has
+// no slots. *centre: a pixel is open iff its centre ray from the shooter's
+// centre hits nothing here. B: every pixel, cast on a miss. C, and B with
+// --centre-rays read (PartCentres): the pixels set in *known (none after
+// a miss), which Distribute adds to.
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
   bool miss = false;
   if (!cache_.Find(i, centre, known, &miss)) return false;
@@ -247,6 +283,12 @@ bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
   return true;
 }
 
+// Method R: regenerates the shot's rays from its key and traces those
+// whose bit is set in `alive` (a foreign shot: the rays that entered this
+// box). A ray that leaves the box for a neighbour is routed: its bit is
+// set in routes[ExitFace], the packet for the neighbour across that face
+// (the six route masks are cleared first); rays absorbed here or escaping
+// the scene end.
 void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t shotKey, uint32_t rays, bool foreign, const MaskBits& alive,
                              MaskBits* routes) {
