@@ -134,9 +134,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
   tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
-  centre /= static_cast<float>(shooter.numCorners);
+  const glm::vec3 centre = CentreOf(shooter);
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     points.Next(r, u, true);
