@@ -61,8 +61,8 @@ Shots Follow(const EnvGrid& grid, int source, CentreChoice choice, int shots, ui
   for (int s = 0; s < shots; ++s) {
     std::vector<std::vector<uint8_t>> pending;
     auto take = [&](Environment* e) {
-      for (uint32_t k = 0; k < e->outboxCount(); ++k) {
-        const uint8_t* p = e->OutboxPacket(k);
+      for (uint32_t k = 0; k < e->outbox().count(); ++k) {
+        const uint8_t* p = e->outbox().Packet(k);
         pending.emplace_back(p, p + e->packetBytes());
         const PacketHeader h = ReadHeader(p);
         out.readShots += (h.flags & kReadsOnly) != 0;

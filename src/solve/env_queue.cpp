@@ -1,8 +1,9 @@
 // Environment, its shots and its queue: local shots, the foreign shooters
 // queued from other environments (slots, admission, delivery), forwarding
-// shooters downstream with their masks, a round's work, and the power still
-// in flight. The rest of Environment is in environment.cpp, env_receive.cpp
-// and trace.cpp.
+// shooters downstream with their masks, and a round's shots. The slots
+// themselves are a ForeignQueue (foreign_queue.h); the power still in
+// flight is in env_flight.cpp, the rest of Environment in environment.cpp,
+// env_receive.cpp, env_read.cpp and trace.cpp.
 #include <algorithm>
 #include <cmath>
 #include <glm/common.hpp>
@@ -16,11 +17,15 @@
 
 namespace vismask {
 
+// Method C's two working masks: pixels some ray hit in, and pixels some ray
+// passed unoccluded.
 MaskBits Environment::ScratchMask(uint32_t k) const {
   size_t w = shape_.words();
   return MaskBits(scratchWords_.subspan(k * w, w), shape_);
 }
 
+// The grid cells downstream of this environment for a shooter from
+// `sourceEnv` (at most 6, into `next`), and how many there are.
 int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
   int source[3];
   envGrid_.Cell(static_cast<int>(sourceEnv), source);
@@ -39,6 +44,9 @@ int Environment::Downstream(uint32_t sourceEnv, int (*next)[3]) const {
   return count;
 }
 
+// Sends the shooter's packet header and `mask` to the neighbours downstream from
+// the source environment; Method R sends each neighbour its face's route
+// mask (`routes`, TraceAlive) instead.
 void Environment::Forward(PacketHeader h, const MaskBits& mask, const MaskBits* routes) {
   int next[6][3];
   int count = Downstream(h.sourceEnv, next);
@@ -52,10 +60,8 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask, const MaskBits* 
     for (int a = 0; a < 3; ++a)
       if (c[a] != cell_[a]) face = 2 * a + (c[a] > cell_[a]);
     if (routes && routes[face].CountOpen(0, h.rays) == 0) continue;
-    CHECK_MSG(outCount_ < outCapacity_, "outbox sized for 6 packets per shot");
-    uint8_t* packet = outbox_.data() + size_t(outCount_) * packetBytes_;
+    uint8_t* packet = outbox_.Add();
     h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
-    ++outCount_;
     if (routes) {
       routes[face].Pack(MaskBytes(packet), h.rays);
     } else if (!shape_.empty()) {
@@ -148,6 +154,8 @@ bool Environment::HasLocalUnshot() const {
   return BestOutside() >= 0;
 }
 
+// The outside shooter with the most unshot power (ties to the first), or
+// -1 when none has any.
 int Environment::BestOutside() const {
   int best = -1;
   double key = 0.0;
@@ -162,6 +170,8 @@ int Environment::BestOutside() const {
   return best;
 }
 
+// Outside shooter k (--sky, --sun) shoots, as a local patch does but with
+// no patch to skip and no centre-mask cache.
 void Environment::ShootOutside(uint32_t k) {
   Outside& o = outside_[k];
   const Patch& p = o.shooter.patch;
@@ -181,17 +191,12 @@ void Environment::ShootOutside(uint32_t k) {
   ShootOwn(p, Skip(kNoPatch), power, key, shotIndex, rays, kNoPatch);
 }
 
-MaskBits Environment::SlotMask(uint32_t slot) const {
-  size_t w = shape_.words();
-  return MaskBits(slotWords_.subspan(slot * w, w), shape_);
-}
-
 void Environment::ShootForeign(uint32_t s) {
   // A foreign shot's light is indirect here (per-pixel direct light runs
   // with one environment only: DESIGN, Direct light per pixel).
   for (double& d : shotDirect_) d = 0.0;
-  Slot& slot = slots_[s];
-  MaskBits in = SlotMask(s);
+  const ForeignQueue::Slot& slot = queue_.slot(s);
+  MaskBits in = queue_.Mask(s);
   MaskBits out = ScratchMask(0);
   if (options_.maskMethod != MaskMethod::kR) out.CopyFrom(in);  // R routes its rays instead
   Patch shooter = PatchFromHeader(slot.header);
@@ -217,85 +222,23 @@ void Environment::ShootForeign(uint32_t s) {
   }
   ++stats_.foreignShots;
   if (forward) Forward(slot.header, out, options_.maskMethod == MaskMethod::kR ? routes : nullptr);
-  slotIndex_.Release(static_cast<int>(s), slot.header.shooterId, slot.header.shotIndex);
-  readyTree_.Set(s, -std::numeric_limits<double>::infinity());
-  slot = Slot();
-  --queued_;
-}
-
-int Environment::FindSlot(uint32_t shooterId, uint32_t shotIndex) const {
-  return slotIndex_.Find(shooterId, shotIndex);
-}
-
-int Environment::BestReadySlot() const {
-  // The largest key, ties to the lower shooter id and shot (readyTree_'s ties).
-  const uint32_t s = readyTree_.Top();
-  if (s == kNoPatch || readyTree_.Key(s) == -std::numeric_limits<double>::infinity()) return -1;
-  return static_cast<int>(s);
+  queue_.Release(s);
 }
 
 void Environment::Deliver(const uint8_t* packet) {
   PacketHeader h = ReadHeader(packet);
   CHECK(h.toEnv == index_ && numNeighbours_ > 0);
-  int s = FindSlot(h.shooterId, h.shotIndex);
-  bool fresh = s < 0;
-  if (fresh) {
-    s = slotIndex_.Take(h.shooterId, h.shotIndex);  // the lowest free slot
-    CHECK_MSG(s >= 0, "foreign-shooter queue full: the admission rule failed");
-    Slot& slot = slots_[s];
-    slot = Slot();
-    slot.header = h;
-    slot.used = 1;
-    // A hemisphere mask waits for every upstream neighbour's. R's packets
-    // come only from neighbours that send rays here, each ready at once;
-    // those of one round for one shot go into one slot (Or, below).
-    if (options_.maskMethod == MaskMethod::kR) {
-      slot.expected = 1;
-    } else {
-      int source[3];
-      envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
-      for (int a = 0; a < 3; ++a) slot.expected += cell_[a] != source[a];
-    }
-    ++queued_;
+  // A hemisphere mask waits for every upstream neighbour's. R's packets
+  // come only from neighbours that send rays here, each ready at once;
+  // those of one round for one shot go into one slot (ForeignQueue::Deliver).
+  uint32_t expected = 1;
+  if (options_.maskMethod != MaskMethod::kR) {
+    int source[3];
+    envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
+    expected = 0;
+    for (int a = 0; a < 3; ++a) expected += cell_[a] != source[a];
   }
-  Slot& slot = slots_[s];
-  MaskBits mask = SlotMask(static_cast<uint32_t>(s));
-  if (!shape_.empty()) {
-    const uint32_t rayBits = options_.maskMethod == MaskMethod::kR ? h.rays : ~0u;
-    if (fresh) {
-      mask.Unpack(MaskBytes(packet), rayBits);
-    } else {
-      // A hemisphere's pixels pass only where every upstream mask has them
-      // open; R's rays each come from the one neighbour they left for.
-      MaskBits incoming = ScratchMask(1);
-      incoming.Unpack(MaskBytes(packet), rayBits);
-      if (options_.maskMethod == MaskMethod::kR)
-        mask.OrPrefix(incoming, rayBits);
-      else
-        mask.And(incoming);
-    }
-  }
-  ++slot.received;
-  if (options_.maskMethod != MaskMethod::kR)                 // R books its flight in the ledger
-    slot.flightShare += static_cast<double>(h.flightShare);  // by the sender (Forward)
-  double power = h.power[0] + h.power[1] + h.power[2];
-  // Method R's open share is of the shot's own rays (bits past them are closed).
-  if (shape_.empty())
-    slot.key = power;
-  else if (options_.maskMethod == MaskMethod::kR) {
-    // The share of the shot's rays that entered here. A slot no ray entered
-    // (yet) is only passed on, at once: its neighbours downstream wait for it.
-    const uint32_t entered = mask.CountOpen(0, std::min(h.rays, mask.bits()));
-    slot.key = entered > 0 ? power * entered / (h.rays > 0 ? h.rays : 1)
-                           : std::numeric_limits<double>::infinity();
-  } else if (h.flags & kReadsOnly)
-    slot.key = power * slot.flightShare;  // ReadShare: the share of its rays that pass
-  else
-    slot.key = power * mask.OpenFraction();
-  readyTree_.Set(
-      static_cast<uint32_t>(s),
-      slot.received < slot.expected ? -std::numeric_limits<double>::infinity() : slot.key,
-      (uint64_t(h.shooterId) << 32) | h.shotIndex);
+  queue_.Deliver(packet, h, options_.maskMethod, expected, ScratchMask(1));
 }
 
 void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork) {
@@ -319,8 +262,8 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
       }
     }
     bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newForwards_ > 0);
-    int s = numNeighbours_ > 0 ? BestReadySlot() : -1;
-    if (s >= 0 && (!localOk || slots_[s].key >= localKey)) {
+    int s = numNeighbours_ > 0 ? queue_.BestReady() : -1;
+    if (s >= 0 && (!localOk || queue_.slot(static_cast<uint32_t>(s)).key >= localKey)) {
       ShootForeign(static_cast<uint32_t>(s));
     } else if (localOk && local == kOutsideIdBase) {
       ShootOutside(static_cast<uint32_t>(outside));
@@ -331,124 +274,6 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
     }
   }
   stats_.gridSteps = grid_.steps();
-}
-
-void Environment::FlightPower(double power[3]) const {
-  const bool methodR = options_.maskMethod == MaskMethod::kR;
-  for (int c = 0; c < 3; ++c) power[c] = methodR ? ledger_.inFlight[c] : 0.0;
-  if (methodR) return;
-  for (const Slot& s : slots_)
-    if (s.used)
-      for (int c = 0; c < 3; ++c) power[c] += s.header.power[c] * s.flightShare;
-  // The packets not yet delivered: their receivers' shares (Forward).
-  for (uint32_t k = 0; k < outCount_; ++k) {
-    PacketHeader h = ReadHeader(OutboxPacket(k));
-    for (int c = 0; c < 3; ++c) power[c] += h.power[c] * h.flightShare;
-  }
-}
-
-// Without a mask, FlightShare looks at directions on a hemisphere of this resolution.
-constexpr uint32_t kNoMaskRes = 16;
-
-uint32_t Environment::FlightRes() const {
-  return shape_.empty() ? kNoMaskRes : shape_.res;
-}
-
-void Environment::FillFlightCols() {
-  if (flightCols_.empty()) return;
-  // A rotation by one column's angle per column, from half a column: the
-  // very recurrence FlightShare used to run in every row, so the same bits.
-  const uint32_t cols = 4 * FlightRes();
-  const double step = 6.283185307179586 / cols;
-  const double cs = std::cos(step), sn = std::sin(step);
-  double c = std::cos(0.5 * step), s = std::sin(0.5 * step);
-  for (uint32_t col = 0; col < cols; ++col) {
-    flightCols_[2 * col] = c;
-    flightCols_[2 * col + 1] = s;
-    double rc = c * cs - s * sn;
-    s = s * cs + c * sn;
-    c = rc;
-  }
-}
-
-double Environment::FlightShareAt(const uint8_t* packet) const {
-  PacketHeader h = ReadHeader(packet);
-  return FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet), box_, cell_);
-}
-
-double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
-                                const int to[3]) const {
-  const uint32_t res = FlightRes(), cols = 4 * res;
-  int from[3];
-  envGrid_.Cell(static_cast<int>(h.fromEnv), from);
-  int axis = 0;
-  for (int a = 0; a < 3; ++a)
-    if (from[a] != to[a]) axis = a;
-  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-  const double plane = from[axis] < to[axis] ? box.lo[axis] : box.hi[axis];
-  // The centre ray's origin and frame, as Method B casts it.
-  Patch shooter = PatchFromHeader(h);
-  Frame f = MakePatchSampler(shooter).frame;
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
-  centre /= static_cast<float>(shooter.numCorners);
-  const glm::vec3 o = centre + CentreLift(shooter.globalId) * f.n;
-  const double halfPi = 1.5707963267948966;
-  const double* colCs = flightCols_.data();
-  auto isOpen = [bits](uint32_t p) { return !bits || ((bits[p >> 3] >> (p & 7)) & 1u); };
-  // Whether the centre direction of (row, col) crosses the face into this box.
-  auto crosses = [&](double st, double ct, uint32_t col) {
-    double lx = st * colCs[2 * col], ly = st * colCs[2 * col + 1];
-    // The crossing axis first: about half the directions point away.
-    double dAxis = lx * f.t[axis] + ly * f.b[axis] + ct * f.n[axis];
-    if (dAxis == 0.0) return false;
-    double t = (plane - o[axis]) / dAxis;
-    if (!(t > 0.0)) return false;
-    double d1 = lx * f.t[a1] + ly * f.b[a1] + ct * f.n[a1];
-    double d2 = lx * f.t[a2] + ly * f.b[a2] + ct * f.n[a2];
-    double q1 = o[a1] + t * d1, q2 = o[a2] + t * d2;
-    // Half-open, so a direction through an edge enters one box only.
-    return q1 >= box.lo[a1] && q1 < box.hi[a1] && q2 >= box.lo[a2] && q2 < box.hi[a2];
-  };
-  // With a mask, the face's view: only the columns that may see the face
-  // are looked at, and of those, the ones surely inside it by far more
-  // than the rounding of `crosses` are counted without it (the same count:
-  // tests/env_test.cpp).
-  PolygonView view;
-  const CentreRays rays{o, f, &maskDirections_};
-  const bool framed =
-      bits && maskDirections_.res() == res &&
-      FaceView(BoxFace(box, axis, from[axis] < to[axis] ? 0 : 1), rays, 1e-7, 1e-7, &view);
-  double share = 0.0;
-  for (uint32_t row = 0; row < res; ++row) {
-    double s0 = std::sin(row * halfPi / res), s1 = std::sin((row + 1) * halfPi / res);
-    double theta = (row + 0.5) * halfPi / res, st = std::sin(theta), ct = std::cos(theta);
-    uint32_t crossing = 0;
-    const uint32_t base = row * cols;
-    if (framed) {
-      PixelArc may, sure;
-      if (ViewRow(view, rays, row, &may, &sure))
-        ForArc(may, sure, static_cast<int>(cols), [&](int col, bool surely) {
-          uint32_t c = static_cast<uint32_t>(col);
-          crossing += isOpen(base + c) && (surely || crosses(st, ct, c));
-        });
-    } else {
-      for (uint32_t col = 0; col < cols; ++col) {
-        uint32_t p = base + col;
-        if (bits) {
-          uint8_t byte = bits[p >> 3] >> (p & 7);
-          if (byte == 0) {
-            col += 7 - (p & 7);  // the rest of this byte is closed
-            continue;
-          }
-          if (!(byte & 1u)) continue;
-        }
-        crossing += crosses(st, ct, col);
-      }
-    }
-    share += (s1 * s1 - s0 * s0) * crossing / cols;
-  }
-  return share;
 }
 
 }  // namespace vismask

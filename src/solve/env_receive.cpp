@@ -13,6 +13,7 @@
 
 namespace vismask {
 
+// Patch j receives `share` (W per channel) at point `x`.
 void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x) {
   const Patch& p = patches_[j];
   PatchEnergy& e = energy_[j];
@@ -47,6 +48,8 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
     MaybeSplit(j, leaf, path, depth);
 }
 
+// Splits leaf `e` of patch `j` (reached from the root by the children
+// `path[0..depth)`) if its quarters differ beyond noise.
 void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth) {
   const Patch& p = patches_[j];
   const bool triangle = p.numCorners == 3;
@@ -112,6 +115,9 @@ void Environment::MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32
   el.child = first;
 }
 
+// The leaf of patch `patch` holding `st`, which is left in the leaf's own
+// parameters; with `path`, the children taken are appended there (*depth
+// of them, at most the element depth).
 uint32_t Environment::Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const {
   const bool triangle = patches_[patch].numCorners == 3;
   uint32_t e = patch;
@@ -161,20 +167,8 @@ void Environment::EmissionUnshot(double out[3]) const {
     for (int c = 0; c < 3; ++c) out[c] += emitLeft_[i + c];
 }
 
-int64_t Environment::FindSmooth(uint32_t v) const {
-  const SmoothVertex* it =
-      std::lower_bound(smooth_.begin(), smooth_.end(), v,
-                       [](const SmoothVertex& s, uint32_t x) { return s.vertex < x; });
-  return it != smooth_.end() && it->vertex == v ? it - smooth_.begin() : -1;
-}
-
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {
-  for (size_t v = 0; v < vertexB_.size(); ++v) {
-    vertexB_[v] = glm::vec3(0.0f);
-    vertexWeight_[v] = 0.0f;
-    vertexFrac_[v] = 0.0f;
-    vertexInward_[v] = glm::vec3(0.0f);
-  }
+  lattice_.Clear();
   for (uint32_t i = 0; i < patches_.size(); ++i) {
     const Patch& p = patches_[i];
     glm::vec2 corners[4];
@@ -186,35 +180,10 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
       glm::vec2 centre = p.numCorners == 3 ? glm::vec2(1.0f / 3.0f) : glm::vec2(0.5f);
       uint32_t leaf = LeafAt(i, corners[k] + 1e-4f * (centre - corners[k]));
       float w = elements_[leaf].area;
-      uint32_t v = p.vertex[k];
-      vertexB_[v] += w * LeafRadiosity(i, leaf, ambient);
-      vertexWeight_[v] += w;
-      vertexFrac_[v] += std::sqrt(w / p.area);
+      lattice_.Add(p.vertex[k], w, LeafRadiosity(i, leaf, ambient), std::sqrt(w / p.area));
     }
   }
-  for (size_t v = 0; v < vertexB_.size(); ++v)
-    if (vertexWeight_[v] > 0.0f) vertexB_[v] /= vertexWeight_[v];
-  // On a polygon's outline the nodal average is the value half a leaf
-  // inside, not at the outline: in a concave corner, where the radiosity
-  // falls towards the edge, it was 6% too bright there. Extrapolate along
-  // the quads' diagonals from the interior vertices beyond them (exact for a
-  // linear gradient): f(0) = n0 + (n0 - n1) (s/2) / (1 - s/2), with s the
-  // corner leaves' edge as a share of the patch's (s = 1: 2 n0 - n1).
-  for (uint32_t i = 0; i < patches_.size(); ++i) {
-    const Patch& p = patches_[i];
-    if (p.numCorners != 4) continue;
-    for (uint32_t k = 0; k < 4; ++k)
-      if (vertexOutline_[p.vertex[k]])
-        vertexInward_[p.vertex[k]] += vertexB_[p.vertex[(k + 2) % 4]];
-  }
-  for (size_t v = 0; v < vertexB_.size(); ++v) {
-    uint8_t q = vertexOutline_[v];
-    if (q == 0) continue;
-    float s = vertexFrac_[v] / static_cast<float>(q), f = 0.5f * s / (1.0f - 0.5f * s);
-    glm::vec3 inward = vertexInward_[v] / static_cast<float>(q);
-    glm::vec3 b = vertexB_[v] + f * (vertexB_[v] - inward);
-    vertexB_[v] = glm::max(b, glm::vec3(0.0f));
-  }
+  lattice_.Finish(patches_);
 }
 
 }  // namespace vismask

@@ -17,6 +17,21 @@
 
 namespace vismask {
 
+// What Prepare copies from the mesh for Build (on the heap, init only).
+struct Environment::Staged {
+  std::vector<Patch> patches;
+  std::vector<PatchGeom> geom;
+  std::vector<uint32_t> twin;     // empty without twins
+  std::vector<PatchTexture> tex;  // empty when no patch is textured
+  std::vector<Outside> outside;
+  DisplayLattice::Staged lattice;
+};
+
+Environment::Environment() = default;
+Environment::~Environment() = default;
+
+// How many rays a local shot of `power` traces and what share of the
+// power it carries (1 unless the shot is partial).
 uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* fraction) const {
   *fraction = 1.0;
   if (options_.rayQuantum <= 0.0) return options_.rays;
@@ -32,8 +47,7 @@ uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* 
   return n < options_.minRays ? options_.minRays : n;
 }
 
-void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices,
-                         const Grid::Plan& plan) {
+void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan) {
   size_t mark = arena.used();
   auto part = [&](uint64_t* bytes) {
     *bytes = arena.used() - mark;
@@ -41,7 +55,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   };
   patches_ = arena.Alloc<Patch>(numPatches);
   geom_ = arena.Alloc<PatchGeom>(numPatches);
-  twin_ = arena.Alloc<uint32_t>(stagedTwin_.size());
+  twin_ = arena.Alloc<uint32_t>(staged_->twin.size());
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
   if (numOutside_ > 0) outside_ = arena.Alloc<Outside>(numOutside_);
@@ -55,34 +69,20 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   indirect_ =
       arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
   emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
-  smoothPatch_ = arena.Alloc<uint8_t>(direct && !stagedSmooth_.empty() ? numPatches : 0);
-  direct_.Layout(arena, direct
-                            ? DirectLight::Count(Span<const Patch>(staged_.data(), staged_.size()))
-                            : DirectLight::Counts{});
+  smoothPatch_ = arena.Alloc<uint8_t>(direct && !staged_->lattice.smooth.empty() ? numPatches : 0);
+  direct_.Layout(arena, direct ? DirectLight::Count(Span<const Patch>(staged_->patches.data(),
+                                                                      staged_->patches.size()))
+                               : DirectLight::Counts{});
   part(&footprint_.elements);
-  vertices_ = arena.Alloc<glm::vec3>(numVertices);
-  vertexB_ = arena.Alloc<glm::vec3>(numVertices);
-  vertexWeight_ = arena.Alloc<float>(numVertices);
-  cutVertex_ = arena.Alloc<uint32_t>(stagedCut_.size());
-  vertexCut_ = arena.Alloc<uint8_t>(numVertices);
-  vertexOutline_ = arena.Alloc<uint8_t>(numVertices);
-  vertexFrac_ = arena.Alloc<float>(numVertices);
-  vertexInward_ = arena.Alloc<glm::vec3>(numVertices);
-  cutNormal_ = arena.Alloc<glm::vec3>(stagedCut_.size());
-  smooth_ = arena.Alloc<SmoothVertex>(stagedSmooth_.size());
-  smoothMatched_ = arena.Alloc<uint8_t>(stagedSmooth_.size());
-  patchSmoothEdges_ = arena.Alloc<uint8_t>(stagedSmoothEdges_.size());
+  lattice_.Layout(arena, staged_->lattice);
   part(&footprint_.vertices);
-  patchTex_ = arena.Alloc<PatchTexture>(stagedTex_.empty() ? 0 : numPatches);
+  patchTex_ = arena.Alloc<PatchTexture>(staged_->tex.empty() ? 0 : numPatches);
   part(&footprint_.textures);
   grid_.Layout(arena, plan);
   part(&footprint_.grid);
   // Exchange buffers only where there is someone to exchange with.
   uint32_t q = numNeighbours_ > 0 ? options_.queueCapacity : 0;
-  slots_ = arena.Alloc<Slot>(q);
-  slotIndex_.Layout(arena, q);
-  readyTree_.Layout(arena, q, true);
-  slotWords_ = arena.Alloc<uint64_t>(size_t(q) * shape_.words());
+  queue_.Layout(arena, q, shape_);
   part(&footprint_.queue);
   FillReadCosts(numPatches);
   // Out and incoming; C's hit and passed, or B's read and decide; R's six route masks.
@@ -98,19 +98,93 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices
   // FlightShare's column directions: (cos, sin) of each column's phi.
   const bool flight = numNeighbours_ > 0 && options_.maskMethod != MaskMethod::kR;
   flightCols_ = arena.Alloc<double>(flight ? 2 * 4 * size_t(FlightRes()) : 0);
-  // The centre-mask cache: a slot per patch while they fit (C: a second
-  // mask per slot, the pixels whose centre ray is known).
-  size_t cacheSlots = 0, perSlot = (PartCentres() ? 2 : 1) * shape_.words();
-  if (centreRays && perSlot > 0)
-    cacheSlots = std::min<uint64_t>(numPatches, options_.maskCacheBytes / (8 * perSlot));
-  cacheWords_ = arena.Alloc<uint64_t>(cacheSlots * perSlot);
-  cacheTag_ = arena.Alloc<uint32_t>(cacheSlots);
-  outbox_ = arena.Alloc<uint8_t>(size_t(outCapacity_) * packetBytes_);
+  // The centre-mask cache: a slot per patch while they fit.
+  cache_.Layout(arena, centreRays, numPatches, options_.maskCacheBytes, shape_, PartCentres());
+  outbox_.Layout(arena, numNeighbours_ > 0 ? 6 * options_.roundShots : 0, packetBytes_);
   part(&footprint_.packets);
   footprint_.total = ArenaRoundUp(arena.used());
   footprint_.numPatches = numPatches;
   footprint_.gridCells = uint64_t(plan.res[0]) * plan.res[1] * plan.res[2];
 }
+
+namespace {
+
+// The staged lattice's vertices on a face environment cell `cell` (box
+// `box`) shares with a neighbour, and their surface's normal.
+void StageCuts(const EnvGrid& grid, const int cell[3], const Bounds& box,
+               const std::vector<Patch>& patches, DisplayLattice::Staged* lattice) {
+  // Lattice vertices on a face shared with a neighbour.
+  lattice->cut.clear();
+  lattice->cutNormal.clear();
+  {
+    glm::vec3 extent = grid.box.hi - grid.box.lo;
+    float tol = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
+    std::vector<char> seen(lattice->vertices.size(), 0);
+    for (const Patch& p : patches) {
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        uint32_t v = p.vertex[k];
+        if (seen[v]) continue;
+        seen[v] = 1;
+        const glm::vec3& x = lattice->vertices[v];
+        bool cut = false;
+        for (int a = 0; a < 3; ++a) {
+          cut |= cell[a] > 0 && std::fabs(x[a] - box.lo[a]) <= tol;
+          cut |= cell[a] + 1 < grid.n[a] && std::fabs(x[a] - box.hi[a]) <= tol;
+        }
+        if (!cut) continue;
+        lattice->cut.push_back(v);
+        lattice->cutNormal.push_back(p.normal);
+      }
+    }
+  }
+}
+
+// The staged lattice's smooth vertices (local ids, by vertex: `vertexMap`
+// from the mesh's), the patch edges between two on one outline edge of
+// their polygon, and how many vertices the display shares.
+void StageSmooth(const Mesh& mesh, const std::unordered_map<uint32_t, uint32_t>& vertexMap,
+                 const std::vector<Patch>& patches, DisplayLattice::Staged* lattice) {
+  // Smooth vertices (local ids, by vertex), and the patch edges between two
+  // on one outline edge of their polygon.
+  lattice->smooth.clear();
+  lattice->smoothEdges.clear();
+  if (!mesh.smooth.empty()) {
+    std::vector<uint32_t> at(lattice->vertices.size(),
+                             kNoPatch);  // local vertex -> lattice->smooth
+    for (const SmoothVertex& s : mesh.smooth) {
+      auto it = vertexMap.find(s.vertex);
+      if (it == vertexMap.end()) continue;
+      lattice->smooth.push_back(s);
+      lattice->smooth.back().vertex = it->second;
+    }
+    std::sort(lattice->smooth.begin(), lattice->smooth.end(),
+              [](const SmoothVertex& a, const SmoothVertex& b) { return a.vertex < b.vertex; });
+    for (uint32_t k = 0; k < lattice->smooth.size(); ++k) at[lattice->smooth[k].vertex] = k;
+    if (!lattice->smooth.empty()) {
+      lattice->smoothEdges.assign(patches.size(), 0);
+      for (size_t i = 0; i < patches.size(); ++i) {
+        const Patch& p = patches[i];
+        for (uint32_t k = 0; k < p.numCorners; ++k) {
+          uint32_t a = at[p.vertex[k]], b = at[p.vertex[(k + 1) % p.numCorners]];
+          if (a == kNoPatch || b == kNoPatch) continue;
+          const SmoothVertex &sa = lattice->smooth[a], &sb = lattice->smooth[b];
+          bool common = false;
+          for (uint32_t ea : sa.edge)
+            for (uint32_t eb : sb.edge) common |= ea == eb;
+          if (common) lattice->smoothEdges[i] |= static_cast<uint8_t>(1u << k);
+        }
+      }
+    }
+  }
+  lattice->numShared = static_cast<uint32_t>(lattice->cut.size());
+  {
+    std::vector<char> cut(lattice->vertices.size(), 0);
+    for (uint32_t v : lattice->cut) cut[v] = 1;
+    for (const SmoothVertex& s : lattice->smooth) lattice->numShared += cut[s.vertex] ? 0 : 1;
+  }
+}
+
+}  // namespace
 
 const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                                          const std::vector<uint32_t>& ids,
@@ -131,21 +205,21 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
-  outCapacity_ = numNeighbours_ > 0 ? 6 * options.roundShots : 0;
+  staged_ = std::make_unique<Staged>();
   {
     std::vector<OutsideShooter> shooters;
     OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
                     &shooters);
-    stagedOutside_.clear();
-    for (const OutsideShooter& s : shooters) stagedOutside_.push_back(Outside{s, {0, 0, 0}, 0});
-    numOutside_ = static_cast<uint32_t>(stagedOutside_.size());
+    staged_->outside.clear();
+    for (const OutsideShooter& s : shooters) staged_->outside.push_back(Outside{s, {0, 0, 0}, 0});
+    numOutside_ = static_cast<uint32_t>(staged_->outside.size());
   }
 
   // Local copies of the patches and a compact local vertex lattice.
-  staged_.clear();
-  stagedVertices_.clear();
-  stagedTex_.clear();
-  staged_.reserve(ids.size());
+  staged_->patches.clear();
+  staged_->lattice.vertices.clear();
+  staged_->tex.clear();
+  staged_->patches.reserve(ids.size());
   bool textured = false;
   std::unordered_map<uint32_t, uint32_t> vertexMap;
   for (uint32_t id : ids) {
@@ -153,25 +227,26 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     for (int k = 0; k < 4; ++k) {
       auto it = vertexMap.find(p.vertex[k]);
       if (it == vertexMap.end()) {
-        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(stagedVertices_.size())).first;
-        stagedVertices_.push_back(mesh.vertices[p.vertex[k]]);
+        it = vertexMap.emplace(p.vertex[k], static_cast<uint32_t>(staged_->lattice.vertices.size()))
+                 .first;
+        staged_->lattice.vertices.push_back(mesh.vertices[p.vertex[k]]);
       }
       p.vertex[k] = it->second;
     }
-    staged_.push_back(p);
+    staged_->patches.push_back(p);
     if (!mesh.textures.empty()) {
-      stagedTex_.push_back(mesh.textures[id]);
+      staged_->tex.push_back(mesh.textures[id]);
       textured |= mesh.textures[id].texture != kNoTexture;
     }
   }
   // Ray-test data; a twin's from its original's (TwinGeom), and the pairs.
-  stagedGeom_.clear();
-  stagedTwin_.clear();
+  staged_->geom.clear();
+  staged_->twin.clear();
   numTwins_ = 0;
   for (uint32_t id : ids) {
     bool copy = !mesh.twin.empty() && mesh.twin[id] != kNoPatch && mesh.twin[id] < id;
-    stagedGeom_.push_back(copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[id]]))
-                               : MakePatchGeom(mesh.patches[id]));
+    staged_->geom.push_back(copy ? TwinGeom(MakePatchGeom(mesh.patches[mesh.twin[id]]))
+                                 : MakePatchGeom(mesh.patches[id]));
     numTwins_ += copy;
   }
   if (!mesh.twin.empty()) {
@@ -179,128 +254,52 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
     for (uint32_t i = 0; i < ids.size(); ++i) local.emplace(ids[i], i);
     for (uint32_t id : ids) {
       auto it = mesh.twin[id] == kNoPatch ? local.end() : local.find(mesh.twin[id]);
-      stagedTwin_.push_back(it == local.end() ? kNoPatch : it->second);
+      staged_->twin.push_back(it == local.end() ? kNoPatch : it->second);
     }
   }
-  if (!textured) stagedTex_.clear();
-  // Lattice vertices on a face shared with a neighbour.
-  stagedCut_.clear();
-  stagedCutNormal_.clear();
-  {
-    glm::vec3 extent = grid.box.hi - grid.box.lo;
-    float tol = 1e-5f * std::fmax(extent.x, std::fmax(extent.y, extent.z));
-    std::vector<char> seen(stagedVertices_.size(), 0);
-    for (const Patch& p : staged_) {
-      for (uint32_t k = 0; k < p.numCorners; ++k) {
-        uint32_t v = p.vertex[k];
-        if (seen[v]) continue;
-        seen[v] = 1;
-        const glm::vec3& x = stagedVertices_[v];
-        bool cut = false;
-        for (int a = 0; a < 3; ++a) {
-          cut |= cell_[a] > 0 && std::fabs(x[a] - box_.lo[a]) <= tol;
-          cut |= cell_[a] + 1 < grid.n[a] && std::fabs(x[a] - box_.hi[a]) <= tol;
-        }
-        if (!cut) continue;
-        stagedCut_.push_back(v);
-        stagedCutNormal_.push_back(p.normal);
-      }
-    }
-  }
-  numCut_ = static_cast<uint32_t>(stagedCut_.size());
-  // Smooth vertices (local ids, by vertex), and the patch edges between two
-  // on one outline edge of their polygon.
-  stagedSmooth_.clear();
-  stagedSmoothEdges_.clear();
-  if (!mesh.smooth.empty()) {
-    std::vector<uint32_t> at(stagedVertices_.size(), kNoPatch);  // local vertex -> stagedSmooth_
-    for (const SmoothVertex& s : mesh.smooth) {
-      auto it = vertexMap.find(s.vertex);
-      if (it == vertexMap.end()) continue;
-      stagedSmooth_.push_back(s);
-      stagedSmooth_.back().vertex = it->second;
-    }
-    std::sort(stagedSmooth_.begin(), stagedSmooth_.end(),
-              [](const SmoothVertex& a, const SmoothVertex& b) { return a.vertex < b.vertex; });
-    for (uint32_t k = 0; k < stagedSmooth_.size(); ++k) at[stagedSmooth_[k].vertex] = k;
-    if (!stagedSmooth_.empty()) {
-      stagedSmoothEdges_.assign(staged_.size(), 0);
-      for (size_t i = 0; i < staged_.size(); ++i) {
-        const Patch& p = staged_[i];
-        for (uint32_t k = 0; k < p.numCorners; ++k) {
-          uint32_t a = at[p.vertex[k]], b = at[p.vertex[(k + 1) % p.numCorners]];
-          if (a == kNoPatch || b == kNoPatch) continue;
-          const SmoothVertex &sa = stagedSmooth_[a], &sb = stagedSmooth_[b];
-          bool common = false;
-          for (uint32_t ea : sa.edge)
-            for (uint32_t eb : sb.edge) common |= ea == eb;
-          if (common) stagedSmoothEdges_[i] |= static_cast<uint8_t>(1u << k);
-        }
-      }
-    }
-  }
-  numShared_ = numCut_;
-  {
-    std::vector<char> cut(stagedVertices_.size(), 0);
-    for (uint32_t v : stagedCut_) cut[v] = 1;
-    for (const SmoothVertex& s : stagedSmooth_) numShared_ += cut[s.vertex] ? 0 : 1;
-  }
-  uint32_t n = static_cast<uint32_t>(staged_.size());
-  plan_ = Grid::MakePlan(Span<const Patch>(staged_.data(), n),
-                         Span<const PatchGeom>(stagedGeom_.data(), n), options.gridDensity);
+  if (!textured) staged_->tex.clear();
+  StageCuts(grid, cell_, box_, staged_->patches, &staged_->lattice);
+  StageSmooth(mesh, vertexMap, staged_->patches, &staged_->lattice);
+  uint32_t n = static_cast<uint32_t>(staged_->patches.size());
+  plan_ = Grid::MakePlan(Span<const Patch>(staged_->patches.data(), n),
+                         Span<const PatchGeom>(staged_->geom.data(), n), options.gridDensity);
   Arena measure = Arena::Measure();
-  Layout(measure, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  Layout(measure, n, plan_);
   // What --export will write of this environment (src/output/export.cpp).
-  footprint_.numVertices = stagedVertices_.size();
+  footprint_.numVertices = staged_->lattice.vertices.size();
   footprint_.numTriangles = 0;
-  for (const Patch& p : staged_) footprint_.numTriangles += p.numCorners == 4 ? 2 : 1;
+  for (const Patch& p : staged_->patches) footprint_.numTriangles += p.numCorners == 4 ? 2 : 1;
   return footprint_;
 }
 
 bool Environment::Build() {
-  uint32_t n = static_cast<uint32_t>(staged_.size());
+  uint32_t n = static_cast<uint32_t>(staged_->patches.size());
   if (!Arena::Reserve(footprint_.total, &arena_)) return false;
-  Layout(arena_, n, static_cast<uint32_t>(stagedVertices_.size()), plan_);
+  Layout(arena_, n, plan_);
   CHECK(ArenaRoundUp(arena_.used()) == arena_.capacity());
   totalArea_ = 0.0;
   kdArea_ = 0.0;
   for (uint32_t i = 0; i < n; ++i) {
-    patches_[i] = staged_[i];
-    geom_[i] = stagedGeom_[i];
-    totalArea_ += staged_[i].area;
-    const glm::vec3& kd = staged_[i].kd;
-    kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_[i].area;
+    patches_[i] = staged_->patches[i];
+    geom_[i] = staged_->geom[i];
+    totalArea_ += staged_->patches[i].area;
+    const glm::vec3& kd = staged_->patches[i].kd;
+    kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_->patches[i].area;
   }
-  for (size_t i = 0; i < stagedTwin_.size(); ++i) twin_[i] = stagedTwin_[i];
-  for (uint32_t k = 0; k < numOutside_; ++k) outside_[k] = stagedOutside_[k];
-  for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = stagedTex_[i];
-  for (size_t v = 0; v < stagedVertices_.size(); ++v) vertices_[v] = stagedVertices_[v];
-  for (size_t v = 0; v < vertexCut_.size(); ++v) vertexCut_[v] = 0;
-  for (size_t k = 0; k < stagedCut_.size(); ++k) {
-    vertexCut_[stagedCut_[k]] = 1;
-    cutVertex_[k] = stagedCut_[k];
-    cutNormal_[k] = stagedCutNormal_[k];
-  }
-  // The outline vertices to extrapolate: touched by one or two quads (and
-  // no triangle), not on a cut, and every touching quad's opposite corner an
-  // interior vertex (four quads), else the outline is too ragged or narrow
-  // to tell inward from along.
-  {
-    std::vector<uint8_t> quads(vertexOutline_.size(), 0), inward(vertexOutline_.size(), 0);
-    for (const Patch& p : staged_)
-      for (uint32_t k = 0; k < p.numCorners; ++k) {
-        uint8_t& q = quads[p.vertex[k]];
-        q = p.numCorners == 4 && q != 0xff ? q + 1 : 0xff;
-      }
-    for (const Patch& p : staged_)
-      if (p.numCorners == 4)
-        for (uint32_t k = 0; k < 4; ++k) inward[p.vertex[k]] += quads[p.vertex[(k + 2) % 4]] == 4;
-    for (size_t v = 0; v < vertexOutline_.size(); ++v) {
-      uint8_t q = quads[v];
-      bool outline = q >= 1 && q <= 2 && !vertexCut_[v] && inward[v] == q;
-      vertexOutline_[v] = outline ? q : 0;
+  for (size_t i = 0; i < staged_->twin.size(); ++i) twin_[i] = staged_->twin[i];
+  // Field by field, so the padding keeps the arena's zeros (a checkpoint
+  // holds the arena's bytes).
+  for (uint32_t k = 0; k < numOutside_; ++k) {
+    const Outside& o = staged_->outside[k];
+    outside_[k].shooter.patch = o.shooter.patch;
+    outside_[k].shots = o.shots;
+    for (int c = 0; c < 3; ++c) {
+      outside_[k].shooter.power[c] = o.shooter.power[c];
+      outside_[k].unshot[c] = o.unshot[c];
     }
   }
+  for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
+  lattice_.Build(staged_->lattice, patches_);
   grid_.Build(patches_, geom_);
   if (options_.directSamples > 0) direct_.Build(patches_);
   centreStepsPerRay_ = 1;
@@ -309,32 +308,20 @@ bool Environment::Build() {
     ++centreStepsPerRay_;
   maskDirections_.Fill();
   FillFlightCols();
-  for (uint32_t& tag : cacheTag_) tag = kNoPatch;
-  std::vector<Patch>().swap(staged_);
-  std::vector<PatchGeom>().swap(stagedGeom_);
-  std::vector<uint32_t>().swap(stagedTwin_);
-  std::vector<Outside>().swap(stagedOutside_);
-  std::vector<PatchTexture>().swap(stagedTex_);
-  std::vector<glm::vec3>().swap(stagedVertices_);
-  std::vector<uint32_t>().swap(stagedCut_);
-  std::vector<glm::vec3>().swap(stagedCutNormal_);
-  for (size_t k = 0; k < stagedSmooth_.size(); ++k) smooth_[k] = stagedSmooth_[k];
-  for (size_t i = 0; i < stagedSmoothEdges_.size(); ++i)
-    patchSmoothEdges_[i] = stagedSmoothEdges_[i];
+  cache_.Clear();
   // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
   // patch of theirs) as they were: their patches show the solved whole.
   if (!smoothPatch_.empty()) {
     std::vector<uint32_t> smoothed;
     for (const Patch& p : patches_)
       for (uint32_t k = 0; k < p.numCorners; ++k)
-        if (FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
+        if (lattice_.FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
     std::sort(smoothed.begin(), smoothed.end());
     for (uint32_t i = 0; i < patches_.size(); ++i)
       smoothPatch_[i] =
           std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
   }
-  std::vector<SmoothVertex>().swap(stagedSmooth_);
-  std::vector<uint8_t>().swap(stagedSmoothEdges_);
+  staged_.reset();  // the heap copies, no longer needed
   Reset();
   return true;
 }
@@ -380,11 +367,8 @@ void Environment::Reset() {
       ledger_.radiosity[c] += o.unshot[c];
     }
   }
-  for (Slot& s : slots_) s = Slot();
-  slotIndex_.Clear();
-  readyTree_.Clear(-std::numeric_limits<double>::infinity());
-  queued_ = 0;
-  outCount_ = 0;
+  queue_.Clear();
+  outbox_.Clear();
 }
 
 EnvState Environment::SaveState() const {
@@ -396,8 +380,8 @@ EnvState Environment::SaveState() const {
   s.centreSteps = centreSteps_;
   s.centreWork = centreWork_;
   s.nextElement = nextElement_;
-  s.queued = queued_;
-  s.outCount = outCount_;
+  s.queued = queue_.count();
+  s.outCount = outbox_.count();
   s.index = index_;
   s.ledger = ledger_;
   s.stats = stats_;
@@ -412,8 +396,8 @@ bool Environment::RestoreState(const EnvState& s) {
   centreSteps_ = s.centreSteps;
   centreWork_ = s.centreWork;
   nextElement_ = s.nextElement;
-  queued_ = s.queued;
-  outCount_ = 0;
+  queue_.SetCount(s.queued);
+  outbox_.Clear();
   ledger_ = s.ledger;
   stats_ = s.stats;
   return true;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <new>
 
 #include "vismask/core/os.h"
 
@@ -145,6 +146,97 @@ bool ShouldStop(const RoundTotals& totals, const SolveOptions& options, SolveRes
   return false;
 }
 
+// What the result reads of the totals: the unshot fraction and the bias
+// and loss estimates (after the first gather and every round).
+void SetEstimates(const RoundTotals& totals, const SolveOptions& options, SolveResult* result) {
+  result->unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
+  result->biasEstimate = BiasEstimate(totals, options.correctUnshot);
+  result->lossEstimate = LossEstimate(totals);
+}
+
+// A round's totals into the result: the counts so far, the round's
+// critical path (the most any rank or environment took) added, and the
+// estimates.
+void AddRound(const RoundTotals& totals, const SolveOptions& options, SolveResult* result) {
+  result->waitSecondsMax = totals.waitedMax;
+  result->criticalSeconds += totals.roundCpuMax;
+  result->totalComputeSeconds += totals.roundCpuSum;
+  result->criticalEnvSeconds += totals.envCpuMax;
+  result->criticalEnvSteps += totals.envStepsMax;
+  result->criticalRankSteps += totals.rankStepsMax;
+  result->criticalEnvWork += totals.envWorkMax;
+  result->criticalRankWork += totals.rankWorkMax;
+  result->work = totals.work;
+  result->gridSteps = totals.steps;
+  result->shots = totals.shots;
+  result->rays = totals.rays;
+  SetEstimates(totals, options, result);
+}
+
+// One round's shots in this rank's environments, in the run's order, each
+// environment's CPU seconds, grid steps and work recorded in *buffers.
+void RunRoundShots(Span<Environment* const> envs, const RankEnvs& rankEnvs,
+                   const SolveOptions& options, const SolveResult& result,
+                   const RoundTotals& totals, ExchangeBuffers* buffers) {
+  const uint32_t n = rankEnvs.total;
+  for (uint32_t k = 0; k < n; ++k) {
+    uint32_t i = options.order.empty() ? k : options.order[k];
+    if (i < rankEnvs.first || i >= rankEnvs.first + rankEnvs.count) continue;
+    double envCpu0 = os::CpuSeconds();
+    uint64_t steps0 = envs[i - rankEnvs.first]->stats().gridSteps;
+    uint64_t work0 = envs[i - rankEnvs.first]->workSteps();
+    envs[i - rankEnvs.first]->RunRound(
+        ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
+        AdmittedForwards(result.rounds, i, n, options.queueCapacity,
+                         options.routed ? totals.held : totals.maxOutstanding),
+        options.roundWork);
+    buffers->envCpu[i - rankEnvs.first] = os::CpuSeconds() - envCpu0;
+    buffers->envSteps[i - rankEnvs.first] = envs[i - rankEnvs.first]->stats().gridSteps - steps0;
+    buffers->envWork[i - rankEnvs.first] = envs[i - rankEnvs.first]->workSteps() - work0;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// After a round without a shot (`idleRound`; else the idle count restarts):
+// whether the solve ends, with the reason in the state's result.
+bool IdleStop(bool idleRound, uint32_t n, const SolveOptions& options, SolveState* state) {
+  SolveResult& result = state->result;
+  if (idleRound && state->totals.shootable == 0) {
+    result.reason = StopReason::kConverged;
+    return true;
+  }
+  if (idleRound && options.maxShots > 0 && options.maxShots - result.shots < uint64_t(n)) {
+    result.reason = StopReason::kMaxShots;  // the budget left went to environments with none
+    return true;
+  }
+  state->idle = idleRound ? state->idle + 1 : 0;
+  if (state->idle >= n) {
+    result.reason = StopReason::kStalled;
+    return true;
+  }
+  return false;
+}
+
+// The no-loss window after a round: a new one when the unshot power has
+// fallen enough, else whether the window is a stall (then kNoLoss).
+bool NoLossStall(SolveState* state) {
+  const RoundTotals& totals = state->totals;
+  if (totals.unshot < (1.0 - kStallFall) * state->windowUnshot) {
+    state->windowShot = totals.radiosity - totals.unshot;
+    state->windowUnshot = totals.unshot;
+    return false;
+  }
+  if (!(totals.radiosity - totals.unshot - state->windowShot >= kStallShot * state->windowUnshot))
+    return false;
+  state->result.reason = StopReason::kNoLoss;
+  state->result.stallFrom = state->windowUnshot / totals.emitted;
+  state->result.stallTo = state->result.unshotFraction;
+  return true;
+}
+
 }  // namespace
 
 SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Transport* transport,
@@ -152,9 +244,20 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
   const uint32_t n = rankEnvs.total;
   CHECK(envs.size() == rankEnvs.count);
   for (uint32_t i = 0; i < envs.size(); ++i) CHECK(envs[i]->index() == rankEnvs.first + i);
-  SolveResult result;
+  // The solve's state at a round's end lives in one SolveState, what a
+  // checkpoint keeps: zeroed (padding too: its bytes are the checkpoint's),
+  // or the checkpoint's when resumed.
   const SolveState* resume = options.resume;
-  if (resume) result = resume->result;
+  SolveState state;
+  std::memset(static_cast<void*>(&state), 0, sizeof state);
+  if (resume)
+    std::memcpy(static_cast<void*>(&state), resume, sizeof state);
+  else
+    new (&state.result) SolveResult();  // its defaults, over the zeroed padding
+  SolveResult& result = state.result;
+  RoundTotals& totals = state.totals;
+  uint64_t& measuredAt = state.measuredAt;  // the shot count last measured
+  double &windowShot = state.windowShot, &windowUnshot = state.windowUnshot;
   Progress progress(options.quiet || transport->rank() != 0, options);
   ErrorProbe* probe = options.probe;
   // Resumed: the clock goes on from the checkpoint's.
@@ -168,18 +271,13 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     ++result.errorMeasurements;
     result.errorSeconds += os::Seconds() - t0;
   };
-  uint64_t measuredAt = ~0ull;  // the shot count last measured
-  RoundTotals totals;
   if (resume) {
-    totals = resume->totals;
     totals.interrupt = 0;
-    measuredAt = resume->measuredAt;
   } else {
+    measuredAt = ~0ull;
     totals = GatherTotals(envs, rankEnvs, transport, buffers, 0.0, 0.0, &result.waitSeconds);
     result.collectives = 1;
-    result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
-    result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
-    result.lossEstimate = LossEstimate(totals);
+    SetEstimates(totals, options, &result);
   }
   if (convergence)
     convergence->Printf("shot,seconds,unshot_fraction%s\n",
@@ -196,46 +294,21 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
 
   // A checkpoint is written only where the solve goes on: a resumed one is not done.
   bool done = resume ? false : ShouldStop(totals, options, &result);
-  uint32_t idle = resume ? resume->idle : 0;
   // The no-loss window: the power shot and the unshot at its start.
-  double windowShot = resume ? resume->windowShot : totals.radiosity - totals.unshot,
-         windowUnshot = resume ? resume->windowUnshot : totals.unshot;
+  if (!resume) {
+    windowShot = totals.radiosity - totals.unshot;
+    windowUnshot = totals.unshot;
+  }
   const bool bounded = options.maxShots > 0 || options.maxSeconds > 0.0 || options.rayBudget > 0;
-  Span<double> envCpu =
-      buffers->envCpu;  // this round's CPU seconds of each of this rank's environments
-  CHECK(envCpu.size() >= envs.size());  // rounds in a row without a shot
-  SolveState state;
+  // Each of this rank's environments' CPU seconds of the round.
+  CHECK(buffers->envCpu.size() >= envs.size());
   while (!done) {
-    if (options.hook) {
-      // Zeroed, padding too: the checkpoint's bytes are the state's.
-      std::memset(static_cast<void*>(&state), 0, sizeof state);
-      state.result = result;
-      state.totals = totals;
-      state.measuredAt = measuredAt;
-      state.windowShot = windowShot;
-      state.windowUnshot = windowUnshot;
-      state.idle = idle;
-      if (options.hook->AtRoundEnd(state)) {
-        result.reason = StopReason::kInterrupted;
-        break;
-      }
+    if (options.hook && options.hook->AtRoundEnd(state)) {
+      result.reason = StopReason::kInterrupted;
+      break;
     }
     double cpu0 = os::CpuSeconds();
-    for (uint32_t k = 0; k < n; ++k) {
-      uint32_t i = options.order.empty() ? k : options.order[k];
-      if (i < rankEnvs.first || i >= rankEnvs.first + rankEnvs.count) continue;
-      double envCpu0 = os::CpuSeconds();
-      uint64_t steps0 = envs[i - rankEnvs.first]->stats().gridSteps;
-      uint64_t work0 = envs[i - rankEnvs.first]->workSteps();
-      envs[i - rankEnvs.first]->RunRound(
-          ShotBudget(i, n, options.roundShots, result.shots, options.maxShots),
-          AdmittedForwards(result.rounds, i, n, options.queueCapacity,
-                           options.routed ? totals.held : totals.maxOutstanding),
-          options.roundWork);
-      envCpu[i - rankEnvs.first] = os::CpuSeconds() - envCpu0;
-      buffers->envSteps[i - rankEnvs.first] = envs[i - rankEnvs.first]->stats().gridSteps - steps0;
-      buffers->envWork[i - rankEnvs.first] = envs[i - rankEnvs.first]->workSteps() - work0;
-    }
+    RunRoundShots(envs, rankEnvs, options, result, totals, buffers);
     double roundCpu = os::CpuSeconds() - cpu0;
     result.computeSeconds += roundCpu;
     ++result.rounds;
@@ -244,56 +317,20 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     totals =
         ExchangeRound(envs, rankEnvs, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
     ++result.collectives;
-    result.waitSecondsMax = totals.waitedMax;
-    result.criticalSeconds += totals.roundCpuMax;
-    result.totalComputeSeconds += totals.roundCpuSum;
-    result.criticalEnvSeconds += totals.envCpuMax;
-    result.criticalEnvSteps += totals.envStepsMax;
-    result.criticalRankSteps += totals.rankStepsMax;
-    result.criticalEnvWork += totals.envWorkMax;
-    result.criticalRankWork += totals.rankWorkMax;
-    result.work = totals.work;
-    result.gridSteps = totals.steps;
-    result.shots = totals.shots;
-    result.rays = totals.rays;
-    result.unshotFraction = totals.emitted > 0.0 ? totals.unshot / totals.emitted : 0.0;
-    result.biasEstimate = BiasEstimate(totals, options.correctUnshot);
-    result.lossEstimate = LossEstimate(totals);
+    AddRound(totals, options, &result);
     // A round without a shot is convergence only when nothing is left to
     // shoot anywhere (--stop-unshot 0 drains every queue). Otherwise the
     // admission held back every environment that had power; its rotation
     // admits each within n rounds, so n such rounds in a row are a stall.
     bool idleRound = result.shots == before;
-    if (idleRound && totals.shootable == 0) {
-      result.reason = StopReason::kConverged;
-      break;
-    }
-    if (idleRound && options.maxShots > 0 && options.maxShots - result.shots < uint64_t(n)) {
-      result.reason = StopReason::kMaxShots;  // the budget left went to environments with none
-      break;
-    }
-    idle = idleRound ? idle + 1 : 0;
-    if (idle >= n) {
-      result.reason = StopReason::kStalled;
-      break;
-    }
+    if (IdleStop(idleRound, n, options, &state)) break;
     done = ShouldStop(totals, options, &result);
     // The no-loss window: a new one opens as soon as the unshot power has
     // fallen by kStallFall of the window's start; kStallShot times that
     // start shot without it is a stall. (Not when the run is bounded by
     // --max-shots, --max-seconds or --ray-budget: the user stops it, and
     // gets its outputs.)
-    if (!done && !bounded) {
-      if (totals.unshot < (1.0 - kStallFall) * windowUnshot) {
-        windowShot = totals.radiosity - totals.unshot;
-        windowUnshot = totals.unshot;
-      } else if (totals.radiosity - totals.unshot - windowShot >= kStallShot * windowUnshot) {
-        result.reason = StopReason::kNoLoss;
-        result.stallFrom = windowUnshot / totals.emitted;
-        result.stallTo = result.unshotFraction;
-        break;
-      }
-    }
+    if (!done && !bounded && NoLossStall(&state)) break;
     if (idleRound && !done) continue;  // nothing new to measure or record
     bool due = probe && (done || (options.errorEvery > 0 &&
                                   result.shots / options.errorEvery > before / options.errorEvery));

@@ -2,13 +2,15 @@
 // environment's grid (Distribute: radiosity received, Method A/B/C masks
 // marked; TraceAlive: Method R's rays in flight), and where a ray leaves the
 // environment's box. The rest of Environment is in environment.cpp (init),
-// env_receive.cpp (receiving, elements, display) and env_queue.cpp (shots
-// and the queue).
+// env_receive.cpp (receiving, elements, display), env_queue.cpp (shots and
+// the queue), env_read.cpp (B's reading shots) and env_flight.cpp (power in
+// flight); shot_ray.h has the ray helpers they share.
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
 #include <limits>
 
+#include "shot_ray.h"
 #include "vismask/core/fminmax.h"
 #include "vismask/core/os.h"
 #include "vismask/solve/centre_raster.h"
@@ -19,99 +21,21 @@
 
 namespace vismask {
 
-namespace {
-
-// The entry and exit parameters of `ray` through `box` (slab test).
-bool Slabs(const Ray& ray, const Bounds& box, float* t0, float* t1) {
-  float lo = -std::numeric_limits<float>::infinity(), hi = std::numeric_limits<float>::infinity();
-  for (int a = 0; a < 3; ++a) {
-    if (ray.d[a] == 0.0f) {
-      if (ray.o[a] < box.lo[a] || ray.o[a] > box.hi[a]) return false;
-      continue;
-    }
-    float inv = 1.0f / ray.d[a];
-    float ta = (box.lo[a] - ray.o[a]) * inv, tb = (box.hi[a] - ray.o[a]) * inv;
-    if (ta > tb) std::swap(ta, tb);
-    lo = FMax(lo, ta);
-    hi = FMin(hi, tb);
-  }
-  *t0 = lo;
-  *t1 = hi;
-  return hi >= lo && hi > 0.0f;
-}
-
-// The five uniforms of ray r of a shot, (point: triangle, u, v; direction:
-// u, v): scrambled Sobol' point r (direction in the two best-stratified
-// dimensions), or with `sobol` off the next five PCG32 draws of the shot's
-// stream, in which case rays must be taken in order.
-class RayPoints {
- public:
-  RayPoints(bool sobol, uint64_t stream)
-      : sobol_(sobol), qmc_(Mix64(stream ^ 0xd1b54a32d192ed03ull)), rng_(ShotRng(stream)) {}
-  // Ray r; with Sobol', `sequential` promises r is the previous call's + 1
-  // (starting at 0), which walks the points one XOR at a time; otherwise
-  // the point is reached from the last one drawn (ShotSampler::Seek).
-  void Next(uint32_t r, float u[5], bool sequential = false) {
-    if (!sobol_) {
-      for (int k = 0; k < 5; ++k) u[k] = rng_.NextFloat();
-      return;
-    }
-    float p[kSobolDims];
-    if (sequential)
-      qmc_.Next(p);
-    else
-      qmc_.Seek(r, p);
-    u[0] = p[4];
-    u[1] = p[2];
-    u[2] = p[3];
-    u[3] = p[0];
-    u[4] = p[1];
-  }
-  bool randomAccess() const { return sobol_; }
-
- private:
-  bool sobol_;
-  ShotSampler qmc_;
-  Rng rng_;
+// What a shot's rays did here, summed in ray order and booked once a shot
+// (Distribute and TraceAlive share it).
+struct Environment::ShotTally {
+  uint64_t traced = 0, hits = 0;
+  double lost[3] = {0, 0, 0};     // left the scene
+  double backHit[3] = {0, 0, 0};  // absorbed by back faces
+  bool outside = false;           // an outside shooter's rays (EnergyLedger::outsideLost)
 };
 
-// Ray r of a shot from its five uniforms (RayPoints): its origin on the
-// shooter lifted `lift` off the plane, its direction cosine-distributed about
-// the normal (*local: in the shooter's frame). Every hit from t = 0 counts
-// (the shooter and its twin are skipped): a ray from near a corner hits the
-// wall beside it however close. A tMin > 0 instead let such rays through the
-// wall and out of a closed box, a bias of ~4e-6 of the shot power a bounce,
-// which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
-Ray ShotRay(const PatchSampler& sampler, const float u[5], float lift, glm::vec3* local) {
-  *local = CosineDirection(u[3], u[4]);
-  Ray ray;
-  ray.o = sampler.Point(u[0], u[1], u[2]) + lift * sampler.frame.n;
-  ray.d = sampler.frame.ToWorld(*local);
-  ray.tMin = 0.0f;
-  ray.tMax = std::numeric_limits<float>::infinity();
-  return ray;
-}
-
-// The pixel of the direction from the shooter's centre to where `ray`
-// (local direction `local`) enters a foreign environment at t0: the
-// centre's view of the same crossing, so off-centre rays are not judged by
-// a parallel ray that crosses elsewhere.
-uint32_t EntryPixel(const Ray& ray, float t0, const glm::vec3& centre, const Frame& frame,
-                    const glm::vec3& local, const MaskDirections& dirs) {
-  glm::vec3 q = ray.o + FMax(t0, 0.0f) * ray.d - centre;
-  glm::vec3 l(glm::dot(q, frame.t), glm::dot(q, frame.b), glm::dot(q, frame.n));
-  float len = glm::length(l);
-  return dirs.Pixel(len > 0.0f && l.z > 0.0f ? l / len : local);
-}
-
-glm::vec3 CentreOf(const Patch& p) {
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < p.numCorners; ++k) centre += p.corner[k];
-  return centre / static_cast<float>(p.numCorners);
-}
-
-}  // namespace
-
+// Ray r of a shot of shooter `id` from its five uniforms: ShotRay for a
+// patch; for an outside shooter (outside.h) its direction (cosine for the
+// sky, the sun's cone for the sun) from a point of its face, the origin
+// moved back along the ray to OutsideLift() outside the scene's box, so
+// that the ray crosses geometry lying on the box's face (a floor on its
+// bottom) rather than starting in its plane.
 Ray Environment::MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
                              glm::vec3* local) const {
   const OutsideKind kind = OutsideKindOf(id);
@@ -136,130 +60,7 @@ Ray Environment::MakeShotRay(const PatchSampler& sampler, uint32_t id, const flo
   return ray;
 }
 
-// auto's costs, in centre rays cast (a centre ray's walk: about 1 200 to
-// 1 600 instructions, callgrind, the Cornell box in 2 environments at the
-// defaults and at R = 100, 4 096 rays). Regenerating a ray downstream (its
-// sample, ray, box test and entry pixel) costs about half of one (640 to
-// 760); a read pixel takes about half a centre ray a ray of the shot (some
-// rays share pixels, some pixels are known or closed upstream); about 0.4
-// of a mask's pixels take a centre ray where every open one is cast
-// (KeepExits and the closing upstream pass over the rest); and casting a
-// mask patch by patch costs about four centre rays a patch (CastCentres).
-// The source's own cast counts in full, though a local shooter's mask is
-// kept for its later shots: which shots read must not depend on the cache.
-constexpr double kRegenCost = 0.5;
-constexpr double kReadCast = 0.5;
-constexpr double kCastShare = 0.4;
-constexpr double kPatchCast = 4.0;
-constexpr int kReadEnvs = 8;
-
-void Environment::FillReadCosts(uint32_t numPatches) {
-  readPerRay_ = 0.0;
-  allCost_ = 0.0;
-  mayRead_ = false;
-  if (numNeighbours_ == 0 || options_.maskMethod != MaskMethod::kB) return;
-  mayRead_ = options_.centreRays == CentreChoice::kRead;
-  // Beyond kReadEnvs environments auto never reads: a read shot's
-  // regeneration grows with every environment beyond every forwarding one
-  // (a 5x5x5 run of 64-ray shots did not finish in minutes), which the
-  // counts below understate. The counts, a pass over every environment,
-  // are only needed up to there; beyond, they stay 0 and ReadsOnly says no.
-  if (options_.centreRays != CentreChoice::kAuto || envGrid_.count() > kReadEnvs) return;
-  double forwarders = 0.0;
-  const int count = envGrid_.count();
-  double regenerated = 0.0, casting = 0.0;
-  for (int e = 0; e < count; ++e) {
-    // e's neighbours downstream of here (Downstream), and the environments
-    // beyond it (ReadPixels), e itself among them.
-    int c[3];
-    envGrid_.Cell(e, c);
-    int next = 0;
-    double beyond = 1.0;
-    for (int a = 0; a < 3; ++a) {
-      const int n = envGrid_.n[a];
-      if (c[a] == cell_[a]) {
-        next += (c[a] > 0) + (c[a] + 1 < n);
-        beyond *= n;
-      } else if (c[a] > cell_[a]) {
-        next += c[a] + 1 < n;
-        beyond *= n - c[a];
-      } else {
-        next += c[a] > 0;
-        beyond *= c[a] + 1;
-      }
-    }
-    if (next == 0) continue;
-    regenerated += (beyond - 1.0) + next;
-    casting += 1.0;
-    forwarders += e != static_cast<int>(index_);
-  }
-  readPerRay_ = kRegenCost * regenerated + kReadCast * casting;
-  // Casting every open pixel, here and in each forwarding environment
-  // downstream, patch by patch where that is cheaper (CastCentres). Not
-  // what the cache already knows: the choice, and so the output, must not
-  // depend on --mask-cache.
-  const double byPatch = kPatchCast * static_cast<double>(numPatches);
-  allCost_ = (1.0 + forwarders) * std::min(kCastShare * shape_.pixels(), byPatch);
-  // Some local shot may read if one of the fewest rays a shot may have would.
-  const uint32_t fewest =
-      options_.rayQuantum > 0.0 ? std::max(options_.minRays, 1u) : options_.rays;
-  mayRead_ = ReadsOnly(fewest);
-}
-
-bool Environment::ReadsOnly(uint32_t rays) const {
-  if (options_.maskMethod != MaskMethod::kB || numNeighbours_ == 0) return false;
-  if (options_.centreRays != CentreChoice::kAuto) return options_.centreRays == CentreChoice::kRead;
-  return rays * readPerRay_ < allCost_;
-}
-
-template <typename Visit>
-void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
-                                    const glm::vec3& centre, Visit visit) const {
-  const Bounds box = envGrid_.EnvBox(env);
-  RayPoints points(options_.sobol, ForeignStream(h.shotKey, static_cast<uint32_t>(env)));
-  for (uint32_t r = 0; r < h.rays; ++r) {
-    float u[5];
-    points.Next(r, u, true);
-    glm::vec3 local;
-    Ray ray = MakeShotRay(sampler, h.shooterId, u, &local);
-    float t0, t1;
-    if (!Slabs(ray, box, &t0, &t1)) continue;
-    visit(EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_));
-  }
-}
-
-void Environment::ReadPixels(const PacketHeader& h, MaskBits* read) {
-  read->SetAllClosed();
-  const Patch shooter = PatchFromHeader(h);  // as the receivers make it
-  const PatchSampler sampler = MakePatchSampler(shooter);
-  const glm::vec3 centre = CentreOf(shooter);
-  int source[3];
-  envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
-  for (int e = 0; e < envGrid_.count(); ++e) {
-    if (e == static_cast<int>(index_)) continue;
-    // Downstream of here, however far: beyond this cell on every axis on
-    // which this cell is beyond the source (Downstream, step by step).
-    int c[3];
-    envGrid_.Cell(e, c);
-    bool beyond = true;
-    for (int a = 0; a < 3; ++a)
-      if (cell_[a] != source[a]) beyond &= (c[a] - cell_[a]) * (cell_[a] - source[a]) >= 0;
-    if (!beyond) continue;
-    stats_.readRays += h.rays;
-    ForEachEntryPixel(h, e, sampler, centre, [read](uint32_t pixel) { read->Open(pixel); });
-  }
-}
-
-double Environment::ReadShare(const PacketHeader& h, const MaskBits& mask, int to) {
-  const Patch shooter = PatchFromHeader(h);
-  const PatchSampler sampler = MakePatchSampler(shooter);
-  stats_.readRays += h.rays;
-  uint32_t open = 0;
-  ForEachEntryPixel(h, to, sampler, CentreOf(shooter),
-                    [&](uint32_t pixel) { open += mask.IsOpen(pixel); });
-  return h.rays > 0 ? static_cast<double>(open) / h.rays : 0.0;
-}
-
+// A ray's first hit here: a front side receives `share`, a back side absorbs it.
 void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally) {
   ++tally->hits;
   if (!hit.front) {
@@ -269,6 +70,7 @@ void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], Sh
   Receive(hit.patch, share, ray.o + hit.t * ray.d);
 }
 
+// The tally into the ledger and the statistics.
 void Environment::Book(const ShotTally& tally) {
   for (int c = 0; c < 3; ++c) {
     ledger_.escaped[c] += tally.lost[c];
@@ -279,6 +81,9 @@ void Environment::Book(const ShotTally& tally) {
   stats_.hits += tally.hits;
 }
 
+// The face by which a ray from inside leaves this environment's box (the
+// nearest far plane: 2 * axis + (step > 0)), or -1 if beyond it lies no
+// environment: the ray leaves the scene.
 int Environment::ExitFace(const Ray& ray) const {
   // The face through which the ray leaves this box: the nearest far plane.
   float best = std::numeric_limits<float>::infinity();
@@ -297,6 +102,15 @@ int Environment::ExitFace(const Ray& ray) const {
   return 2 * axis + (step > 0);
 }
 
+// Traces `rays` rays of one shooter through this environment. Rays whose
+// pixel is closed in `in` are skipped; with a mask method, `out` loses the
+// pixels of rays that hit here (A), of centre rays that hit (B), or of
+// pixels the rays only hit and those whose centre ray hits (C).
+// `centre`, when given, is this shooter's slot of the centre-mask cache
+// (CachedCentre): B reads every pixel from it; C reads the pixels set in
+// *known, and casts the others it needs into it.
+// `read` (--centre-rays read, B): the pixels downstream will read; B
+// decides only those (ReadPixels).
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out,
                              MaskBits* centreMask, MaskBits* known, MaskBits* read) {
@@ -320,9 +134,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
   ShotTally tally;
   tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
-  centre /= static_cast<float>(shooter.numCorners);
+  const glm::vec3 centre = CentreOf(shooter);
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     points.Next(r, u, true);
@@ -420,6 +232,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   }
 }
 
+// Casts the centre ray of every pixel open in *mask and closes those that
+// hit, after closing those that lead to no neighbour (KeepExits).
 void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   PatchSampler sampler = MakePatchSampler(shooter);
   glm::vec3 centre(0.0f);
@@ -455,23 +269,24 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   if (skip.patch == kNoPatch || shotCount_[skip.patch] == 1) centreWork_ += work;
 }
 
+// Local patch i's slot of the centre-mask cache: false when the cache has
+// no slots. *centre: a pixel is open iff its centre ray from the shooter's
+// centre hits nothing here. B: every pixel, cast on a miss. C, and B with
+// --centre-rays read (PartCentres): the pixels set in *known (none after
+// a miss), which Distribute adds to.
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
-  if (cacheTag_.empty()) return false;
-  const bool methodC = PartCentres();
-  size_t slot = i % cacheTag_.size(), w = shape_.words(), per = methodC ? 2 : 1;
-  *centre = MaskBits(cacheWords_.subspan(slot * per * w, w), shape_);
-  if (methodC) *known = MaskBits(cacheWords_.subspan((slot * per + 1) * w, w), shape_);
-  if (cacheTag_[slot] != i) {
-    centre->SetAllOpen();
-    if (methodC)
-      known->SetAllClosed();
-    else
-      CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
-    cacheTag_[slot] = i;
-  }
+  bool miss = false;
+  if (!cache_.Find(i, centre, known, &miss)) return false;
+  if (miss && !PartCentres()) CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
   return true;
 }
 
+// Method R: regenerates the shot's rays from its key and traces those
+// whose bit is set in `alive` (a foreign shot: the rays that entered this
+// box). A ray that leaves the box for a neighbour is routed: its bit is
+// set in routes[ExitFace], the packet for the neighbour across that face
+// (the six route masks are cleared first); rays absorbed here or escaping
+// the scene end.
 void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t shotKey, uint32_t rays, bool foreign, const MaskBits& alive,
                              MaskBits* routes) {

@@ -8,6 +8,7 @@
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
+#include <memory>
 #include <vector>
 
 #include "vismask/accel/grid.h"
@@ -15,295 +16,126 @@
 #include "vismask/core/span.h"
 #include "vismask/display/direct.h"
 #include "vismask/scene/mesh.h"
+#include "vismask/solve/centre_mask_cache.h"
+#include "vismask/solve/display_lattice.h"
 #include "vismask/solve/element.h"
+#include "vismask/solve/env_options.h"
+#include "vismask/solve/foreign_queue.h"
+#include "vismask/solve/ledger.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/max_tree.h"
+#include "vismask/solve/outbox.h"
 #include "vismask/solve/outside.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
-#include "vismask/solve/slot_index.h"
 #include "vismask/solve/work.h"
 
 namespace vismask {
 
 struct PatchSampler;
 
-// Per-channel energy bookkeeping, in W (double). For one environment with no
-// neighbours, emitted == absorbed + escaped + unshot up to rounding; with
-// several, the difference is the power still in flight between environments
-// plus what the masks lost or let leak. Method R books its power in flight
-// exactly (summed over all environments, emitted == absorbed + escaped +
-// unshot + inFlight up to rounding); the hemisphere masks cannot, and leave
-// inFlight at 0.
-struct EnergyLedger {
-  double emitted[3] = {0, 0, 0};
-  double absorbed[3] = {0, 0, 0};  // by receivers (1 - kd) and by back faces
-  double escaped[3] = {0, 0, 0};   // rays that left the scene
-  double unshot[3] = {0, 0, 0};    // local patches' unshot power, kept current
-  // Method R: + the rays that left this environment for a neighbour, - those
-  // that entered it from one (a ray enters exactly the next environment on
-  // its path, so the sum over environments is the power not yet traced).
-  double inFlight[3] = {0, 0, 0};
-  double radiosity[3] = {0, 0, 0};  // sum of b * area over local patches (emitted + reflected)
-  // --sky, --sun: of absorbed and escaped, what outside shooters' rays lost
-  // at once, on a back face or crossing the scene without a hit: light
-  // that never lit the scene. The solve's stop rules leave it out of the
-  // emitted and radiosity power (exchange.cpp), so that the sky on the
-  // outside of a closed room's walls does not count as converged power.
-  double outsideLost[3] = {0, 0, 0};
-};
-
-// Counters of one environment's work.
-struct EnvStats {
-  uint64_t shots = 0;            // local shots
-  uint64_t foreignShots = 0;     // queued foreign shooters distributed here
-  uint64_t rays = 0;             // form-factor rays traced
-  uint64_t maskRays = 0;         // Method B's and C's centre rays (pixels decided)
-  uint64_t maskRaysByPatch = 0;  // those decided patch by patch (RasterCentres)
-  uint64_t maskNoExit = 0;       // pixels closed because they lead to no neighbour (KeepExits)
-  uint64_t readShots = 0;        // B's local shots deciding only the pixels read (ReadsOnly)
-  uint64_t readRays = 0;         // rays regenerated for it (ReadPixels, ReadShare)
-  uint64_t gridSteps = 0;        // their walks' cells entered and patches tested (Grid::steps)
-  uint64_t hits = 0;
-  uint64_t packetsSent = 0;
-  uint64_t forwardsCreated = 0;  // local shots that went on to neighbours
-  uint64_t splits = 0;           // elements split into four
-  uint64_t refusedSplits = 0;    // splits refused because the element pool was used up
-};
-
-// What an environment's arena holds, in bytes, by part (from the measuring
-// pass of its layout; the parts sum to `total`).
-struct EnvFootprint {
-  uint64_t patches = 0;   // Patch, PatchGeom, PatchEnergy, shot counts, selection tree
-  uint64_t vertices = 0;  // display lattice and its radiosity
-  uint64_t textures = 0;  // textured patches' uv and display scale (0 with none textured)
-  uint64_t elements = 0;  // the element pool (roots and children)
-  uint64_t grid = 0;      // cell offsets and patch references
-  uint64_t queue = 0;     // foreign-shooter slots and their masks
-  uint64_t packets = 0;   // outbox, working masks and the centre-mask cache
-  uint64_t total = 0;     // the arena's size (rounded up to Arena::kAlign)
-  uint64_t numPatches = 0;
-  uint64_t gridCells = 0;
-  uint64_t numVertices = 0;   // display lattice vertices
-  uint64_t numTriangles = 0;  // the patches as triangles (a quad is two): --export's
-};
-
-struct EnvOptions {
-  // Grid cells per patch (Cleary's lambda). One: on the 130 000-patch box
-  // 1.17-1.24x the rays per second of 4 (median of 6 alternated bench
-  // pairs, docs/BENCHMARKS.md's cell-size table), the same within noise at
-  // 8 000, and 16 B a patch less.
-  float gridDensity = 1.0f;
-  float rayEpsilon = 0.0f;  // ray origins lifted this far off the shooter's plane (scene units)
-  // Rays per shot. With rayQuantum == 0 every shot traces `rays` rays.
-  // With rayQuantum > 0 (power allocation) a shot of power P (channels
-  // summed) traces P / rayQuantum rays, rounded stochastically from the
-  // shot's own stream, at least minRays; a shot that would need more than
-  // `rays` shoots only rays * rayQuantum of its power and keeps the rest
-  // unshot (a partial shot), so `rays` is also the most any shot traces.
-  uint32_t rays = 4096;
-  double rayQuantum = 0.0;
-  uint32_t minRays = 1;
-  bool sobol = true;  // scrambled Sobol' points; false: independent PCG32 draws
-  uint64_t seed = 1;  // run seed
-  MaskMethod maskMethod = MaskMethod::kB;
-  uint32_t maskRes = 50;
-  uint32_t roundShots = 1;      // shots per environment per round
-  uint32_t queueCapacity = 64;  // foreign shooters held at once
-  // Methods B and C: bytes for the centre masks of local shooters, one slot
-  // per patch (direct-mapped) while they fit; kept for the patch's later
-  // shots, since a local shooter's centre mask depends only on its geometry.
-  uint64_t maskCacheBytes = uint64_t{8} << 20;
-  // Method B: which open pixels take a centre ray (--centre-rays; ReadsOnly).
-  CentreChoice centreRays = CentreChoice::kAuto;
-  ElementOptions elements;
-  // --direct-samples: shadow rays a shaded point sends to the emitters
-  // (direct.h); 0: no per-pixel direct light (the display shows the solved
-  // radiosity, direct part included). With N > 0 the environment keeps each
-  // patch's indirect radiosity apart and its emitter list.
-  uint32_t directSamples = 0;
-  // --sky, --sun: the light from outside the scene's box (outside.h), in
-  // outsideTiles x outsideTiles shooters a face of the box.
-  OutsideLight outside;
-  uint32_t outsideTiles = 1;
-};
-
-// What a checkpoint keeps of an environment beside its arena's bytes (the
-// patches' energy, elements, shot counts, queue, slots and selection trees
-// all live there): the counters and the ledger held in the object. Trivially
-// copyable, written as it is (checkpoint.h).
-struct EnvState {
-  uint64_t arenaUsed;  // the arena's bytes (checked on resume: the same layout)
-  uint64_t numPatches;
-  uint64_t gridSteps;
-  uint64_t centreSteps;
-  uint64_t centreWork;
-  uint32_t nextElement;
-  uint32_t queued;
-  uint32_t outCount;  // 0 at a round's end (the outbox is delivered)
-  uint32_t index;
-  EnergyLedger ledger;
-  EnvStats stats;
-};
-
 class Environment {
  public:
-  Environment() = default;
+  Environment();
+  ~Environment();
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
 
-  // Init, first half: takes environment `index` of `grid` from the patches
-  // `ids` of `mesh` (copied to the heap, display vertices remapped to a local
-  // lattice), plans the grid and measures the arena. No arena yet. A twin
-  // in a two-sided mesh (mesh.h) gets TwinGeom of its original's ray-test
-  // data; twins are paired locally when both are among `ids`.
+  // Init, first half: environment `index` of `grid` from the patches `ids`
+  // of `mesh` (copied to the heap, vertices remapped to a local lattice; a
+  // twin gets TwinGeom of its original's, paired when both are here); plans
+  // the grid and measures the arena. Second half (Build): the arena of
+  // exactly that size, the patches copied in, the grid built, the heap
+  // copies dropped; false, with nothing built, if the memory is refused.
   const EnvFootprint& Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                               const std::vector<uint32_t>& ids, const EnvOptions& options);
-  // Init, second half: makes the arena of exactly the measured size, copies
-  // the patches in, builds the grid, and drops the heap copies. False, with
-  // nothing built, if the system refuses the arena's memory.
   bool Build();
-  // Prepare and Build.
   void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh, const std::vector<uint32_t>& ids,
             const EnvOptions& options) {
     Prepare(grid, index, mesh, ids, options);
     Build();
   }
   const EnvFootprint& footprint() const { return footprint_; }
-
   // Emission: B = Ke, unshot power = Ke * area; ledger and queue restart.
   void Reset();
 
-  // One round: up to `shotBudget` shots, each the larger of the local patch
-  // with most unshot power (allowed while `newForwards` remains, when there
-  // are neighbours) and the queued foreign shooter with most power, ending
-  // early once the round's work has reached `roundWork` grid steps (0: no
-  // limit; workSteps below). Packets for neighbours go to the outbox.
+  // One round (env_queue.cpp): up to `shotBudget` shots, each the larger of
+  // the local patch or outside shooter with most unshot power (while
+  // `newForwards` remains, with neighbours) and the ready foreign shooter
+  // with most power; ends once the round's work reaches `roundWork` (0: no
+  // limit). Packets for neighbours go to the outbox.
   void RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork = 0);
-  // The work rounds are measured in, counted and never timed (work.h): the
-  // grid steps of the form-factor rays, WorkCosts' ray a form-factor ray (and a ray
-  // B regenerates, ReadPixels and ReadShare, which costs about as much
-  // beside its walk), a hit's and a shot's (by mask method), plus the work of
-  // the centre casts (B and C)
-  // that every --mask-cache makes: a foreign shooter's, and a local
-  // shooter's first. The cache saves a local shooter's later casts, so their
-  // real steps (and those of the last-occluder hint) are left out.
+  // The work rounds are measured in, counted, never timed (work.h): the
+  // form-factor rays' grid steps and WorkCosts' charges, and the centre
+  // casts every --mask-cache makes (a local shooter's later, cached casts
+  // are left out).
   uint64_t workSteps() const {
     const WorkCosts& w = WorkCostsOf(options_.maskMethod);
     return grid_.steps() - centreSteps_ + centreWork_ + w.ray * (stats_.rays + stats_.readRays) +
            w.hit * stats_.hits + w.shot * (stats_.shots + stats_.foreignShots);
   }
-  // A centre ray's work: the integer cube root of the grid's cells (the
-  // cells a ray crosses, about), at least 1; a cast by patch counts four a patch.
+  // A centre ray's work: the integer cube root of the grid's cells, at least 1.
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
-  // The packets this round produced, `packetBytes()` each, in send order.
-  uint32_t outboxCount() const { return outCount_; }
-  const uint8_t* OutboxPacket(uint32_t i) const {
-    return outbox_.data() + size_t(i) * packetBytes_;
-  }
-  void ClearOutbox() { outCount_ = 0; }
-  // Takes a packet addressed to this environment. Packets must be delivered
-  // in a fixed order (sender, then send order) for results to be reproducible.
+  // This round's packets, in send order; delivery, in a fixed order (sender,
+  // then send order) for reproducible results; the share FlightShare gives
+  // a packet addressed here with this box (what its sender put in it).
+  const Outbox& outbox() const { return outbox_; }
+  void ClearOutbox() { outbox_.Clear(); }
   void Deliver(const uint8_t* packet);
-  // The share of a packet addressed here that FlightShare gives with this
-  // environment's own box: what its sender must have put in the header
-  // (tests/exchange_test.cpp).
   double FlightShareAt(const uint8_t* packet) const;
-
-  // How many foreign shooters are held.
-  uint32_t queuedCount() const { return queued_; }
-  // The power, per channel, this environment books as shot but not yet
-  // delivered (docs/DESIGN.md, "Power in flight"), so that the sum over
-  // environments counts each watt once: Method R's ledger().inFlight; for
-  // the other methods, each queued shooter's power times the cosine-weighted
-  // share of the directions, open in a packet received, whose centre ray
-  // crosses from that packet's sender into this box, and the same for the
-  // packets in the outbox, each with its receiver's share (so the sum is
-  // the same before and after a delivery, up to rounding).
+  uint32_t queuedCount() const { return queue_.count(); }
+  // The power booked as shot but not yet delivered (docs/DESIGN.md, "Power
+  // in flight"; env_flight.cpp), so that the sum over environments counts
+  // each watt once.
   void FlightPower(double power[3]) const;
 
-  // Display radiosity at the lattice vertices: the area-weighted mean, over
-  // the patches touching the vertex, of the leaf element at that corner's
-  // B + kd * ambient.
+  // Display values (env_receive.cpp): the lattice's vertex radiosity, a
+  // leaf's display radiosity (emission + received / area + kd * ambient,
+  // the reflected part scaled by PatchTexture::scale when textured; only
+  // the indirect part when ShowsIndirect), the leaf of a patch at `st`.
   void ComputeVertexRadiosity(const double ambient[3]);
-  // The display radiosity of leaf element `e` of patch `patch`: the
-  // patch's emission + what the leaf received / its area + kd * ambient.
-  // For a textured patch the part after the emission is scaled by
-  // PatchTexture::scale (the material's mean kd over the patch's: texture.h).
   glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;
-  // The leaf element of patch `patch` at parameters `st`.
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
   Span<const Element> elements() const { return elements_; }
-  // Per-pixel direct light (EnvOptions::directSamples > 0): the emitters,
-  // and whether the display shows indirect radiosity only (LeafRadiosity
-  // then gives the patch's emission + the leaf's indirect radiosity + kd *
-  // ambient).
+  uint32_t elementsUsed() const { return nextElement_; }
+  const DisplayLattice& lattice() const { return lattice_; }
+  DisplayLattice& lattice() { return lattice_; }
+  Span<const glm::vec3> vertices() const { return lattice_.vertices(); }
+  Span<const glm::vec3> vertexRadiosity() const { return lattice_.radiosity(); }
+  Span<const SmoothVertex> smoothVertices() const { return lattice_.smoothVertices(); }
+  uint32_t numSharedVertices() const { return lattice_.numShared(); }
+  // Per-pixel direct light (--direct-samples): the image shows the indirect
+  // part (SetDisplayIndirect) of each patch not of a smoothed polygon, and
+  // gathers the direct part from directLight().
   bool directPerPixel() const { return options_.directSamples > 0; }
-  // Whether LeafRadiosity gives the indirect part alone (directPerPixel()
-  // and the image being drawn) or the whole (the export).
   void SetDisplayIndirect(bool on) { displayIndirect_ = on && directPerPixel(); }
   bool displayIndirect() const { return displayIndirect_; }
-  // Whether patch i shows its indirect part alone (and the image gathers
-  // its direct part): displayIndirect() and its polygon not smoothed (a
-  // smoothed polygon, whose direct part the gather would shade with its
-  // facets' normals, shows the solved whole, as without it).
   bool ShowsIndirect(uint32_t i) const {
     return displayIndirect_ && (smoothPatch_.empty() || !smoothPatch_[i]);
   }
   uint32_t directSamples() const { return options_.directSamples; }
   const DirectLight& directLight() const { return direct_; }
   float rayEpsilon() const { return options_.rayEpsilon; }
-  // Leaf element e's indirect radiosity: what it received from shots other
-  // than an emitter's own emission, reflected, over its area (0 without
-  // directPerPixel()).
+  // Leaf e's reflected radiosity from shots other than emission (0 without
+  // directPerPixel()), and the emission not yet shot.
   glm::dvec3 Indirect(uint32_t e) const {
     if (indirect_.empty()) return glm::dvec3(0.0);
     return glm::dvec3(indirect_[3 * e], indirect_[3 * e + 1], indirect_[3 * e + 2]) /
            static_cast<double>(elements_[e].area);
   }
-  // The emitted power not yet shot (per channel; 0 without directPerPixel()).
   void EmissionUnshot(double out[3]) const;
-  // The lattice vertices on a face this environment shares with a neighbour
-  // (where the partition cut a polygon), and their surface's normal: the
-  // display shares their values across the cut (display.h).
-  Span<const uint32_t> cutVertices() const { return cutVertex_; }
-  uint32_t numCutVertices() const { return numCut_; }  // known from Prepare on
-  Span<const glm::vec3> cutNormals() const { return cutNormal_; }
-  Span<const float> vertexWeights() const { return vertexWeight_; }
-  bool IsCutVertex(uint32_t v) const { return vertexCut_[v] != 0; }
-  // The lattice vertices that may share their value with other polygons'
-  // (Mesh::smooth, local vertex ids, by vertex), and how many vertices the
-  // display exchanges: cut or smooth, each once (known from Prepare on).
-  Span<const SmoothVertex> smoothVertices() const { return smooth_; }
-  uint32_t numSharedVertices() const { return numShared_; }
-  // The index in smoothVertices() of lattice vertex v, or -1.
-  int64_t FindSmooth(uint32_t v) const;
-  // Whether smooth vertex k shared its value with another polygon's at the
-  // same point in the last ShareVertices (display scratch).
-  bool smoothMatched(size_t k) const { return smoothMatched_[k] != 0; }
-  void SetSmoothMatched(size_t k, bool matched) { smoothMatched_[k] = matched ? 1 : 0; }
-  // Whether edge k (corner k to k+1) of patch i lies on an outline edge of
-  // its polygon whose ends are both smooth vertices: the display
-  // interpolates their shared values along it.
-  bool IsSmoothEdge(uint32_t i, uint32_t k) const {
-    return !patchSmoothEdges_.empty() && ((patchSmoothEdges_[i] >> k) & 1u);
-  }
-  void SetVertexRadiosity(uint32_t v, const glm::vec3& b) { vertexB_[v] = b; }
-  uint32_t elementsUsed() const { return nextElement_; }
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return packetBytes_; }
   bool hasNeighbours() const { return numNeighbours_ > 0; }
   const Bounds& box() const { return box_; }
   Span<const Patch> patches() const { return patches_; }
-  // The local index of patch i's twin (two-sided meshes, mesh.h), or kNoPatch.
+  // Patch i's twin (two-sided meshes) or kNoPatch; how many patches are twin copies.
   uint32_t twinOf(uint32_t i) const { return twin_.empty() ? kNoPatch : twin_[i]; }
-  uint32_t numTwins() const { return numTwins_; }  // patches that are a twin copy
+  uint32_t numTwins() const { return numTwins_; }
   Span<const PatchEnergy> energy() const { return energy_; }
-  Span<const glm::vec3> vertices() const { return vertices_; }
-  Span<const glm::vec3> vertexRadiosity() const { return vertexB_; }
   // Patch i's texture data, or null when it is not textured.
   const PatchTexture* patchTexture(uint32_t i) const {
     return patchTex_.empty() || patchTex_[i].texture == kNoTexture ? nullptr : &patchTex_[i];
@@ -316,211 +148,105 @@ class Environment {
   size_t arenaCapacity() const { return arena_.capacity(); }
   size_t arenaUsed() const { return arena_.used(); }
 
-  // Checkpoint and resume (checkpoint.h), between rounds only: the state
-  // beside the arena, and the arena's bytes (restored over an arena laid
-  // out by the same scene and options: spans hold no pointers into it).
+  // Checkpoint and resume (checkpoint.h), between rounds: the state beside
+  // the arena; RestoreState is false, changing nothing, if `s` is not of
+  // this layout. The arena's bytes are restored over one laid out alike.
   EnvState SaveState() const;
-  // False if `s` is not of this environment's layout (index, patches,
-  // arena bytes); then nothing is changed.
   bool RestoreState(const EnvState& s);
-  // The whole block (capacity, footprint().total: what `footprint` counts).
   Span<const uint8_t> arenaBytes() const {
     return Span<const uint8_t>(arena_.data(), arena_.capacity());
   }
   Span<uint8_t> mutableArenaBytes() { return Span<uint8_t>(arena_.data(), arena_.capacity()); }
 
-  // --max-seconds's plan (app.cpp): the seconds `rays` form-factor-like
-  // rays take through this environment's grid (from patch centres, cosine
-  // directions, a fixed stream), and the power a ray carries, changed.
+  // --max-seconds's plan: the seconds `rays` form-factor-like rays take
+  // here (trace.cpp), and the power a ray carries.
   double TimeRays(uint32_t rays) const;
   double rayQuantum() const { return options_.rayQuantum; }
   void SetRayQuantum(double q) { options_.rayQuantum = q; }
-
-  // Test hooks: the shooter a plain progressive-refinement step would take.
+  // Test hooks: the top local shooter; whether a patch or an outside
+  // shooter has unshot power; the outside shooters held (outside.h).
   uint32_t TopShooter() const { return tree_.Top(); }
-  // Whether a local patch or an outside shooter (--sky, --sun) has unshot power.
   bool HasLocalUnshot() const;
-  // The outside shooters this environment holds (outside.h).
   uint32_t numOutside() const { return numOutside_; }
 
  private:
-  // A queued foreign shooter: its packet header, its mask so far (AND of the
-  // upstream masks received), and how many of those have arrived.
-  struct Slot {
-    PacketHeader header;
-    double key;  // power * open share, channels summed
-    uint8_t used;
-    uint8_t received;
-    uint8_t expected;
-    // Of the power, booked here as in flight: the sum of the packets'
-    // shares (FlightShare), in double as the report sums them from the
-    // outbox before delivery (exchange.h), so both agree to double rounding.
-    double flightShare;
+  struct Staged;     // the heap copies between Prepare and Build (environment.cpp)
+  struct ShotTally;  // what a shot's rays did here, booked once a shot (trace.cpp)
+  // An outside shooter (--sky, --sun), in the arena so that a checkpoint's
+  // bytes hold its unshot power.
+  struct Outside {
+    OutsideShooter shooter;
+    double unshot[3];
+    uint32_t shots;
   };
 
-  void Layout(Arena& arena, uint32_t numPatches, uint32_t numVertices, const Grid::Plan& plan);
+  void Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan);
+  // Shots (env_queue.cpp) and their rays (trace.cpp).
   void ShootLocal(uint32_t i);
-  // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
-  // no patch to skip and no centre-mask cache.
   void ShootOutside(uint32_t k);
   void ShootOwn(const Patch& p, Skip skip, const double power[3], uint64_t key, uint32_t shotIndex,
                 uint32_t rays, uint32_t cached);
-  // The outside shooter with the most unshot power (ties to the first), or
-  // -1 when none has any.
+  void ShootForeign(uint32_t slot);
   int BestOutside() const;
-  // Ray r of a shot of shooter `id` from its five uniforms: ShotRay for a
-  // patch; for an outside shooter (outside.h) its direction (cosine for the
-  // sky, the sun's cone for the sun) from a point of its face, the origin
-  // moved back along the ray to OutsideLift() outside the scene's box, so
-  // that the ray crosses geometry lying on the box's face (a floor on its
-  // bottom) rather than starting in its plane.
+  uint32_t ShotRays(const double power[3], uint64_t shotKey, double* fraction) const;
   Ray MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
                   glm::vec3* local) const;
-  // How far off its plane a shooter's centre rays start: rayEpsilon in front
-  // of a patch, OutsideLift() behind an outside shooter (outside the box).
+  void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
+                  uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
+                  MaskBits* known = nullptr, MaskBits* read = nullptr);
+  void TraceAlive(const Patch& shooter, Skip skip, const double power[3], uint64_t shotKey,
+                  uint32_t rays, bool foreign, const MaskBits& alive, MaskBits* routes);
+  void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
+  void Book(const ShotTally& tally);
+  int ExitFace(const Ray& ray) const;
+  bool LeavesScene(const Ray& ray) const { return ExitFace(ray) < 0; }
+  // Centre rays (B, C; trace.cpp) and B's reading shots (env_read.cpp).
+  void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
+  bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
+  bool ReadsOnly(uint32_t rays) const;
+  void FillReadCosts(uint32_t numPatches);
+  void ReadPixels(const PacketHeader& h, MaskBits* read);
+  double ReadShare(const PacketHeader& h, const MaskBits& mask, int to);
+  template <typename Visit>
+  void ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
+                         const glm::vec3& centre, Visit visit) const;
+  // Centre rays start rayEpsilon in front of a patch, OutsideLift() behind
+  // an outside shooter (outside the box).
   float CentreLift(uint32_t id) const {
     return OutsideKindOf(id) == OutsideKind::kNone ? options_.rayEpsilon : -OutsideLift();
   }
   float OutsideLift() const { return 4.0f * options_.rayEpsilon; }
-  void ShootForeign(uint32_t slot);
-  // Traces `rays` rays of one shooter through this environment. Rays whose
-  // pixel is closed in `in` are skipped; with a mask method, `out` loses the
-  // pixels of rays that hit here (A), of centre rays that hit (B), or of
-  // pixels the rays only hit and those whose centre ray hits (C).
-  // `centre`, when given, is this shooter's slot of the centre-mask cache
-  // (CachedCentre): B reads every pixel from it; C reads the pixels set in
-  // *known, and casts the others it needs into it.
-  // `read` (--centre-rays read, B): the pixels downstream will read; B
-  // decides only those (ReadPixels).
-  void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
-                  uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
-                  MaskBits* known = nullptr, MaskBits* read = nullptr);
-  // Local patch i's slot of the centre-mask cache: false when the cache has
-  // no slots. *centre: a pixel is open iff its centre ray from the shooter's
-  // centre hits nothing here. B: every pixel, cast on a miss. C, and B with
-  // --centre-rays read (PartCentres): the pixels set in *known (none after
-  // a miss), which Distribute adds to.
-  bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
-  // Whether the cache keeps a mask of known pixels beside each centre mask
-  // (C, and B when some local shots may decide only the pixels read
-  // downstream: mayRead_, FillReadCosts). A slot then takes twice the bytes.
+  // Whether the centre-mask cache keeps known pixels too: C, and B when a
+  // local shot may read only (mayRead_, FillReadCosts).
   bool PartCentres() const {
     return options_.maskMethod == MaskMethod::kC ||
            (options_.maskMethod == MaskMethod::kB && mayRead_);
   }
-  // Method B: whether local patch i's shot of `rays` rays decides only the
-  // pixels its rays will read downstream (ReadPixels), its packets carrying
-  // the share of the receiver's rays that pass (ReadShare) as their power in
-  // flight and priority, rather than every open pixel that leads to a
-  // neighbour. The source decides and says so in the packets' flags, which
-  // every environment downstream follows. auto: whichever costs fewer
-  // centre rays' worth by FillReadCosts' counts.
-  bool ReadsOnly(uint32_t rays) const;
-  // auto's counts for shots from here, in centre rays cast, from the grid
-  // and the patch count (Layout): per ray of a shot, what reading costs
-  // (every ray regenerated for each environment beyond a forwarding one
-  // and for each packet's share, and the read pixels' casts); what casting
-  // every open pixel costs, here and in each forwarding environment
-  // downstream; and whether any shot from here, of the fewest rays a shot
-  // may have, reads.
-  void FillReadCosts(uint32_t numPatches);
-  double readPerRay_ = 0.0;
-  double allCost_ = 0.0;
-  bool mayRead_ = false;
-  // --centre-rays read: opens in *read (closed first) the pixel of every ray
-  // that an environment downstream of this one will trace for the shot `h`
-  // (Distribute's foreign rays: its stream, its box, the pixel of where the
-  // ray enters it seen from the shooter's centre), every one it may reach.
-  void ReadPixels(const PacketHeader& h, MaskBits* read);
-  // --centre-rays read: the share of h's rays that environment `to` will
-  // trace through pixels open in `mask` (its rays regenerated here).
-  double ReadShare(const PacketHeader& h, const MaskBits& mask, int to);
-  // Calls visit(pixel) with the entry pixel (Distribute's: where the ray
-  // enters the box, seen from the shooter's centre) of every ray of h that
-  // environment `env` traces for it: its stream (ForeignStream), its box.
-  template <typename Visit>
-  void ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
-                         const glm::vec3& centre, Visit visit) const;
-  // Casts the centre ray of every pixel open in *mask and closes those that
-  // hit, after closing those that lead to no neighbour (KeepExits).
-  void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
-  // Method R: regenerates the shot's rays from its key and traces those
-  // whose bit is set in `alive` (a foreign shot: the rays that entered this
-  // box). A ray that leaves the box for a neighbour is routed: its bit is
-  // set in routes[ExitFace], the packet for the neighbour across that face
-  // (the six route masks are cleared first); rays absorbed here or escaping
-  // the scene end.
-  void TraceAlive(const Patch& shooter, Skip skip, const double power[3], uint64_t shotKey,
-                  uint32_t rays, bool foreign, const MaskBits& alive, MaskBits* routes);
-  // Method R's route masks, one a face of the box (2 * axis + (step > 0)).
-  MaskBits RouteMask(int face) const { return ScratchMask(2 + static_cast<uint32_t>(face)); }
-  // How many rays a local shot of `power` traces and what share of the
-  // power it carries (1 unless the shot is partial).
-  uint32_t ShotRays(const double power[3], uint64_t shotKey, double* fraction) const;
-  // Method C's two working masks: pixels some ray hit in, and pixels some ray
-  // passed unoccluded.
-  MaskBits ScratchMask(uint32_t k) const;
-  // Patch j receives `share` (W per channel) at point `x`.
-  void Receive(uint32_t j, const double share[3], const glm::vec3& x);
-  // What a shot's rays did here, summed in ray order and booked once a shot
-  // (Distribute and TraceAlive share it, trace.cpp).
-  struct ShotTally {
-    uint64_t traced = 0, hits = 0;
-    double lost[3] = {0, 0, 0};     // left the scene
-    double backHit[3] = {0, 0, 0};  // absorbed by back faces
-    bool outside = false;           // an outside shooter's rays (EnergyLedger::outsideLost)
-  };
-  // A ray's first hit here: a front side receives `share`, a back side absorbs it.
-  void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
-  // The tally into the ledger and the statistics.
-  void Book(const ShotTally& tally);
-  // The leaf of patch `patch` holding `st`, which is left in the leaf's own
-  // parameters; with `path`, the children taken are appended there (*depth
-  // of them, at most the element depth).
-  uint32_t Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const;
-  // Splits leaf `e` of patch `j` (reached from the root by the children
-  // `path[0..depth)`) if its quarters differ beyond noise.
-  void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
-  // The face by which a ray from inside leaves this environment's box (the
-  // nearest far plane: 2 * axis + (step > 0)), or -1 if beyond it lies no
-  // environment: the ray leaves the scene.
-  int ExitFace(const Ray& ray) const;
-  bool LeavesScene(const Ray& ray) const { return ExitFace(ray) < 0; }
-  // Sends the shooter's packet header and `mask` to the neighbours downstream from
-  // the source environment; Method R sends each neighbour its face's route
-  // mask (`routes`, TraceAlive) instead.
+  // Packets (env_queue.cpp, env_flight.cpp); R's route masks, one a face of
+  // the box (2 * axis + (step > 0)), follow the first two working masks.
   void Forward(PacketHeader header, const MaskBits& mask, const MaskBits* routes = nullptr);
-  // The grid cells downstream of this environment for a shooter from
-  // `sourceEnv` (at most 6, into `next`), and how many there are.
   int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
-  // The cosine-weighted share of h's hemisphere whose centre rays are open
-  // in the packet's mask `bits` (null: no mask, all open) and cross the face
-  // from h.fromEnv into the receiver's `box` (at grid cell `to`). Worked out
-  // by the sender (Forward), with the receiver's box as the receiver makes
-  // it (EnvGrid::EnvBox); every environment has the same tables
-  // (maskDirections_, flightCols_).
+  MaskBits ScratchMask(uint32_t k) const;
+  MaskBits RouteMask(int face) const { return ScratchMask(2 + static_cast<uint32_t>(face)); }
   double FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
                      const int to[3]) const;
-  // FlightShare's hemisphere resolution (the mask's, or kNoMaskRes without
-  // one) and its table of column directions, made once.
   uint32_t FlightRes() const;
   void FillFlightCols();
-  Span<double> flightCols_;  // per column: cos(phi), sin(phi) of its centre
-  int FindSlot(uint32_t shooterId, uint32_t shotIndex) const;
-  int BestReadySlot() const;
-  MaskBits SlotMask(uint32_t slot) const;
+  // Receiving (env_receive.cpp).
+  void Receive(uint32_t j, const double share[3], const glm::vec3& x);
+  uint32_t Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const;
+  void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
 
   uint32_t index_ = 0;
-  EnvGrid envGrid_;  // the environment partition (grid_ is the ray-casting grid)
+  EnvGrid envGrid_;  // the partition (grid_ is the ray-casting grid)
   int cell_[3] = {0, 0, 0};
   Bounds box_;
-  // The faces of box_ that another environment lies beyond (KeepExits).
-  Patch exits_[6] = {};
+  Patch exits_[6] = {};  // the faces of box_ another environment lies beyond (KeepExits)
   uint32_t numExits_ = 0;
   uint32_t numNeighbours_ = 0;
   EnvOptions options_;
   MaskShape shape_;
-  MaskDirections maskDirections_;  // B and C with a downstream neighbour: the pixels' centre rays
+  MaskDirections maskDirections_;  // B and C with neighbours: the pixels' centre rays
   uint32_t packetBytes_ = 0;
   Arena arena_ = Arena::Measure();
   Span<Patch> patches_;
@@ -529,81 +255,40 @@ class Environment {
   uint32_t numTwins_ = 0;
   Span<PatchEnergy> energy_;
   Span<uint32_t> shotCount_;
-  Span<Element> elements_;  // roots first (element i is patch i's), then the pool
-  // directPerPixel(), 3 channels: per element, the reflected power received
-  // from shots other than emission (indirect_, history included like
-  // Element::received); per patch, the emitted power not yet shot (emitLeft_); shotDirect_, the
-  // share of the current shot's power, per channel, that is emission.
+  Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
+  Span<Element> elements_;       // roots first (element i is patch i's), then the pool
+  uint32_t nextElement_ = 0;
+  // directPerPixel(), 3 channels: per element the power received from shots
+  // other than emission, per patch the emission not yet shot, and the
+  // current shot's share that is emission; 1 per patch of a smoothed polygon.
   Span<double> indirect_;
   Span<double> emitLeft_;
   double shotDirect_[3] = {0, 0, 0};
+  Span<uint8_t> smoothPatch_;
   bool displayIndirect_ = false;
-  Span<uint8_t> smoothPatch_;  // directPerPixel(): 1 for a patch of a smoothed polygon
   DirectLight direct_;
-  uint32_t nextElement_ = 0;
-  Span<glm::vec3> vertices_;
-  Span<glm::vec3> vertexB_;
-  Span<float> vertexWeight_;
-  Span<uint32_t> cutVertex_;
-  Span<uint8_t> vertexCut_;  // 1 for a cut vertex
-  // Outline vertices of quad lattices that ComputeVertexRadiosity
-  // extrapolates: how many quads touch them (1 or 2; 0: not extrapolated),
-  // fixed at Build. Its scratch: the corner leaves' edge shares, the inward value.
-  Span<uint8_t> vertexOutline_;
-  Span<float> vertexFrac_;
-  Span<glm::vec3> vertexInward_;
-  Span<glm::vec3> cutNormal_;
-  uint32_t numCut_ = 0;
-  Span<SmoothVertex> smooth_;
-  Span<uint8_t> smoothMatched_;
-  Span<uint8_t>
-      patchSmoothEdges_;  // bit k: edge k is smooth (IsSmoothEdge); empty without smooth vertices
-  uint32_t numShared_ = 0;
-  Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
+  DisplayLattice lattice_;
   Grid grid_;
   MaxTree tree_;
-  // Exchange state: empty for an environment without neighbours.
-  Span<Slot> slots_;
-  SlotIndex slotIndex_;          // which slot holds a shot, which are free
-  MaxTree readyTree_;            // the ready slots by key (-inf: not ready or free)
-  Span<uint64_t> slotWords_;     // slot s's mask: words [s * shape_.words(), ...)
-  Span<uint64_t> scratchWords_;  // working masks: out, incoming (and C's hit, passed)
-  Span<uint64_t> cacheWords_;    // B, C: cached centre masks of local shooters, slot by slot
-  Span<uint32_t> cacheTag_;      // the local patch each slot holds, or kNoPatch
-  Span<uint8_t> outbox_;
-  uint32_t outCapacity_ = 0;
-  uint32_t outCount_ = 0;
-  uint32_t queued_ = 0;
-  uint32_t newForwards_ = 0;
-  // --sky, --sun: this environment's outside shooters, staged at Prepare
-  // and kept in the arena (so a checkpoint's arena bytes hold their unshot
-  // power); none laid out when there are none.
-  struct Outside {
-    OutsideShooter shooter;
-    double unshot[3];
-    uint32_t shots;
-  };
-  std::vector<Outside> stagedOutside_;
   Span<Outside> outside_;
   uint32_t numOutside_ = 0;
+  // Exchange state: empty for an environment without neighbours.
+  ForeignQueue queue_;
+  Span<uint64_t> scratchWords_;  // working masks (ScratchMask)
+  CentreMaskCache cache_;
+  Outbox outbox_;
+  Span<double> flightCols_;  // FlightShare: cos(phi), sin(phi) of each column's centre
+  uint32_t newForwards_ = 0;
+  double readPerRay_ = 0.0, allCost_ = 0.0;  // FillReadCosts
+  bool mayRead_ = false;
   EnergyLedger ledger_;
   EnvStats stats_;
   uint64_t centreSteps_ = 0;  // grid steps of the centre rays really cast
   uint64_t centreWork_ = 0;   // the work of the casts every cache size makes (workSteps)
   uint64_t centreStepsPerRay_ = 1;
-  double totalArea_ = 0.0;
-  double kdArea_ = 0.0;
+  double totalArea_ = 0.0, kdArea_ = 0.0;
   EnvFootprint footprint_;
-  // Between Prepare and Build only.
-  std::vector<Patch> staged_;
-  std::vector<PatchGeom> stagedGeom_;
-  std::vector<uint32_t> stagedTwin_;     // empty without twins
-  std::vector<PatchTexture> stagedTex_;  // empty when no patch is textured
-  std::vector<glm::vec3> stagedVertices_;
-  std::vector<uint32_t> stagedCut_;
-  std::vector<glm::vec3> stagedCutNormal_;
-  std::vector<SmoothVertex> stagedSmooth_;
-  std::vector<uint8_t> stagedSmoothEdges_;
+  std::unique_ptr<Staged> staged_;
   Grid::Plan plan_;
 };
 

@@ -1,0 +1,97 @@
+// DisplayLattice: an environment's display vertices (its patches' corners,
+// local ids) and the radiosity the image interpolates between them. The
+// vertices on a face shared with a neighbour (cut vertices) and those that
+// may share their value with other polygons' (smooth vertices) are the ones
+// the display exchanges (display.h: CollectShared, ShareVertices). Carved
+// from the environment's arena (Layout), filled once at Build.
+#pragma once
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <vector>
+
+#include "vismask/core/arena.h"
+#include "vismask/core/span.h"
+#include "vismask/scene/mesh.h"
+#include "vismask/solve/patch.h"
+
+namespace vismask {
+
+class DisplayLattice {
+ public:
+  // What Build copies in, staged by Environment::Prepare.
+  struct Staged {
+    std::vector<glm::vec3> vertices;
+    std::vector<uint32_t> cut;         // cut vertices
+    std::vector<glm::vec3> cutNormal;  // their surface's normal
+    std::vector<SmoothVertex> smooth;  // by vertex
+    std::vector<uint8_t> smoothEdges;  // per patch (IsSmoothEdge); empty without smooth vertices
+    uint32_t numShared = 0;            // cut or smooth, each once
+  };
+
+  // Room for the staged lattice (also from a measuring arena).
+  void Layout(Arena& arena, const Staged& staged);
+  // Copies the staged lattice in and marks the outline vertices to
+  // extrapolate (from `patches`, in local vertex ids).
+  void Build(const Staged& staged, Span<const Patch> patches);
+
+  // The radiosity at every vertex: Clear, Add each patch corner's leaf
+  // value with its weight (the leaf's area) and its edge's share of the
+  // patch's edge, then Finish: the weighted mean, extrapolated to the
+  // polygon's outline along quads' diagonals.
+  void Clear();
+  void Add(uint32_t v, float weight, const glm::vec3& b, float edgeShare) {
+    radiosity_[v] += weight * b;
+    weight_[v] += weight;
+    frac_[v] += edgeShare;
+  }
+  void Finish(Span<const Patch> patches);
+
+  Span<const glm::vec3> vertices() const { return vertices_; }
+  Span<const glm::vec3> radiosity() const { return radiosity_; }
+  Span<const float> weights() const { return weight_; }
+  // The display's shared value of vertex v (ShareVertices).
+  void SetRadiosity(uint32_t v, const glm::vec3& b) { radiosity_[v] = b; }
+
+  // Cut vertices and their surface's normal (known from Layout on).
+  Span<const uint32_t> cutVertices() const { return cut_; }
+  uint32_t numCut() const { return numCut_; }
+  Span<const glm::vec3> cutNormals() const { return cutNormal_; }
+  bool IsCutVertex(uint32_t v) const { return isCut_[v] != 0; }
+  // Smooth vertices (Mesh::smooth, local vertex ids, by vertex), and how
+  // many vertices the display exchanges: cut or smooth, each once.
+  Span<const SmoothVertex> smoothVertices() const { return smooth_; }
+  uint32_t numShared() const { return numShared_; }
+  // The index in smoothVertices() of vertex v, or -1.
+  int64_t FindSmooth(uint32_t v) const;
+  // Whether smooth vertex k shared its value with another polygon's at the
+  // same point in the last ShareVertices (display scratch).
+  bool smoothMatched(size_t k) const { return smoothMatched_[k] != 0; }
+  void SetSmoothMatched(size_t k, bool matched) { smoothMatched_[k] = matched ? 1 : 0; }
+  // Whether edge k (corner k to k+1) of patch i lies on an outline edge of
+  // its polygon whose ends are both smooth vertices: the display
+  // interpolates their shared values along it.
+  bool IsSmoothEdge(uint32_t i, uint32_t k) const {
+    return !smoothEdges_.empty() && ((smoothEdges_[i] >> k) & 1u);
+  }
+
+ private:
+  Span<glm::vec3> vertices_;
+  Span<glm::vec3> radiosity_;
+  Span<float> weight_;
+  Span<uint32_t> cut_;
+  Span<uint8_t> isCut_;  // 1 for a cut vertex
+  // Outline vertices of quad lattices that Finish extrapolates: how many
+  // quads touch them (1 or 2; 0: not extrapolated), fixed at Build. Its
+  // scratch: the corner leaves' edge shares, the inward value.
+  Span<uint8_t> outline_;
+  Span<float> frac_;
+  Span<glm::vec3> inward_;
+  Span<glm::vec3> cutNormal_;
+  uint32_t numCut_ = 0;
+  Span<SmoothVertex> smooth_;
+  Span<uint8_t> smoothMatched_;
+  Span<uint8_t> smoothEdges_;  // bit k: edge k is smooth; empty without smooth vertices
+  uint32_t numShared_ = 0;
+};
+
+}  // namespace vismask

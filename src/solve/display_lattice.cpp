@@ -1,0 +1,98 @@
+// DisplayLattice: its layout, its copy from the staged lattice, and the
+// vertex radiosity's mean and outline extrapolation.
+#include "vismask/solve/display_lattice.h"
+
+#include <algorithm>
+#include <glm/common.hpp>
+
+namespace vismask {
+
+void DisplayLattice::Layout(Arena& arena, const Staged& staged) {
+  const size_t n = staged.vertices.size();
+  vertices_ = arena.Alloc<glm::vec3>(n);
+  radiosity_ = arena.Alloc<glm::vec3>(n);
+  weight_ = arena.Alloc<float>(n);
+  cut_ = arena.Alloc<uint32_t>(staged.cut.size());
+  isCut_ = arena.Alloc<uint8_t>(n);
+  outline_ = arena.Alloc<uint8_t>(n);
+  frac_ = arena.Alloc<float>(n);
+  inward_ = arena.Alloc<glm::vec3>(n);
+  cutNormal_ = arena.Alloc<glm::vec3>(staged.cut.size());
+  smooth_ = arena.Alloc<SmoothVertex>(staged.smooth.size());
+  smoothMatched_ = arena.Alloc<uint8_t>(staged.smooth.size());
+  smoothEdges_ = arena.Alloc<uint8_t>(staged.smoothEdges.size());
+  numCut_ = static_cast<uint32_t>(staged.cut.size());
+  numShared_ = staged.numShared;
+}
+
+void DisplayLattice::Build(const Staged& staged, Span<const Patch> patches) {
+  for (size_t v = 0; v < staged.vertices.size(); ++v) vertices_[v] = staged.vertices[v];
+  for (size_t v = 0; v < isCut_.size(); ++v) isCut_[v] = 0;
+  for (size_t k = 0; k < staged.cut.size(); ++k) {
+    isCut_[staged.cut[k]] = 1;
+    cut_[k] = staged.cut[k];
+    cutNormal_[k] = staged.cutNormal[k];
+  }
+  // The outline vertices to extrapolate: touched by one or two quads (and
+  // no triangle), not on a cut, and every touching quad's opposite corner an
+  // interior vertex (four quads), else the outline is too ragged or narrow
+  // to tell inward from along.
+  std::vector<uint8_t> quads(outline_.size(), 0), inward(outline_.size(), 0);
+  for (const Patch& p : patches)
+    for (uint32_t k = 0; k < p.numCorners; ++k) {
+      uint8_t& q = quads[p.vertex[k]];
+      q = p.numCorners == 4 && q != 0xff ? q + 1 : 0xff;
+    }
+  for (const Patch& p : patches)
+    if (p.numCorners == 4)
+      for (uint32_t k = 0; k < 4; ++k) inward[p.vertex[k]] += quads[p.vertex[(k + 2) % 4]] == 4;
+  for (size_t v = 0; v < outline_.size(); ++v) {
+    uint8_t q = quads[v];
+    bool outline = q >= 1 && q <= 2 && !isCut_[v] && inward[v] == q;
+    outline_[v] = outline ? q : 0;
+  }
+  for (size_t k = 0; k < staged.smooth.size(); ++k) smooth_[k] = staged.smooth[k];
+  for (size_t i = 0; i < staged.smoothEdges.size(); ++i) smoothEdges_[i] = staged.smoothEdges[i];
+}
+
+int64_t DisplayLattice::FindSmooth(uint32_t v) const {
+  const SmoothVertex* it =
+      std::lower_bound(smooth_.begin(), smooth_.end(), v,
+                       [](const SmoothVertex& s, uint32_t x) { return s.vertex < x; });
+  return it != smooth_.end() && it->vertex == v ? it - smooth_.begin() : -1;
+}
+
+void DisplayLattice::Clear() {
+  for (size_t v = 0; v < radiosity_.size(); ++v) {
+    radiosity_[v] = glm::vec3(0.0f);
+    weight_[v] = 0.0f;
+    frac_[v] = 0.0f;
+    inward_[v] = glm::vec3(0.0f);
+  }
+}
+
+void DisplayLattice::Finish(Span<const Patch> patches) {
+  for (size_t v = 0; v < radiosity_.size(); ++v)
+    if (weight_[v] > 0.0f) radiosity_[v] /= weight_[v];
+  // On a polygon's outline the nodal average is the value half a leaf
+  // inside, not at the outline: in a concave corner, where the radiosity
+  // falls towards the edge, it is too bright there. Extrapolate along
+  // the quads' diagonals from the interior vertices beyond them (exact for a
+  // linear gradient): f(0) = n0 + (n0 - n1) (s/2) / (1 - s/2), with s the
+  // corner leaves' edge as a share of the patch's (s = 1: 2 n0 - n1).
+  for (const Patch& p : patches) {
+    if (p.numCorners != 4) continue;
+    for (uint32_t k = 0; k < 4; ++k)
+      if (outline_[p.vertex[k]]) inward_[p.vertex[k]] += radiosity_[p.vertex[(k + 2) % 4]];
+  }
+  for (size_t v = 0; v < radiosity_.size(); ++v) {
+    uint8_t q = outline_[v];
+    if (q == 0) continue;
+    float s = frac_[v] / static_cast<float>(q), f = 0.5f * s / (1.0f - 0.5f * s);
+    glm::vec3 inward = inward_[v] / static_cast<float>(q);
+    glm::vec3 b = radiosity_[v] + f * (radiosity_[v] - inward);
+    radiosity_[v] = glm::max(b, glm::vec3(0.0f));
+  }
+}
+
+}  // namespace vismask
