@@ -150,12 +150,12 @@ $(BUILD)/obj/%.o: %.cpp $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
 	$(SAY) CXX $<
 	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
-# stb_image 2.27, compiled into texture.cpp, overflows signed ints on corrupt
+# stb_image 2.27, compiled into texture_decode.cpp, overflows signed ints on corrupt
 # JPEGs (its DC prediction: fixed upstream in 2.28): -fwrapv makes them wrap,
 # as the hardware does, instead of undefined behaviour (the texture fuzz
 # target, issue 42).
-$(BUILD)/obj/src/scene/texture.o build/fuzz/obj/src/scene/texture.o: CXXFLAGS += -fwrapv
-build/fuzz/obj/src/scene/texture.o: FUZZ_CXXFLAGS += -fwrapv
+$(BUILD)/obj/src/scene/texture_decode.o build/fuzz/obj/src/scene/texture_decode.o: CXXFLAGS += -fwrapv
+build/fuzz/obj/src/scene/texture_decode.o: FUZZ_CXXFLAGS += -fwrapv
 
 $(BUILD)/vismask: $(BUILD)/obj/src/app/main.o $(LIB_OBJ) $(POSIX_OBJ)
 	$(SAY) LD $@

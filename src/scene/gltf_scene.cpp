@@ -1,7 +1,7 @@
 // glTF 2.0 input (scene.h, LoadGltf): a .gltf or .glb parsed by tinygltf
 // (Debian's libtinygltf-dev, header only, compiled here with nlohmann json;
 // its image decoding and writing are left out: stb_image is compiled once,
-// in texture.cpp, which decodes the textures), then its triangles, node
+// in texture_decode.cpp, which decodes the textures), then its triangles, node
 // transforms, materials and first camera made into the Scene the OBJ loader
 // makes. Files are read through vismask's reader (regular files, 4 GiB at
 // most); every accessor is bounds-checked here before it is read.
@@ -85,7 +85,7 @@ bool FsWrite(std::string*, const std::string&, const std::vector<unsigned char>&
   return false;
 }
 
-// Images stay encoded: a data: URI's bytes are kept (texture.cpp decodes
+// Images stay encoded: a data: URI's bytes are kept (texture_decode.cpp decodes
 // them); a buffer view's are taken later, bounds-checked, from the buffer.
 bool KeepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
                     const unsigned char* bytes, int size, void*) {

@@ -10,7 +10,7 @@
 // tests/fuzz/texture-corpus/ holds the seeds: small PNG (8-bit, 16-bit,
 // grey with alpha), JPEG, BMP and TGA images, and jpeg-dc-overflow, whose
 // DC terms overflow stb_image 2.27's int (UBSan stops there unless
-// texture.cpp is compiled with -fwrapv, as the Makefile does).
+// texture_decode.cpp is compiled with -fwrapv, as the Makefile does).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
