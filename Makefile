@@ -15,6 +15,7 @@
 #   make fuzz-report    10 M executions of each fuzz target: docs/STABILITY.md
 #   make stability      the stiff and extreme suites: docs/STABILITY.md
 #   make outside-check  --sky and --sun against Cycles on a skylight: docs/OUTSIDE.md
+#   make check-sizes    source files over 450 lines and functions over 120 (tools/check-sizes)
 
 CROSS ?=
 CXX := $(CROSS)g++
@@ -131,7 +132,7 @@ MPI_BIN := $(if $(filter 1,$(MPI)),$(BUILD)/vismask-mpi)
 MPI_INC := $(SYSROOT_LIB)/openmpi/include
 MPI_LIBDIR := $(SYSROOT_LIB)/openmpi/lib
 
-.PHONY: all deps demo demo-image test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments renderpark parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability outside-check
+.PHONY: all deps demo demo-image test format format-check viewer view viewer-screenshot install uninstall headers clean test-cross experiments renderpark parallel cluster-experiments cluster-million cluster-resume bench fuzz fuzz-deps fuzz-report stability outside-check check-sizes
 all: $(BUILD)/vismask $(MPI_BIN)
 
 deps:
@@ -150,12 +151,12 @@ $(BUILD)/obj/%.o: %.cpp $(SYSROOT_DEP)
 	@mkdir -p $(dir $@)
 	$(SAY) CXX $<
 	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
-# stb_image 2.27, compiled into texture.cpp, may overflow signed ints on
+# stb_image 2.27, compiled into texture_decode.cpp, may overflow signed ints on
 # corrupt input (it did in its JPEG DC prediction, before JPEG went to
 # libjpeg-turbo): -fwrapv makes them wrap, as the hardware does, instead of
 # undefined behaviour.
-$(BUILD)/obj/src/scene/texture.o build/fuzz/obj/src/scene/texture.o: CXXFLAGS += -fwrapv
-build/fuzz/obj/src/scene/texture.o: FUZZ_CXXFLAGS += -fwrapv
+$(BUILD)/obj/src/scene/texture_decode.o build/fuzz/obj/src/scene/texture_decode.o: CXXFLAGS += -fwrapv
+build/fuzz/obj/src/scene/texture_decode.o: FUZZ_CXXFLAGS += -fwrapv
 
 $(BUILD)/vismask: $(BUILD)/obj/src/app/main.o $(LIB_OBJ) $(POSIX_OBJ)
 	$(SAY) LD $@
@@ -296,6 +297,11 @@ BENCH_IF_PRESENT := $(if $(and $(wildcard /usr/include/embree3/rtcore.h),$(wildc
 # installs it), for the viewer's tests; VISMASK_MAKE_ARGS tells the install
 # test which build make install should take.
 VIEWER_IF_NPM := $(if $(shell command -v npm 2>/dev/null),viewer)
+# make check-sizes: no .cpp or .h under src/, include/ or platform/ over 450
+# lines and no function over 120 (tools/check-sizes; its --selftest first).
+check-sizes:
+	@tools/check-sizes --selftest && tools/check-sizes
+
 # make format-check: every C++ file is as .clang-format lays it out
 # (clang-format --dry-run -Werror; .ci/run runs it before the suite);
 # make format rewrites them so.

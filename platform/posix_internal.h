@@ -1,6 +1,6 @@
-// What platform/posix_os.cpp shares with platform/posix_files.cpp: the
-// table of temporary names a fatal signal removes, and the guard that holds
-// a fatal signal back while CommitAll renames.
+// What platform/posix_os.cpp shares with platform/posix_files.cpp and
+// platform/posix_commit.cpp: the table of temporary names a fatal signal
+// removes, and the guard that holds a fatal signal back while CommitAll renames.
 #pragma once
 
 namespace vismask::os {

@@ -1,6 +1,6 @@
 // POSIX implementation of include/vismask/core/os.h: signals and the temporary
 // files they remove, clocks, standard streams, memory figures (files and
-// directories: posix_files.cpp).
+// directories: posix_files.cpp; their commit: posix_commit.cpp).
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>

@@ -784,7 +784,7 @@ TEST(Hardening3Test, ViewServesOnlyRealFilesInsideItsFoldersToLocalHosts) {
 // chunk longer than the file; a BMP without its palette; a BMP of width 0.
 // (A JPEG whose DC terms
 // overflow stb_image's int is a seed of the fuzz target, whose clang UBSan
-// stops there unless texture.cpp is compiled with -fwrapv.)
+// stops there unless texture_decode.cpp is compiled with -fwrapv.)
 TEST(Hardening3Test, AJpegHuffmanTableOfMoreThan256CodesIsRefused) {
   TextureImage image;
   // The second: its DHT segment runs past the file's end (stb_image reads

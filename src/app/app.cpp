@@ -109,46 +109,15 @@ int Compare(const Options& o) {
 
 using namespace run;
 
-int Main(int argc, const char* const* argv) {
-  SetPhase(Phase::kInit);
-  double start = os::Seconds();
-  auto r = std::make_unique<RunState>();
-  Status s = ParseArgs(argc, argv, &r->options);
-  if (!s.ok()) return Fail(s);
-  if (r->options.help) {
-    const char* text = r->options.command == "view"         ? ViewHelpText()
-                       : r->options.command == "scene-dump" ? SceneDumpHelpText()
-                       : r->options.helpAll                 ? HelpText()
-                                                            : UsageText();
-    return WriteStdout(text, std::strlen(text)) ? kExitOk : kExitOutput;
-  }
-  if (r->options.command == "compare") return Compare(r->options);
-  if (r->options.command == "verify") return Verify(r->options);
-  if (r->options.command == "footprint") return Footprint(r->options);
-  if (r->options.command == "view") return View(r->options);
-  if (r->options.command == "scene-dump") return SceneDump(r->options);
-  // --resume without --envs: the checkpoint's environments (a run of 16
-  // ranks, resumed on 15, keeps its 16 environments).
-  if (!r->options.resumeDir.empty() && !r->options.hasEnvs) {
-    const std::string spec = ManifestValue(r->options.resumeDir, "environments");
-    if (!spec.empty()) {
-      std::vector<const char*> args(argv, argv + argc);
-      args.push_back("--envs");
-      args.push_back(spec.c_str());
-      s = ParseArgs(static_cast<int>(args.size()), args.data(), &r->options);
-      if (!s.ok()) return Fail(s);
-    }
-  }
-  // The pipe transport forks here: every rank carries on from this point.
-  r->transport = MakeTransport(
-      TransportRequest{r->options.transport, r->options.ranks, r->options.rankTimeout}, &s);
-  // An error with no text: another rank (rank 0) reports it.
-  if (!r->transport) return s.message().empty() ? kExitUsage : Fail(s);
-  // Under mpirun without --envs: one balanced environment a rank.
-  SetWorldSize(r->transport->size(), &r->options);
+namespace {
+
+// Init on every rank, and every rank told whether every rank's init
+// succeeded (rank 0 alone opens the outputs) before anyone starts the
+// solve's collectives: the largest exit code.
+int InitAllRanks(RunState* r) {
   int rc = kExitUsage;
   try {
-    rc = Init(r.get());
+    rc = Init(r);
   } catch (const std::bad_alloc&) {
     // Init's peak is in the budget, but the system may still refuse it
     // (ulimit -v, overcommit off): refused here, with what this process
@@ -165,59 +134,56 @@ int Main(int argc, const char* const* argv) {
   CHECK_LE(r->transport->size(), kMaxRanks);  // MakeTransport refuses more
   r->transport->AllGather(&mine, sizeof mine, all);
   for (int k = 0; k < r->transport->size(); ++k) rc = std::max(rc, static_cast<int>(all[k]));
-  if (rc != kExitOk) return r->transport->Finish(rc);
-  // --checkpoint, --resume: the directory, and the state resumed from.
-  const bool checkpointing = !r->options.checkpointDir.empty();
-  if (checkpointing) {
-    std::string identity;
-    if (r->isRoot()) {
-      uint64_t bytes = 0;
-      uint32_t crc = 0;
-      std::string why;
-      if (!SizeAndCrc(r->options.scene, &bytes, &crc, &why)) {
-        os::PrintErr("vismask: %s: %s\n", r->options.scene.c_str(), why.c_str());
-        bytes = crc = 0;  // the scene was read at init: seen only if it went since
-      }
-      identity = CheckpointIdentity(bytes, crc, EnvSpec(r->options), r->options.resultArgs);
+  return rc;
+}
+
+// --checkpoint, --resume: the directory, and the state resumed from; false
+// (said) on an error.
+bool SetupCheckpoints(RunState* r) {
+  Status s;
+  std::string identity;
+  if (r->isRoot()) {
+    uint64_t bytes = 0;
+    uint32_t crc = 0;
+    std::string why;
+    if (!SizeAndCrc(r->options.scene, &bytes, &crc, &why)) {
+      os::PrintErr("vismask: %s: %s\n", r->options.scene.c_str(), why.c_str());
+      bytes = crc = 0;  // the scene was read at init: seen only if it went since
     }
-    Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
-    s = r->checkpoints.Setup(r->options.checkpointDir, r->options.checkpointEvery, envs,
-                             r->rankEnvs.total, r->transport.get(), identity);
-    if (s.ok() && !r->options.resumeDir.empty()) s = r->checkpoints.Resume(&r->resumeState);
-    if (!s.ok()) {
-      if (!s.message().empty()) Fail(s);
-      return r->transport->Finish(kExitUsage);
-    }
-    os::DeferInterrupts(true);
+    identity = CheckpointIdentity(bytes, crc, EnvSpec(r->options), r->options.resultArgs);
   }
-  r->initSeconds = os::Seconds() - start;
+  Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
+  s = r->checkpoints.Setup(r->options.checkpointDir, r->options.checkpointEvery, envs,
+                           r->rankEnvs.total, r->transport.get(), identity);
+  if (s.ok() && !r->options.resumeDir.empty()) s = r->checkpoints.Resume(&r->resumeState);
+  if (!s.ok()) {
+    if (!s.message().empty()) Fail(s);
+    return false;
+  }
+  return true;
+}
 
-  PlanBudget(r.get());
-
-  SetPhase(Phase::kSolve);
+// The solve's options from the command line.
+SolveOptions SolveOptionsOf(const Options& o) {
   SolveOptions so;
-  so.roundShots = r->options.roundShots;
-  so.roundWork = r->options.roundWork;
-  so.queueCapacity = r->options.queue;
-  so.routed = r->options.maskMethod == MaskMethod::kR;
-  so.order = Span<const uint32_t>(r->options.envOrder.data(), r->options.envOrder.size());
-  so.stopUnshot = r->options.stopUnshot;
-  so.maxShots = r->options.maxShots;
-  so.rayBudget = r->options.rayBudget;
-  so.maxSeconds = r->options.maxSeconds;
-  so.stopError = r->options.stopError;
-  so.correctUnshot = r->options.correctUnshot;
-  so.quiet = r->options.quiet;
-  ReferenceProbe probe(r.get());
-  if (!r->options.reference.empty()) so.probe = &probe;
-  so.errorEvery = r->options.errorEvery;
-  if (checkpointing) so.hook = &r->checkpoints;
-  if (r->checkpoints.resumed()) so.resume = &r->resumeState;
-  SolveResult res =
-      Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->rankEnvs,
-            r->transport.get(), &r->exchange, so, r->isRoot() ? &r->convergence : nullptr);
-  // Past the solve a signal ends the run at once again (the outputs' commit defers it).
-  if (checkpointing) os::DeferInterrupts(false);
+  so.roundShots = o.roundShots;
+  so.roundWork = o.roundWork;
+  so.queueCapacity = o.queue;
+  so.routed = o.maskMethod == MaskMethod::kR;
+  so.order = Span<const uint32_t>(o.envOrder.data(), o.envOrder.size());
+  so.stopUnshot = o.stopUnshot;
+  so.maxShots = o.maxShots;
+  so.rayBudget = o.rayBudget;
+  so.maxSeconds = o.maxSeconds;
+  so.stopError = o.stopError;
+  so.correctUnshot = o.correctUnshot;
+  so.quiet = o.quiet;
+  return so;
+}
+
+// A solve that ended without outputs (a signal, a stall): its message on
+// rank 0 and the run's exit status; -1 when the solve finished.
+int EndedEarly(RunState* r, const SolveResult& res) {
   if (res.reason == StopReason::kInterrupted) {  // a signal: the checkpoint holds the solve
     const int sig = r->checkpoints.interrupt();
     if (r->isRoot()) {
@@ -262,24 +228,95 @@ int Main(int argc, const char* const* argv) {
     return r->transport->Finish(kExitStalled);
   }
 
+  return -1;
+}
+
+// Rank 0's last line: shots, solve time, the view, where the image went.
+void PrintDone(const RunState* r, const SolveResult& res) {
+  char view[128] = "--camera";
+  if (r->hasSide)
+    std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side),
+                  r->sideChosen ? " (chosen)" : "");
+  else if (r->inside)
+    std::snprintf(
+        view, sizeof view, "view from inside (chosen: the %s side sees %s)",
+        ViewSideName(r->viewChoice.side),
+        r->viewChoice.sideBack > r->viewChoice.sideFront ? "mostly back faces" : "one wall");
+  os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
+               static_cast<unsigned long long>(res.shots), res.seconds, view,
+               r->options.outDir.c_str());
+}
+
+}  // namespace
+
+int Main(int argc, const char* const* argv) {
+  SetPhase(Phase::kInit);
+  double start = os::Seconds();
+  auto r = std::make_unique<RunState>();
+  Status s = ParseArgs(argc, argv, &r->options);
+  if (!s.ok()) return Fail(s);
+  if (r->options.help) {
+    const char* text = r->options.command == "view"         ? ViewHelpText()
+                       : r->options.command == "scene-dump" ? SceneDumpHelpText()
+                       : r->options.helpAll                 ? HelpText()
+                                                            : UsageText();
+    return WriteStdout(text, std::strlen(text)) ? kExitOk : kExitOutput;
+  }
+  if (r->options.command == "compare") return Compare(r->options);
+  if (r->options.command == "verify") return Verify(r->options);
+  if (r->options.command == "footprint") return Footprint(r->options);
+  if (r->options.command == "view") return View(r->options);
+  if (r->options.command == "scene-dump") return SceneDump(r->options);
+  // --resume without --envs: the checkpoint's environments (a run of 16
+  // ranks, resumed on 15, keeps its 16 environments).
+  if (!r->options.resumeDir.empty() && !r->options.hasEnvs) {
+    const std::string spec = ManifestValue(r->options.resumeDir, "environments");
+    if (!spec.empty()) {
+      std::vector<const char*> args(argv, argv + argc);
+      args.push_back("--envs");
+      args.push_back(spec.c_str());
+      s = ParseArgs(static_cast<int>(args.size()), args.data(), &r->options);
+      if (!s.ok()) return Fail(s);
+    }
+  }
+  // The pipe transport forks here: every rank carries on from this point.
+  r->transport = MakeTransport(
+      TransportRequest{r->options.transport, r->options.ranks, r->options.rankTimeout}, &s);
+  // An error with no text: another rank (rank 0) reports it.
+  if (!r->transport) return s.message().empty() ? kExitUsage : Fail(s);
+  // Under mpirun without --envs: one balanced environment a rank.
+  SetWorldSize(r->transport->size(), &r->options);
+  int rc = InitAllRanks(r.get());
+  if (rc != kExitOk) return r->transport->Finish(rc);
+  // --checkpoint, --resume: the directory, and the state resumed from.
+  const bool checkpointing = !r->options.checkpointDir.empty();
+  if (checkpointing) {
+    if (!SetupCheckpoints(r.get())) return r->transport->Finish(kExitUsage);
+    os::DeferInterrupts(true);
+  }
+  r->initSeconds = os::Seconds() - start;
+
+  PlanBudget(r.get());
+
+  SetPhase(Phase::kSolve);
+  SolveOptions so = SolveOptionsOf(r->options);
+  ReferenceProbe probe(r.get());
+  if (!r->options.reference.empty()) so.probe = &probe;
+  so.errorEvery = r->options.errorEvery;
+  if (checkpointing) so.hook = &r->checkpoints;
+  if (r->checkpoints.resumed()) so.resume = &r->resumeState;
+  SolveResult res =
+      Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->rankEnvs,
+            r->transport.get(), &r->exchange, so, r->isRoot() ? &r->convergence : nullptr);
+  // Past the solve a signal ends the run at once again (the outputs' commit defers it).
+  if (checkpointing) os::DeferInterrupts(false);
+  const int early = EndedEarly(r.get(), res);
+  if (early >= 0) return early;
   SetPhase(Phase::kOutput);
   rc = WriteOutputs(r.get(), res);
   SetPhase(Phase::kDone);
   rc = r->transport->Finish(rc);
-  if (rc == kExitOk && !r->options.quiet && r->isRoot()) {
-    char view[128] = "--camera";
-    if (r->hasSide)
-      std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side),
-                    r->sideChosen ? " (chosen)" : "");
-    else if (r->inside)
-      std::snprintf(
-          view, sizeof view, "view from inside (chosen: the %s side sees %s)",
-          ViewSideName(r->viewChoice.side),
-          r->viewChoice.sideBack > r->viewChoice.sideFront ? "mostly back faces" : "one wall");
-    os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
-                 static_cast<unsigned long long>(res.shots), res.seconds, view,
-                 r->options.outDir.c_str());
-  }
+  if (rc == kExitOk && !r->options.quiet && r->isRoot()) PrintDone(r.get(), res);
   return rc;
 }
 

@@ -37,8 +37,11 @@ examples:
 )";
 }
 
-const char* HelpText() {
-  return R"(vismask - fixed-memory progressive-refinement radiosity
+namespace {
+
+// `vismask --help all`: every command and option, the outputs, the exit
+// status (data, kept apart from the function that returns it).
+constexpr char kHelpAll[] = R"(vismask - fixed-memory progressive-refinement radiosity
 
 usage:
   vismask render SCENE [options]         solve and render a scene (SCENE.obj,
@@ -335,6 +338,11 @@ or silent (--rank-timeout); 4 the solve stalled (no environment could shoot
 while power was left); with --checkpoint, 128 + the signal (130 for SIGINT)
 after a signal, its checkpoint written
 )";
+
+}  // namespace
+
+const char* HelpText() {
+  return kHelpAll;
 }
 
 }  // namespace vismask

@@ -1,6 +1,6 @@
 // Init's scene work (run.h): the OBJ read in passes (scene_stream.h), cut
-// into environments of which this rank keeps its own, the environments
-// meshed and staged, and the bounds on what init holds at its peak.
+// into environments of which this rank keeps its own (their meshing and
+// init's peak: src/app/prepare_envs.cpp).
 #include "run.h"
 
 namespace vismask::run {
@@ -52,55 +52,18 @@ bool Emits(const Material& m) {
   return m.ke.x > 0.0f || m.ke.y > 0.0f || m.ke.z > 0.0f;
 }
 
-}  // namespace
+// A piece of the scene this rank keeps: its environment and its polygon.
+struct OwnPiece {
+  uint32_t env, source;  // source: in p->scene.polygons
+  Polygon polygon;
+};
 
-uint64_t Prepared::StagedBound(uint32_t e) const {
-  // Environment::Prepare's copies until Build: per patch the patch, its
-  // geometry, texture, twin id and smooth edges; per lattice vertex its
-  // position, a smooth-vertex record, a cut flag and normal.
-  constexpr uint64_t kPerPatch = sizeof(Patch) + sizeof(PatchGeom) + sizeof(PatchTexture) + 8;
-  constexpr uint64_t kPerVertex = sizeof(glm::vec3) + sizeof(SmoothVertex) + 20;
-  return static_cast<uint64_t>(envPatches[e]) * kPerPatch +
-         static_cast<uint64_t>(envVertices[e]) * kPerVertex;
-}
-
-uint64_t Prepared::MeshBound(uint32_t e) const {
-  // The Mesh an environment is made from (freed once it is staged): its
-  // patches and positions (1.5 times, AddTwins growing them past their
-  // reserve), twin ids, textures, patch ids, the grid plan's scratch; its
-  // smooth-vertex records twice (found, kept) and a seen flag.
-  constexpr uint64_t kPerPatch = 3 * sizeof(Patch) / 2 + 6 + sizeof(PatchTexture) + 4 + 64;
-  constexpr uint64_t kPerVertex = 3 * sizeof(glm::vec3) / 2 + 2 * sizeof(SmoothVertex) + 1;
-  return static_cast<uint64_t>(envPatches[e]) * kPerPatch +
-         static_cast<uint64_t>(envVertices[e]) * kPerVertex;
-}
-
-uint64_t Prepared::InitPeak(uint32_t first, uint32_t end, bool root, uint64_t envArenas,
-                            uint64_t rankArena, uint64_t held) const {
-  uint64_t pieceBytes = 0, stagedBytes = 0, meshBytes = 0;
-  for (uint32_t e = first; e < end; ++e) {
-    pieceBytes += envPieceBytes[e];
-    stagedBytes += StagedBound(e);
-    meshBytes = std::max(meshBytes, MeshBound(e));  // one mesh at a time
-  }
-  // Per environment of the whole grid: its counts.
-  held += kInitBaseBytes + textureBytes + 4 * sizeof(double) * envPatches.size();
-  const uint64_t parse =
-      info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes() + (root ? checkBytes : 0);
-  const uint64_t mesh = pieceBytes + stagedBytes + meshBytes;
-  // The pieces are freed before the arenas are made, but their small blocks
-  // may stay in the process's heap: counted, so that the bound holds for
-  // the resident set too.
-  const uint64_t build = pieceBytes + stagedBytes + envArenas + rankArena;
-  return held + std::max(parse, std::max(mesh, build));
-}
-
-Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end, bool root) {
+// Pass 1: parse, mend and check; keep the emitting polygons for the
+// emitter check (rank 0), nothing else of the polygons. Then the textures,
+// and the scene's materials, bounds and camera.
+Status ReadScene(const Options& o, Prepared* p, bool root,
+                 std::vector<std::pair<uint32_t, Polygon>>* emitters) {
   SceneInfo& info = p->info;
-  const bool chooseSide = !o.hasCamera && !o.hasView;
-  // Pass 1: parse, mend and check; keep the emitting polygons for the
-  // emitter check (rank 0), nothing else of the polygons.
-  std::vector<std::pair<uint32_t, Polygon>> emitters;
   size_t numEmitters = 0;
   double t0 = os::Seconds();
   // Each polygon, as mended, with its corners, area and material: where a
@@ -111,7 +74,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       [&](uint32_t i, const Polygon& poly) {
         if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
         ++numEmitters;
-        if (root) emitters.emplace_back(i, poly);
+        if (root) emitters->emplace_back(i, poly);
       },
       &info);
   if (!s.ok()) return s;
@@ -140,6 +103,12 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
   p->scene.camera = info.camera;
+  return Status::Ok();
+}
+
+// The patch size and the environments' grid: uniform, or --envs auto's.
+Status PlanGrid(const Options& o, Prepared* p) {
+  const SceneInfo& info = p->info;
   glm::vec3 extent = info.bounds.hi - info.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
   p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
@@ -147,75 +116,48 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   p->smooth = o.smooth;
   for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];
   p->grid.box = info.bounds;
-  if (o.envsAuto) {
-    // --envs auto:N: the shape with the least cut area, planes where the
-    // estimated patches divide evenly. Pass 1b feeds the splitter polygon
-    // by polygon in file order (the weights need the patch size, known
-    // only once pass 1 has the bounds); it holds kBins weights an axis.
-    if (!ChooseEnvShape(o.envsAutoCount, extent, p->grid.n))
-      return Status::Error("vismask: --envs: auto:" + std::to_string(o.envsAutoCount) +
-                           ": no grid of that many environments fits the scene (each axis "
-                           "1..64, none split where the scene is flat)");
-    WorkSplitter splitter;
-    s = StreamObj(info, o.load, [&](uint32_t, const Polygon& poly) {
-      const int n = static_cast<int>(poly.corners.size());
-      splitter.Add(poly.corners.data(), n, poly.area,
-                   EstimatedPatches(poly.corners.data(), n, p->patchSize));
-    });
-    if (!s.ok()) return s;
-    splitter.Planes(&p->grid);
-  }
-  p->first = first;
-  p->end = end;
-  const uint32_t total = static_cast<uint32_t>(p->grid.count());
-  p->envPatches.assign(total, 0.0);
-  p->envTwins.assign(total, 0.0);
-  p->envVertices.assign(total, 0.0);
-  p->envPieceBytes.assign(total, 0);
-  p->twins.all = o.twoSided;
-  p->twins.emitters = o.twoSidedEmitters;
-  // glTF's doubleSided materials: their patches get twins of their own.
-  for (const Material& m : info.materials)
-    if (m.twoSided) p->twins.materials.assign(info.materials.size(), 0);
-  for (size_t m = 0; m < p->twins.materials.size(); ++m)
-    p->twins.materials[m] = info.materials[m].twoSided;
+  if (!o.envsAuto) return Status::Ok();
+  // --envs auto:N: the shape with the least cut area, planes where the
+  // estimated patches divide evenly. Pass 1b feeds the splitter polygon
+  // by polygon in file order (the weights need the patch size, known
+  // only once pass 1 has the bounds); it holds kBins weights an axis.
+  if (!ChooseEnvShape(o.envsAutoCount, extent, p->grid.n))
+    return Status::Error("vismask: --envs: auto:" + std::to_string(o.envsAutoCount) +
+                         ": no grid of that many environments fits the scene (each axis "
+                         "1..64, none split where the scene is flat)");
+  WorkSplitter splitter;
+  Status s = StreamObj(info, o.load, [&](uint32_t, const Polygon& poly) {
+    const int n = static_cast<int>(poly.corners.size());
+    splitter.Add(poly.corners.data(), n, poly.area,
+                 EstimatedPatches(poly.corners.data(), n, p->patchSize));
+  });
+  if (!s.ok()) return s;
+  splitter.Planes(&p->grid);
+  return Status::Ok();
+}
 
-  // Before pass 2 allocates: the parser's arrays, the camera's probe and
-  // the emitter check against the budget; then the pieces as they come.
-  const uint64_t passBytes = p->held + kInitBaseBytes + info.ParserBytes() +
-                             ViewProbe::HeapBytes() + (root ? p->checkBytes : 0);
-  if (p->budget > 0 && passBytes > p->budget) {
-    if (p->overBudget)
-      p->overBudget(passBytes,
-                    "to read the scene (the vertex arrays, the camera probe, the emitter check)");
-    return Status::Error("");
-  }
-  uint64_t pieceTotal = 0;
-  // Pass 2: every polygon clipped into the environments; this rank keeps
-  // the pieces of its own and counts the patches of every environment (ids
-  // are global, environment-major). The camera's side and the emitter
-  // check take their polygons here too.
+// Pass 2: every polygon clipped into the environments; this rank keeps
+// the pieces of its own and counts the patches of every environment (ids
+// are global, environment-major). The camera's side and the emitter
+// check take their polygons here too.
+struct CutPass {
+  CutPass(const Options& options, Prepared* prepared, uint32_t firstEnv, uint32_t endEnv,
+          uint64_t held)
+      : o(options), p(prepared), first(firstEnv), end(endEnv), passBytes(held) {}
+
+  const Options& o;
+  Prepared* p;
+  uint32_t first, end;
+  uint64_t passBytes;  // what init holds before the pieces
   std::unique_ptr<ViewProbe> probe;
-  if (chooseSide && !info.camera.has) probe = std::make_unique<ViewProbe>(info.bounds);
   std::unique_ptr<EmitterCheck> check;
-  if (root) {
-    check =
-        std::make_unique<EmitterCheck>(info.bounds, info.materials, emitters, kEmitterCheckChunk);
-  }
-  emitters.clear();
-  emitters.shrink_to_fit();
-  struct OwnPiece {
-    uint32_t env, source;  // source: in p->scene.polygons
-    Polygon polygon;
-  };
   std::vector<OwnPiece> own;
   std::vector<std::pair<uint32_t, double>>
       emitted;  // (environment, emitted power) per emitting piece
   Status failed;
   Scene one;
-  one.objPath = o.scene;
-  one.bounds = info.bounds;
   Partition cut;
+  uint64_t pieceTotal = 0;
   // The scene's patches as the mesher will make them, about (summed over
   // whole polygons in file order, the same on every rank): the size of an
   // automatic --round-work.
@@ -225,8 +167,9 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   int stripLine = 0;
   size_t stripCorners = 0;
   double stripChange = 0.0;  // the largest relative change of area
-  t0 = os::Seconds();
-  s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) {
+
+  void Add(uint32_t i, const Polygon& poly, bool root) {
+    const SceneInfo& info = p->info;
     estimated +=
         EstimatedPatches(poly.corners.data(), static_cast<int>(poly.corners.size()), p->patchSize);
     bool strips = false;
@@ -248,13 +191,19 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       failed = st;
       return;
     }
-    const Material& mat = info.materials[poly.material];
+    Pieces(i, poly);
+  }
+
+  // The pieces of polygon i (cut): counted for every environment, kept for
+  // this rank's.
+  void Pieces(uint32_t i, const Polygon& poly) {
+    const Material& mat = p->info.materials[poly.material];
     uint32_t source = kNoPatch;
     for (size_t k = 0; k < cut.scene.polygons.size(); ++k) {
       const uint32_t e = cut.env[k];
       const Polygon& piece = cut.scene.polygons[k];
       double patches = 0.0;
-      st = CountPolygonPatches(o.scene, piece, p->patchSize, &patches, &p->envVertices[e]);
+      Status st = CountPolygonPatches(o.scene, piece, p->patchSize, &patches, &p->envVertices[e]);
       if (!st.ok()) {
         failed = Status::Error("vismask: --patch-size: " + st.ToString());
         return;
@@ -286,21 +235,11 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       }
       own.push_back({e, source, piece});
     }
-  });
-  if (!s.ok()) return s;
-  if (!failed.ok()) return failed;
-  if (o.roundWorkAuto)
-    p->roundWork = AutoRoundWork(o, estimated, o.envs[0] * o.envs[1] * o.envs[2]);
-  p->clock.Done("cutting the scene into environments", os::Seconds() - t0);
-  if (probe) {
-    p->view = probe->Choose();
-    p->side = p->view.side;
-    p->viewProbed = true;
   }
-  t0 = os::Seconds();
-  if (check)
-    p->emitterWarnings = EmitterWarnings(check->Finish(), o.scene, info.materials, info.bounds);
-  if (stripFaces > 0) {
+
+  // The warning for the faces meshed in strips ("" if none).
+  void StripWarning(std::vector<std::string>* warnings) const {
+    if (stripFaces == 0) return;
     char text[512];
     std::snprintf(text, sizeof text,
                   "%s:%d: warning: %zu convex face%s of many corners (here %zu) meshed in strips "
@@ -309,57 +248,50 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                   "changed by at most %.2g%%",
                   o.scene.c_str(), stripLine, stripFaces, stripFaces == 1 ? "" : "s", stripCorners,
                   100.0 * std::fabs(stripChange));
-    p->emitterWarnings.push_back(text);
+    warnings->push_back(text);
   }
-  p->clock.Done("emitter check", os::Seconds() - t0);
-  probe.reset();
-  check.reset();
-  // Environment by environment, as meshing each would refuse it.
-  for (uint32_t e = 0; e < total; ++e) {
-    if (p->envPatches[e] > static_cast<double>(kMaxPatches))
-      return Status::Error("vismask: --patch-size: " +
-                           MeshSizeError(p->envPatches[e], p->patchSize, kMaxPatches).message());
-    if (p->envPatches[e] + p->envTwins[e] > static_cast<double>(kMaxPatches))
-      return Status::Error(
-          "vismask: --patch-size: the mesh needs " +
-          std::to_string(static_cast<uint64_t>(p->envPatches[e] + p->envTwins[e])) +
-          " patches with both sides, more than the limit of " + std::to_string(kMaxPatches));
-  }
-  for (uint32_t e = 0; e < total; ++e) {
-    p->envPatches[e] += p->envTwins[e];
-    // A twin's lattice is a copy of its original's (at most all of them).
-    if (p->envTwins[e] > 0.0) p->envVertices[e] *= 2.0;
-    if (e < first) p->idBase += static_cast<uint32_t>(p->envPatches[e]);
-  }
-  // The power a ray carries: the emitted power (channels summed, in piece
-  // order by environment, the same on every rank) over --emitted-rays.
-  std::stable_sort(emitted.begin(), emitted.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  double power = 0.0;
-  for (const auto& [e, w] : emitted) power += w;
-  // --sky, --sun: one shooter a face of an environment for Method R, whose
-  // rays carry their own routes; tiles for the hemisphere masks, which judge
-  // a shooter's rays by its centre (docs/DESIGN.md, "Light from outside").
-  const uint32_t outsideTiles = o.maskMethod == MaskMethod::kR ? 1 : kMaxOutsideTiles;
-  power += OutsidePower(p->grid, o.outside, outsideTiles);
+};
 
-  // This rank's pieces, by environment (within one, in source order).
-  std::stable_sort(own.begin(), own.end(),
+// Environment by environment, as meshing each would refuse it.
+Status CheckEnvSizes(const Prepared& p, uint32_t total) {
+  for (uint32_t e = 0; e < total; ++e) {
+    if (p.envPatches[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: " +
+                           MeshSizeError(p.envPatches[e], p.patchSize, kMaxPatches).message());
+    if (p.envPatches[e] + p.envTwins[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: the mesh needs " +
+                           std::to_string(static_cast<uint64_t>(p.envPatches[e] + p.envTwins[e])) +
+                           " patches with both sides, more than the limit of " +
+                           std::to_string(kMaxPatches));
+  }
+  return Status::Ok();
+}
+
+// This rank's pieces, by environment (within one, in source order), into
+// p->part and p->pieces.
+void KeepPieces(const Options& o, Prepared* p, uint32_t total, std::vector<OwnPiece>* own) {
+  std::stable_sort(own->begin(), own->end(),
                    [](const OwnPiece& a, const OwnPiece& b) { return a.env < b.env; });
   p->part.grid = p->grid;
   p->part.scene.objPath = o.scene;
-  p->part.scene.materials = info.materials;
-  p->part.scene.bounds = info.bounds;
+  p->part.scene.materials = p->info.materials;
+  p->part.scene.bounds = p->info.bounds;
   p->pieces.assign(total, {});
-  for (OwnPiece& piece : own) {
+  for (OwnPiece& piece : *own) {
     p->pieces[piece.env].push_back(static_cast<uint32_t>(p->part.scene.polygons.size()));
     p->part.scene.polygons.push_back(std::move(piece.polygon));
     p->part.env.push_back(piece.env);
     p->part.source.push_back(piece.source);
   }
-  own.clear();
-  own.shrink_to_fit();
+  own->clear();
+  own->shrink_to_fit();
+}
 
+// The environments' options: rays, masks, elements, the power a ray of
+// --emitted-rays carries, and the packet size.
+void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepared* p) {
+  const SceneInfo& info = p->info;
+  const glm::vec3 extent = info.bounds.hi - info.bounds.lo;
   EnvOptions& e = p->envOptions;
   // 1e-6 of the scene's size, and at least 8 float steps of its largest
   // coordinate, so that the lift survives rounding far from the origin.
@@ -390,54 +322,95 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       p->grid.count() == 1 && o.directSamples > 0 ? static_cast<uint32_t>(o.directSamples) : 0;
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
-  return Status::Ok();
 }
 
-// Meshes environments [first, end), which `p` holds, in order, one at a
-// time, giving each patch its global (environment-major) id from p.idBase
-// on, and prepares them into `envs`.
-Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
-                   std::vector<std::unique_ptr<Environment>>* envs) {
-  CHECK(p.first <= first && end <= p.end);
-  uint32_t nextId = p.idBase;
-  for (uint32_t e = p.first; e < first; ++e) nextId += static_cast<uint32_t>(p.envPatches[e]);
-  const double t0 = os::Seconds();
-  double textureSeconds = 0.0;
-  for (uint32_t e = first; e < end; ++e) {
-    Mesh mesh;
-    Status s = MeshScene(p.part.scene, p.pieces[e], p.patchSize, kMaxPatches, &mesh);
-    if (!s.ok()) return Status::Error("vismask: --patch-size: " + s.message());
-    // Twins in the environment of their originals, after all of its patches.
-    AddTwins(p.twins, &mesh, &p.part.scene);
-    if (mesh.patches.size() > kMaxPatches)
-      return Status::Error(
-          "vismask: --patch-size: the mesh needs " + std::to_string(mesh.patches.size()) +
-          " patches with both sides, more than the limit of " + std::to_string(kMaxPatches));
-    CHECK_EQ(static_cast<double>(mesh.patches.size()), p.envPatches[e]);
-    for (Patch& patch : mesh.patches) patch.globalId += nextId;
-    nextId += static_cast<uint32_t>(mesh.patches.size());
-    const double tt = os::Seconds();
-    TextureMesh(p.part.scene, p.textures, &mesh);
-    textureSeconds += os::Seconds() - tt;
-    if (p.smooth) MarkSmoothVertices(p.scene, p.part, p.tolerance, &mesh, &p.sourceIds);
-    // Patch::surface is the piece's index in the whole partition (the
-    // raster's fragment id, compared across ranks): the rank's pieces are
-    // those of its environments, after the pieces of all before them.
-    for (Patch& patch : mesh.patches) patch.surface += p.pieceBase;
-    std::vector<uint32_t> ids(mesh.patches.size());
-    for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
-    envs->push_back(std::make_unique<Environment>());
-    envs->back()->Prepare(p.grid, e, mesh, ids, p.envOptions);
+}  // namespace
+
+Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end, bool root) {
+  SceneInfo& info = p->info;
+  const bool chooseSide = !o.hasCamera && !o.hasView;
+  std::vector<std::pair<uint32_t, Polygon>> emitters;
+  Status s = ReadScene(o, p, root, &emitters);
+  if (!s.ok()) return s;
+  s = PlanGrid(o, p);
+  if (!s.ok()) return s;
+  p->first = first;
+  p->end = end;
+  const uint32_t total = static_cast<uint32_t>(p->grid.count());
+  p->envPatches.assign(total, 0.0);
+  p->envTwins.assign(total, 0.0);
+  p->envVertices.assign(total, 0.0);
+  p->envPieceBytes.assign(total, 0);
+  p->twins.all = o.twoSided;
+  p->twins.emitters = o.twoSidedEmitters;
+  // glTF's doubleSided materials: their patches get twins of their own.
+  for (const Material& m : info.materials)
+    if (m.twoSided) p->twins.materials.assign(info.materials.size(), 0);
+  for (size_t m = 0; m < p->twins.materials.size(); ++m)
+    p->twins.materials[m] = info.materials[m].twoSided;
+
+  // Before pass 2 allocates: the parser's arrays, the camera's probe and
+  // the emitter check against the budget; then the pieces as they come.
+  const uint64_t passBytes = p->held + kInitBaseBytes + info.ParserBytes() +
+                             ViewProbe::HeapBytes() + (root ? p->checkBytes : 0);
+  if (p->budget > 0 && passBytes > p->budget) {
+    if (p->overBudget)
+      p->overBudget(passBytes,
+                    "to read the scene (the vertex arrays, the camera probe, the emitter check)");
+    return Status::Error("");
   }
-  p.clock.Done("texture means", textureSeconds);
-  p.clock.Done("meshing", os::Seconds() - t0 - textureSeconds);
+  CutPass pass(o, p, first, end, passBytes);
+  if (chooseSide && !info.camera.has) pass.probe = std::make_unique<ViewProbe>(info.bounds);
+  if (root) {
+    pass.check =
+        std::make_unique<EmitterCheck>(info.bounds, info.materials, emitters, kEmitterCheckChunk);
+  }
+  emitters.clear();
+  emitters.shrink_to_fit();
+  pass.one.objPath = o.scene;
+  pass.one.bounds = info.bounds;
+  double t0 = os::Seconds();
+  s = StreamObj(info, o.load, [&](uint32_t i, const Polygon& poly) { pass.Add(i, poly, root); });
+  if (!s.ok()) return s;
+  if (!pass.failed.ok()) return pass.failed;
+  if (o.roundWorkAuto)
+    p->roundWork = AutoRoundWork(o, pass.estimated, o.envs[0] * o.envs[1] * o.envs[2]);
+  p->clock.Done("cutting the scene into environments", os::Seconds() - t0);
+  if (pass.probe) {
+    p->view = pass.probe->Choose();
+    p->side = p->view.side;
+    p->viewProbed = true;
+  }
+  t0 = os::Seconds();
+  if (pass.check)
+    p->emitterWarnings =
+        EmitterWarnings(pass.check->Finish(), o.scene, info.materials, info.bounds);
+  pass.StripWarning(&p->emitterWarnings);
+  p->clock.Done("emitter check", os::Seconds() - t0);
+  pass.probe.reset();
+  pass.check.reset();
+  s = CheckEnvSizes(*p, total);
+  if (!s.ok()) return s;
+  for (uint32_t e = 0; e < total; ++e) {
+    p->envPatches[e] += p->envTwins[e];
+    // A twin's lattice is a copy of its original's (at most all of them).
+    if (p->envTwins[e] > 0.0) p->envVertices[e] *= 2.0;
+    if (e < first) p->idBase += static_cast<uint32_t>(p->envPatches[e]);
+  }
+  // The power a ray carries: the emitted power (channels summed, in piece
+  // order by environment, the same on every rank) over --emitted-rays.
+  std::stable_sort(pass.emitted.begin(), pass.emitted.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  double power = 0.0;
+  for (const auto& [e, w] : pass.emitted) power += w;
+  // --sky, --sun: one shooter a face of an environment for Method R, whose
+  // rays carry their own routes; tiles for the hemisphere masks, which judge
+  // a shooter's rays by its centre (docs/DESIGN.md, "Light from outside").
+  const uint32_t outsideTiles = o.maskMethod == MaskMethod::kR ? 1 : kMaxOutsideTiles;
+  power += OutsidePower(p->grid, o.outside, outsideTiles);
+  KeepPieces(o, p, total, &pass.own);
+  SetEnvOptions(o, power, outsideTiles, p);
   return Status::Ok();
-}
-
-uint64_t OwnPatches(const Prepared& p) {
-  double n = 0.0;
-  for (uint32_t e = p.first; e < p.end; ++e) n += p.envPatches[e];
-  return static_cast<uint64_t>(n);
 }
 
 }  // namespace vismask::run

@@ -1,6 +1,7 @@
 // The render pipeline's shared pieces (internal to src/): the run's state on
 // one rank (RunState), what init prepares (Prepared), and the stages that
-// src/app/app.cpp (dispatch, compare, Main), src/app/render_init.cpp (init),
+// src/app/app.cpp (dispatch, compare, Main), src/app/render_init.cpp (init;
+// src/app/prepare.cpp and src/app/prepare_envs.cpp its scene work),
 // src/output/output.cpp (the image and the outputs), src/output/run_json.cpp (run.json)
 // and src/output/footprint.cpp (`vismask footprint`) define.
 #pragma once

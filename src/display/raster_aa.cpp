@@ -177,16 +177,10 @@ glm::vec3 RadianceAt(const PieceSetup& s, const DisplayPiece& piece, Vec2 h,
   return c;
 }
 
-}  // namespace
-
-template <bool kTextured>
-void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
-  const uint32_t nc = piece.numCorners;
-  glm::vec3 q[4];
-  for (uint32_t k = 0; k < nc; ++k) q[k] = ToCamera(view, piece.p[k]);
-
-  // The piece's plane (Newell's normal) and 2D frame.
-  PieceSetup s;
+// The piece's plane (Newell's normal) and 2D frame from its corners in
+// camera space, q[0 .. nc); false for a degenerate piece.
+bool PlaneSetup(const glm::vec3* q, uint32_t nc, PieceSetup* out) {
+  PieceSetup& s = *out;
   s.numCorners = nc;
   glm::vec3 n(0.0f), mid(0.0f);
   for (uint32_t k = 0; k < nc; ++k) {
@@ -200,7 +194,7 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
   float nLen = glm::length(n);
   glm::vec3 edge = q[1] - q[0];
   float eLen = glm::length(edge);
-  if (!(nLen > 0.0f) || !(eLen > 0.0f)) return;
+  if (!(nLen > 0.0f) || !(eLen > 0.0f)) return false;
   s.n = n / nLen;
   s.d = glm::dot(s.n, mid / static_cast<float>(nc));
   s.origin = q[0];
@@ -213,12 +207,25 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
   if (nc == 3) {
     float det = Cross(Vec2{s.c2[1].x - s.c2[0].x, s.c2[1].y - s.c2[0].y},
                       Vec2{s.c2[2].x - s.c2[0].x, s.c2[2].y - s.c2[0].y});
-    if (det == 0.0f) return;
+    if (det == 0.0f) return false;
     s.invDet = 1.0f / det;
   }
 
-  // Clip to the near plane and the sides of the view (one pixel outside it,
-  // so the clip's own edges never cross a pixel that is drawn).
+  return true;
+}
+
+// A piece clipped to the view and projected: its corners in pixel
+// coordinates, their extent and their depths' range.
+struct ScreenPoly {
+  Vec2 sp[kMaxPoly];
+  int m = 0;
+  float minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf, zMin = kInf, zMax = 0.0f;
+};
+
+// Clip to the near plane and the sides of the view (one pixel outside it,
+// so the clip's own edges never cross a pixel that is drawn), and project;
+// false when less than a polygon is left.
+bool ClipProject(const View& view, const glm::vec3* q, uint32_t nc, ScreenPoly* out) {
   const float halfW = 0.5f * static_cast<float>(view.width),
               halfH = 0.5f * static_cast<float>(view.height);
   const float f = view.focal;
@@ -230,11 +237,12 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
   m = ClipPoly(bufA, m, glm::vec3(-f, 0, halfW + 1.0f), 0.0f, bufB);
   m = ClipPoly(bufB, m, glm::vec3(0, f, halfH + 1.0f), 0.0f, bufA);
   m = ClipPoly(bufA, m, glm::vec3(0, -f, halfH + 1.0f), 0.0f, bufB);
-  if (m < 3) return;
+  if (m < 3) return false;
 
-  // Project; orient the polygon counter-clockwise in pixel coordinates.
-  Vec2 sp[kMaxPoly];
-  float minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf, zMin = kInf, zMax = 0.0f;
+  // Project.
+  Vec2* sp = out->sp;
+  float &minX = out->minX, &maxX = out->maxX, &minY = out->minY, &maxY = out->maxY;
+  float &zMin = out->zMin, &zMax = out->zMax;
   for (int k = 0; k < m; ++k) {
     float invZ = 1.0f / bufB[k].z;
     sp[k] = Vec2{halfW + f * bufB[k].x * invZ, halfH - f * bufB[k].y * invZ};
@@ -242,6 +250,30 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
     minY = std::fmin(minY, sp[k].y), maxY = std::fmax(maxY, sp[k].y);
     zMin = std::fmin(zMin, bufB[k].z), zMax = std::fmax(zMax, bufB[k].z);
   }
+  out->m = m;
+  return true;
+}
+
+}  // namespace
+
+template <bool kTextured>
+void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
+  const uint32_t nc = piece.numCorners;
+  glm::vec3 q[4];
+  for (uint32_t k = 0; k < nc; ++k) q[k] = ToCamera(view, piece.p[k]);
+  PieceSetup s;
+  s.numCorners = nc;
+  if (!PlaneSetup(q, nc, &s)) return;
+  ScreenPoly poly;
+  if (!ClipProject(view, q, nc, &poly)) return;
+  const float halfW = 0.5f * static_cast<float>(view.width),
+              halfH = 0.5f * static_cast<float>(view.height);
+  const float f = view.focal;
+  // Orient the polygon counter-clockwise in pixel coordinates.
+  Vec2* sp = poly.sp;
+  const int m = poly.m;
+  const float minX = poly.minX, maxX = poly.maxX, minY = poly.minY, maxY = poly.maxY;
+  const float zMin = poly.zMin, zMax = poly.zMax;
   float twice = 0.0f;
   for (int k = 0; k < m; ++k) twice += Cross(sp[k], sp[(k + 1) % m]);
   if (!(std::fabs(twice) > 0.0f)) return;

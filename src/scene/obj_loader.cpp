@@ -32,6 +32,61 @@ uint32_t Loader::DefaultMaterial(const std::string& name, const std::string& pat
   return it->second.first;
 }
 
+Status Loader::Face(const Tokens& t, int line, uint32_t material, uint32_t smoothing,
+                    std::vector<Polygon>* pieces, const PolygonVisitor& visit) {
+  const std::string& path = path_;
+  const size_t args = t.size() - 1;
+  std::string err;
+  Polygon p;
+  p.material = material;
+  p.line = line;
+  p.smoothing = smoothing;
+  size_t withUv = 0, withNormal = 0;
+  for (size_t k = 1; k <= args; ++k) {
+    CornerIndex c;
+    err = ParseCorner(t[k], vertices_.size(), uvs_.size(), normals_.size(), &c);
+    if (!err.empty()) return Status::At(path, line, err);
+    p.corners.push_back(vertices_[c.v]);
+    p.uv.push_back(c.vt == kNone ? glm::vec2(0.0f) : uvs_[c.vt]);
+    p.vn.push_back(c.vn == kNone ? glm::vec3(0.0f) : normals_[c.vn]);
+    withUv += c.vt != kNone;
+    withNormal += c.vn != kNone;
+  }
+  // Per-corner data is all or nothing: a face that gives it for some
+  // corners only keeps none (said once per kind).
+  if (withUv != args) {
+    if (withUv != 0)
+      Warn(path, line, "texture coordinates on some corners of a face only: ignored");
+    p.uv.clear();
+  }
+  if (withNormal != args) {
+    if (withNormal != 0) Warn(path, line, "normals on some corners of a face only: ignored");
+    p.vn.clear();
+  }
+  pieces->clear();
+  FaceResult r = ShapeFace(p, options_.strict, pieces);
+  if (r.fate == FaceResult::kRefused) return Status::At(path, line, r.error);
+  for (const Polygon& piece : *pieces) visit(piece);
+  if (r.removedCorners > 0 &&
+      (r.fate == FaceResult::kKept || r.fate == FaceResult::kTriangulated)) {
+    cornersRemoved_.Add(line);
+    cornersRemoved_.corners += r.removedCorners;
+  }
+  if (r.fate == FaceResult::kTriangulated) {
+    triangulated_.Add(line);
+    triangulated_.off = std::max(triangulated_.off, r.offPlane);
+    // Triangles too thin to keep are degenerate pieces of the face.
+    if (r.droppedTriangles > 0) degenerate_.Add(line);
+  }
+  if (r.fate == FaceResult::kDegenerate) degenerate_.Add(line);
+  if (r.fate == FaceResult::kSelfIntersecting) selfIntersecting_.Add(line);
+  if (r.fate == FaceResult::kDegenerate || r.fate == FaceResult::kSelfIntersecting)
+    droppedFace_.emplace(material, std::make_pair(line, r.fate == FaceResult::kDegenerate
+                                                            ? "has no area"
+                                                            : "has edges that cross (a bow tie)"));
+  return Status::Ok();
+}
+
 Status Loader::LoadObj(const std::string& path, LineSource& lines, const PolygonVisitor& visit) {
   path_ = path;
   std::string err;
@@ -72,54 +127,8 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
              "faces before any 'usemtl': they get the default grey material '" +
                  std::string(kDefaultMaterial) + "' (Kd 0.5)");
       }
-      Polygon p;
-      p.material = material;
-      p.line = line;
-      p.smoothing = smoothing;
-      size_t withUv = 0, withNormal = 0;
-      for (size_t k = 1; k <= args; ++k) {
-        CornerIndex c;
-        err = ParseCorner(t[k], vertices_.size(), uvs_.size(), normals_.size(), &c);
-        if (!err.empty()) return Status::At(path, line, err);
-        p.corners.push_back(vertices_[c.v]);
-        p.uv.push_back(c.vt == kNone ? glm::vec2(0.0f) : uvs_[c.vt]);
-        p.vn.push_back(c.vn == kNone ? glm::vec3(0.0f) : normals_[c.vn]);
-        withUv += c.vt != kNone;
-        withNormal += c.vn != kNone;
-      }
-      // Per-corner data is all or nothing: a face that gives it for some
-      // corners only keeps none (said once per kind).
-      if (withUv != args) {
-        if (withUv != 0)
-          Warn(path, line, "texture coordinates on some corners of a face only: ignored");
-        p.uv.clear();
-      }
-      if (withNormal != args) {
-        if (withNormal != 0) Warn(path, line, "normals on some corners of a face only: ignored");
-        p.vn.clear();
-      }
-      pieces.clear();
-      FaceResult r = ShapeFace(p, options_.strict, &pieces);
-      if (r.fate == FaceResult::kRefused) return Status::At(path, line, r.error);
-      for (const Polygon& piece : pieces) visit(piece);
-      if (r.removedCorners > 0 &&
-          (r.fate == FaceResult::kKept || r.fate == FaceResult::kTriangulated)) {
-        cornersRemoved_.Add(line);
-        cornersRemoved_.corners += r.removedCorners;
-      }
-      if (r.fate == FaceResult::kTriangulated) {
-        triangulated_.Add(line);
-        triangulated_.off = std::max(triangulated_.off, r.offPlane);
-        // Triangles too thin to keep are degenerate pieces of the face.
-        if (r.droppedTriangles > 0) degenerate_.Add(line);
-      }
-      if (r.fate == FaceResult::kDegenerate) degenerate_.Add(line);
-      if (r.fate == FaceResult::kSelfIntersecting) selfIntersecting_.Add(line);
-      if (r.fate == FaceResult::kDegenerate || r.fate == FaceResult::kSelfIntersecting)
-        droppedFace_.emplace(material,
-                             std::make_pair(line, r.fate == FaceResult::kDegenerate
-                                                      ? "has no area"
-                                                      : "has edges that cross (a bow tie)"));
+      Status st = Face(t, line, material, smoothing, &pieces, visit);
+      if (!st.ok()) return st;
     } else if (key == "usemtl") {
       if (args != 1) return Status::At(path, line, "'usemtl' needs 1 name, got " + Str(args));
       auto it = materialIndex_.find(t[1]);

@@ -1,6 +1,6 @@
 // Scene loading: the scene-wide checks as reductions over the polygon
 // stream, the closed-scene check, and the whole-file loader (scene.h). The
-// parser is in scene_text.cpp, obj_loader.cpp and mtl_loader.cpp; the
+// parser is in scene_text.cpp, scene_lines.cpp, obj_loader.cpp and mtl_loader.cpp; the
 // streaming passes in scene_stream.cpp.
 #include "vismask/scene/scene.h"
 

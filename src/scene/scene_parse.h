@@ -219,6 +219,10 @@ class Loader {
   // The index of material `name`, made the default grey (Kd 0.5) at
   // path:line if no MTL defined it.
   uint32_t DefaultMaterial(const std::string& name, const std::string& path, int line);
+  // Face statement `t` at `line` (3 or more corners), shaped (ShapeFace) and
+  // its pieces visited; what was mended or dropped counted for the warnings.
+  Status Face(const Tokens& t, int line, uint32_t material, uint32_t smoothing,
+              std::vector<Polygon>* pieces, const PolygonVisitor& visit);
   // One warning line per distinct `what`, at its first file:line.
   void Warn(const std::string& path, int line, const std::string& what) {
     if (!warnedKeys_.insert(what).second) return;

@@ -93,6 +93,10 @@ Status MeshSizeError(double numPatches, float patchSize, uint64_t maxPatches);
 // ceil(len / patchSize), at least 1 (double: it may be huge). The meshing
 // and the partition's patch estimate both count with it.
 double EdgeDivisions(double len, double patchSize);
+// The m x n lattice MeshScene lays on a convex quad c[0..3]: c[0]c[1] and
+// c[3]c[2] cut in m, c[0]c[3] and c[1]c[2] in n, each pair as its longer side
+// is (EdgeDivisions). The meshing and the partition's estimate share it.
+void QuadDivisions(const glm::dvec3* c, double patchSize, double* m, double* n);
 
 // Appends a twin of each patch `options` selects, after all the patches:
 // the same corners (bit for bit) in reverse order from corner[0], so its
