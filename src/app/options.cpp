@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "vismask/parallel/transport.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
 
@@ -558,9 +559,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
                          std::to_string(numEnvs) +
                          " environments (each rank needs one; see --envs)");
-  if (o->transport == "loop" && o->ranks > 1)
-    return Status::Error(
-        "vismask: --transport loop runs one process; use --transport pipe with --ranks");
+  const std::string loop = LoopTransportError(o->transport, o->ranks);
+  if (!loop.empty()) return Status::Error(loop);
   if (!o->envOrder.empty()) {
     size_t n = size_t(o->envs[0]) * o->envs[1] * o->envs[2];
     std::vector<bool> seen(n, false);
