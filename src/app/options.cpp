@@ -537,7 +537,7 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
         "--stop-error too, or a fraction above 0");
   // --ranks N > 1 without --envs: --envs auto, one balanced environment a
   // rank (under mpirun, SetWorldSize does the same with the world's size).
-  if (!o->hasEnvs && o->ranks > 1) o->envsAuto = true;
+  AutoEnvsForRanks(o->ranks, o);
   if (o->envsAuto) {
     // auto: as many environments as ranks (pipe; under mpirun, the world).
     if (o->envsAutoCount == 0) o->envsAutoCount = std::max(o->ranks, 1);

@@ -191,9 +191,16 @@ constexpr uint32_t kMinAutoQueue = 64;
 constexpr uint32_t kAutoQueueShots = 64;
 uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes);
 
-// A run of `ranks` ranks (the MPI world) without --envs: --envs auto with
-// one environment a rank, its rounds resolved again. True when it changed
-// the options (no --envs, more than one rank, not already auto).
+// The one rule for --envs from the rank count: a run of `ranks` > 1 ranks
+// without --envs has --envs auto, one environment a rank (at most
+// kMaxAutoEnvs). Sets envsAuto and envsAutoCount; true when it changed
+// them (no --envs, more than one rank, not already auto). ParseArgs applies
+// it for --ranks, SetWorldSize for the MPI world.
+bool AutoEnvsForRanks(int ranks, Options* options);
+
+// A run of `ranks` ranks (the MPI world): AutoEnvsForRanks, and when that
+// changed the options, the grid's placeholder shape and the rounds resolved
+// again. True when it changed the options.
 bool SetWorldSize(int ranks, Options* options);
 
 // The automatic --round-work: kAutoRoundWorkShots full shots, each the
