@@ -1,7 +1,8 @@
 // Options: the command line. `vismask render SCENE.obj [flags]` and
 // `vismask --help`. Parsing is strict: an unknown flag, a missing value or a
 // value that does not parse completely, is not finite or is out of range is
-// an error (never clamped).
+// an error (never clamped). Each option's name, syntax, range, help and
+// run.json key are one row of the option table (options_table.h).
 #pragma once
 #include <cstdint>
 #include <string>
