@@ -225,18 +225,15 @@ Status ParseCompareOrVerify(const std::vector<std::string>& args, Options* o) {
 
 // What a checkpoint must agree with: the arguments as given, less the
 // scene (compared by its bytes), --envs (by its meaning) and the options
-// that leave the result as it is.
+// the table lets differ.
 std::vector<std::string> ResultArgs(const std::vector<std::string>& args) {
   std::vector<std::string> result;
   for (size_t k = 1; k < args.size(); ++k) {
-    const std::string& a = args[k];
-    const OptionSpec* s = FindOption(a);
+    const OptionSpec* s = FindOption(args[k]);
     if (!s) continue;  // the scene (values are taken with their flag)
     const bool flag = s->kind == OptionKind::kFlag;
-    bool neutral = a == "--envs";
-    for (const char* n : kResultNeutral) neutral = neutral || a == n;
-    if (!neutral) {
-      result.push_back(a);
+    if (s->resume == ResumeRule::kMustMatch) {
+      result.push_back(args[k]);
       if (!flag && k + 1 < args.size()) result.push_back(args[k + 1]);
     }
     if (!flag) ++k;

@@ -105,9 +105,10 @@ struct Options {
   std::string checkpointDir;
   double checkpointEvery = 300.0;
   std::string resumeDir;
-  // The arguments a checkpoint must agree with (checkpoint.h): every one
-  // given but the scene, --envs (compared as EnvSpec) and those that leave
-  // the result as it is (kResultNeutral).
+  // The arguments a checkpoint must agree with (checkpoint.h): every option
+  // given whose table row says it changes the result (ResumeRule::kMustMatch)
+  // with its value as given; the scene is compared by its bytes and --envs
+  // as EnvSpec.
   std::vector<std::string> resultArgs;
   bool json = false;        // footprint --json
   std::string reference;    // --reference REF.pfm: the error of the image against it
@@ -159,12 +160,6 @@ inline uint32_t RayCap(const Options& o) {
   return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
 }
 
-// The options that do not change a render's result: a checkpoint may be
-// resumed with other values (or without them). --envs is compared by its
-// meaning (EnvSpec), not as given.
-constexpr const char* kResultNeutral[] = {
-    "--ranks",        "--transport",  "--out",        "--export",           "--quiet",
-    "--rank-timeout", "--mem-budget", "--checkpoint", "--checkpoint-every", "--resume"};
 // The environments a run has, as a checkpoint records them: "auto:N" or
 // "NXxNYxNZ" (after SetWorldSize under mpirun).
 std::string EnvSpec(const Options& o);
