@@ -62,12 +62,12 @@ void CameraKeys(Fields& f, const Context& c) {
   f.Key("camera").Printf("[%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g]", k.eye.x,
                          k.eye.y, k.eye.z, k.target.x, k.target.y, k.target.z, k.up.x, k.up.y,
                          k.up.z, k.fovyDeg);
-  f.Bool("camera_from_scene", c.r.cameraFromScene);
 }
 // The side the camera frames (null with --camera), whether it was chosen
 // (no --view), and how (null when --camera, --view or the scene's camera
 // decided): the best side's image (its shares of front and back hits, one
-// wall or not) and the best inside candidate's.
+// wall or not) and the best inside candidate's; then whether the camera is
+// the scene's.
 void ViewKeys(Fields& f, const Context& c) {
   const RunState& r = c.r;
   if (r.hasSide)
@@ -75,18 +75,18 @@ void ViewKeys(Fields& f, const Context& c) {
   else
     f.Key("view").Printf("%s", r.inside ? "\"inside\"" : "null");
   f.Bool("view_auto", r.sideChosen);
-  if (!r.viewProbed) {
-    f.Key("view_choice").Printf("null");
-    return;
-  }
   const ViewChoice& v = r.viewChoice;
-  f.Key("view_choice")
-      .Printf(
-          "{\"side\": \"%s\", \"side_front_share\": %.6g, \"side_back_share\": %.6g, "
-          "\"side_one_wall\": %s, \"inside_candidate\": %d, \"inside_front_share\": %.6g, "
-          "\"inside_score\": %.6g, \"inside\": %s}",
-          ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
-          v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false");
+  if (!r.viewProbed)
+    f.Key("view_choice").Printf("null");
+  else
+    f.Key("view_choice")
+        .Printf(
+            "{\"side\": \"%s\", \"side_front_share\": %.6g, \"side_back_share\": %.6g, "
+            "\"side_one_wall\": %s, \"inside_candidate\": %d, \"inside_front_share\": %.6g, "
+            "\"inside_score\": %.6g, \"inside\": %s}",
+            ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
+            v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false");
+  f.Bool("camera_from_scene", r.cameraFromScene);
 }
 // --sky (radiance) and --sun (towards it, irradiance, angular diameter): null without.
 void Sky(Fields& f, const Context& c) {
