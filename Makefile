@@ -255,7 +255,8 @@ viewer-screenshot: $(BUILD)/vismask viewer
 
 # make install PREFIX=/usr/local DESTDIR=...: the binaries in bin/, the
 # viewer (with its three.js files) in share/vismask/viewer/ and a man page
-# made from --help by help2man in share/man/man1/. make uninstall removes
+# made by help2man from --help all (every row of the option table,
+# options_table.h) in share/man/man1/. make uninstall removes
 # them (share/vismask/ whole; bin/ and share/man/man1/ stay).
 PREFIX ?= /usr/local
 DESTDIR ?=

@@ -22,14 +22,12 @@ std::unique_ptr<Transport> MakeTransport(const TransportRequest& request, Status
         "has loop and pipe");
     return nullptr;
   }
-  if (name == "loop" || (name.empty() && request.ranks == 1)) {
-    if (request.ranks != 1) {
-      *error = Status::Error("vismask: --transport loop runs one rank (got --ranks " +
-                             std::to_string(request.ranks) + "); use --transport pipe");
-      return nullptr;
-    }
-    return MakeLoopTransport();
+  std::string loop = LoopTransportError(name, request.ranks);
+  if (!loop.empty()) {
+    *error = Status::Error(loop);
+    return nullptr;
   }
+  if (name == "loop" || (name.empty() && request.ranks == 1)) return MakeLoopTransport();
   if (name == "pipe" || name.empty()) {
     return MakePipeTransport(request.ranks, request.rankTimeout, error);
   }

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "test_util.h"
+#include "vismask/app/options_table.h"
 
 namespace vismask {
 namespace {
@@ -65,6 +66,14 @@ TEST(InstallTest, InstallsFindsItsPageAndUninstalls) {
   std::string man = ReadFile(root + "/share/man/man1/vismask.1");
   EXPECT_NE(man.find(".TH VISMASK \"1\""), std::string::npos);
   EXPECT_NE(man.find("vismask view OUT_DIR"), std::string::npos);
+  // Made from --help all, so from the option table: every option is in it
+  // (help2man writes '-' as "\-").
+  for (const OptionSpec& s : OptionTable()) {
+    std::string name;
+    for (const char* c = s.name; *c; ++c)
+      name += *c == '-' ? std::string("\\-") : std::string(1, *c);
+    EXPECT_NE(man.find(name), std::string::npos) << s.name;
+  }
   EXPECT_EQ(FileExists(root + "/share/man/man1/vismask-mpi.1"), mpi);
 
   // The installed binary finds the installed page (nothing else lies beside

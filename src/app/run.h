@@ -350,6 +350,8 @@ void WriteExport(RunState* r);
 void JsonString(TextWriter* w, const char* s);
 std::string JsonQuoted(const std::string& s);
 void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double outputSeconds);
+// run.json's "options" section, from the option table (run_json_options.cpp).
+void WriteRunJsonOptions(TextWriter* w, const RunState& r, float exposure);
 void RenderImage(RunState* r);
 int WriteOutputs(RunState* r, const SolveResult& res);
 int Footprint(const Options& o);

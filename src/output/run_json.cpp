@@ -84,120 +84,12 @@ void JsonTriple(TextWriter* w, const char* name, const double v[3], bool comma) 
   w->Printf("    \"%s\": [%.17g, %.17g, %.17g]%s\n", name, v[0], v[1], v[2], comma ? "," : "");
 }
 
-void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double outputSeconds) {
+namespace {
+
+// "counts": the scene, the environments and the ranks.
+void WriteCounts(const RunState* r, TextWriter* out) {
   const Options& o = r->options;
-  TextWriter w(&r->files[kRunJson], r->textBuffer);
-  w.Printf("{\n  \"vismask_version\": 1,\n  \"command\": \"render\",\n  \"scene\": ");
-  JsonString(&w, o.scene.c_str());
-  w.Printf(",\n  \"out\": ");
-  JsonString(&w, o.outDir.c_str());
-  w.Printf(",\n  \"options\": {\n");
-  w.Printf("    \"patch_size\": %.9g,\n    \"rays\": %u,\n    \"seed\": %llu,\n", r->patchSize,
-           RayCap(o), static_cast<unsigned long long>(o.seed));
-  w.Printf(
-      "    \"ray_alloc\": \"%s\",\n    \"emitted_rays\": %llu,\n    \"min_rays\": %u,\n"
-      "    \"max_rays\": %u,\n    \"sampler\": \"%s\",\n    \"ray_budget\": %llu,\n",
-      o.rayAlloc == Options::RayAlloc::kPower ? "power" : "fixed",
-      static_cast<unsigned long long>(o.emittedRays), o.minRays, o.maxRays,
-      o.sobol ? "sobol" : "random", static_cast<unsigned long long>(o.rayBudget));
-  w.Printf("    \"stop_unshot\": %.17g,\n    \"max_shots\": %llu,\n    \"max_seconds\": %.17g,\n",
-           o.stopUnshot, static_cast<unsigned long long>(o.maxShots), o.maxSeconds);
-  w.Printf("    \"width\": %d,\n    \"height\": %d,\n    \"exposure\": %.9g,\n", o.width, o.height,
-           exposure);
-  w.Printf("    \"exposure_auto\": %s,\n", o.hasExposure ? "false" : "true");
-  const Camera& c = r->camera;  // as --camera takes it: eye, target, up, fovy
-  w.Printf("    \"camera\": [%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g],\n",
-           c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z, c.up.x, c.up.y, c.up.z,
-           c.fovyDeg);
-  // The side the camera frames (null with --camera), and whether it was chosen (no --view).
-  if (r->hasSide)
-    w.Printf("    \"view\": \"%s\",\n", ViewSideName(r->side));
-  else if (r->inside)
-    w.Printf("    \"view\": \"inside\",\n");
-  else
-    w.Printf("    \"view\": null,\n");
-  w.Printf("    \"view_auto\": %s,\n", r->sideChosen ? "true" : "false");
-  // How the default view was chosen (null when --camera, --view or the
-  // scene's camera decided): the best side's image (its shares of front and
-  // back hits, one wall or not) and the best inside candidate's.
-  if (r->viewProbed) {
-    const ViewChoice& v = r->viewChoice;
-    w.Printf(
-        "    \"view_choice\": {\"side\": \"%s\", \"side_front_share\": %.6g, "
-        "\"side_back_share\": %.6g, \"side_one_wall\": %s, \"inside_candidate\": %d, "
-        "\"inside_front_share\": %.6g, \"inside_score\": %.6g, \"inside\": %s},\n",
-        ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
-        v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false");
-  } else {
-    w.Printf("    \"view_choice\": null,\n");
-  }
-  w.Printf("    \"camera_from_scene\": %s,\n", r->cameraFromScene ? "true" : "false");
-  // --sky (radiance) and --sun (towards it, irradiance, angular diameter): null without.
-  const OutsideLight& lit = o.outside;
-  if (lit.HasSky())
-    w.Printf("    \"sky\": [%.9g, %.9g, %.9g],\n", lit.sky.x, lit.sky.y, lit.sky.z);
-  else
-    w.Printf("    \"sky\": null,\n");
-  if (lit.HasSun())
-    w.Printf(
-        "    \"sun\": {\"toward\": [%.9g, %.9g, %.9g], \"irradiance\": [%.9g, %.9g, %.9g], "
-        "\"degrees\": %.9g},\n",
-        lit.sunToward.x, lit.sunToward.y, lit.sunToward.z, lit.sun.x, lit.sun.y, lit.sun.z,
-        lit.sunDegrees);
-  else
-    w.Printf("    \"sun\": null,\n");
-  w.Printf("    \"envs\": [%d, %d, %d],\n    \"mask_method\": \"%s\",\n", o.envs[0], o.envs[1],
-           o.envs[2], MaskMethodName(o.maskMethod));
-  w.Printf(
-      "    \"mask_res\": %u,\n    \"centre_rays\": \"%s\",\n    \"round_shots\": %u,\n    "
-      "\"round_work\": %llu,\n    \"queue\": "
-      "%u,\n",
-      o.maskRes, CentreChoiceName(o.centreRays), o.roundShots,
-      static_cast<unsigned long long>(o.roundWork), o.queue);
-  // --envs auto:N (null: --envs NXxNYxNZ) and the planes the grid was cut
-  // at, per axis from the scene box's low to its high side.
-  if (o.envsAuto)
-    w.Printf("    \"envs_auto\": %d,\n", o.envsAutoCount);
-  else
-    w.Printf("    \"envs_auto\": null,\n");
-  w.Printf("    \"env_planes\": [");
-  for (int a = 0; a < 3; ++a) {
-    w.Printf("%s[", a ? ", " : "");
-    for (int k = 0; k <= r->envGrid.n[a]; ++k)
-      w.Printf("%s%.9g", k ? ", " : "", r->envGrid.Plane(a, k));
-    w.Printf("]");
-  }
-  w.Printf("],\n");
-  w.Printf("    \"rank_timeout\": %.17g,\n", o.rankTimeout);
-  w.Printf("    \"reference\": ");
-  if (o.reference.empty())
-    w.Printf("null");
-  else
-    JsonString(&w, o.reference.c_str());
-  w.Printf(",\n    \"exclude\": ");
-  if (o.exclude.empty())
-    w.Printf("null");
-  else
-    JsonString(&w, o.exclude.c_str());
-  w.Printf(",\n    \"error_every\": %llu,\n", static_cast<unsigned long long>(o.errorEvery));
-  w.Printf("    \"correct_unshot\": %s,\n", o.correctUnshot ? "true" : "false");
-  w.Printf("    \"aa\": %s,\n", o.aa ? "true" : "false");
-  w.Printf("    \"direct_samples\": %d,\n", o.directSamples < 0 ? 0 : o.directSamples);
-  // Only when --max-seconds planned --emitted-rays (its value is the plan).
-  if (o.emittedRaysPlanned) w.Printf("    \"emitted_rays_planned\": true,\n");
-  w.Printf("    \"smooth\": %s,\n    \"crease\": %.9g,\n", o.smooth ? "true" : "false",
-           o.creaseDeg);
-  // Only when on, so that a one-sided run.json is what it was before them.
-  if (o.twoSided || o.twoSidedEmitters)
-    w.Printf("    \"two_sided\": %s,\n    \"two_sided_emitters\": %s,\n",
-             o.twoSided ? "true" : "false", o.twoSidedEmitters ? "true" : "false");
-  // Only with --export, so that a run.json without it is what it was.
-  if (!o.exportPath.empty()) {
-    w.Printf("    \"export\": ");
-    JsonString(&w, o.exportPath.c_str());
-    w.Printf(",\n");
-  }
-  w.Printf("    \"stop_error\": %.17g\n  },\n", o.stopError);
+  TextWriter& w = *out;
   size_t patches = 0, vertices = 0, cells = 0, refs = 0;
   for (const EnvSummary& e : r->summary) {
     patches += e.patches;
@@ -219,6 +111,12 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
              static_cast<unsigned long long>(r->exportWhole.triangles),
              static_cast<unsigned long long>(r->exportBytes));
   w.Printf("\n  },\n");
+}
+
+// "result" up to the per-environment lists: the stop, the shots, rays,
+// packets, times and work.
+void WriteResultTotals(const RunState* r, const SolveResult& res, TextWriter* out) {
+  TextWriter& w = *out;
   EnvStats st;
   for (const EnvSummary& e : r->summary) {
     st.shots += e.stats.shots;
@@ -281,6 +179,12 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   perEnv("environment_rays", [](const EnvSummary& e) { return e.stats.rays; });
   perEnv("environment_work", [](const EnvSummary& e) { return e.work; });
   w.Printf("    \"unshot_fraction\": %.17g,\n", res.unshotFraction);
+}
+
+// The rest of "result": the elements and the stated error.
+void WriteResultError(const RunState* r, const SolveResult& res, TextWriter* out) {
+  const Options& o = r->options;
+  TextWriter& w = *out;
   // Sub-patch elements: the pool (roots included), what was used, the
   // leaves drawn, and whether refinement stopped for want of elements.
   uint64_t used = 0, capacity = 0, leaves = 0, depth = 0, splits = 0, refused = 0;
@@ -334,6 +238,11 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"stated_error\": %.17g\n  },\n",
            std::sqrt(mc * mc + res.biasEstimate * res.biasEstimate +
                      res.lossEstimate * res.lossEstimate));
+}
+
+// "energy": the ledger summed over the environments.
+void WriteEnergy(const RunState* r, TextWriter* out) {
+  TextWriter& w = *out;
   EnergyLedger total;
   for (const EnvSummary& e : r->summary) {
     for (int c = 0; c < 3; ++c) {
@@ -358,39 +267,45 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     residual[c] = total.emitted[c] - total.absorbed[c] - total.escaped[c] - total.unshot[c] -
                   total.inFlight[c];
   JsonTriple(&w, "residual", residual, false);
-  w.Printf("  },\n  \"timings\": {\n    \"init_seconds\": %.6f,\n", r->initSeconds);
-  w.Printf("    \"solve_seconds\": %.6f,\n    \"error_seconds\": %.6f,\n", res.seconds,
-           res.errorSeconds);
-  w.Printf("    \"output_seconds\": %.6f\n  },\n", outputSeconds);
-  if (!o.checkpointDir.empty()) {
-    // --checkpoint, --resume: what was written, when, and each rank's bytes.
-    const Checkpoints& c = r->checkpoints;
-    w.Printf("  \"checkpoint\": {\n    \"dir\": ");
-    JsonString(&w, o.checkpointDir.c_str());
-    w.Printf(",\n    \"every_seconds\": %.17g,\n    \"written\": %llu,\n    \"failed\": %llu,\n",
-             o.checkpointEvery, static_cast<unsigned long long>(c.written()),
-             static_cast<unsigned long long>(c.failed()));
-    if (c.haveCheckpoint())
-      w.Printf("    \"last_rounds\": %llu,\n    \"last_solve_seconds\": %.6f,\n",
-               static_cast<unsigned long long>(c.checkpointRounds()), c.checkpointElapsed());
-    else
-      w.Printf("    \"last_rounds\": null,\n    \"last_solve_seconds\": null,\n");
-    if (c.resumed())
-      w.Printf("    \"resumed_from_rounds\": %llu,\n",
-               static_cast<unsigned long long>(c.resumedRounds()));
-    else
-      w.Printf("    \"resumed_from_rounds\": null,\n");
-    w.Printf("    \"rank0_write_seconds\": %.6f,\n    \"rank_bytes\": [", c.writeSeconds());
-    const int ranks = r->transport->size();
-    for (int k = 0; k < ranks; ++k) {
-      RankEnvs re = EnvsOfRank(r->rankEnvs.total, ranks, k);
-      uint64_t bytes = 0;
-      for (uint32_t e = re.first; e < re.first + re.count; ++e)
-        bytes += CheckpointFileBytes(r->summary[e].arenaBytes);
-      w.Printf("%s%llu", k ? ", " : "", static_cast<unsigned long long>(bytes));
-    }
-    w.Printf("]\n  },\n");
+  w.Printf("  },\n");
+}
+
+// "checkpoint" (with --checkpoint or --resume).
+void WriteCheckpoint(const RunState* r, TextWriter* out) {
+  const Options& o = r->options;
+  TextWriter& w = *out;
+  // --checkpoint, --resume: what was written, when, and each rank's bytes.
+  const Checkpoints& c = r->checkpoints;
+  w.Printf("  \"checkpoint\": {\n    \"dir\": ");
+  JsonString(&w, o.checkpointDir.c_str());
+  w.Printf(",\n    \"every_seconds\": %.17g,\n    \"written\": %llu,\n    \"failed\": %llu,\n",
+           o.checkpointEvery, static_cast<unsigned long long>(c.written()),
+           static_cast<unsigned long long>(c.failed()));
+  if (c.haveCheckpoint())
+    w.Printf("    \"last_rounds\": %llu,\n    \"last_solve_seconds\": %.6f,\n",
+             static_cast<unsigned long long>(c.checkpointRounds()), c.checkpointElapsed());
+  else
+    w.Printf("    \"last_rounds\": null,\n    \"last_solve_seconds\": null,\n");
+  if (c.resumed())
+    w.Printf("    \"resumed_from_rounds\": %llu,\n",
+             static_cast<unsigned long long>(c.resumedRounds()));
+  else
+    w.Printf("    \"resumed_from_rounds\": null,\n");
+  w.Printf("    \"rank0_write_seconds\": %.6f,\n    \"rank_bytes\": [", c.writeSeconds());
+  const int ranks = r->transport->size();
+  for (int k = 0; k < ranks; ++k) {
+    RankEnvs re = EnvsOfRank(r->rankEnvs.total, ranks, k);
+    uint64_t bytes = 0;
+    for (uint32_t e = re.first; e < re.first + re.count; ++e)
+      bytes += CheckpointFileBytes(r->summary[e].arenaBytes);
+    w.Printf("%s%llu", k ? ", " : "", static_cast<unsigned long long>(bytes));
   }
+  w.Printf("]\n  },\n");
+}
+
+// "memory": the arenas, textures, init's stages and every rank's.
+void WriteMemory(const RunState* r, TextWriter* out) {
+  TextWriter& w = *out;
   w.Printf("  \"memory\": {\n    \"environment_arena_bytes\": [");
   for (size_t i = 0; i < r->summary.size(); ++i)
     w.Printf("%s%llu", i ? ", " : "", static_cast<unsigned long long>(r->summary[i].arenaBytes));
@@ -446,6 +361,12 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
   w.Printf("    \"peak_rss_explained\": %.4f,\n",
            peak > 0 ? static_cast<double>(arenas + files) / static_cast<double>(peak) : 0.0);
   w.Printf("    \"peak_rss_bytes\": %llu\n  }", static_cast<unsigned long long>(peak));
+}
+
+// "outputs": the commit record.
+void WriteOutputList(const RunState* r, TextWriter* out) {
+  const Options& o = r->options;
+  TextWriter& w = *out;
   // The commit record: every other output of this run, its size and CRC-32
   // (all are written by now; run.json is renamed last), so that a reader
   // (vismask verify) can tell a complete set from a mixed one.
@@ -461,6 +382,30 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     if (f != kRunJson) record(kOutputNames[f], r->files[f]);
   if (r->exportFile.isOpen()) record(o.exportPath.c_str(), r->exportFile);
   w.Printf("\n  ]\n}\n");
+}
+
+}  // namespace
+
+void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double outputSeconds) {
+  const Options& o = r->options;
+  TextWriter w(&r->files[kRunJson], r->textBuffer);
+  w.Printf("{\n  \"vismask_version\": 1,\n  \"command\": \"render\",\n  \"scene\": ");
+  JsonString(&w, o.scene.c_str());
+  w.Printf(",\n  \"out\": ");
+  JsonString(&w, o.outDir.c_str());
+  w.Printf(",\n");
+  WriteRunJsonOptions(&w, *r, exposure);
+  WriteCounts(r, &w);
+  WriteResultTotals(r, res, &w);
+  WriteResultError(r, res, &w);
+  WriteEnergy(r, &w);
+  w.Printf("  \"timings\": {\n    \"init_seconds\": %.6f,\n", r->initSeconds);
+  w.Printf("    \"solve_seconds\": %.6f,\n    \"error_seconds\": %.6f,\n", res.seconds,
+           res.errorSeconds);
+  w.Printf("    \"output_seconds\": %.6f\n  },\n", outputSeconds);
+  if (!o.checkpointDir.empty()) WriteCheckpoint(r, &w);
+  WriteMemory(r, &w);
+  WriteOutputList(r, &w);
   w.Flush();
 }
 

@@ -1,9 +1,9 @@
 #include "vismask/scene/jpeg.h"
 
+#include <jpeglib.h>
+
 #include <csetjmp>
 #include <cstdio>  // jpeglib.h needs FILE and size_t declared first
-
-#include <jpeglib.h>
 
 namespace vismask {
 
@@ -48,8 +48,8 @@ std::string Printable(const char* s) {
 // One decompression from header to the last row, or to the header only
 // (rows == nullptr). Between setjmp and a longjmp only trivially
 // destructible objects live in this frame.
-bool Run(const unsigned char* b, size_t n, int* width, int* height, uint8_t* rows,
-         size_t rowsSize, ErrorManager* err) {
+bool Run(const unsigned char* b, size_t n, int* width, int* height, uint8_t* rows, size_t rowsSize,
+         ErrorManager* err) {
   jpeg_decompress_struct d;
   d.err = jpeg_std_error(&err->pub);
   err->pub.error_exit = OnError;

@@ -1,8 +1,9 @@
 // The defaults that follow from the run's shape (options.h): how big a
 // round is (ResolveRounds, AutoRoundWork), the foreign-shooter queue
 // (AutoQueue), and --envs auto for a run of several ranks without --envs
-// (SetWorldSize). ParseArgs calls ResolveRounds once the environment count
-// is known; init sets the automatic round work from the scene.
+// (AutoEnvsForRanks: ParseArgs for --ranks, SetWorldSize for the MPI world). ParseArgs calls
+// ResolveRounds once the environment count is known; init sets the automatic round work from the
+// scene.
 #include <algorithm>
 #include <cmath>
 
@@ -37,10 +38,15 @@ uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes) {
   return static_cast<uint32_t>(std::max<uint64_t>(kMinAutoQueue, std::min(want, fit)));
 }
 
-bool SetWorldSize(int ranks, Options* o) {
+bool AutoEnvsForRanks(int ranks, Options* o) {
   if (o->hasEnvs || ranks <= 1 || o->envsAuto) return false;
   o->envsAuto = true;
   o->envsAutoCount = std::min(ranks, kMaxAutoEnvs);
+  return true;
+}
+
+bool SetWorldSize(int ranks, Options* o) {
+  if (!AutoEnvsForRanks(ranks, o)) return false;
   if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs)) return false;
   ResolveRounds(o->envsAutoCount, o);
   // Per-pixel direct light needs one environment (ParseArgs).

@@ -1,7 +1,8 @@
 // Options: the command line. `vismask render SCENE.obj [flags]` and
 // `vismask --help`. Parsing is strict: an unknown flag, a missing value or a
 // value that does not parse completely, is not finite or is out of range is
-// an error (never clamped).
+// an error (never clamped). Each option's name, syntax, range, help and
+// run.json key are one row of the option table (options_table.h).
 #pragma once
 #include <cstdint>
 #include <string>
@@ -25,45 +26,46 @@ struct Options {
   LoadOptions load;      // --strict, --emit NAME=R,G,B|ka (repeatable)
   OutsideLight outside;  // --sky R,G,B, --sun X,Y,Z,R,G,B[,DEG] (outside.h)
   std::string outDir = "out";
-  std::string
-      exportPath;  // --export FILE.glb: the solved mesh as binary glTF (gltf.h); empty: none
+  // --export FILE.glb: the solved mesh as binary glTF (gltf.h); empty: none.
+  std::string exportPath;
   float patchSize = 0.0f;  // 0: automatic (largest scene extent / kAutoPatchDivisions)
   // Ray allocation: kPower (the default) gives a shot rays in proportion
   // to its power; kFixed (chosen by --rays N alone) gives every shot N.
   enum class RayAlloc { kPower, kFixed };
-  RayAlloc rayAlloc = RayAlloc::kPower;
-  bool hasRayAlloc = false;
-  uint32_t rays = 4096;  // --rays: per shot (fixed)
+  RayAlloc rayAlloc = RayAlloc::kPower;  // --ray-alloc power|fixed
+  bool hasRayAlloc = false;              // --ray-alloc given (else --rays alone picks fixed)
+  uint32_t rays = 4096;                  // --rays: per shot (fixed)
   bool hasRays = false;
   bool hasEmittedRays = false;      // --emitted-rays given (else --max-seconds may plan it)
   bool emittedRaysPlanned = false;  // --max-seconds chose emittedRays (app.cpp, PlanBudget)
   uint64_t emittedRays = 4000000;   // --emitted-rays: the rays the emitted power is worth (power)
   uint32_t minRays = 16;            // --min-rays: the fewest a shot traces (power)
-  uint32_t maxRays =
-      8192;           // --max-rays: the most a shot traces (power); more power -> partial shots
-  bool sobol = true;  // --sampler sobol|random
+  // --max-rays: the most a shot traces (power); a shot worth more shoots a
+  // part of its power and keeps the rest.
+  uint32_t maxRays = 8192;
+  bool sobol = true;              // --sampler sobol|random
   uint32_t elementsPerPatch = 8;  // --elements K: the element pool, K per patch beyond the roots
   uint32_t elementDepth = 4;      // --element-depth D: the deepest an element splits
   float elementSpread = 0.1f;     // --element-spread S: the least relative spread that splits
   float elementChi2 = 20.0f;      // --element-chi2 X: the significance a split needs
   uint64_t rayBudget = 0;         // --ray-budget N: stop once N rays are traced; 0: none
-  uint64_t seed = 1;
-  double stopUnshot = 1e-3;
-  uint64_t maxShots = 0;    // 0: none
-  double maxSeconds = 0.0;  // 0: none
-  int width = 512;
+  uint64_t seed = 1;              // --seed: every random stream derives from it
+  double stopUnshot = 1e-3;       // --stop-unshot F: stop once unshot < F * emitted power
+  uint64_t maxShots = 0;          // --max-shots; 0: none
+  double maxSeconds = 0.0;        // --max-seconds; 0: none
+  int width = 512;                // --width, --height: the image in pixels
   int height = 512;
-  bool hasCamera = false;
+  bool hasCamera = false;  // --camera given: `camera` as given (else init chooses one)
   Camera camera;
   bool hasView = false;  // --view SIDE: that side's camera instead of the chosen one
   ViewSide view = ViewSide::kFront;
-  bool hasExposure = false;
+  bool hasExposure = false;  // --exposure given (else automatic)
   float exposure = 1.0f;
-  bool quiet = false;
+  bool quiet = false;       // --quiet: no progress line
   int envs[3] = {1, 1, 1};  // --envs NX[xNY[xNZ]] (or the grid --envs auto:N chose, at init)
+  bool hasEnvs = false;     // --envs given (else --ranks N > 1 or an MPI world > 1 means auto:N)
   // --envs auto[:N]: N environments (default: --ranks), the grid's shape and
   // its split planes chosen at init from the scene (partition.h, WorkSplitter).
-  bool hasEnvs = false;  // --envs given (else --ranks N > 1 or an MPI world > 1 means auto:N)
   bool envsAuto = false;
   int envsAutoCount = 0;
   // R by default: every ray absorbed in exactly one environment, and its
@@ -73,10 +75,11 @@ struct Options {
   bool hasMaskRes = false;
   uint32_t maskRes = 50;
   // Round size (ResolveRounds). --round-shots K: at most K shots per
-  // environment per round; --round-work N: a round ends for an environment
-  // once its work reaches N: its rays' grid steps (cells entered plus
-  // patches tested: Grid::steps) plus a charge per ray, per hit and per shot
-  // (WorkCostsOf the mask method, work.h); a count, never a time; 0: never. With several
+  // environment per round. --round-work N: a round ends for an environment
+  // once its work reaches N, work being a count of its rays' grid steps
+  // (cells entered plus patches tested: Grid::steps) plus a ray's, a hit's
+  // and a shot's charge (WorkCostsOf the mask method, work.h): a count, so
+  // rounds never depend on the machine's speed; 0: no limit. With several
   // environments and neither given, both are automatic: roundWorkAuto, and
   // init sets roundWork from the scene (AutoRoundWork); with one
   // environment and neither given, one shot a round (nothing to exchange).
@@ -89,13 +92,13 @@ struct Options {
   bool hasQueue = false;
   // --centre-rays: which open pixels Method B casts a centre ray through.
   CentreChoice centreRays = CentreChoice::kAuto;
-  uint32_t maskCacheKiB = 8192;  // --mask-cache: B/C centre masks kept per environment
-  std::vector<uint32_t> envOrder;
-  std::string transport;  // --transport loop|pipe|mpi; empty: the binary's default
-  int ranks = 1;          // --ranks N (pipe)
-  double rankTimeout =
-      kDefaultRankTimeout;  // --rank-timeout S: a silent peer ends the run; 0: never
-  uint64_t memBudget = 0;   // --mem-budget BYTES per rank; 0: none
+  uint32_t maskCacheKiB = 8192;    // --mask-cache: B/C centre masks kept per environment
+  std::vector<uint32_t> envOrder;  // --env-order: a permutation of the environments
+  std::string transport;           // --transport loop|pipe|mpi; empty: the binary's default
+  int ranks = 1;                   // --ranks N (pipe)
+  // --rank-timeout S: a peer silent that long ends the run; 0: never.
+  double rankTimeout = kDefaultRankTimeout;
+  uint64_t memBudget = 0;  // --mem-budget BYTES per rank; 0: none
   // --checkpoint DIR: the solve's state written there at round ends, every
   // --checkpoint-every S seconds of solve (0: every round) and on SIGINT,
   // SIGTERM or SIGHUP; --resume DIR: the solve continued from DIR's newest
@@ -103,15 +106,17 @@ struct Options {
   std::string checkpointDir;
   double checkpointEvery = 300.0;
   std::string resumeDir;
-  // The arguments a checkpoint must agree with (checkpoint.h): every one
-  // given but the scene, --envs (compared as EnvSpec) and those that leave
-  // the result as it is (kResultNeutral).
+  // The arguments a checkpoint must agree with (checkpoint.h): every option
+  // given whose table row says it changes the result (ResumeRule::kMustMatch)
+  // with its value as given; the scene is compared by its bytes and --envs
+  // as EnvSpec.
   std::vector<std::string> resultArgs;
   bool json = false;        // footprint --json
   std::string reference;    // --reference REF.pfm: the error of the image against it
   uint64_t errorEvery = 0;  // --error-every K shots (with --reference); 0: at the end only
-  std::string exclude;  // --exclude MASK.pgm (render with --reference, compare): pixels left out of
-                        // the error
+  // --exclude MASK.pgm (render with --reference, compare): pixels left out
+  // of the error.
+  std::string exclude;
   bool correctUnshot = false;  // --correct-unshot on: patches.csv's b gets kd * ambient
   // --two-sided: every polygon gets a second, reversed copy (its twin), so
   // both sides receive, reflect and show. --two-sided-emitters: emitting
@@ -125,8 +130,8 @@ struct Options {
   // environment, 0 with several (ResolveDirect).
   int directSamples = -1;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
-  bool smooth =
-      true;  // --smooth on|off: share display values across smoothed polygons (smoothing.h)
+  // --smooth on|off: share display values across smoothed polygons (smoothing.h).
+  bool smooth = true;
   float creaseDeg = 30.0f;  // --crease DEG: the most two normals may differ by and be smoothed
   double stopError = 0.0;   // --stop-error E: stop when the estimated bias < E; 0: off
   // vismask compare A.pfm B.pfm
@@ -146,8 +151,8 @@ constexpr uint32_t kAutoRoundShots = 256;
 constexpr uint64_t kAutoRoundOutboxBytes = 512 * 1024;
 
 // The automatic patch size divides the scene's largest extent by this: the
-// setting that gave the smallest error against the ground truth at the
-// default rays (docs/RESULTS.md).
+// division that keeps the error against the ground truth smallest at the
+// default rays (docs/RESULTS.md compares them).
 constexpr float kAutoPatchDivisions = 28.0f;
 
 // The most rays one shot traces (--max-rays under power allocation, --rays
@@ -156,12 +161,6 @@ inline uint32_t RayCap(const Options& o) {
   return o.rayAlloc == Options::RayAlloc::kPower ? o.maxRays : o.rays;
 }
 
-// The options that do not change a render's result: a checkpoint may be
-// resumed with other values (or without them). --envs is compared by its
-// meaning (EnvSpec), not as given.
-constexpr const char* kResultNeutral[] = {
-    "--ranks",        "--transport",  "--out",        "--export",           "--quiet",
-    "--rank-timeout", "--mem-budget", "--checkpoint", "--checkpoint-every", "--resume"};
 // The environments a run has, as a checkpoint records them: "auto:N" or
 // "NXxNYxNZ" (after SetWorldSize under mpirun).
 std::string EnvSpec(const Options& o);
@@ -185,16 +184,23 @@ void ResolveRounds(int numEnvs, Options* options);
 // both bounds: too few slots make a split solve take many rounds (each
 // environment waits for room to admit foreign shooters); too many an
 // environment let it shoot its weak local patches while strong foreign
-// power waits in the queue, which costs shots on stiff scenes (the
-// measured trade-off is in docs/DESIGN.md, "Packets, queues, rounds").
+// power waits in the queue, which costs shots on stiff scenes (docs/DESIGN.md,
+// "Packets, queues, rounds").
 constexpr uint64_t kAutoQueueBytes = 1u << 20;
 constexpr uint32_t kMinAutoQueue = 64;
 constexpr uint32_t kAutoQueueShots = 64;
 uint32_t AutoQueue(int numEnvs, uint32_t roundShots, uint64_t packetBytes);
 
-// A run of `ranks` ranks (the MPI world) without --envs: --envs auto with
-// one environment a rank, its rounds resolved again. True when it changed
-// the options (no --envs, more than one rank, not already auto).
+// The one rule for --envs from the rank count: a run of `ranks` > 1 ranks
+// without --envs has --envs auto, one environment a rank (at most
+// kMaxAutoEnvs). Sets envsAuto and envsAutoCount; true when it changed
+// them (no --envs, more than one rank, not already auto). ParseArgs applies
+// it for --ranks, SetWorldSize for the MPI world.
+bool AutoEnvsForRanks(int ranks, Options* options);
+
+// A run of `ranks` ranks (the MPI world): AutoEnvsForRanks, and when that
+// changed the options, the grid's placeholder shape and the rounds resolved
+// again. True when it changed the options.
 bool SetWorldSize(int ranks, Options* options);
 
 // The automatic --round-work: kAutoRoundWorkShots full shots, each the

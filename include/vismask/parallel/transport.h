@@ -48,6 +48,15 @@ inline std::string RankCountError(int ranks, const char* what) {
          std::to_string(kMaxRanks) + " ranks";
 }
 
+// Empty unless `transport` is "loop" with several ranks, the one
+// combination of the two that cannot run (loop is one process): then the
+// user's error. ParseArgs refuses it; MakeTransport refuses it again for a
+// request made without the command line.
+inline std::string LoopTransportError(const std::string& transport, int ranks) {
+  if (transport != "loop" || ranks <= 1) return "";
+  return "vismask: --transport loop runs one process; use --transport pipe with --ranks";
+}
+
 class Transport {
  public:
   virtual ~Transport() = default;
