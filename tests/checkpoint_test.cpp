@@ -168,6 +168,18 @@ TEST_F(CheckpointTest, SkyAndSunResumeIdentically) {
                 {"", " --ranks 2"}, run);
 }
 
+// --sky FILE.hdr: the map is read again on resume (its bytes are part of
+// the checkpoint's identity); killed and resumed as above.
+TEST_F(CheckpointTest, SkyMapResumesIdentically) {
+  const std::string run =
+      " render scenes/skylight.obj --sky scenes/skies/two-colour.hdr --envs 2x1x2 "
+      "--max-shots 120 --round-shots 4 --width 64 --height 64 --patch-size 0.8 --quiet";
+  std::string log;
+  ASSERT_EQ(RunVismask(run + " --out " + ref() + "sm", &log), 0) << log;
+  KillAndResume(dir, ref() + "sm", VismaskBin(), "", "write", 3 * kFilesPerCheckpoint + 1,
+                {"", " --ranks 2"}, run);
+}
+
 // Two pipe ranks killed at a random round (whichever rank reaches the call
 // first: rank 0 writes 3 files a checkpoint, rank 1 two), resumed on one
 // process and on three ranks.

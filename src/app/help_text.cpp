@@ -166,6 +166,13 @@ render options:
                        >= 0 (W/m^2/sr of scene units), in every direction
                        the scene does not block, as a path tracer's constant
                        world colour; the scene then need not emit
+  --sky FILE.hdr       light from a sky map: an equirectangular Radiance HDR
+                       image of the radiance in each direction, oriented as
+                       Blender's default equirectangular world on a Y-up
+                       scene (the centre looks along +X, the top is +Y,
+                       three quarters across looks along +Z); a path tracer's
+                       world environment texture. A path ending in .hdr or
+                       .pic, or holding a '/', is a file
   --sun X,Y,Z,R,G,B[,DEG]
                        light from a sun in direction (X, Y, Z) (towards
                        it), of irradiance (R, G, B) on a surface facing it,

@@ -413,7 +413,8 @@ Status ParseArgs(int argc, const char* const* argv, Options* o) {
       if (v != "on" && v != "off") return Bad(a, v, "on or off");
       o->correctUnshot = v == "on";
     } else if (a == "--sky") {
-      if (!ParseSky(v, &o->outside)) return Bad(a, v, "R,G,B: the sky's radiance, each >= 0");
+      if (!ParseSky(v, &o->outside))
+        return Bad(a, v, "R,G,B (the sky's radiance, each >= 0) or FILE.hdr");
       o->load.outsideLight = o->outside.Any();
     } else if (a == "--sun") {
       if (!ParseSun(v, &o->outside))

@@ -136,6 +136,19 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
                 std::to_string(p->textures.images.size()) + " images decoded");
   for (const TextureImage& t : p->textures.images)
     p->textureBytes += uint64_t{t.width} * t.height * 4 + t.pyramid.texels.size() * sizeof(float);
+  // --sky FILE.hdr: the map, within what the budget leaves beside the
+  // textures; every copy of the options made from here on shares it.
+  p->outside = o.outside;
+  if (!p->outside.skyFile.empty()) {
+    auto map = std::make_shared<SkyMap>();
+    const uint64_t left = textureBudget == 0                ? 0
+                          : textureBudget > p->textureBytes ? textureBudget - p->textureBytes
+                                                            : 1;
+    s = ReadSkyMap(p->outside.skyFile, map.get(), left);
+    if (!s.ok()) return s;
+    p->textureBytes += map->staged.size() * sizeof(float);
+    p->outside.skyMap = std::move(map);
+  }
   p->scene.objPath = o.scene;
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
@@ -341,7 +354,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // rays carry their own routes; tiles for the hemisphere masks, which judge
   // a shooter's rays by its centre (docs/DESIGN.md, "Light from outside").
   const uint32_t outsideTiles = o.maskMethod == MaskMethod::kR ? 1 : kMaxOutsideTiles;
-  power += OutsidePower(p->grid, o.outside, outsideTiles);
+  power += OutsidePower(p->grid, p->outside, outsideTiles);
 
   // This rank's pieces, by environment (within one, in source order).
   std::stable_sort(own.begin(), own.end(),
@@ -374,7 +387,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
     e.minRays = o.minRays;
   }
   e.seed = o.seed;
-  e.outside = o.outside;
+  e.outside = p->outside;
   e.outsideTiles = outsideTiles;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;

@@ -132,12 +132,18 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     w.Printf("    \"view_choice\": null,\n");
   }
   w.Printf("    \"camera_from_scene\": %s,\n", r->cameraFromScene ? "true" : "false");
-  // --sky (radiance) and --sun (towards it, irradiance, angular diameter): null without.
+  // --sky (radiance, or the map's file) and --sun (towards it, irradiance,
+  // angular diameter): null without.
   const OutsideLight& lit = o.outside;
-  if (lit.HasSky())
+  if (!lit.skyFile.empty()) {
+    w.Printf("    \"sky\": {\"file\": ");
+    JsonString(&w, lit.skyFile.c_str());
+    w.Printf("},\n");
+  } else if (lit.HasSky()) {
     w.Printf("    \"sky\": [%.9g, %.9g, %.9g],\n", lit.sky.x, lit.sky.y, lit.sky.z);
-  else
+  } else {
     w.Printf("    \"sky\": null,\n");
+  }
   if (lit.HasSun())
     w.Printf(
         "    \"sun\": {\"toward\": [%.9g, %.9g, %.9g], \"irradiance\": [%.9g, %.9g, %.9g], "

@@ -49,7 +49,9 @@ def CheckWithVismask(scene, a=None):
     if not os.access(binary, os.X_OK):
         return
     lit = []
-    if a and a.get("sky") is not None:
+    if a and isinstance(a.get("sky"), dict):
+        lit += ["--sky", a["sky"]["file"]]
+    elif a and a.get("sky") is not None:
         lit += ["--sky", ",".join(repr(float(v)) for v in a["sky"])]
     if a and a.get("sun") is not None:
         s = a["sun"]
@@ -172,6 +174,8 @@ def Cached(a, argvForRecord):
     for k in ("sky", "sun"):
         if a.get(k) is not None:
             what[k] = a[k]
+    if isinstance(a.get("sky"), dict):  # a sky map: its bytes, wherever it is
+        what["sky"] = {"sha256": a["sky"]["sha256"]}
     key.update(json.dumps(what, sort_keys=True).encode())
     key = key.hexdigest()[:24]
     cache = os.path.join(ROOT, "build", "reference-cache", key)
