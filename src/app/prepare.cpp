@@ -41,10 +41,15 @@ uint64_t PolygonBytes(const Polygon& poly) {
 
 // Whether material m emits once --emit has been applied (pass 1 sees the
 // MTL's Ke; ScanObj applies --emit at its end).
-bool EmitsAfterOverrides(const Material& m, const LoadOptions& load) {
+glm::vec3 KeAfterOverrides(const Material& m, const LoadOptions& load) {
   glm::vec3 ke = m.ke;
   for (const EmitOverride& e : load.emit)
     if (e.material == m.name) ke = e.fromKa ? m.ka : e.ke;
+  return ke;
+}
+
+bool EmitsAfterOverrides(const Material& m, const LoadOptions& load) {
+  const glm::vec3 ke = KeAfterOverrides(m, load);
   return ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
 }
 
@@ -102,6 +107,9 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // emitter check (rank 0), nothing else of the polygons.
   std::vector<std::pair<uint32_t, Polygon>> emitters;
   size_t numEmitters = 0;
+  // The brightest emitting polygons (kViewLights, by power; ties to the
+  // first in the file), on every rank: the inside views' light estimate.
+  std::vector<ViewLight> lights;
   double t0 = os::Seconds();
   // Each polygon, as mended, with its corners, area and material: where a
   // work-balanced split (an accumulator fed one polygon at a time) takes
@@ -111,6 +119,18 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
       [&](uint32_t i, const Polygon& poly) {
         if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
         ++numEmitters;
+        if (chooseSide) {
+          const glm::vec3 ke = KeAfterOverrides(info.materials[poly.material], o.load);
+          ViewLight l;
+          for (const glm::vec3& c : poly.corners) l.centre += c;
+          l.centre /= static_cast<float>(poly.corners.size());
+          l.normal = poly.normal;
+          l.power = (double(ke.x) + ke.y + ke.z) / 3.0 * poly.area;
+          auto at = std::find_if(lights.begin(), lights.end(),
+                                 [&](const ViewLight& m) { return l.power > m.power; });
+          if (at - lights.begin() < kViewLights) lights.insert(at, l);
+          if (lights.size() > static_cast<size_t>(kViewLights)) lights.pop_back();
+        }
         if (root) emitters.emplace_back(i, poly);
       },
       &info);
@@ -209,7 +229,10 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // are global, environment-major). The camera's side and the emitter
   // check take their polygons here too.
   std::unique_ptr<ViewProbe> probe;
-  if (chooseSide && !info.camera.has) probe = std::make_unique<ViewProbe>(info.bounds);
+  if (chooseSide && !info.camera.has) {
+    probe = std::make_unique<ViewProbe>(info.bounds);
+    probe->SetLights(lights);
+  }
   std::unique_ptr<EmitterCheck> check;
   if (root) {
     check =

@@ -125,9 +125,16 @@ void WriteRunJson(RunState* r, const SolveResult& res, float exposure, double ou
     w.Printf(
         "    \"view_choice\": {\"side\": \"%s\", \"side_front_share\": %.6g, "
         "\"side_back_share\": %.6g, \"side_one_wall\": %s, \"inside_candidate\": %d, "
-        "\"inside_front_share\": %.6g, \"inside_score\": %.6g, \"inside\": %s},\n",
+        "\"inside_front_share\": %.6g, \"inside_score\": %.6g, \"inside\": %s, "
+        "\"inside_by_light\": %s, \"inside_scores\": [",
         ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
-        v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false");
+        v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false",
+        v.byLight ? "true" : "false");
+    // Every candidate's geometric and lit score (-1: not probed; ViewChoice).
+    for (int k = 0; k < kInsideCandidates; ++k) w.Printf("%s%.6g", k ? ", " : "", v.geometric[k]);
+    w.Printf("], \"inside_lit_scores\": [");
+    for (int k = 0; k < kInsideCandidates; ++k) w.Printf("%s%.6g", k ? ", " : "", v.lit[k]);
+    w.Printf("]},\n");
   } else {
     w.Printf("    \"view_choice\": null,\n");
   }
