@@ -340,6 +340,21 @@ TEST(AllocTest, SkyAndSunAllocateNothingAfterInit) {
   }
 }
 
+// --sky FILE.hdr: the map read into the rank's arena at init; each sky
+// shot's shares summed over its rays and read ray by ray from it.
+TEST(AllocTest, SkyMapAllocatesNothingAfterInit) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const std::string how :
+       {"--mask-method R --envs 2x1x2", "--mask-method B --envs 2x1x2", "--envs 1"}) {
+    CountedRender run("scenes/skylight.obj",
+                      "--sky scenes/skies/two-colour.hdr --emitted-rays 200000 --width 64 "
+                      "--height 64 --mask-res 24 " +
+                          how);
+    ASSERT_EQ(run.code, 0) << how << ": " << run.err;
+    EXPECT_EQ(run.allocations, 0) << how << ": heap allocations after init";
+  }
+}
+
 TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   // Four processes: this one (rank 0, counted) and three forked ranks, each

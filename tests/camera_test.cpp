@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <sstream>
@@ -232,6 +234,131 @@ TEST(CameraTest, ClosedRoomIsSeenFromInside) {
   EXPECT_LT(c.candidateFront, 0.5);
 }
 
+// A long room (12 x 3 x 4, walls facing in) with four pillars in its far
+// half and a small lamp under the ceiling near its x = 0 end: the pillars
+// make the far half the most varied view (the geometric score), while the
+// light is at the other end. As an OBJ (the lamp's material emits), and as
+// polygons with the lamp as the lit score's light.
+struct LongRoom {
+  std::vector<Polygon> polygons;
+  ViewLight lamp;
+  std::string obj;
+};
+
+LongRoom MakeLongRoom() {
+  LongRoom room;
+  std::ostringstream obj, faces;
+  obj << "mtllib room.mtl\n";
+  int vertices = 0;
+  // The quad o, o + a, o + a + b, o + b: its normal is a x b.
+  auto quad = [&](glm::vec3 o, glm::vec3 a, glm::vec3 b, const char* mat) {
+    const glm::vec3 c[4] = {o, o + a, o + a + b, o + b};
+    room.polygons.push_back(Quad(c[0], c[1], c[2], c[3]));
+    for (const glm::vec3& v : c) obj << "v " << v.x << " " << v.y << " " << v.z << "\n";
+    faces << "usemtl " << mat << "\nf " << vertices + 1 << " " << vertices + 2 << " "
+          << vertices + 3 << " " << vertices + 4 << "\n";
+    vertices += 4;
+  };
+  auto box = [&](glm::vec3 lo, glm::vec3 hi, bool inward) {
+    const glm::vec3 d = hi - lo;
+    const glm::vec3 x(d.x, 0, 0), y(0, d.y, 0), z(0, 0, d.z);
+    const glm::vec3 o[6] = {lo, lo + y, lo, lo + z, lo, lo + x};
+    const glm::vec3 a[6] = {z, x, x, y, y, z}, b[6] = {x, z, y, x, z, y};
+    for (int f = 0; f < 6; ++f)
+      inward ? quad(o[f], a[f], b[f], "wall") : quad(o[f], b[f], a[f], "wall");
+  };
+  box({0, 0, 0}, {12, 3, 4}, true);
+  for (float x : {7.5f, 10.0f})
+    for (float z : {1.2f, 2.8f}) box({x - 0.3f, 0, z - 0.3f}, {x + 0.3f, 3, z + 0.3f}, false);
+  quad({0.7f, 2.99f, 1.7f}, {0.6f, 0, 0}, {0, 0, 0.6f}, "lamp");
+  room.lamp.centre = glm::vec3(1.0f, 2.99f, 2.0f);
+  room.lamp.normal = room.polygons.back().normal;
+  room.lamp.power = 20.0 * 0.36;
+  room.obj = obj.str() + faces.str();
+  return room;
+}
+
+// Issue 40: the inside view scored by how lit it is. In the long room the
+// geometric score picks a view of the dark far half (the pillars); the lit
+// score one looking towards the lamp's end, and it wins.
+TEST(CameraTest, InsideViewGoesWhereTheLightIs) {
+  const LongRoom room = MakeLongRoom();
+  ASSERT_LT(room.lamp.normal.y, -0.99f);  // facing down
+  Bounds bounds{{0, 0, 0}, {12, 3, 4}};
+  auto choose = [&](bool lit) {
+    ViewProbe probe(bounds);
+    if (lit) probe.SetLights({room.lamp});
+    for (uint32_t k = 0; k < room.polygons.size(); ++k) probe.Add(k, room.polygons[k]);
+    return probe.Choose();
+  };
+  const ViewChoice geometric = choose(false), lit = choose(true);
+  ASSERT_TRUE(geometric.inside);
+  ASSERT_TRUE(lit.inside);
+  EXPECT_FALSE(geometric.byLight);
+  EXPECT_TRUE(lit.byLight);
+  // The geometric choice looks away from the lamp (towards +x), the lit
+  // one towards it, and they differ.
+  const Camera g = InsideCamera(bounds, geometric.candidate);
+  const Camera l = InsideCamera(bounds, lit.candidate);
+  EXPECT_GT(g.target.x, g.eye.x);
+  EXPECT_LT(l.target.x, l.eye.x);
+  EXPECT_NE(geometric.candidate, lit.candidate);
+  // The scores say so: the geometric winner has the higher geometric score,
+  // the lit winner the higher lit score; without lights every lit score is 0.
+  EXPECT_GT(lit.geometric[geometric.candidate], lit.geometric[lit.candidate]);
+  EXPECT_GT(lit.lit[lit.candidate], 2.0 * lit.lit[geometric.candidate]);
+  for (int k = 0; k < kInsideCandidates; ++k) {
+    EXPECT_EQ(geometric.geometric[k], lit.geometric[k]) << k;
+    EXPECT_EQ(geometric.lit[k], 0.0) << k;
+  }
+  // A lamp behind a wall lights nothing: the far end's wall (x = 12) seen
+  // from a lamp outside it, facing in, is in its shadow map's way.
+  ViewLight behind = room.lamp;
+  behind.centre = glm::vec3(12.5f, 1.5f, 2.0f);
+  behind.normal = glm::vec3(-1, 0, 0);
+  ViewProbe probe(bounds);
+  probe.SetLights({behind});
+  for (uint32_t k = 0; k < room.polygons.size(); ++k) probe.Add(k, room.polygons[k]);
+  const ViewChoice shut = probe.Choose();
+  for (int k = 0; k < kInsideCandidates; ++k) EXPECT_EQ(shut.lit[k], 0.0) << k;
+  EXPECT_FALSE(shut.byLight);
+  EXPECT_EQ(shut.candidate, geometric.candidate);
+}
+
+// The same through `vismask render`: the scene's lamp is the light, and
+// run.json records every candidate's geometric and lit score.
+TEST(CameraTest, RunJsonRecordsTheInsideScores) {
+  TempDir dir;
+  const LongRoom room = MakeLongRoom();
+  WriteFile(dir.File("room.obj"), room.obj);
+  WriteFile(dir.File("room.mtl"), "newmtl wall\nKd 0.6 0.6 0.6\nnewmtl lamp\nKe 20 20 20\n");
+  auto r = RunMain({"render", dir.File("room.obj"), "--out", dir.File("out"), "--max-shots", "5",
+                    "--width", "32", "--height", "32", "--quiet"});
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string json = ReadFile(dir.File("out/run.json"));
+  ViewProbe probe(Bounds{{0, 0, 0}, {12, 3, 4}});
+  probe.SetLights({room.lamp});
+  for (uint32_t k = 0; k < room.polygons.size(); ++k) probe.Add(k, room.polygons[k]);
+  const ViewChoice want = probe.Choose();
+  EXPECT_NE(json.find("\"inside\": true, \"inside_by_light\": true"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"inside_candidate\": " + std::to_string(want.candidate) + ","),
+            std::string::npos)
+      << json;
+  for (const char* key : {"\"inside_scores\": [", "\"inside_lit_scores\": ["}) {
+    const size_t at = json.find(key);
+    ASSERT_NE(at, std::string::npos) << key;
+    const double* scores = key[8] == 's' ? want.geometric : want.lit;
+    const char* p = json.c_str() + at + std::strlen(key);
+    for (int k = 0; k < kInsideCandidates; ++k) {
+      char* end = nullptr;
+      const double v = std::strtod(p, &end);
+      ASSERT_NE(end, p) << key << k;
+      EXPECT_NEAR(v, scores[k], 1e-5 * std::fabs(scores[k]) + 1e-12) << key << k;
+      p = end + (*end == ',' ? 1 : 0);
+    }
+  }
+}
+
 TEST(CameraTest, OccludedFrontFacesAreNotCounted) {
   // A quad facing -z (towards the front camera) behind a larger one facing
   // +z: facing the eye is not enough, the front camera sees only a back.
@@ -326,7 +453,7 @@ TEST(CameraTest, DefaultRenderOfAClosedRoomLooksFromInside) {
   std::string json = ReadFile(dir.File("out/run.json"));
   EXPECT_NE(json.find("\"view\": \"inside\",\n    \"view_auto\": true,"), std::string::npos)
       << json;
-  EXPECT_NE(json.find("\"inside\": true}"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"inside\": true,"), std::string::npos) << json;
   std::vector<double> c = JsonCamera(json);
   ASSERT_EQ(c.size(), 10u) << json;
   for (int a = 0; a < 3; ++a) {  // the eye and the target in the unit box

@@ -168,6 +168,46 @@ TEST_F(CheckpointTest, SkyAndSunResumeIdentically) {
                 {"", " --ranks 2"}, run);
 }
 
+// --sky FILE.hdr: the map is read again on resume (its bytes are part of
+// the checkpoint's identity); killed and resumed as above.
+TEST_F(CheckpointTest, SkyMapResumesIdentically) {
+  const std::string run =
+      " render scenes/skylight.obj --sky scenes/skies/two-colour.hdr --envs 2x1x2 "
+      "--max-shots 120 --round-shots 4 --width 64 --height 64 --patch-size 0.8 --quiet";
+  std::string log;
+  ASSERT_EQ(RunVismask(run + " --out " + ref() + "sm", &log), 0) << log;
+  KillAndResume(dir, ref() + "sm", VismaskBin(), "", "write", 3 * kFilesPerCheckpoint + 1,
+                {"", " --ranks 2"}, run);
+}
+
+// The sky map's bytes are part of the identity: the same path with other
+// bytes is refused, naming sky_map; the same bytes resume.
+TEST_F(CheckpointTest, CheckpointWithAnotherSkyMapIsRefused) {
+  const std::string sky = dir.File("sky.hdr"), ck = dir.File("ck");
+  test::WriteFile(sky, ReadFile("scenes/skies/two-colour.hdr"));
+  const std::string run = " render scenes/skylight.obj --sky " + sky +
+                          " --envs 2x1x2 --max-shots 120 --round-shots 4 --width 32 --height 32 "
+                          "--patch-size 0.8 --quiet";
+  std::string log;
+  ASSERT_NE(
+      Shell("VISMASK_TEST_CHECKPOINT_KILL=rename:" + std::to_string(3 * kFilesPerCheckpoint + 1) +
+                " " + VismaskBin() + run + " --out " + dir.File("killed") + " --checkpoint " + ck +
+                " --checkpoint-every 0",
+            &log),
+      0)
+      << log;
+  std::string other = ReadFile(sky);
+  other[other.size() - 2] ^= 1;  // a texel's green
+  test::WriteFile(sky, other);
+  log.clear();
+  EXPECT_EQ(RunVismask(run + " --out " + dir.File("refused") + " --resume " + ck, &log), 2) << log;
+  EXPECT_NE(log.find("the checkpoint is of another run"), std::string::npos) << log;
+  EXPECT_NE(log.find("sky_map: "), std::string::npos) << log;
+  test::WriteFile(sky, ReadFile("scenes/skies/two-colour.hdr"));
+  log.clear();
+  EXPECT_EQ(RunVismask(run + " --out " + dir.File("resumed") + " --resume " + ck, &log), 0) << log;
+}
+
 // Two pipe ranks killed at a random round (whichever rank reaches the call
 // first: rank 0 writes 3 files a checkpoint, rank 1 two), resumed on one
 // process and on three ranks.

@@ -161,6 +161,17 @@ TEST(RanksTest, SkyAndSunGiveTheSameBytesEverywhere) {
   ExpectSameBytesEverywhere("B", {"4"}, {"2"}, lit);
 }
 
+// --sky FILE.hdr: each ray's share from the map, normalised over the shot's
+// rays by every environment that traces one of them.
+TEST(RanksTest, SkyMapGivesTheSameBytesEverywhere) {
+  const std::vector<std::string> lit = test::Words(
+      "render scenes/skylight.obj --sky scenes/skies/two-colour.hdr --sun 1,4,0.5,3,3,2.5 "
+      "--envs 2x1x2 --emitted-rays 200000 --width 64 --height 64 --mask-res 24 --quiet "
+      "--camera 0.4,2.2,0.4,3,0.3,3,0,1,0,70");
+  ExpectSameBytesEverywhere("R", {"2", "3"}, {"4"}, lit);
+  ExpectSameBytesEverywhere("B", {"4"}, {"2"}, lit);
+}
+
 // Smoothing shares display values between polygons in different
 // environments and ranks, summed in an order that does not depend on them.
 TEST(RanksTest, SmoothingGivesTheSameBytesEverywhere) {

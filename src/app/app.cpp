@@ -151,6 +151,15 @@ bool SetupCheckpoints(RunState* r) {
       bytes = crc = 0;  // the scene was read at init: seen only if it went since
     }
     identity = CheckpointIdentity(bytes, crc, EnvSpec(r->options), r->options.resultArgs);
+    // --sky FILE.hdr: the map's bytes change the result as the scene's do.
+    const std::string& sky = r->options.outside.skyFile;
+    if (!sky.empty()) {
+      if (!SizeAndCrc(sky, &bytes, &crc, &why)) bytes = crc = 0;
+      char line[64];
+      std::snprintf(line, sizeof line, "sky_map %llu %08x\n",
+                    static_cast<unsigned long long>(bytes), crc);
+      identity += line;
+    }
   }
   Span<Environment* const> envs(r->envPtrs.data(), r->envPtrs.size());
   s = r->checkpoints.Setup(r->options.checkpointDir, r->options.checkpointEvery, envs,

@@ -38,6 +38,14 @@ void AddSceneRows(std::vector<Row>* t) {
                     ">= 0 (W/m^2/sr of scene units), in every direction\n"
                     "the scene does not block, as a path tracer's constant\n"
                     "world colour; the scene then need not emit")
+              .More("--sky FILE.hdr",
+                    "light from a sky map: an equirectangular Radiance HDR\n"
+                    "image of the radiance in each direction, oriented as\n"
+                    "Blender's default equirectangular world on a Y-up\n"
+                    "scene (the centre looks along +X, the top is +Y,\n"
+                    "three quarters across looks along +Z); a path tracer's\n"
+                    "world environment texture. A path ending in .hdr or\n"
+                    ".pic, or holding a '/', is a file")
               .Usage()
               .Json("sky"),
           Custom("--sun", ParseSunOption)

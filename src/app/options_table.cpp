@@ -91,7 +91,8 @@ Status ParseMemBudget(const std::string& a, const std::string& v, Options* o) {
 
 // --sky: a radiance (ParseSky, outside.h), the one place its syntax is read.
 Status ParseSkyOption(const std::string& a, const std::string& v, Options* o) {
-  if (!ParseSky(v, &o->outside)) return BadValue(a, v, "R,G,B: the sky's radiance, each >= 0");
+  if (!ParseSky(v, &o->outside))
+    return BadValue(a, v, "R,G,B (the sky's radiance, each >= 0) or FILE.hdr");
   o->load.outsideLight = o->outside.Any();
   return Status::Ok();
 }

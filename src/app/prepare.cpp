@@ -41,11 +41,30 @@ uint64_t PolygonBytes(const Polygon& poly) {
 
 // Whether material m emits once --emit has been applied (pass 1 sees the
 // MTL's Ke; ScanObj applies --emit at its end).
-bool EmitsAfterOverrides(const Material& m, const LoadOptions& load) {
+glm::vec3 KeAfterOverrides(const Material& m, const LoadOptions& load) {
   glm::vec3 ke = m.ke;
   for (const EmitOverride& e : load.emit)
     if (e.material == m.name) ke = e.fromKa ? m.ka : e.ke;
+  return ke;
+}
+
+bool EmitsAfterOverrides(const Material& m, const LoadOptions& load) {
+  const glm::vec3 ke = KeAfterOverrides(m, load);
   return ke.x > 0.0f || ke.y > 0.0f || ke.z > 0.0f;
+}
+
+// Keeps *lights the kViewLights most powerful emitting polygons, by power
+// (ties to the one seen first).
+void KeepBrightest(const Polygon& poly, glm::vec3 ke, std::vector<ViewLight>* lights) {
+  ViewLight l;
+  for (const glm::vec3& c : poly.corners) l.centre += c;
+  l.centre /= static_cast<float>(poly.corners.size());
+  l.normal = poly.normal;
+  l.power = (double(ke.x) + ke.y + ke.z) / 3.0 * poly.area;
+  auto at = std::find_if(lights->begin(), lights->end(),
+                         [&](const ViewLight& m) { return l.power > m.power; });
+  if (at - lights->begin() < kViewLights) lights->insert(at, l);
+  if (lights->size() > static_cast<size_t>(kViewLights)) lights->pop_back();
 }
 
 bool Emits(const Material& m) {
@@ -61,8 +80,12 @@ struct OwnPiece {
 // Pass 1: parse, mend and check; keep the emitting polygons for the
 // emitter check (rank 0), nothing else of the polygons. Then the textures,
 // and the scene's materials, bounds and camera.
-Status ReadScene(const Options& o, Prepared* p, bool root,
-                 std::vector<std::pair<uint32_t, Polygon>>* emitters) {
+// With chooseSide, *lights gets the brightest emitting polygons
+// (kViewLights, by power; ties to the first in the file), on every rank:
+// the inside views' light estimate.
+Status ReadScene(const Options& o, Prepared* p, bool root, bool chooseSide,
+                 std::vector<std::pair<uint32_t, Polygon>>* emitters,
+                 std::vector<ViewLight>* lights) {
   SceneInfo& info = p->info;
   size_t numEmitters = 0;
   double t0 = os::Seconds();
@@ -74,6 +97,8 @@ Status ReadScene(const Options& o, Prepared* p, bool root,
       [&](uint32_t i, const Polygon& poly) {
         if (!EmitsAfterOverrides(info.materials[poly.material], o.load)) return;
         ++numEmitters;
+        if (chooseSide)
+          KeepBrightest(poly, KeAfterOverrides(info.materials[poly.material], o.load), lights);
         if (root) emitters->emplace_back(i, poly);
       },
       &info);
@@ -99,6 +124,19 @@ Status ReadScene(const Options& o, Prepared* p, bool root,
                 std::to_string(p->textures.images.size()) + " images decoded");
   for (const TextureImage& t : p->textures.images)
     p->textureBytes += uint64_t{t.width} * t.height * 4 + t.pyramid.texels.size() * sizeof(float);
+  // --sky FILE.hdr: the map, within what the budget leaves beside the
+  // textures; every copy of the options made from here on shares it.
+  p->outside = o.outside;
+  if (!p->outside.skyFile.empty()) {
+    auto map = std::make_shared<SkyMap>();
+    const uint64_t left = textureBudget == 0                ? 0
+                          : textureBudget > p->textureBytes ? textureBudget - p->textureBytes
+                                                            : 1;
+    s = ReadSkyMap(p->outside.skyFile, map.get(), left);
+    if (!s.ok()) return s;
+    p->textureBytes += map->staged.size() * sizeof(float);
+    p->outside.skyMap = std::move(map);
+  }
   p->scene.objPath = o.scene;
   p->scene.materials = info.materials;
   p->scene.bounds = info.bounds;
@@ -252,21 +290,6 @@ struct CutPass {
   }
 };
 
-// Environment by environment, as meshing each would refuse it.
-Status CheckEnvSizes(const Prepared& p, uint32_t total) {
-  for (uint32_t e = 0; e < total; ++e) {
-    if (p.envPatches[e] > static_cast<double>(kMaxPatches))
-      return Status::Error("vismask: --patch-size: " +
-                           MeshSizeError(p.envPatches[e], p.patchSize, kMaxPatches).message());
-    if (p.envPatches[e] + p.envTwins[e] > static_cast<double>(kMaxPatches))
-      return Status::Error("vismask: --patch-size: the mesh needs " +
-                           std::to_string(static_cast<uint64_t>(p.envPatches[e] + p.envTwins[e])) +
-                           " patches with both sides, more than the limit of " +
-                           std::to_string(kMaxPatches));
-  }
-  return Status::Ok();
-}
-
 // This rank's pieces, by environment (within one, in source order), into
 // p->part and p->pieces.
 void KeepPieces(const Options& o, Prepared* p, uint32_t total, std::vector<OwnPiece>* own) {
@@ -306,7 +329,7 @@ void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepar
     e.minRays = o.minRays;
   }
   e.seed = o.seed;
-  e.outside = o.outside;
+  e.outside = p->outside;
   e.outsideTiles = outsideTiles;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
@@ -330,7 +353,8 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   SceneInfo& info = p->info;
   const bool chooseSide = !o.hasCamera && !o.hasView;
   std::vector<std::pair<uint32_t, Polygon>> emitters;
-  Status s = ReadScene(o, p, root, &emitters);
+  std::vector<ViewLight> lights;
+  Status s = ReadScene(o, p, root, chooseSide, &emitters, &lights);
   if (!s.ok()) return s;
   s = PlanGrid(o, p);
   if (!s.ok()) return s;
@@ -360,7 +384,10 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
     return Status::Error("");
   }
   CutPass pass(o, p, first, end, passBytes);
-  if (chooseSide && !info.camera.has) pass.probe = std::make_unique<ViewProbe>(info.bounds);
+  if (chooseSide && !info.camera.has) {
+    pass.probe = std::make_unique<ViewProbe>(info.bounds);
+    pass.probe->SetLights(lights);
+  }
   if (root) {
     pass.check =
         std::make_unique<EmitterCheck>(info.bounds, info.materials, emitters, kEmitterCheckChunk);
@@ -407,7 +434,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // rays carry their own routes; tiles for the hemisphere masks, which judge
   // a shooter's rays by its centre (docs/DESIGN.md, "Light from outside").
   const uint32_t outsideTiles = o.maskMethod == MaskMethod::kR ? 1 : kMaxOutsideTiles;
-  power += OutsidePower(p->grid, o.outside, outsideTiles);
+  power += OutsidePower(p->grid, p->outside, outsideTiles);
   KeepPieces(o, p, total, &pass.own);
   SetEnvOptions(o, power, outsideTiles, p);
   return Status::Ok();

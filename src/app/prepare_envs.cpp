@@ -45,6 +45,21 @@ uint64_t Prepared::InitPeak(uint32_t first, uint32_t end, bool root, uint64_t en
   return held + std::max(parse, std::max(mesh, build));
 }
 
+// Environment by environment, as meshing each would refuse it.
+Status CheckEnvSizes(const Prepared& p, uint32_t total) {
+  for (uint32_t e = 0; e < total; ++e) {
+    if (p.envPatches[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: " +
+                           MeshSizeError(p.envPatches[e], p.patchSize, kMaxPatches).message());
+    if (p.envPatches[e] + p.envTwins[e] > static_cast<double>(kMaxPatches))
+      return Status::Error("vismask: --patch-size: the mesh needs " +
+                           std::to_string(static_cast<uint64_t>(p.envPatches[e] + p.envTwins[e])) +
+                           " patches with both sides, more than the limit of " +
+                           std::to_string(kMaxPatches));
+  }
+  return Status::Ok();
+}
+
 // Meshes environments [first, end), which `p` holds, in order, one at a
 // time, giving each patch its global (environment-major) id from p.idBase
 // on, and prepares them into `envs`.

@@ -303,6 +303,7 @@ int Init(RunState* r) {
   Arena measure = Arena::Measure();
   r->LayoutRank(measure, p.packetBytes, r->transport->size(), r->isRoot(), p.textures,
                 texturesUsed);
+  r->LayoutSkyMap(measure, p.outside);
   uint64_t envBytes = 0;
   for (auto& e : r->envs) envBytes += e->footprint().total;
   uint64_t need = envBytes + ArenaRoundUp(measure.used());
@@ -354,6 +355,14 @@ int Init(RunState* r) {
     return refused("the rank's exchange and output buffers", ArenaRoundUp(measure.used()));
   r->LayoutRank(r->rankArena, p.packetBytes, r->transport->size(), r->isRoot(), p.textures,
                 texturesUsed);
+  // --sky FILE.hdr: the map's texels into the rank's arena, one copy that
+  // its environments read (their options share the map); the heap's go.
+  if (SkyMap* map = p.outside.skyMap.get()) {
+    Span<float> texels = r->LayoutSkyMap(r->rankArena, p.outside);
+    std::copy(map->staged.begin(), map->staged.end(), texels.begin());
+    map->texels = texels;
+    std::vector<float>().swap(map->staged);
+  }
   r->envFb.Clear();  // kept clear between uses (RenderImage clears only what it drew)
   if (!r->isRoot()) return kExitOk;
   for (size_t i = 0; i < r->reference.size(); ++i) r->reference[i] = ref.pixels[i];

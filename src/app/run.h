@@ -175,6 +175,11 @@ struct RunState {
   // into each patch's kd); only those its environments use (`used`).
   uint64_t rankExchangeBytes = 0, rankImageBytes = 0, rankOutputBytes = 0, rankTextureBytes = 0,
            rankExportBytes = 0;
+  // --sky FILE.hdr: the rank's copy of the map's texels (none without).
+  static Span<float> LayoutSkyMap(Arena& arena, const OutsideLight& lit) {
+    return lit.skyMap ? arena.Alloc<float>(size_t{lit.skyMap->width} * lit.skyMap->height * 3)
+                      : Span<float>();
+  }
   void LayoutRank(Arena& arena, uint32_t packetBytes, int ranks, bool root,
                   const SceneTextures& sceneTextures, const std::vector<uint8_t>& used) {
     size_t mark = arena.used();
@@ -282,6 +287,7 @@ struct Prepared {
   Scene scene;
   std::vector<uint32_t> sourceIds;
   SceneTextures textures;  // decoded map_Kd images
+  OutsideLight outside;    // --sky, --sun, with --sky FILE.hdr's map read
   EnvGrid grid;
   Partition part;               // this rank's pieces (part.source indexes scene.polygons)
   uint32_t first = 0, end = 0;  // the environments this rank holds
@@ -330,6 +336,10 @@ struct Prepared {
 // What init holds besides the scene and the arenas (the process's strings,
 // tables, the transport's and iostream's buffers), a bound.
 constexpr uint64_t kInitBaseBytes = uint64_t{4} << 20;
+
+// Environment by environment, the patch limit as meshing each would
+// refuse it (with its twins).
+Status CheckEnvSizes(const Prepared& p, uint32_t total);
 
 // Pass 0 (scene_stream.h): the statements counted, nothing parsed.
 Status CountScene(const Options& o, Prepared* p);

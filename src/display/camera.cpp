@@ -93,39 +93,102 @@ Camera InsideCamera(const Bounds& b, int candidate) {
   return c;
 }
 
-ViewProbe::ViewProbe(const Bounds& bounds) {
+void ViewProbe::Start(Probe& probe, const Camera& camera, int n) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  auto start = [&](Probe& probe, const Camera& camera, int n) {
-    probe.n = n;
-    probe.ok = MakeView(camera, n, n, &probe.view);
-    if (!probe.ok) return;
-    const View& view = probe.view;
-    const glm::dvec3 right(view.right), up(view.up), forward(view.forward);
-    const double focal = view.focal, halfN = 0.5 * n;
-    probe.dir.resize(n * n);
-    // One ray through each pixel centre of an n x n image, row 0 at the top.
-    for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x)
-        probe.dir[y * n + x] =
-            focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
-    probe.depth.assign(n * n, kInf);
-    probe.nearest.assign(n * n, kInf);
-    probe.index.assign(n * n, 0);
-    probe.front.assign(n * n, 0);
-    probe.plane.assign(n * n, 0);
-  };
+  probe.n = n;
+  probe.ok = MakeView(camera, n, n, &probe.view);
+  if (!probe.ok) return;
+  const View& view = probe.view;
+  const glm::dvec3 right(view.right), up(view.up), forward(view.forward);
+  const double focal = view.focal, halfN = 0.5 * n;
+  probe.dir.resize(n * n);
+  // One ray through each pixel centre of an n x n image, row 0 at the top.
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x)
+      probe.dir[y * n + x] = focal * forward + (x + 0.5 - halfN) * right + (halfN - (y + 0.5)) * up;
+  probe.depth.assign(n * n, kInf);
+  probe.nearest.assign(n * n, kInf);
+  probe.index.assign(n * n, 0);
+  probe.front.assign(n * n, 0);
+  probe.plane.assign(n * n, 0);
+  probe.normal.assign(n * n, glm::vec3(0.0f));
+}
+
+ViewProbe::ViewProbe(const Bounds& bounds) {
+  reach_ = glm::length(bounds.hi - bounds.lo);
   for (int s = 0; s < kNumViewSides; ++s)
-    start(probes_[s], SideCamera(bounds, static_cast<ViewSide>(s)), kViewProbeRays);
+    Start(probes_[s], SideCamera(bounds, static_cast<ViewSide>(s)), kViewProbeRays);
   // Inside candidates only in a box with room to stand in.
   const glm::vec3 e = bounds.hi - bounds.lo;
   if (e.x > 0.0f && e.y > 0.0f && e.z > 0.0f)
     for (int k = 0; k < kInsideCandidates; ++k)
-      start(inside_[k], InsideCamera(bounds, k), kInsideProbeRays);
+      Start(inside_[k], InsideCamera(bounds, k), kInsideProbeRays);
+}
+
+void ViewProbe::SetLights(const std::vector<ViewLight>& lights) {
+  numLights_ = 0;
+  for (const ViewLight& l : lights) {
+    if (numLights_ == kViewLights || !(l.power > 0.0)) continue;
+    const float len = glm::length(l.normal);
+    if (!(len > 0.0f)) continue;
+    ViewLight& mine = lights_[numLights_];
+    mine = l;
+    mine.normal = l.normal / len;
+    // The shadow map: from just off the lamp along its normal, 120 degrees
+    // across, up whichever axis is least along the normal.
+    const glm::vec3 n = mine.normal;
+    Camera c;
+    c.eye = l.centre + 1e-4f * reach_ * n;
+    c.target = c.eye + n;
+    c.up = std::fabs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+    c.fovyDeg = 120.0f;
+    Start(lightProbes_[numLights_], c, kLightProbeRays);
+    ++numLights_;
+  }
+}
+
+double ViewProbe::LightAt(const glm::dvec3& x, const glm::dvec3& n) const {
+  constexpr double kPi = 3.141592653589793;
+  double sum = 0.0;
+  const double reach = reach_;
+  for (int k = 0; k < numLights_; ++k) {
+    const ViewLight& l = lights_[k];
+    const Probe& q = lightProbes_[k];
+    if (!q.ok) continue;
+    const glm::dvec3 toX = x - glm::dvec3(l.centre);
+    const double r2 = std::max(glm::dot(toX, toX), 1e-6 * reach * reach), r = std::sqrt(r2);
+    const double cosLamp = glm::dot(glm::dvec3(l.normal), toX) / r;
+    const double cosHere = -glm::dot(n, toX) / r;
+    if (!(cosLamp > 0.0 && cosHere > 0.0)) continue;
+    // Seen from the lamp: x's pixel in its shadow map, x lit when no hit
+    // there (or at a neighbour, the map's own resolution) is nearer than x
+    // by more than 2% of the distance.
+    const View& v = q.view;
+    const glm::dvec3 d = x - glm::dvec3(v.eye);
+    const double z = glm::dot(d, glm::dvec3(v.forward));
+    if (!(z > 0.0)) continue;
+    const double halfN = 0.5 * q.n;
+    const double sx = halfN + v.focal * glm::dot(d, glm::dvec3(v.right)) / z;
+    const double sy = halfN - v.focal * glm::dot(d, glm::dvec3(v.up)) / z;
+    if (!(sx >= 0.0 && sx < q.n && sy >= 0.0 && sy < q.n)) continue;  // outside the cone
+    const int px = static_cast<int>(sx), py = static_cast<int>(sy);
+    const double dist = glm::length(d);
+    double farthest = 0.0;
+    for (int y = std::max(0, py - 1); y <= std::min(q.n - 1, py + 1); ++y)
+      for (int xx = std::max(0, px - 1); xx <= std::min(q.n - 1, px + 1); ++xx) {
+        const int i = y * q.n + xx;
+        farthest = std::max(farthest, q.depth[i] * glm::length(q.dir[i]));
+      }
+    if (dist > 1.02 * farthest + 1e-3 * reach) continue;  // in shadow
+    sum += l.power * cosLamp * cosHere / (kPi * r2);
+  }
+  return sum;
 }
 
 void ViewProbe::Add(uint32_t index, const Polygon& p, bool twoSided) {
   for (Probe& probe : probes_) AddTo(probe, index, p, false, false);
   for (Probe& probe : inside_) AddTo(probe, index, p, true, twoSided);
+  for (int k = 0; k < numLights_; ++k) AddTo(lightProbes_[k], index, p, true, true);
 }
 
 void ViewProbe::AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided) {
@@ -220,6 +283,7 @@ void ViewProbe::AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip,
       probe.index[i] = index;
       probe.front[i] = facing < 0.0 || twoSided;
       probe.plane[i] = plane;
+      probe.normal[i] = p.normal;
     }
   }
 }
@@ -264,25 +328,52 @@ ViewChoice ViewProbe::Choose() const {
   const bool poor = back > front || c.sideOneWall;
   // A candidate's score: its front hits off the orientation most of them
   // share, so that a view of one wall or of a block up close scores little
-  // and one across a room (floor, walls, ceiling) much.
-  double bestScore = -1.0;
+  // and one across a room (floor, walls, ceiling) much; its lit score the
+  // same with each hit counted by the light estimated there (ViewLight).
+  double bestScore = -1.0, bestLit = 0.0;
+  int litCandidate = -1;
+  double share[kInsideCandidates] = {};  // front hits over the probe's rays
   for (int k = 0; k < kInsideCandidates; ++k) {
+    c.geometric[k] = c.lit[k] = -1.0;
     const Probe& q = inside_[k];
     if (!q.ok) continue;
     uint32_t f = 0, by[7] = {0, 0, 0, 0, 0, 0, 0};
+    double lit = 0.0, litBy[7] = {0, 0, 0, 0, 0, 0, 0};
+    const glm::dvec3 eye(q.view.eye);
     for (size_t i = 0; i < q.front.size(); ++i)
       if (q.front[i]) {
         ++f;
         ++by[q.plane[i]];
+        if (numLights_ == 0) continue;
+        const glm::dvec3 x = eye + q.depth[i] * q.dir[i];
+        glm::dvec3 n(q.normal[i]);
+        if (glm::dot(n, q.dir[i]) > 0.0) n = -n;  // a two-sided polygon's back
+        const double e = LightAt(x, n);
+        lit += e;
+        litBy[q.plane[i]] += e;
       }
     const double m2 = static_cast<double>(q.n) * q.n;
     const double score = (f - *std::max_element(by + 1, by + 7)) / m2;
+    share[k] = f / m2;
+    c.geometric[k] = score;
+    c.lit[k] = (lit - *std::max_element(litBy + 1, litBy + 7)) / m2;
     if (score > bestScore) {
       bestScore = score;
       c.candidate = k;
-      c.candidateFront = f / m2;
-      c.candidateScore = score;
     }
+    const bool goes = share[k] > c.sideFront && share[k] >= 0.5 && score >= 0.1 * share[k];
+    if (goes && c.lit[k] > bestLit) {
+      bestLit = c.lit[k];
+      litCandidate = k;
+    }
+  }
+  if (litCandidate >= 0) {
+    c.candidate = litCandidate;
+    c.byLight = true;
+  }
+  if (c.candidate >= 0) {
+    c.candidateFront = share[c.candidate];
+    c.candidateScore = c.geometric[c.candidate];
   }
   c.inside = poor && c.candidate >= 0 && c.candidateFront > c.sideFront &&
              c.candidateFront >= 0.5 && c.candidateScore >= 0.1 * c.candidateFront;
@@ -290,10 +381,12 @@ ViewChoice ViewProbe::Choose() const {
 }
 
 uint64_t ViewProbe::HeapBytes() {
-  constexpr uint64_t per = sizeof(glm::dvec3) + 2 * sizeof(double) + sizeof(uint32_t) + 2;
+  constexpr uint64_t per =
+      sizeof(glm::dvec3) + 2 * sizeof(double) + sizeof(uint32_t) + 2 + sizeof(glm::vec3);
   constexpr uint64_t n2 = uint64_t{kViewProbeRays} * kViewProbeRays;
   constexpr uint64_t m2 = uint64_t{kInsideProbeRays} * kInsideProbeRays;
-  return (kNumViewSides * n2 + kInsideCandidates * m2) * per;
+  constexpr uint64_t l2 = uint64_t{kLightProbeRays} * kLightProbeRays;
+  return (kNumViewSides * n2 + kInsideCandidates * m2 + kViewLights * l2) * per;
 }
 
 void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {

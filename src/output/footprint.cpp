@@ -43,6 +43,7 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
     Arena measure = Arena::Measure();
     r.LayoutRank(measure, p.packetBytes, ranks, k == 0, p.textures,
                  TexturesUsed(p, r.rankEnvs.first, r.rankEnvs.count));
+    r.LayoutSkyMap(measure, p.outside);
     f->rankOwn[k] = ArenaRoundUp(measure.used());
     for (uint32_t e = r.rankEnvs.first; e < r.rankEnvs.first + r.rankEnvs.count; ++e) {
       f->rankEnvBytes[k] += envs[e]->footprint().total;

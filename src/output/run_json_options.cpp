@@ -78,20 +78,33 @@ void ViewKeys(Fields& f, const Context& c) {
   const ViewChoice& v = r.viewChoice;
   if (!r.viewProbed)
     f.Key("view_choice").Printf("null");
-  else
-    f.Key("view_choice")
-        .Printf(
-            "{\"side\": \"%s\", \"side_front_share\": %.6g, \"side_back_share\": %.6g, "
-            "\"side_one_wall\": %s, \"inside_candidate\": %d, \"inside_front_share\": %.6g, "
-            "\"inside_score\": %.6g, \"inside\": %s}",
-            ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
-            v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false");
+  else {
+    TextWriter& w = f.Key("view_choice");
+    w.Printf(
+        "{\"side\": \"%s\", \"side_front_share\": %.6g, \"side_back_share\": %.6g, "
+        "\"side_one_wall\": %s, \"inside_candidate\": %d, \"inside_front_share\": %.6g, "
+        "\"inside_score\": %.6g, \"inside\": %s, \"inside_by_light\": %s, \"inside_scores\": [",
+        ViewSideName(v.side), v.sideFront, v.sideBack, v.sideOneWall ? "true" : "false",
+        v.candidate, v.candidateFront, v.candidateScore, v.inside ? "true" : "false",
+        v.byLight ? "true" : "false");
+    // Every candidate's geometric and lit score (-1: not probed; ViewChoice).
+    for (int k = 0; k < kInsideCandidates; ++k) w.Printf("%s%.6g", k ? ", " : "", v.geometric[k]);
+    w.Printf("], \"inside_lit_scores\": [");
+    for (int k = 0; k < kInsideCandidates; ++k) w.Printf("%s%.6g", k ? ", " : "", v.lit[k]);
+    w.Printf("]}");
+  }
   f.Bool("camera_from_scene", r.cameraFromScene);
 }
 // --sky (radiance) and --sun (towards it, irradiance, angular diameter): null without.
 void Sky(Fields& f, const Context& c) {
   const OutsideLight& lit = c.o.outside;
-  if (lit.HasSky())
+  if (!lit.skyFile.empty())  // a map: its file
+  {
+    TextWriter& w = f.Key("sky");
+    w.Printf("{\"file\": ");
+    JsonString(&w, lit.skyFile.c_str());
+    w.Printf("}");
+  } else if (lit.HasSky())
     f.Key("sky").Printf("[%.9g, %.9g, %.9g]", lit.sky.x, lit.sky.y, lit.sky.z);
   else
     f.Key("sky").Printf("null");

@@ -19,6 +19,7 @@
 #define STBI_ONLY_PNG
 #define STBI_ONLY_BMP
 #define STBI_ONLY_TGA
+#define STBI_ONLY_HDR  // --sky FILE.hdr (ReadSkyMap); DecodeTexture refuses it
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wunused-function"
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
@@ -184,11 +185,13 @@ std::string BadBmpPalette(const unsigned char* b, size_t n) {
 
 }  // namespace
 
-Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
-                   uint64_t budget) {
-  auto fail = [&](const std::string& why) {
-    return ErrorAt(where, "cannot read texture '" + path + "': " + why);
-  };
+namespace {
+
+// An image file's bytes, read whole: ReadTexture's and ReadSkyMap's checks.
+// `fail` makes the error from a reason.
+template <class Fail>
+Status ReadImageBytes(const std::string& path, uint64_t budget, const Fail& fail,
+                      std::string* out) {
   // Only a regular file (not /dev/zero, not a FIFO), of a size stb_image
   // takes, read whole only once its size is known.
   os::InFile in;
@@ -212,7 +215,68 @@ Status ReadTexture(const std::string& path, const std::string& where, TextureIma
   const int64_t got = size > 0 ? in.Read(&bytes[0], bytes.size(), &why) : 0;
   if (got < 0) return fail("read error (" + why + ")");
   if (got != size) return fail("the file changed while it was read");
+  *out = std::move(bytes);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ReadTexture(const std::string& path, const std::string& where, TextureImage* image,
+                   uint64_t budget) {
+  auto fail = [&](const std::string& why) {
+    return ErrorAt(where, "cannot read texture '" + path + "': " + why);
+  };
+  std::string bytes;
+  Status s = ReadImageBytes(path, budget, fail, &bytes);
+  if (!s.ok()) return s;
   return DecodeTexture(bytes, path, where, image, budget);
+}
+
+Status ReadSkyMap(const std::string& path, SkyMap* map, uint64_t budget) {
+  auto fail = [&](const std::string& why) {
+    return Status::Error("vismask: --sky: cannot read sky map '" + path + "': " + why);
+  };
+  std::string bytes;
+  Status s = ReadImageBytes(path, budget, fail, &bytes);
+  if (!s.ok()) return s;
+  const stbi_uc* encoded = reinterpret_cast<const stbi_uc*>(bytes.data());
+  const int n = static_cast<int>(bytes.size());
+  if (!stbi_is_hdr_from_memory(encoded, n)) return fail("not a Radiance HDR image");
+  int w = 0, h = 0, comp = 0;
+  if (!stbi_info_from_memory(encoded, n, &w, &h, &comp))
+    return fail(stbi_failure_reason() ? EscapedReason(stbi_failure_reason()) : "decoder failed");
+  if (w <= 0 || h <= 0)
+    return fail("the image is " + std::to_string(w) + "x" + std::to_string(h) +
+                " texels: it has none");
+  const uint64_t texels = static_cast<uint64_t>(w) * static_cast<uint64_t>(h);
+  if (texels > kMaxSkyTexels)
+    return fail(std::to_string(w) + "x" + std::to_string(h) + " texels, more than the " +
+                std::to_string(kMaxSkyTexels) + " a sky map may have");
+  const uint64_t need = bytes.size() + kSkyDecodeBytesPerTexel * texels;
+  if (budget > 0 && need > budget)
+    return fail("decoding its " + std::to_string(w) + "x" + std::to_string(h) + " texels needs " +
+                std::to_string(need) + " bytes, more than the " + std::to_string(budget) +
+                " --mem-budget leaves it at init");
+  float* data = stbi_loadf_from_memory(encoded, n, &w, &h, &comp, 3);
+  if (!data)
+    return fail(stbi_failure_reason() ? EscapedReason(stbi_failure_reason()) : "decoder failed");
+  if (static_cast<uint64_t>(w) * static_cast<uint64_t>(h) != texels) {
+    stbi_image_free(data);
+    return fail("the image's size changed while it was decoded");
+  }
+  SkyMap m;
+  m.path = path;
+  m.width = static_cast<uint32_t>(w);
+  m.height = static_cast<uint32_t>(h);
+  m.staged.assign(data, data + texels * 3);
+  stbi_image_free(data);
+  for (float v : m.staged)
+    if (!(v >= 0.0f && v <= 1e20f))  // NaN, infinite, negative or beyond outside.cpp's bound
+      return fail("a texel's radiance is negative or not finite");
+  m.Integrate();
+  *map = std::move(m);
+  map->texels = Span<const float>(map->staged.data(), map->staged.size());
+  return Status::Ok();
 }
 
 Status DecodeTexture(const std::string& bytes, const std::string& path, const std::string& where,
@@ -242,6 +306,9 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
   if (!corrupt.empty()) return fail("corrupt PNG: " + corrupt);
   corrupt = BadBmpPalette(encoded, bytes.size());
   if (!corrupt.empty()) return fail("unsupported BMP: " + corrupt);
+  // A Radiance HDR file is a sky (--sky), not a texture.
+  if (stbi_is_hdr_from_memory(encoded, static_cast<int>(bytes.size())))
+    return fail("not a PNG, JPEG, BMP or TGA image");
   // JPEG through libjpeg-turbo (jpeg.h says why), the rest through stb_image.
   const bool jpeg = IsJpeg(encoded, bytes.size());
   // The size first, from the header alone: the decoded bytes are judged

@@ -1,8 +1,10 @@
 #include "vismask/solve/outside.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <glm/geometric.hpp>
 #include <vector>
 
@@ -38,11 +40,26 @@ bool ParseNumbers(const std::string& text, std::vector<double>* out) {
 }  // namespace
 
 bool ParseSky(const std::string& text, OutsideLight* light) {
+  auto endsWith = [&](const char* tail) {
+    const size_t n = std::strlen(tail);
+    if (text.size() < n) return false;
+    for (size_t k = 0; k < n; ++k)
+      if (std::tolower(static_cast<unsigned char>(text[text.size() - n + k])) != tail[k])
+        return false;
+    return true;
+  };
+  if (text.find('/') != std::string::npos || endsWith(".hdr") || endsWith(".pic")) {
+    light->skyFile = text;
+    light->sky = glm::vec3(0.0f);
+    return true;
+  }
   std::vector<double> v;
   if (!ParseNumbers(text, &v) || v.size() != 3) return false;
   for (double x : v)
     if (x < 0.0) return false;
   light->sky = glm::vec3(v[0], v[1], v[2]);
+  light->skyFile.clear();
+  light->skyMap.reset();
   return true;
 }
 
@@ -104,10 +121,13 @@ void OutsideShooters(const EnvGrid& grid, int env, const OutsideLight& light, ui
             p.globalId = kOutsideIdBase + (static_cast<uint32_t>(env) << 10) +
                          (static_cast<uint32_t>(8 * kind + 2 * axis + side) << 6) + j * tiles + i;
             // The sky: a uniform radiance L through a plane carries pi L a
-            // unit of area.
+            // unit of area; a map, its integral over the sky this face
+            // sees (SkyMap::crossing).
+            const SkyMap* map = light.skyMap.get();
             for (int c = 0; c < 3; ++c) {
-              s.power[c] = kind == 0 ? 3.141592653589793 * light.sky[c] * area
-                                     : static_cast<double>(light.sun[c]) * cosine * area;
+              s.power[c] = kind == 1 ? static_cast<double>(light.sun[c]) * cosine * area
+                           : map     ? map->crossing[2 * axis + side][c] * area
+                                     : 3.141592653589793 * light.sky[c] * area;
               p.ke[c] = static_cast<float>(s.power[c] / area);
             }
             out->push_back(s);
@@ -124,6 +144,81 @@ double OutsidePower(const EnvGrid& grid, const OutsideLight& light, uint32_t til
     for (const OutsideShooter& o : s) total += o.power[0] + o.power[1] + o.power[2];
   }
   return total;
+}
+
+namespace {
+
+constexpr double kPi = 3.141592653589793;
+
+// The integral of max(0, f(phi)) over [a, b] within [-pi, pi], f = cos
+// (axis 0) or sin (axis 2) times `sign`, piece by piece where f keeps its sign.
+double AzimuthIntegral(double a, double b, int axis, double sign) {
+  const double cuts[5] = {-kPi, -0.5 * kPi, 0.0, 0.5 * kPi, kPi};
+  double sum = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const double lo = std::max(a, cuts[k]), hi = std::min(b, cuts[k + 1]);
+    if (!(hi > lo)) continue;
+    const double mid = 0.5 * (cuts[k] + cuts[k + 1]);
+    const double f = sign * (axis == 0 ? std::cos(mid) : std::sin(mid));
+    if (f <= 0.0) continue;
+    // The antiderivative of sign * cos is sign * sin, of sign * sin is -sign * cos.
+    sum += axis == 0 ? sign * (std::sin(hi) - std::sin(lo)) : -sign * (std::cos(hi) - std::cos(lo));
+  }
+  return sum;
+}
+
+}  // namespace
+
+glm::vec3 SkyMap::Radiance(const glm::vec3& w) const {
+  const double len = std::sqrt(double(w.x) * w.x + double(w.y) * w.y + double(w.z) * w.z);
+  if (!(len > 0.0) || width == 0 || height == 0) return glm::vec3(0.0f);
+  const double phi = std::atan2(double(w.z), double(w.x));  // -pi .. pi, 0 along +X
+  const double el = std::asin(std::max(-1.0, std::min(1.0, w.y / len)));
+  const double fx = (phi + kPi) / (2.0 * kPi) * width, fy = (0.5 * kPi - el) / kPi * height;
+  const uint32_t i = static_cast<uint32_t>(std::min<double>(std::max(0.0, fx), width - 1));
+  const uint32_t j = static_cast<uint32_t>(std::min<double>(std::max(0.0, fy), height - 1));
+  const float* t = texels.data() + (size_t(j) * width + i) * 3;
+  return glm::vec3(t[0], t[1], t[2]);
+}
+
+void SkyMap::Integrate() {
+  // Each face's integral as pi (the cosine's over a hemisphere) times the
+  // map's weighted mean over it, that mean taken about the first texel: a
+  // uniform map's is then exactly its value, and --sky FILE.hdr of one
+  // colour shoots exactly what --sky R,G,B of it does.
+  double sum[6][3] = {}, weight[6] = {};
+  const float* t = staged.data();
+  const double ref[3] = {t[0], t[1], t[2]};
+  for (uint32_t j = 0; j < height; ++j) {
+    // Elevations of the row, top first; the solid angle is cos(el) del dphi.
+    const double e1 = 0.5 * kPi - kPi * j / height, e0 = 0.5 * kPi - kPi * (j + 1.0) / height;
+    // Over the row: the integral of sin(el) cos(el) where it is positive
+    // (the upper sky, seen through the top face) and negative (the lower),
+    // and of cos^2(el) (the sides, times their azimuth integral).
+    auto sin2 = [](double e) { return std::sin(e) * std::sin(e); };
+    const double up = 0.5 * (sin2(std::max(e1, 0.0)) - sin2(std::max(e0, 0.0)));
+    const double down = 0.5 * (sin2(std::min(e0, 0.0)) - sin2(std::min(e1, 0.0)));
+    auto g = [](double e) { return 0.5 * e + 0.25 * std::sin(2.0 * e); };
+    const double side = g(e1) - g(e0);
+    for (uint32_t i = 0; i < width; ++i, t += 3) {
+      const double a = -kPi + 2.0 * kPi * i / width, b = -kPi + 2.0 * kPi * (i + 1.0) / width;
+      // Outward normal of face 2 * axis + side: +/- the axis (side 1: +).
+      const double w[6] = {side * AzimuthIntegral(a, b, 0, -1.0),
+                           side * AzimuthIntegral(a, b, 0, 1.0),
+                           (b - a) * down,
+                           (b - a) * up,
+                           side * AzimuthIntegral(a, b, 2, -1.0),
+                           side * AzimuthIntegral(a, b, 2, 1.0)};
+      for (int f = 0; f < 6; ++f) {
+        weight[f] += w[f];
+        for (int c = 0; c < 3; ++c) sum[f][c] += w[f] * (t[c] - ref[c]);
+      }
+    }
+  }
+  for (int f = 0; f < 6; ++f)
+    for (int c = 0; c < 3; ++c)
+      crossing[f][c] =
+          weight[f] > 0.0 ? std::max(0.0, kPi * (ref[c] + sum[f][c] / weight[f])) : 0.0;
 }
 
 glm::vec3 SunRayDirection(const OutsideLight& light, float u1, float u2) {

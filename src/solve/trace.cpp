@@ -21,6 +21,48 @@
 
 namespace vismask {
 
+namespace {
+
+// --sky FILE.hdr: the per-ray shares of sky shooter `id`'s shot (SkyShares,
+// outside.h): the map's radiance summed over every ray of the shot, in ray
+// order, as every environment that traces one of them sums it. No map, or
+// not the sky: every ray carries power / rays.
+SkyShares SkySharesOf(const OutsideLight& lit, bool sobol, const Frame& frame, uint32_t id,
+                      uint64_t stream, uint32_t rays, const double power[3]) {
+  SkyShares s;
+  if (!lit.skyMap || OutsideKindOf(id) != OutsideKind::kSky || rays == 0) return s;
+  s.map = lit.skyMap.get();
+  RayPoints points(sobol, stream);
+  double sum[3] = {0, 0, 0};
+  for (uint32_t r = 0; r < rays; ++r) {
+    float u[5];
+    points.Next(r, u, true);
+    const glm::vec3 l = s.map->Radiance(-frame.ToWorld(CosineDirection(u[3], u[4])));
+    for (int c = 0; c < 3; ++c) sum[c] += l[c];
+  }
+  s.rays = rays;
+  for (int c = 0; c < 3; ++c) {
+    s.sum[c] = sum[c];
+    s.even[c] = power[c] / rays;
+  }
+  return s;
+}
+
+// Method C: an open pixel of *out whose rays only hit closes; *hit becomes
+// the pixels left to the centre ray: open, and with both kinds of ray or
+// none. Word by word (bits past the last pixel are 0 in all three).
+void SplitByRays(MaskBits* out, MaskBits* hit, const MaskBits& passed) {
+  Span<uint64_t> o = out->words(), h = hit->words();
+  const Span<uint64_t> q = passed.words();
+  for (size_t w = 0; w < o.size(); ++w) {
+    const uint64_t open = o[w], hits = h[w], passes = q[w];
+    o[w] = open & ~(hits & ~passes);
+    h[w] = open & ~(hits ^ passes);
+  }
+}
+
+}  // namespace
+
 // What a shot's rays did here, summed in ray order and booked once a shot
 // (Distribute and TraceAlive share it).
 struct Environment::ShotTally {
@@ -132,6 +174,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   RayPoints points(options_.sobol, stream);
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
+  const SkyShares sky = SkySharesOf(options_.outside, options_.sobol, sampler.frame,
+                                    shooter.globalId, stream, rays, power);
   ShotTally tally;
   tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
   const glm::vec3 centre = CentreOf(shooter);
@@ -140,6 +184,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     points.Next(r, u, true);
     glm::vec3 local;
     Ray ray = MakeShotRay(sampler, shooter.globalId, u, &local);
+    double ratio[3];
+    if (sky.map) sky.Of(ray.d, share, ratio);
     uint32_t pixel = 0;
     if (foreign) {
       float t0, t1;
@@ -204,15 +250,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     else
       CastCentres(shooter, skip, out);
   } else if (methodC) {
-    // An open pixel whose rays only hit closes; hitPixels becomes the
-    // pixels left to the centre ray: open here, and with both kinds of ray
-    // or none. Word by word (bits past the last pixel are 0 in all three).
-    Span<uint64_t> o = out->words(), h = hitPixels.words(), q = passedPixels.words();
-    for (size_t w = 0; w < o.size(); ++w) {
-      uint64_t open = o[w], hit = h[w], passed = q[w];
-      o[w] = open & ~(hit & ~passed);
-      h[w] = open & ~(hit ^ passed);
-    }
+    SplitByRays(out, &hitPixels, passedPixels);
     if (centreMask) {
       // Cast only the pixels left whose centre ray is not known yet, into the cache.
       passedPixels.CopyFrom(hitPixels);
@@ -297,13 +335,23 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   RayPoints points(options_.sobol, shotKey);
   double share[3];
   for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
+  const SkyShares sky = SkySharesOf(options_.outside, options_.sobol, sampler.frame,
+                                    shooter.globalId, shotKey, rays, power);
   ShotTally tally;
   tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
   uint64_t left = 0;
+  // With a sky map: the rays that left less those that entered, each
+  // counted by its share's ratio to power / rays (SkyShares).
+  double flight[3] = {0, 0, 0}, ratio[3];
   auto trace = [&](uint32_t r, const float u[5]) {
     glm::vec3 local;
     Ray ray = MakeShotRay(sampler, shooter.globalId, u, &local);
     ++tally.traced;
+    if (sky.map) {
+      sky.Of(ray.d, share, ratio);
+      if (foreign)
+        for (int c = 0; c < 3; ++c) flight[c] -= ratio[c];
+    }
     Hit hit;
     if (grid_.Intersect(ray, skip, &hit)) {
       Land(ray, hit, share, &tally);
@@ -315,6 +363,8 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
     } else {
       routes[face].Open(r);  // on to the neighbour across the face it leaves by
       ++left;
+      if (sky.map)
+        for (int c = 0; c < 3; ++c) flight[c] += ratio[c];
     }
   };
   if (points.randomAccess()) {
@@ -344,7 +394,9 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   // traces came in; the sum over environments is the power still on its way.
   const uint64_t entered = foreign ? tally.traced : 0;
   for (int c = 0; c < 3; ++c)
-    ledger_.inFlight[c] += (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
+    ledger_.inFlight[c] +=
+        sky.map ? flight[c] * sky.even[c]
+                : (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
 }
 
 double Environment::TimeRays(uint32_t rays) const {

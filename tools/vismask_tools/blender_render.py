@@ -7,8 +7,9 @@
 # clockwise seen from the front), face_materials [m...], materials
 # [{"kd":[r,g,b],"ke":[r,g,b],"two_sided":bool}...], camera {eye,target,up,fovy}, width,
 # height, spp, seed, threads (0: all), work (a scratch directory), pfm, pgm
-# (the paths to write), mask_dilate (pixels), sky (null or [r,g,b]: a world of
-# that radiance, unseen by camera rays), sun (null or {toward, irradiance,
+# (the paths to write), mask_dilate (pixels), sky (null, [r,g,b]: a world of
+# that radiance, or {file, sha256}: an equirectangular map; unseen by camera
+# rays), sun (null or {toward, irradiance,
 # degrees}: a Sun lamp of that strength, W/m^2 of irradiance).
 import array
 import json
@@ -144,8 +145,25 @@ def Settings(job):
     w.color = (0.0, 0.0, 0.0)
     if job.get("sky"):
         w.use_nodes = True
-        bg = w.node_tree.nodes["Background"]
-        bg.inputs["Color"].default_value = (job["sky"][0], job["sky"][1], job["sky"][2], 1.0)
+        nt = w.node_tree
+        bg = nt.nodes["Background"]
+        if isinstance(job["sky"], dict):
+            # A sky map: the world direction turned 90 degrees about X, so
+            # that the scene's +Y (up) is the Z up of Cycles' equirectangular
+            # mapping and its -Z Blender's +Y (as Blender's OBJ importer
+            # turns a Y-up file); texel-constant, as vismask reads the map.
+            env = nt.nodes.new("ShaderNodeTexEnvironment")
+            env.image = bpy.data.images.load(job["sky"]["file"])  # float: linear
+            env.interpolation = "Closest"
+            coord = nt.nodes.new("ShaderNodeTexCoord")
+            turn = nt.nodes.new("ShaderNodeMapping")
+            turn.vector_type = "POINT"
+            turn.inputs["Rotation"].default_value = (math.pi / 2, 0.0, 0.0)
+            nt.links.new(coord.outputs["Generated"], turn.inputs["Vector"])
+            nt.links.new(turn.outputs["Vector"], env.inputs["Vector"])
+            nt.links.new(env.outputs["Color"], bg.inputs["Color"])
+        else:
+            bg.inputs["Color"].default_value = (job["sky"][0], job["sky"][1], job["sky"][2], 1.0)
         bg.inputs["Strength"].default_value = 1.0
         w.cycles_visibility.camera = False
     s.world = w

@@ -2,6 +2,7 @@
 the reports' tables), PFM and PGM images, and 8-bit PNG."""
 
 import json
+import math
 import os
 import struct
 import zlib
@@ -90,3 +91,20 @@ def write_png(path, w, h, rgb):
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
                 + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+
+
+def write_hdr(path, w, h, texel):
+    """A Radiance HDR file (uncompressed RGBE scanlines, rows top to bottom):
+    texel(i, j) gives the linear RGB of column i, row j (0 the top)."""
+    def rgbe(r, g, b):
+        v = max(r, g, b)
+        if v < 1e-32:
+            return bytes(4)
+        m, e = math.frexp(v)
+        k = m * 256.0 / v
+        return bytes([int(r * k), int(g * k), int(b * k), e + 128])
+    with open(path + ".tmp", "wb") as f:
+        f.write(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (h, w))
+        for j in range(h):
+            f.write(b"".join(rgbe(*texel(i, j)) for i in range(w)))
+    os.replace(path + ".tmp", path)

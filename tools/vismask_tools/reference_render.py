@@ -174,6 +174,8 @@ def Cached(a, argvForRecord):
     for k in ("sky", "sun"):
         if a.get(k) is not None:
             what[k] = a[k]
+    if isinstance(a.get("sky"), dict):  # a sky map: its bytes, wherever it is
+        what["sky"] = {"sha256": a["sky"]["sha256"]}
     key.update(json.dumps(what, sort_keys=True).encode())
     key = key.hexdigest()[:24]
     cache = os.path.join(ROOT, "build", "reference-cache", key)

@@ -46,7 +46,9 @@ def LightArgs(sky=None, sun=None):
     """vismask's --sky and --sun arguments for a sky [r, g, b] and a sun
     {toward, irradiance, degrees} (tools/reference's)."""
     args = []
-    if sky is not None:
+    if isinstance(sky, dict):  # a sky map: {file, sha256}
+        args += ["--sky", sky["file"]]
+    elif sky is not None:
         args += ["--sky", ",".join(repr(float(v)) for v in sky)]
     if sun is not None:
         args += ["--sun", ",".join(repr(float(v)) for v in

@@ -73,6 +73,22 @@ constexpr int kInsideCandidates = 8;
 constexpr int kInsideProbeRays = 32;
 Camera InsideCamera(const Bounds& bounds, int candidate);
 
+// The inside candidates scored by how lit they are: each front hit of a
+// candidate's probe weighted by an estimate, at init and before the solve,
+// of the irradiance there from the scene's brightest emitters (up to
+// kViewLights, by power): each a small Lambertian source at its polygon's
+// centre, E = power cos(at the lamp) cos(at the surface) / (pi r^2), seen
+// or not through a shadow map probed from the lamp (kLightProbeRays^2 rays
+// over 120 degrees about its normal; a point outside that cone counts as
+// unlit). The lit score is the geometric one (front hits off their
+// commonest orientation) with each hit counted by that estimate.
+struct ViewLight {
+  glm::vec3 centre{0.0f}, normal{0.0f, 1.0f, 0.0f};
+  double power = 0.0;  // Ke * area, the channels' mean
+};
+constexpr int kViewLights = 4;
+constexpr int kLightProbeRays = 32;
+
 // What the probe chose: the best side, how its image fares (the share of
 // its rays whose nearest hit is a front face, of those that hit a back face,
 // and whether one plane's orientation holds 90% of its front hits), and
@@ -89,6 +105,15 @@ struct ViewChoice {
   int candidate = -1;           // the best inside candidate probed (-1: none)
   double candidateFront = 0.0;  // its front share
   double candidateScore = 0.0;  // its share of front hits off their commonest orientation
+  // Every candidate's scores (-1: not probed): the geometric one (as
+  // candidateScore) and the lit one (ViewLight; 0 without lights). With
+  // lights, the candidate is the one of highest lit score of those that
+  // would go inside (front share above the side's and at least 1/2, a
+  // tenth of it off the commonest orientation); without, or where no lit
+  // score is above 0, the highest geometric score (`byLight` false).
+  double geometric[kInsideCandidates] = {};
+  double lit[kInsideCandidates] = {};
+  bool byLight = false;
 };
 
 // A camera's derived basis for projection onto a width x height image.
@@ -116,6 +141,9 @@ class ViewProbe {
   // glTF material); the inside candidates count its back as a front (the
   // sides keep their counts of old).
   void Add(uint32_t index, const Polygon& polygon, bool twoSided = false);
+  // The lamps the lit score estimates light from (at most kViewLights
+  // taken), before the first Add.
+  void SetLights(const std::vector<ViewLight>& lights);
   void Rays(uint32_t rays[kNumViewSides]) const;  // as VisibleFrontRays
   ViewSide Side() const;                          // as ChooseViewSide
   // The side, and whether an inside candidate replaces it (ViewChoice).
@@ -130,12 +158,20 @@ class ViewProbe {
     std::vector<double> depth, nearest;
     std::vector<uint32_t> index;
     std::vector<uint8_t> front;
-    std::vector<uint8_t> plane;  // the hit's orientation: 1 + 2 * axis + (normal < 0); 0: none
+    std::vector<uint8_t> plane;     // the hit's orientation: 1 + 2 * axis + (normal < 0); 0: none
+    std::vector<glm::vec3> normal;  // the hit polygon's normal
     int n = kViewProbeRays;
   };
+  void Start(Probe& probe, const Camera& camera, int n);
+  // The estimated irradiance at x (normal n, facing the viewer) from the lights.
+  double LightAt(const glm::dvec3& x, const glm::dvec3& n) const;
   void AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided);
   Probe probes_[kNumViewSides];
   Probe inside_[kInsideCandidates];
+  ViewLight lights_[kViewLights];
+  Probe lightProbes_[kViewLights];  // from each lamp along its normal: its shadow map
+  int numLights_ = 0;
+  float reach_ = 0.0f;  // the box's diagonal
   std::vector<glm::dvec2> poly_;
 };
 

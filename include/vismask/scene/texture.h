@@ -23,6 +23,7 @@
 #include "vismask/core/status.h"
 #include "vismask/scene/mesh.h"
 #include "vismask/scene/scene.h"
+#include "vismask/solve/outside.h"
 #include "vismask/solve/patch.h"
 
 namespace vismask {
@@ -94,6 +95,16 @@ Status ReadTexture(const std::string& path, const std::string& where, TextureIma
 // The texture fuzz target's entry (tests/fuzz/texture_fuzz.cpp).
 Status DecodeTexture(const std::string& bytes, const std::string& path, const std::string& where,
                      TextureImage* image, uint64_t budget = 0);
+
+// --sky FILE.hdr: a Radiance HDR file (stb_image's reader) read and decoded
+// into *map (linear RGB floats, staged on the heap; SkyMap::crossing
+// integrated), with ReadTexture's checks: a regular file of at most 2^31 - 1
+// bytes, its bytes and then its decoding (kSkyDecodeBytesPerTexel a texel,
+// the dimensions read from the header first) within `budget` (> 0), at most
+// kMaxSkyTexels texels, every texel finite and >= 0. Errors name the file.
+constexpr uint64_t kSkyDecodeBytesPerTexel = 24;  // stb_image's floats and the staged copy
+constexpr uint64_t kMaxSkyTexels = uint64_t{1} << 26;
+Status ReadSkyMap(const std::string& path, SkyMap* map, uint64_t budget = 0);
 
 // The affine map x -> uv = (dot(u.xyz, x) + u.w, dot(v.xyz, x) + v.w) on a
 // polygon's plane, fitted to its corners' uv (least squares; exact for a

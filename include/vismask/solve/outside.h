@@ -12,26 +12,63 @@
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "vismask/core/span.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
 #include "vismask/solve/sampling.h"
 
 namespace vismask {
 
+// --sky FILE.hdr: an equirectangular map of the sky's radiance, in the
+// orientation of Blender/Cycles' default equirectangular world mapping on
+// a scene that Blender's OBJ and glTF importers bring in (the file's +Y is
+// Blender's +Z, its -Z Blender's +Y): the map's centre column is the sky
+// seen along +X, its top row the sky straight up (+Y), its column at three
+// quarters of the width the sky along +Z, its left and right edges -X. The
+// radiance of sky direction w (unit, pointing away from the scene) is the
+// texel holding azimuth atan2(w.z, w.x) and elevation asin(w.y), constant
+// over each texel (nearest, no filtering; tools/reference asks Cycles for
+// "Closest" interpolation).
+struct SkyMap {
+  std::string path;
+  uint32_t width = 0, height = 0;
+  // Linear RGB radiance, rows top to bottom: the rank's arena once init
+  // has laid it out (staged on the heap until then, `staged`).
+  Span<const float> texels;
+  std::vector<float> staged;
+  // For each face of the scene's box (2 * axis + side, side 1 the high
+  // one), what crosses a unit area of it inwards: the integral over sky
+  // directions w of L(w) max(0, dot(w, face's outward normal)), per
+  // channel; exact for the texel-constant map (per texel in closed form).
+  double crossing[6][3] = {};
+
+  // The radiance of sky direction w (any length > 0).
+  glm::vec3 Radiance(const glm::vec3& w) const;
+  // Builds `crossing` from `staged` (width x height RGB).
+  void Integrate();
+};
+
 struct OutsideLight {
-  glm::vec3 sky{0.0f};           // --sky R,G,B: radiance (W/m^2/sr in scene units)
+  glm::vec3 sky{0.0f};  // --sky R,G,B: radiance (W/m^2/sr in scene units)
+  // --sky FILE.hdr: the file (set by ParseSky), and the map read at init
+  // (ReadSkyMap, scene/texture.h) that every copy of these options shares.
+  std::string skyFile;
+  std::shared_ptr<SkyMap> skyMap;
   glm::vec3 sunToward{0, 0, 1};  // --sun X,Y,Z: unit direction towards the sun
   glm::vec3 sun{0.0f};           // --sun ...,R,G,B: irradiance on a surface facing it
   float sunDegrees = 0.53f;      // --sun ...,DEG: its angular diameter
-  bool HasSky() const { return sky.x > 0.0f || sky.y > 0.0f || sky.z > 0.0f; }
+  bool HasSky() const { return !skyFile.empty() || sky.x > 0.0f || sky.y > 0.0f || sky.z > 0.0f; }
   bool HasSun() const { return sun.x > 0.0f || sun.y > 0.0f || sun.z > 0.0f; }
   bool Any() const { return HasSky() || HasSun(); }
 };
 
-// Parses --sky's "R,G,B" (each >= 0 and finite) into light->sky.
+// Parses --sky's "R,G,B" (each >= 0 and finite) into light->sky, or a
+// file's path (one that ends in .hdr or .pic, in any case, or holds a '/')
+// into light->skyFile.
 bool ParseSky(const std::string& text, OutsideLight* light);
 // Parses --sun's "X,Y,Z,R,G,B[,DEG]" (a nonzero direction, normalised;
 // R, G, B >= 0; 0 <= DEG <= 90) into light->sunToward, sun, sunDegrees.
@@ -65,6 +102,36 @@ void OutsideShooters(const EnvGrid& grid, int env, const OutsideLight& light, ui
                      std::vector<OutsideShooter>* out);
 // Their power over every environment, channels summed (as emitted power).
 double OutsidePower(const EnvGrid& grid, const OutsideLight& light, uint32_t tiles);
+
+// A sky shot's rays under a map (--sky FILE.hdr). The rays keep the
+// uniform sky's cosine-distributed directions, so that the hemisphere
+// masks and Method R's routes (which judge a shooter's rays by those
+// directions) hold as they are; each ray instead carries its own colour,
+// in proportion to the map's radiance where it comes from. The shares are
+// normalised over the shot's rays (power / rays times the ray's radiance
+// over the rays' mean, per channel), so that a shot delivers its power and
+// the energy ledger stays closed (to rounding); every environment that traces a ray of
+// the shot computes the same sum, over every ray of the shot in order.
+// Importance sampling the map would put the rays where the map is bright,
+// but would make a ray's direction depend on the map and break the masks'
+// cosine pixels; per-ray colour costs variance under a small bright sun in
+// the map, which --sun is for.
+struct SkyShares {
+  const SkyMap* map = nullptr;  // null: every ray carries power / rays
+  uint32_t rays = 0;
+  double even[3] = {0, 0, 0};  // power / rays
+  double sum[3] = {0, 0, 0};   // the rays' radiance summed
+  // The share of a ray travelling along d: power / rays times `ratio`, the
+  // ray's radiance over the rays' mean (exactly 1 under a uniform map; 1
+  // in a channel no ray has radiance in).
+  void Of(const glm::vec3& d, double share[3], double ratio[3]) const {
+    const glm::vec3 l = map->Radiance(-d);
+    for (int c = 0; c < 3; ++c) {
+      ratio[c] = sum[c] > 0.0 ? static_cast<double>(l[c]) * rays / sum[c] : 1.0;
+      share[c] = even[c] * ratio[c];
+    }
+  }
+};
 
 // The direction of travel of a sun ray from two uniforms: uniform in solid
 // angle within the sun's cone, about -sunToward.
