@@ -61,13 +61,11 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   if (numOutside_ > 0) outside_ = arena.Alloc<Outside>(numOutside_);
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
-  elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options_.elements.perPatch));
-  // Per-pixel direct light: the indirect radiosity and unshot emission per
-  // patch, and the emitter list (counted from the staged patches, which
-  // Build copies in unchanged).
+  // Per-pixel direct light: the indirect radiosity per element, the unshot
+  // emission per patch, and the emitter list (counted from the staged
+  // patches, which Build copies in unchanged).
   const bool direct = options_.directSamples > 0;
-  indirect_ =
-      arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
+  elements_.Layout(arena, numPatches, options_.elements, direct);
   emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
   smoothPatch_ = arena.Alloc<uint8_t>(direct && !staged_->lattice.smooth.empty() ? numPatches : 0);
   direct_.Layout(arena, direct ? DirectLight::Count(Span<const Patch>(staged_->patches.data(),
@@ -342,18 +340,11 @@ void Environment::Reset() {
       ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
-    if (!indirect_.empty())
-      for (int c = 0; c < 3; ++c) {
-        indirect_[3 * i + c] = 0.0;
-        emitLeft_[3 * i + c] = e.unshot[c];
-      }
+    if (!emitLeft_.empty())
+      for (int c = 0; c < 3; ++c) emitLeft_[3 * i + c] = e.unshot[c];
     tree_.Set(i, UnshotKey(e));
-    Element& root = elements_[i];
-    root = Element{};
-    root.area = p.area;
-    root.child = kNoElement;
   }
-  nextElement_ = static_cast<uint32_t>(patches_.size());
+  elements_.Reset(patches_);
   // The outside shooters emit as patches do; their power counts in the
   // radiosity power R as an emitter's b * area does (the power shot so far
   // is R - unshot).
@@ -379,7 +370,7 @@ EnvState Environment::SaveState() const {
   s.gridSteps = grid_.steps();
   s.centreSteps = centreSteps_;
   s.centreWork = centreWork_;
-  s.nextElement = nextElement_;
+  s.nextElement = elements_.used();
   s.queued = queue_.count();
   s.outCount = outbox_.count();
   s.index = index_;
@@ -395,7 +386,7 @@ bool Environment::RestoreState(const EnvState& s) {
   grid_.SetSteps(s.gridSteps);
   centreSteps_ = s.centreSteps;
   centreWork_ = s.centreWork;
-  nextElement_ = s.nextElement;
+  elements_.SetUsed(s.nextElement);
   queue_.SetCount(s.queued);
   outbox_.Clear();
   ledger_ = s.ledger;

@@ -19,6 +19,7 @@
 #include "vismask/solve/centre_mask_cache.h"
 #include "vismask/solve/display_lattice.h"
 #include "vismask/solve/element.h"
+#include "vismask/solve/element_tree.h"
 #include "vismask/solve/env_options.h"
 #include "vismask/solve/foreign_queue.h"
 #include "vismask/solve/ledger.h"
@@ -98,8 +99,8 @@ class Environment {
   void ComputeVertexRadiosity(const double ambient[3]);
   glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
-  Span<const Element> elements() const { return elements_; }
-  uint32_t elementsUsed() const { return nextElement_; }
+  Span<const Element> elements() const { return elements_.all(); }
+  uint32_t elementsUsed() const { return elements_.used(); }
   const DisplayLattice& lattice() const { return lattice_; }
   DisplayLattice& lattice() { return lattice_; }
   Span<const glm::vec3> vertices() const { return lattice_.vertices(); }
@@ -120,11 +121,7 @@ class Environment {
   float rayEpsilon() const { return options_.rayEpsilon; }
   // Leaf e's reflected radiosity from shots other than emission (0 without
   // directPerPixel()), and the emission not yet shot.
-  glm::dvec3 Indirect(uint32_t e) const {
-    if (indirect_.empty()) return glm::dvec3(0.0);
-    return glm::dvec3(indirect_[3 * e], indirect_[3 * e + 1], indirect_[3 * e + 2]) /
-           static_cast<double>(elements_[e].area);
-  }
+  glm::dvec3 Indirect(uint32_t e) const { return elements_.Indirect(e); }
   void EmissionUnshot(double out[3]) const;
 
   uint32_t index() const { return index_; }
@@ -234,8 +231,6 @@ class Environment {
   void FillFlightCols();
   // Receiving (env_receive.cpp).
   void Receive(uint32_t j, const double share[3], const glm::vec3& x);
-  uint32_t Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const;
-  void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
 
   uint32_t index_ = 0;
   EnvGrid envGrid_;  // the partition (grid_ is the ray-casting grid)
@@ -256,12 +251,9 @@ class Environment {
   Span<PatchEnergy> energy_;
   Span<uint32_t> shotCount_;
   Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
-  Span<Element> elements_;       // roots first (element i is patch i's), then the pool
-  uint32_t nextElement_ = 0;
-  // directPerPixel(), 3 channels: per element the power received from shots
-  // other than emission, per patch the emission not yet shot, and the
-  // current shot's share that is emission; 1 per patch of a smoothed polygon.
-  Span<double> indirect_;
+  ElementTree elements_;
+  // directPerPixel(), 3 channels: per patch the emission not yet shot, and
+  // the current shot's share that is emission; 1 per patch of a smoothed polygon.
   Span<double> emitLeft_;
   double shotDirect_[3] = {0, 0, 0};
   Span<uint8_t> smoothPatch_;
