@@ -10,6 +10,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <limits>
+#include <type_traits>
 #include <unordered_map>
 
 #include "vismask/solve/centre_raster.h"
@@ -362,20 +363,43 @@ void Environment::Reset() {
   outbox_.Clear();
 }
 
+// EnvState's fields beside what holds each here, one list for both ways:
+// with `env` const (SaveState) each is copied into `s`, else (RestoreState)
+// out of it. A part's field goes through its getter and setter.
+template <typename Env, typename State>
+void Environment::StateFields(Env& env, State& s) {
+  constexpr bool kSave = std::is_const<Env>::value;
+  auto held = [](auto& saved, auto& member) {
+    if constexpr (kSave)
+      saved = member;
+    else
+      member = saved;
+  };
+  auto viaPart = [](auto& saved, auto& part, auto get, auto set) {
+    if constexpr (kSave)
+      saved = (part.*get)();
+    else
+      (part.*set)(saved);
+  };
+  viaPart(s.gridSteps, env.grid_, &Grid::steps, &Grid::SetSteps);
+  held(s.centreSteps, env.centreSteps_);
+  held(s.centreWork, env.centreWork_);
+  viaPart(s.nextElement, env.elements_, &ElementTree::used, &ElementTree::SetUsed);
+  viaPart(s.queued, env.queue_, &ForeignQueue::count, &ForeignQueue::SetCount);
+  held(s.ledger, env.ledger_);
+  held(s.stats, env.stats_);
+}
+
+// The fields that say which layout the state is of are saved, and checked
+// on restore before anything changes.
 EnvState Environment::SaveState() const {
   EnvState s;
   std::memset(static_cast<void*>(&s), 0, sizeof s);  // padding too: the same bytes every time
   s.arenaUsed = arena_.used();
   s.numPatches = patches_.size();
-  s.gridSteps = grid_.steps();
-  s.centreSteps = centreSteps_;
-  s.centreWork = centreWork_;
-  s.nextElement = elements_.used();
-  s.queued = queue_.count();
   s.outCount = outbox_.count();
   s.index = index_;
-  s.ledger = ledger_;
-  s.stats = stats_;
+  StateFields(*this, s);
   return s;
 }
 
@@ -383,14 +407,8 @@ bool Environment::RestoreState(const EnvState& s) {
   if (s.index != index_ || s.numPatches != patches_.size() || s.arenaUsed != arena_.used() ||
       s.outCount != 0 || s.nextElement > elements_.size())
     return false;
-  grid_.SetSteps(s.gridSteps);
-  centreSteps_ = s.centreSteps;
-  centreWork_ = s.centreWork;
-  elements_.SetUsed(s.nextElement);
-  queue_.SetCount(s.queued);
+  StateFields(*this, s);
   outbox_.Clear();
-  ledger_ = s.ledger;
-  stats_ = s.stats;
   return true;
 }
 

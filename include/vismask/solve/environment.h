@@ -178,6 +178,8 @@ class Environment {
   };
 
   void Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan);
+  template <typename Env, typename State>
+  static void StateFields(Env& env, State& s);  // SaveState and RestoreState's one list
   // Shots (env_queue.cpp) and their rays (trace.cpp).
   void ShootLocal(uint32_t i);
   void ShootOutside(uint32_t k);
