@@ -94,12 +94,7 @@ void Environment::ShootLocal(uint32_t i) {
     power[c] = fraction < 1.0 ? src.unshot[c] * fraction : src.unshot[c];
     // Per-pixel direct light: the share of this shot that is the patch's
     // own emission, in proportion to the emission in its unshot power.
-    shotDirect_[c] = 0.0;
-    if (!emitLeft_.empty() && src.unshot[c] > 0.0) {
-      double& left = emitLeft_[3 * size_t(i) + c];
-      shotDirect_[c] = std::fmin(1.0, left / src.unshot[c]);
-      left = fraction < 1.0 ? left - shotDirect_[c] * power[c] : 0.0;
-    }
+    direct_.BookLocalShot(i, c, src.unshot[c], power[c], fraction);
     ledger_.unshot[c] -= power[c];
     src.unshot[c] = fraction < 1.0 ? src.unshot[c] - power[c] : 0.0;
   }
@@ -151,29 +146,13 @@ void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uin
 bool Environment::HasLocalUnshot() const {
   const uint32_t top = tree_.Top();
   if (top != kNoPatch && UnshotKey(energy_[top]) > 0.0) return true;
-  return BestOutside() >= 0;
-}
-
-// The outside shooter with the most unshot power (ties to the first), or
-// -1 when none has any.
-int Environment::BestOutside() const {
-  int best = -1;
-  double key = 0.0;
-  for (uint32_t k = 0; k < numOutside_; ++k) {
-    const double* u = outside_[k].unshot;
-    const double s = u[0] + u[1] + u[2];
-    if (s > key) {
-      key = s;
-      best = static_cast<int>(k);
-    }
-  }
-  return best;
+  return outside_.Best() >= 0;
 }
 
 // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
 // no patch to skip and no centre-mask cache.
 void Environment::ShootOutside(uint32_t k) {
-  Outside& o = outside_[k];
+  OutsideSet::Entry& o = outside_[k];
   const Patch& p = o.shooter.patch;
   const uint32_t shotIndex = o.shots++;
   const uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
@@ -192,9 +171,7 @@ void Environment::ShootOutside(uint32_t k) {
 }
 
 void Environment::ShootForeign(uint32_t s) {
-  // A foreign shot's light is indirect here (per-pixel direct light runs
-  // with one environment only: DESIGN, Direct light per pixel).
-  for (double& d : shotDirect_) d = 0.0;
+  direct_.BookForeignShot();  // a foreign shot's light is indirect here
   const ForeignQueue::Slot& slot = queue_.slot(s);
   MaskBits in = queue_.Mask(s);
   MaskBits out = ScratchMask(0);
@@ -252,7 +229,7 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
     double localKey = local == kNoPatch ? 0.0 : tree_.Key(local);
     // An outside shooter (--sky, --sun) goes before the patches when it has
     // more unshot power (ties to the patch).
-    const int outside = numOutside_ > 0 ? BestOutside() : -1;
+    const int outside = outside_.size() > 0 ? outside_.Best() : -1;
     if (outside >= 0) {
       const double* u = outside_[outside].unshot;
       const double key = u[0] + u[1] + u[2];

@@ -34,7 +34,8 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
     e.b[c] += reflected * invArea;
     e.var[c] += (reflected * invArea) * (reflected * invArea);  // one ray's term
     e.unshot[c] += reflected;
-    if (elements_.hasIndirect()) elements_.AddIndirect(leaf, c, reflected * (1.0 - shotDirect_[c]));
+    if (elements_.hasIndirect())
+      elements_.AddIndirect(leaf, c, reflected * (1.0 - direct_.shotDirect(c)));
     ledger_.unshot[c] += reflected;
     ledger_.radiosity[c] += reflected;
     ledger_.absorbed[c] += share[c] - reflected;
@@ -81,12 +82,6 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
     b[c] = static_cast<float>(static_cast<double>(p.ke[c]) + el.received[c] / el.area +
                               p.kd[c] * ambient[c]);
   return b;
-}
-
-void Environment::EmissionUnshot(double out[3]) const {
-  for (int c = 0; c < 3; ++c) out[c] = 0.0;
-  for (size_t i = 0; i < emitLeft_.size(); i += 3)
-    for (int c = 0; c < 3; ++c) out[c] += emitLeft_[i + c];
 }
 
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {

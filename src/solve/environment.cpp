@@ -24,7 +24,7 @@ struct Environment::Staged {
   std::vector<PatchGeom> geom;
   std::vector<uint32_t> twin;     // empty without twins
   std::vector<PatchTexture> tex;  // empty when no patch is textured
-  std::vector<Outside> outside;
+  std::vector<OutsideShooter> outside;
   DisplayLattice::Staged lattice;
 };
 
@@ -59,7 +59,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   twin_ = arena.Alloc<uint32_t>(staged_->twin.size());
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
-  if (numOutside_ > 0) outside_ = arena.Alloc<Outside>(numOutside_);
+  outside_.Layout(arena, static_cast<uint32_t>(staged_->outside.size()));
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
   // Per-pixel direct light: the indirect radiosity per element, the unshot
@@ -67,11 +67,10 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   // patches, which Build copies in unchanged).
   const bool direct = options_.directSamples > 0;
   elements_.Layout(arena, numPatches, options_.elements, direct);
-  emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
-  smoothPatch_ = arena.Alloc<uint8_t>(direct && !staged_->lattice.smooth.empty() ? numPatches : 0);
-  direct_.Layout(arena, direct ? DirectLight::Count(Span<const Patch>(staged_->patches.data(),
-                                                                      staged_->patches.size()))
-                               : DirectLight::Counts{});
+  direct_.Layout(arena, numPatches, direct, !staged_->lattice.smooth.empty(),
+                 direct ? DirectLight::Count(
+                              Span<const Patch>(staged_->patches.data(), staged_->patches.size()))
+                        : DirectLight::Counts{});
   part(&footprint_.elements);
   lattice_.Layout(arena, staged_->lattice);
   part(&footprint_.vertices);
@@ -205,14 +204,8 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   staged_ = std::make_unique<Staged>();
-  {
-    std::vector<OutsideShooter> shooters;
-    OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
-                    &shooters);
-    staged_->outside.clear();
-    for (const OutsideShooter& s : shooters) staged_->outside.push_back(Outside{s, {0, 0, 0}, 0});
-    numOutside_ = static_cast<uint32_t>(staged_->outside.size());
-  }
+  OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
+                  &staged_->outside);
 
   // Local copies of the patches and a compact local vertex lattice.
   staged_->patches.clear();
@@ -286,21 +279,11 @@ bool Environment::Build() {
     kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_->patches[i].area;
   }
   for (size_t i = 0; i < staged_->twin.size(); ++i) twin_[i] = staged_->twin[i];
-  // Field by field, so the padding keeps the arena's zeros (a checkpoint
-  // holds the arena's bytes).
-  for (uint32_t k = 0; k < numOutside_; ++k) {
-    const Outside& o = staged_->outside[k];
-    outside_[k].shooter.patch = o.shooter.patch;
-    outside_[k].shots = o.shots;
-    for (int c = 0; c < 3; ++c) {
-      outside_[k].shooter.power[c] = o.shooter.power[c];
-      outside_[k].unshot[c] = o.unshot[c];
-    }
-  }
+  outside_.Fill(staged_->outside);
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
   lattice_.Build(staged_->lattice, patches_);
   grid_.Build(patches_, geom_);
-  if (options_.directSamples > 0) direct_.Build(patches_);
+  direct_.Build(patches_, lattice_);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())
@@ -308,18 +291,6 @@ bool Environment::Build() {
   maskDirections_.Fill();
   FillFlightCols();
   cache_.Clear();
-  // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
-  // patch of theirs) as they were: their patches show the solved whole.
-  if (!smoothPatch_.empty()) {
-    std::vector<uint32_t> smoothed;
-    for (const Patch& p : patches_)
-      for (uint32_t k = 0; k < p.numCorners; ++k)
-        if (lattice_.FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
-    std::sort(smoothed.begin(), smoothed.end());
-    for (uint32_t i = 0; i < patches_.size(); ++i)
-      smoothPatch_[i] =
-          std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
-  }
   staged_.reset();  // the heap copies, no longer needed
   Reset();
   return true;
@@ -341,24 +312,14 @@ void Environment::Reset() {
       ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
-    if (!emitLeft_.empty())
-      for (int c = 0; c < 3; ++c) emitLeft_[3 * i + c] = e.unshot[c];
+    direct_.ResetPatch(i, e.unshot);
     tree_.Set(i, UnshotKey(e));
   }
   elements_.Reset(patches_);
   // The outside shooters emit as patches do; their power counts in the
   // radiosity power R as an emitter's b * area does (the power shot so far
   // is R - unshot).
-  for (uint32_t k = 0; k < numOutside_; ++k) {
-    Outside& o = outside_[k];
-    o.shots = 0;
-    for (int c = 0; c < 3; ++c) {
-      o.unshot[c] = o.shooter.power[c];
-      ledger_.emitted[c] += o.unshot[c];
-      ledger_.unshot[c] += o.unshot[c];
-      ledger_.radiosity[c] += o.unshot[c];
-    }
-  }
+  outside_.Reset(&ledger_);
   queue_.Clear();
   outbox_.Clear();
 }

@@ -14,9 +14,9 @@
 #include "vismask/accel/grid.h"
 #include "vismask/core/arena.h"
 #include "vismask/core/span.h"
-#include "vismask/display/direct.h"
 #include "vismask/scene/mesh.h"
 #include "vismask/solve/centre_mask_cache.h"
+#include "vismask/solve/direct_book.h"
 #include "vismask/solve/display_lattice.h"
 #include "vismask/solve/element.h"
 #include "vismask/solve/element_tree.h"
@@ -27,6 +27,7 @@
 #include "vismask/solve/max_tree.h"
 #include "vismask/solve/outbox.h"
 #include "vismask/solve/outside.h"
+#include "vismask/solve/outside_set.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
@@ -111,18 +112,16 @@ class Environment {
   // part (SetDisplayIndirect) of each patch not of a smoothed polygon, and
   // gathers the direct part from directLight().
   bool directPerPixel() const { return options_.directSamples > 0; }
-  void SetDisplayIndirect(bool on) { displayIndirect_ = on && directPerPixel(); }
-  bool displayIndirect() const { return displayIndirect_; }
-  bool ShowsIndirect(uint32_t i) const {
-    return displayIndirect_ && (smoothPatch_.empty() || !smoothPatch_[i]);
-  }
+  void SetDisplayIndirect(bool on) { direct_.SetShowIndirect(on && directPerPixel()); }
+  bool displayIndirect() const { return direct_.showIndirect(); }
+  bool ShowsIndirect(uint32_t i) const { return direct_.ShowsIndirect(i); }
   uint32_t directSamples() const { return options_.directSamples; }
-  const DirectLight& directLight() const { return direct_; }
+  const DirectLight& directLight() const { return direct_.light(); }
   float rayEpsilon() const { return options_.rayEpsilon; }
   // Leaf e's reflected radiosity from shots other than emission (0 without
   // directPerPixel()), and the emission not yet shot.
   glm::dvec3 Indirect(uint32_t e) const { return elements_.Indirect(e); }
-  void EmissionUnshot(double out[3]) const;
+  void EmissionUnshot(double out[3]) const { direct_.EmissionUnshot(out); }
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return packetBytes_; }
@@ -164,18 +163,11 @@ class Environment {
   // shooter has unshot power; the outside shooters held (outside.h).
   uint32_t TopShooter() const { return tree_.Top(); }
   bool HasLocalUnshot() const;
-  uint32_t numOutside() const { return numOutside_; }
+  uint32_t numOutside() const { return outside_.size(); }
 
  private:
   struct Staged;     // the heap copies between Prepare and Build (environment.cpp)
   struct ShotTally;  // what a shot's rays did here, booked once a shot (trace.cpp)
-  // An outside shooter (--sky, --sun), in the arena so that a checkpoint's
-  // bytes hold its unshot power.
-  struct Outside {
-    OutsideShooter shooter;
-    double unshot[3];
-    uint32_t shots;
-  };
 
   void Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan);
   template <typename Env, typename State>
@@ -186,7 +178,6 @@ class Environment {
   void ShootOwn(const Patch& p, Skip skip, const double power[3], uint64_t key, uint32_t shotIndex,
                 uint32_t rays, uint32_t cached);
   void ShootForeign(uint32_t slot);
-  int BestOutside() const;
   uint32_t ShotRays(const double power[3], uint64_t shotKey, double* fraction) const;
   Ray MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
                   glm::vec3* local) const;
@@ -254,18 +245,11 @@ class Environment {
   Span<uint32_t> shotCount_;
   Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
   ElementTree elements_;
-  // directPerPixel(), 3 channels: per patch the emission not yet shot, and
-  // the current shot's share that is emission; 1 per patch of a smoothed polygon.
-  Span<double> emitLeft_;
-  double shotDirect_[3] = {0, 0, 0};
-  Span<uint8_t> smoothPatch_;
-  bool displayIndirect_ = false;
-  DirectLight direct_;
+  DirectBook direct_;
   DisplayLattice lattice_;
   Grid grid_;
   MaxTree tree_;
-  Span<Outside> outside_;
-  uint32_t numOutside_ = 0;
+  OutsideSet outside_;
   // Exchange state: empty for an environment without neighbours.
   ForeignQueue queue_;
   Span<uint64_t> scratchWords_;  // working masks (ScratchMask)
