@@ -18,7 +18,8 @@
 namespace vismask {
 
 // Method C's two working masks: pixels some ray hit in, and pixels some ray
-// passed unoccluded.
+// passed unoccluded. R's route masks (RouteMask), one a face of the box
+// (2 * axis + (step > 0)), follow the first two.
 MaskBits Environment::ScratchMask(uint32_t k) const {
   size_t w = shape_.words();
   return MaskBits(scratchWords_.subspan(k * w, w), shape_);
@@ -202,6 +203,8 @@ void Environment::ShootForeign(uint32_t s) {
   queue_.Release(s);
 }
 
+// Delivery, in a fixed order (sender, then send order) for reproducible
+// results.
 void Environment::Deliver(const uint8_t* packet) {
   PacketHeader h = ReadHeader(packet);
   CHECK(h.toEnv == index_ && numNeighbours_ > 0);
@@ -218,6 +221,21 @@ void Environment::Deliver(const uint8_t* packet) {
   queue_.Deliver(packet, h, options_.maskMethod, expected, ScratchMask(1));
 }
 
+// The work rounds are measured in, counted, never timed (work.h): the
+// form-factor rays' grid steps and WorkCosts' charges, and the centre casts
+// every --mask-cache makes (a local shooter's later, cached casts are left
+// out).
+uint64_t Environment::workSteps() const {
+  const WorkCosts& w = WorkCostsOf(options_.maskMethod);
+  return grid_.steps() - centreSteps_ + centreWork_ + w.ray * (stats_.rays + stats_.readRays) +
+         w.hit * stats_.hits + w.shot * (stats_.shots + stats_.foreignShots);
+}
+
+// One round: up to `shotBudget` shots, each the larger of the local patch
+// or outside shooter with most unshot power (while `newForwards` remains,
+// with neighbours) and the ready foreign shooter with most power; ends once
+// the round's work reaches `roundWork` (0: no limit). Packets for
+// neighbours go to the outbox.
 void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork) {
   newForwards_ = newForwards;
   // The round's work: grid steps counted, never timed, so the round ends

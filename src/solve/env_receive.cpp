@@ -52,10 +52,14 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
   }
 }
 
+// The leaf of patch `patch` at `st`.
 uint32_t Environment::LeafAt(uint32_t patch, glm::vec2 st) const {
   return elements_.Descend(patches_[patch].numCorners == 3, patch, &st, nullptr, nullptr);
 }
 
+// A leaf's display radiosity: emission + received / area + kd * ambient,
+// the reflected part scaled by PatchTexture::scale when textured; only the
+// indirect part when ShowsIndirect.
 glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const {
   const Patch& p = patches_[patch];
   const Element& el = elements_[e];

@@ -48,6 +48,13 @@ uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* 
   return n < options_.minRays ? options_.minRays : n;
 }
 
+// Whether the centre-mask cache keeps known pixels too: C, and B when a
+// local shot may read only (mayRead_, FillReadCosts).
+bool Environment::PartCentres() const {
+  return options_.maskMethod == MaskMethod::kC ||
+         (options_.maskMethod == MaskMethod::kB && mayRead_);
+}
+
 void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan) {
   size_t mark = arena.used();
   auto part = [&](uint64_t* bytes) {
@@ -184,6 +191,12 @@ void StageSmooth(const Mesh& mesh, const std::unordered_map<uint32_t, uint32_t>&
 
 }  // namespace
 
+// Init, first half: environment `index` of `grid` from the patches `ids`
+// of `mesh` (copied to the heap, vertices remapped to a local lattice; a
+// twin gets TwinGeom of its original's, paired when both are here); plans
+// the grid and measures the arena. Second half (Build): the arena of
+// exactly that size, the patches copied in, the grid built, the heap
+// copies dropped; false, with nothing built, if the memory is refused.
 const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                                          const std::vector<uint32_t>& ids,
                                          const EnvOptions& options) {
@@ -351,8 +364,10 @@ void Environment::StateFields(Env& env, State& s) {
   held(s.stats, env.stats_);
 }
 
-// The fields that say which layout the state is of are saved, and checked
-// on restore before anything changes.
+// Checkpoint and resume, between rounds: the state beside the arena;
+// RestoreState is false, changing nothing, if `s` is not of this layout
+// (the fields that say which are saved, and checked before anything
+// changes). The arena's bytes are restored over one laid out alike.
 EnvState Environment::SaveState() const {
   EnvState s;
   std::memset(static_cast<void*>(&s), 0, sizeof s);  // padding too: the same bytes every time
