@@ -10,6 +10,8 @@
 
 namespace vismask {
 
+// The power booked as shot but not yet delivered (docs/DESIGN.md, "Power
+// in flight"), so that the sum over environments counts each watt once.
 void Environment::FlightPower(double power[3]) const {
   const bool methodR = options_.maskMethod == MaskMethod::kR;
   for (int c = 0; c < 3; ++c) power[c] = methodR ? ledger_.inFlight[c] : 0.0;
@@ -48,6 +50,8 @@ void Environment::FillFlightCols() {
   }
 }
 
+// The share FlightShare gives a packet addressed here with this box (what
+// its sender put in it).
 double Environment::FlightShareAt(const uint8_t* packet) const {
   PacketHeader h = ReadHeader(packet);
   return FlightShare(h, shape_.empty() ? nullptr : MaskBytes(packet), box_, cell_);

@@ -18,7 +18,8 @@
 namespace vismask {
 
 // Method C's two working masks: pixels some ray hit in, and pixels some ray
-// passed unoccluded.
+// passed unoccluded. R's route masks (RouteMask), one a face of the box
+// (2 * axis + (step > 0)), follow the first two.
 MaskBits Environment::ScratchMask(uint32_t k) const {
   size_t w = shape_.words();
   return MaskBits(scratchWords_.subspan(k * w, w), shape_);
@@ -94,12 +95,7 @@ void Environment::ShootLocal(uint32_t i) {
     power[c] = fraction < 1.0 ? src.unshot[c] * fraction : src.unshot[c];
     // Per-pixel direct light: the share of this shot that is the patch's
     // own emission, in proportion to the emission in its unshot power.
-    shotDirect_[c] = 0.0;
-    if (!emitLeft_.empty() && src.unshot[c] > 0.0) {
-      double& left = emitLeft_[3 * size_t(i) + c];
-      shotDirect_[c] = std::fmin(1.0, left / src.unshot[c]);
-      left = fraction < 1.0 ? left - shotDirect_[c] * power[c] : 0.0;
-    }
+    direct_.BookLocalShot(i, c, src.unshot[c], power[c], fraction);
     ledger_.unshot[c] -= power[c];
     src.unshot[c] = fraction < 1.0 ? src.unshot[c] - power[c] : 0.0;
   }
@@ -151,29 +147,13 @@ void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uin
 bool Environment::HasLocalUnshot() const {
   const uint32_t top = tree_.Top();
   if (top != kNoPatch && UnshotKey(energy_[top]) > 0.0) return true;
-  return BestOutside() >= 0;
-}
-
-// The outside shooter with the most unshot power (ties to the first), or
-// -1 when none has any.
-int Environment::BestOutside() const {
-  int best = -1;
-  double key = 0.0;
-  for (uint32_t k = 0; k < numOutside_; ++k) {
-    const double* u = outside_[k].unshot;
-    const double s = u[0] + u[1] + u[2];
-    if (s > key) {
-      key = s;
-      best = static_cast<int>(k);
-    }
-  }
-  return best;
+  return outside_.Best() >= 0;
 }
 
 // Outside shooter k (--sky, --sun) shoots, as a local patch does but with
 // no patch to skip and no centre-mask cache.
 void Environment::ShootOutside(uint32_t k) {
-  Outside& o = outside_[k];
+  OutsideSet::Entry& o = outside_[k];
   const Patch& p = o.shooter.patch;
   const uint32_t shotIndex = o.shots++;
   const uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
@@ -192,9 +172,7 @@ void Environment::ShootOutside(uint32_t k) {
 }
 
 void Environment::ShootForeign(uint32_t s) {
-  // A foreign shot's light is indirect here (per-pixel direct light runs
-  // with one environment only: DESIGN, Direct light per pixel).
-  for (double& d : shotDirect_) d = 0.0;
+  direct_.BookForeignShot();  // a foreign shot's light is indirect here
   const ForeignQueue::Slot& slot = queue_.slot(s);
   MaskBits in = queue_.Mask(s);
   MaskBits out = ScratchMask(0);
@@ -225,6 +203,8 @@ void Environment::ShootForeign(uint32_t s) {
   queue_.Release(s);
 }
 
+// Delivery, in a fixed order (sender, then send order) for reproducible
+// results.
 void Environment::Deliver(const uint8_t* packet) {
   PacketHeader h = ReadHeader(packet);
   CHECK(h.toEnv == index_ && numNeighbours_ > 0);
@@ -241,6 +221,21 @@ void Environment::Deliver(const uint8_t* packet) {
   queue_.Deliver(packet, h, options_.maskMethod, expected, ScratchMask(1));
 }
 
+// The work rounds are measured in, counted, never timed (work.h): the
+// form-factor rays' grid steps and WorkCosts' charges, and the centre casts
+// every --mask-cache makes (a local shooter's later, cached casts are left
+// out).
+uint64_t Environment::workSteps() const {
+  const WorkCosts& w = WorkCostsOf(options_.maskMethod);
+  return grid_.steps() - centreSteps_ + centreWork_ + w.ray * (stats_.rays + stats_.readRays) +
+         w.hit * stats_.hits + w.shot * (stats_.shots + stats_.foreignShots);
+}
+
+// One round: up to `shotBudget` shots, each the larger of the local patch
+// or outside shooter with most unshot power (while `newForwards` remains,
+// with neighbours) and the ready foreign shooter with most power; ends once
+// the round's work reaches `roundWork` (0: no limit). Packets for
+// neighbours go to the outbox.
 void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork) {
   newForwards_ = newForwards;
   // The round's work: grid steps counted, never timed, so the round ends
@@ -252,7 +247,7 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
     double localKey = local == kNoPatch ? 0.0 : tree_.Key(local);
     // An outside shooter (--sky, --sun) goes before the patches when it has
     // more unshot power (ties to the patch).
-    const int outside = numOutside_ > 0 ? BestOutside() : -1;
+    const int outside = outside_.size() > 0 ? outside_.Best() : -1;
     if (outside >= 0) {
       const double* u = outside_[outside].unshot;
       const double key = u[0] + u[1] + u[2];

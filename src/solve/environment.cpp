@@ -10,6 +10,7 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <limits>
+#include <type_traits>
 #include <unordered_map>
 
 #include "vismask/solve/centre_raster.h"
@@ -23,7 +24,7 @@ struct Environment::Staged {
   std::vector<PatchGeom> geom;
   std::vector<uint32_t> twin;     // empty without twins
   std::vector<PatchTexture> tex;  // empty when no patch is textured
-  std::vector<Outside> outside;
+  std::vector<OutsideShooter> outside;
   DisplayLattice::Staged lattice;
 };
 
@@ -47,6 +48,13 @@ uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* 
   return n < options_.minRays ? options_.minRays : n;
 }
 
+// Whether the centre-mask cache keeps known pixels too: C, and B when a
+// local shot may read only (mayRead_, FillReadCosts).
+bool Environment::PartCentres() const {
+  return options_.maskMethod == MaskMethod::kC ||
+         (options_.maskMethod == MaskMethod::kB && mayRead_);
+}
+
 void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan) {
   size_t mark = arena.used();
   auto part = [&](uint64_t* bytes) {
@@ -58,21 +66,18 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   twin_ = arena.Alloc<uint32_t>(staged_->twin.size());
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
-  if (numOutside_ > 0) outside_ = arena.Alloc<Outside>(numOutside_);
+  outside_.Layout(arena, static_cast<uint32_t>(staged_->outside.size()));
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
-  elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options_.elements.perPatch));
-  // Per-pixel direct light: the indirect radiosity and unshot emission per
-  // patch, and the emitter list (counted from the staged patches, which
-  // Build copies in unchanged).
+  // Per-pixel direct light: the indirect radiosity per element, the unshot
+  // emission per patch, and the emitter list (counted from the staged
+  // patches, which Build copies in unchanged).
   const bool direct = options_.directSamples > 0;
-  indirect_ =
-      arena.Alloc<double>(direct ? 3 * size_t(numPatches) * (1 + options_.elements.perPatch) : 0);
-  emitLeft_ = arena.Alloc<double>(direct ? 3 * size_t(numPatches) : 0);
-  smoothPatch_ = arena.Alloc<uint8_t>(direct && !staged_->lattice.smooth.empty() ? numPatches : 0);
-  direct_.Layout(arena, direct ? DirectLight::Count(Span<const Patch>(staged_->patches.data(),
-                                                                      staged_->patches.size()))
-                               : DirectLight::Counts{});
+  elements_.Layout(arena, numPatches, options_.elements, direct);
+  direct_.Layout(arena, numPatches, direct, !staged_->lattice.smooth.empty(),
+                 direct ? DirectLight::Count(
+                              Span<const Patch>(staged_->patches.data(), staged_->patches.size()))
+                        : DirectLight::Counts{});
   part(&footprint_.elements);
   lattice_.Layout(arena, staged_->lattice);
   part(&footprint_.vertices);
@@ -186,6 +191,12 @@ void StageSmooth(const Mesh& mesh, const std::unordered_map<uint32_t, uint32_t>&
 
 }  // namespace
 
+// Init, first half: environment `index` of `grid` from the patches `ids`
+// of `mesh` (copied to the heap, vertices remapped to a local lattice; a
+// twin gets TwinGeom of its original's, paired when both are here); plans
+// the grid and measures the arena. Second half (Build): the arena of
+// exactly that size, the patches copied in, the grid built, the heap
+// copies dropped; false, with nothing built, if the memory is refused.
 const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                                          const std::vector<uint32_t>& ids,
                                          const EnvOptions& options) {
@@ -206,14 +217,8 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
                               : MaskShape{};
   packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   staged_ = std::make_unique<Staged>();
-  {
-    std::vector<OutsideShooter> shooters;
-    OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
-                    &shooters);
-    staged_->outside.clear();
-    for (const OutsideShooter& s : shooters) staged_->outside.push_back(Outside{s, {0, 0, 0}, 0});
-    numOutside_ = static_cast<uint32_t>(staged_->outside.size());
-  }
+  OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
+                  &staged_->outside);
 
   // Local copies of the patches and a compact local vertex lattice.
   staged_->patches.clear();
@@ -287,21 +292,11 @@ bool Environment::Build() {
     kdArea_ += (static_cast<double>(kd[0]) + kd[1] + kd[2]) / 3.0 * staged_->patches[i].area;
   }
   for (size_t i = 0; i < staged_->twin.size(); ++i) twin_[i] = staged_->twin[i];
-  // Field by field, so the padding keeps the arena's zeros (a checkpoint
-  // holds the arena's bytes).
-  for (uint32_t k = 0; k < numOutside_; ++k) {
-    const Outside& o = staged_->outside[k];
-    outside_[k].shooter.patch = o.shooter.patch;
-    outside_[k].shots = o.shots;
-    for (int c = 0; c < 3; ++c) {
-      outside_[k].shooter.power[c] = o.shooter.power[c];
-      outside_[k].unshot[c] = o.unshot[c];
-    }
-  }
+  outside_.Fill(staged_->outside);
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
   lattice_.Build(staged_->lattice, patches_);
   grid_.Build(patches_, geom_);
-  if (options_.directSamples > 0) direct_.Build(patches_);
+  direct_.Build(patches_, lattice_);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())
@@ -309,18 +304,6 @@ bool Environment::Build() {
   maskDirections_.Fill();
   FillFlightCols();
   cache_.Clear();
-  // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
-  // patch of theirs) as they were: their patches show the solved whole.
-  if (!smoothPatch_.empty()) {
-    std::vector<uint32_t> smoothed;
-    for (const Patch& p : patches_)
-      for (uint32_t k = 0; k < p.numCorners; ++k)
-        if (lattice_.FindSmooth(p.vertex[k]) >= 0) smoothed.push_back(p.surface);
-    std::sort(smoothed.begin(), smoothed.end());
-    for (uint32_t i = 0; i < patches_.size(); ++i)
-      smoothPatch_[i] =
-          std::binary_search(smoothed.begin(), smoothed.end(), patches_[i].surface) ? 1 : 0;
-  }
   staged_.reset();  // the heap copies, no longer needed
   Reset();
   return true;
@@ -342,49 +325,57 @@ void Environment::Reset() {
       ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
-    if (!indirect_.empty())
-      for (int c = 0; c < 3; ++c) {
-        indirect_[3 * i + c] = 0.0;
-        emitLeft_[3 * i + c] = e.unshot[c];
-      }
+    direct_.ResetPatch(i, e.unshot);
     tree_.Set(i, UnshotKey(e));
-    Element& root = elements_[i];
-    root = Element{};
-    root.area = p.area;
-    root.child = kNoElement;
   }
-  nextElement_ = static_cast<uint32_t>(patches_.size());
+  elements_.Reset(patches_);
   // The outside shooters emit as patches do; their power counts in the
   // radiosity power R as an emitter's b * area does (the power shot so far
   // is R - unshot).
-  for (uint32_t k = 0; k < numOutside_; ++k) {
-    Outside& o = outside_[k];
-    o.shots = 0;
-    for (int c = 0; c < 3; ++c) {
-      o.unshot[c] = o.shooter.power[c];
-      ledger_.emitted[c] += o.unshot[c];
-      ledger_.unshot[c] += o.unshot[c];
-      ledger_.radiosity[c] += o.unshot[c];
-    }
-  }
+  outside_.Reset(&ledger_);
   queue_.Clear();
   outbox_.Clear();
 }
 
+// EnvState's fields beside what holds each here, one list for both ways:
+// with `env` const (SaveState) each is copied into `s`, else (RestoreState)
+// out of it. A part's field goes through its getter and setter.
+template <typename Env, typename State>
+void Environment::StateFields(Env& env, State& s) {
+  constexpr bool kSave = std::is_const<Env>::value;
+  auto held = [](auto& saved, auto& member) {
+    if constexpr (kSave)
+      saved = member;
+    else
+      member = saved;
+  };
+  auto viaPart = [](auto& saved, auto& part, auto get, auto set) {
+    if constexpr (kSave)
+      saved = (part.*get)();
+    else
+      (part.*set)(saved);
+  };
+  viaPart(s.gridSteps, env.grid_, &Grid::steps, &Grid::SetSteps);
+  held(s.centreSteps, env.centreSteps_);
+  held(s.centreWork, env.centreWork_);
+  viaPart(s.nextElement, env.elements_, &ElementTree::used, &ElementTree::SetUsed);
+  viaPart(s.queued, env.queue_, &ForeignQueue::count, &ForeignQueue::SetCount);
+  held(s.ledger, env.ledger_);
+  held(s.stats, env.stats_);
+}
+
+// Checkpoint and resume, between rounds: the state beside the arena;
+// RestoreState is false, changing nothing, if `s` is not of this layout
+// (the fields that say which are saved, and checked before anything
+// changes). The arena's bytes are restored over one laid out alike.
 EnvState Environment::SaveState() const {
   EnvState s;
   std::memset(static_cast<void*>(&s), 0, sizeof s);  // padding too: the same bytes every time
   s.arenaUsed = arena_.used();
   s.numPatches = patches_.size();
-  s.gridSteps = grid_.steps();
-  s.centreSteps = centreSteps_;
-  s.centreWork = centreWork_;
-  s.nextElement = nextElement_;
-  s.queued = queue_.count();
   s.outCount = outbox_.count();
   s.index = index_;
-  s.ledger = ledger_;
-  s.stats = stats_;
+  StateFields(*this, s);
   return s;
 }
 
@@ -392,14 +383,8 @@ bool Environment::RestoreState(const EnvState& s) {
   if (s.index != index_ || s.numPatches != patches_.size() || s.arenaUsed != arena_.used() ||
       s.outCount != 0 || s.nextElement > elements_.size())
     return false;
-  grid_.SetSteps(s.gridSteps);
-  centreSteps_ = s.centreSteps;
-  centreWork_ = s.centreWork;
-  nextElement_ = s.nextElement;
-  queue_.SetCount(s.queued);
+  StateFields(*this, s);
   outbox_.Clear();
-  ledger_ = s.ledger;
-  stats_ = s.stats;
   return true;
 }
 

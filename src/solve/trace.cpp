@@ -103,6 +103,15 @@ Ray Environment::MakeShotRay(const PatchSampler& sampler, uint32_t id, const flo
 }
 
 // A ray's first hit here: a front side receives `share`, a back side absorbs it.
+// Centre rays start rayEpsilon in front of a patch, OutsideLift() behind an
+// outside shooter (outside the box).
+float Environment::CentreLift(uint32_t id) const {
+  return OutsideKindOf(id) == OutsideKind::kNone ? options_.rayEpsilon : -OutsideLift();
+}
+float Environment::OutsideLift() const {
+  return 4.0f * options_.rayEpsilon;
+}
+
 void Environment::Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally) {
   ++tally->hits;
   if (!hit.front) {
@@ -399,6 +408,7 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
                 : (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
 }
 
+// --max-seconds's plan: the seconds `rays` form-factor-like rays take here.
 double Environment::TimeRays(uint32_t rays) const {
   if (patches_.empty()) return 0.0;
   Rng rng(0x5eed, 41);

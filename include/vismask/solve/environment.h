@@ -14,18 +14,18 @@
 #include "vismask/accel/grid.h"
 #include "vismask/core/arena.h"
 #include "vismask/core/span.h"
-#include "vismask/display/direct.h"
 #include "vismask/scene/mesh.h"
 #include "vismask/solve/centre_mask_cache.h"
+#include "vismask/solve/direct_book.h"
 #include "vismask/solve/display_lattice.h"
-#include "vismask/solve/element.h"
+#include "vismask/solve/element_tree.h"
 #include "vismask/solve/env_options.h"
 #include "vismask/solve/foreign_queue.h"
 #include "vismask/solve/ledger.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/max_tree.h"
 #include "vismask/solve/outbox.h"
-#include "vismask/solve/outside.h"
+#include "vismask/solve/outside_set.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
@@ -42,12 +42,7 @@ class Environment {
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
 
-  // Init, first half: environment `index` of `grid` from the patches `ids`
-  // of `mesh` (copied to the heap, vertices remapped to a local lattice; a
-  // twin gets TwinGeom of its original's, paired when both are here); plans
-  // the grid and measures the arena. Second half (Build): the arena of
-  // exactly that size, the patches copied in, the grid built, the heap
-  // copies dropped; false, with nothing built, if the memory is refused.
+  // Init in two halves (environment.cpp): Prepare measures, Build makes the arena.
   const EnvFootprint& Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                               const std::vector<uint32_t>& ids, const EnvOptions& options);
   bool Build();
@@ -60,72 +55,43 @@ class Environment {
   // Emission: B = Ke, unshot power = Ke * area; ledger and queue restart.
   void Reset();
 
-  // One round (env_queue.cpp): up to `shotBudget` shots, each the larger of
-  // the local patch or outside shooter with most unshot power (while
-  // `newForwards` remains, with neighbours) and the ready foreign shooter
-  // with most power; ends once the round's work reaches `roundWork` (0: no
-  // limit). Packets for neighbours go to the outbox.
+  // One round of shots, and the work rounds are measured in (env_queue.cpp).
   void RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork = 0);
-  // The work rounds are measured in, counted, never timed (work.h): the
-  // form-factor rays' grid steps and WorkCosts' charges, and the centre
-  // casts every --mask-cache makes (a local shooter's later, cached casts
-  // are left out).
-  uint64_t workSteps() const {
-    const WorkCosts& w = WorkCostsOf(options_.maskMethod);
-    return grid_.steps() - centreSteps_ + centreWork_ + w.ray * (stats_.rays + stats_.readRays) +
-           w.hit * stats_.hits + w.shot * (stats_.shots + stats_.foreignShots);
-  }
+  uint64_t workSteps() const;
   // A centre ray's work: the integer cube root of the grid's cells, at least 1.
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
-  // This round's packets, in send order; delivery, in a fixed order (sender,
-  // then send order) for reproducible results; the share FlightShare gives
-  // a packet addressed here with this box (what its sender put in it).
+  // Packets: this round's, their delivery (env_queue.cpp), their share here.
   const Outbox& outbox() const { return outbox_; }
   void ClearOutbox() { outbox_.Clear(); }
   void Deliver(const uint8_t* packet);
   double FlightShareAt(const uint8_t* packet) const;
   uint32_t queuedCount() const { return queue_.count(); }
-  // The power booked as shot but not yet delivered (docs/DESIGN.md, "Power
-  // in flight"; env_flight.cpp), so that the sum over environments counts
-  // each watt once.
+  // The power booked as shot but not yet delivered (env_flight.cpp).
   void FlightPower(double power[3]) const;
 
-  // Display values (env_receive.cpp): the lattice's vertex radiosity, a
-  // leaf's display radiosity (emission + received / area + kd * ambient,
-  // the reflected part scaled by PatchTexture::scale when textured; only
-  // the indirect part when ShowsIndirect), the leaf of a patch at `st`.
+  // Display values (env_receive.cpp): vertices', a leaf's, a patch's leaf at `st`.
   void ComputeVertexRadiosity(const double ambient[3]);
   glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
-  Span<const Element> elements() const { return elements_; }
-  uint32_t elementsUsed() const { return nextElement_; }
+  Span<const Element> elements() const { return elements_.all(); }
+  uint32_t elementsUsed() const { return elements_.used(); }
   const DisplayLattice& lattice() const { return lattice_; }
   DisplayLattice& lattice() { return lattice_; }
   Span<const glm::vec3> vertices() const { return lattice_.vertices(); }
   Span<const glm::vec3> vertexRadiosity() const { return lattice_.radiosity(); }
   Span<const SmoothVertex> smoothVertices() const { return lattice_.smoothVertices(); }
   uint32_t numSharedVertices() const { return lattice_.numShared(); }
-  // Per-pixel direct light (--direct-samples): the image shows the indirect
-  // part (SetDisplayIndirect) of each patch not of a smoothed polygon, and
-  // gathers the direct part from directLight().
+  // Per-pixel direct light (--direct-samples; DirectBook).
   bool directPerPixel() const { return options_.directSamples > 0; }
-  void SetDisplayIndirect(bool on) { displayIndirect_ = on && directPerPixel(); }
-  bool displayIndirect() const { return displayIndirect_; }
-  bool ShowsIndirect(uint32_t i) const {
-    return displayIndirect_ && (smoothPatch_.empty() || !smoothPatch_[i]);
-  }
+  void SetDisplayIndirect(bool on) { direct_.SetShowIndirect(on && directPerPixel()); }
+  bool displayIndirect() const { return direct_.showIndirect(); }
+  bool ShowsIndirect(uint32_t i) const { return direct_.ShowsIndirect(i); }
   uint32_t directSamples() const { return options_.directSamples; }
-  const DirectLight& directLight() const { return direct_; }
+  const DirectLight& directLight() const { return direct_.light(); }
   float rayEpsilon() const { return options_.rayEpsilon; }
-  // Leaf e's reflected radiosity from shots other than emission (0 without
-  // directPerPixel()), and the emission not yet shot.
-  glm::dvec3 Indirect(uint32_t e) const {
-    if (indirect_.empty()) return glm::dvec3(0.0);
-    return glm::dvec3(indirect_[3 * e], indirect_[3 * e + 1], indirect_[3 * e + 2]) /
-           static_cast<double>(elements_[e].area);
-  }
-  void EmissionUnshot(double out[3]) const;
+  glm::dvec3 Indirect(uint32_t e) const { return elements_.Indirect(e); }
+  void EmissionUnshot(double out[3]) const { direct_.EmissionUnshot(out); }
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return packetBytes_; }
@@ -148,9 +114,7 @@ class Environment {
   size_t arenaCapacity() const { return arena_.capacity(); }
   size_t arenaUsed() const { return arena_.used(); }
 
-  // Checkpoint and resume (checkpoint.h), between rounds: the state beside
-  // the arena; RestoreState is false, changing nothing, if `s` is not of
-  // this layout. The arena's bytes are restored over one laid out alike.
+  // Checkpoint and resume between rounds (checkpoint.h; environment.cpp).
   EnvState SaveState() const;
   bool RestoreState(const EnvState& s);
   Span<const uint8_t> arenaBytes() const {
@@ -158,36 +122,28 @@ class Environment {
   }
   Span<uint8_t> mutableArenaBytes() { return Span<uint8_t>(arena_.data(), arena_.capacity()); }
 
-  // --max-seconds's plan: the seconds `rays` form-factor-like rays take
-  // here (trace.cpp), and the power a ray carries.
+  // --max-seconds's plan (trace.cpp), and the power a ray carries.
   double TimeRays(uint32_t rays) const;
   double rayQuantum() const { return options_.rayQuantum; }
   void SetRayQuantum(double q) { options_.rayQuantum = q; }
-  // Test hooks: the top local shooter; whether a patch or an outside
-  // shooter has unshot power; the outside shooters held (outside.h).
+  // Test hooks: the top local shooter, any unshot power, the outside shooters.
   uint32_t TopShooter() const { return tree_.Top(); }
   bool HasLocalUnshot() const;
-  uint32_t numOutside() const { return numOutside_; }
+  uint32_t numOutside() const { return outside_.size(); }
 
  private:
   struct Staged;     // the heap copies between Prepare and Build (environment.cpp)
   struct ShotTally;  // what a shot's rays did here, booked once a shot (trace.cpp)
-  // An outside shooter (--sky, --sun), in the arena so that a checkpoint's
-  // bytes hold its unshot power.
-  struct Outside {
-    OutsideShooter shooter;
-    double unshot[3];
-    uint32_t shots;
-  };
 
   void Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& plan);
+  template <typename Env, typename State>
+  static void StateFields(Env& env, State& s);  // SaveState and RestoreState's one list
   // Shots (env_queue.cpp) and their rays (trace.cpp).
   void ShootLocal(uint32_t i);
   void ShootOutside(uint32_t k);
   void ShootOwn(const Patch& p, Skip skip, const double power[3], uint64_t key, uint32_t shotIndex,
                 uint32_t rays, uint32_t cached);
   void ShootForeign(uint32_t slot);
-  int BestOutside() const;
   uint32_t ShotRays(const double power[3], uint64_t shotKey, double* fraction) const;
   Ray MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
                   glm::vec3* local) const;
@@ -210,20 +166,10 @@ class Environment {
   template <typename Visit>
   void ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
                          const glm::vec3& centre, Visit visit) const;
-  // Centre rays start rayEpsilon in front of a patch, OutsideLift() behind
-  // an outside shooter (outside the box).
-  float CentreLift(uint32_t id) const {
-    return OutsideKindOf(id) == OutsideKind::kNone ? options_.rayEpsilon : -OutsideLift();
-  }
-  float OutsideLift() const { return 4.0f * options_.rayEpsilon; }
-  // Whether the centre-mask cache keeps known pixels too: C, and B when a
-  // local shot may read only (mayRead_, FillReadCosts).
-  bool PartCentres() const {
-    return options_.maskMethod == MaskMethod::kC ||
-           (options_.maskMethod == MaskMethod::kB && mayRead_);
-  }
-  // Packets (env_queue.cpp, env_flight.cpp); R's route masks, one a face of
-  // the box (2 * axis + (step > 0)), follow the first two working masks.
+  float CentreLift(uint32_t id) const;
+  float OutsideLift() const;
+  bool PartCentres() const;
+  // Packets (env_queue.cpp, env_flight.cpp).
   void Forward(PacketHeader header, const MaskBits& mask, const MaskBits* routes = nullptr);
   int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
   MaskBits ScratchMask(uint32_t k) const;
@@ -234,8 +180,6 @@ class Environment {
   void FillFlightCols();
   // Receiving (env_receive.cpp).
   void Receive(uint32_t j, const double share[3], const glm::vec3& x);
-  uint32_t Descend(uint32_t patch, glm::vec2* st, uint8_t* path, uint32_t* depth) const;
-  void MaybeSplit(uint32_t j, uint32_t e, const uint8_t* path, uint32_t depth);
 
   uint32_t index_ = 0;
   EnvGrid envGrid_;  // the partition (grid_ is the ray-casting grid)
@@ -256,22 +200,12 @@ class Environment {
   Span<PatchEnergy> energy_;
   Span<uint32_t> shotCount_;
   Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
-  Span<Element> elements_;       // roots first (element i is patch i's), then the pool
-  uint32_t nextElement_ = 0;
-  // directPerPixel(), 3 channels: per element the power received from shots
-  // other than emission, per patch the emission not yet shot, and the
-  // current shot's share that is emission; 1 per patch of a smoothed polygon.
-  Span<double> indirect_;
-  Span<double> emitLeft_;
-  double shotDirect_[3] = {0, 0, 0};
-  Span<uint8_t> smoothPatch_;
-  bool displayIndirect_ = false;
-  DirectLight direct_;
+  ElementTree elements_;
+  DirectBook direct_;
   DisplayLattice lattice_;
   Grid grid_;
   MaxTree tree_;
-  Span<Outside> outside_;
-  uint32_t numOutside_ = 0;
+  OutsideSet outside_;
   // Exchange state: empty for an environment without neighbours.
   ForeignQueue queue_;
   Span<uint64_t> scratchWords_;  // working masks (ScratchMask)

@@ -1,0 +1,63 @@
+// DirectBook: an environment's bookkeeping for per-pixel direct light
+// (--direct-samples; docs/design/direct-light.md): per patch the emission
+// not yet shot, the share of the current shot that is emission (3
+// channels), which patches belong to a smoothed polygon (they show the
+// solved whole), whether the image shows the indirect part, and the
+// emitters the pixels gather from. Carved from the environment's arena
+// (Layout); it holds nothing without per-pixel direct light.
+#pragma once
+#include <cstdint>
+
+#include "vismask/core/arena.h"
+#include "vismask/core/span.h"
+#include "vismask/display/direct.h"
+#include "vismask/solve/display_lattice.h"
+#include "vismask/solve/patch.h"
+
+namespace vismask {
+
+class DirectBook {
+ public:
+  // With `on`, room for `numPatches` patches' unshot emission, their
+  // smoothed-polygon flags (with `smooth`) and the emitters `counts`
+  // (also from a measuring arena).
+  void Layout(Arena& arena, uint32_t numPatches, bool on, bool smooth,
+              const DirectLight::Counts& counts);
+  // The emitters from `patches`, and which of them have a smooth vertex of
+  // `lattice` (init: uses the heap).
+  void Build(Span<const Patch> patches, const DisplayLattice& lattice);
+  // Patch i's emission still unshot is all of `unshot` (a solve's start).
+  void ResetPatch(uint32_t i, const double unshot[3]) {
+    if (!emitLeft_.empty())
+      for (int c = 0; c < 3; ++c) emitLeft_[3 * size_t(i) + c] = unshot[c];
+  }
+  // Local patch i shoots `power` (channel c) of its `unshot`, a part
+  // `fraction` of it: the shot's emission share, in proportion to the
+  // emission in its unshot power, and the emission left.
+  void BookLocalShot(uint32_t i, int c, double unshot, double power, double fraction);
+  // A foreign shot's light is indirect here (per-pixel direct light runs
+  // with one environment only: DESIGN, Direct light per pixel).
+  void BookForeignShot() {
+    for (double& d : shotDirect_) d = 0.0;
+  }
+  double shotDirect(int c) const { return shotDirect_[c]; }
+  void EmissionUnshot(double out[3]) const;
+
+  void SetShowIndirect(bool on) { showIndirect_ = on; }
+  bool showIndirect() const { return showIndirect_; }
+  // Patch i shows its indirect part: shown so, and not of a smoothed polygon.
+  bool ShowsIndirect(uint32_t i) const {
+    return showIndirect_ && (smoothPatch_.empty() || !smoothPatch_[i]);
+  }
+  const DirectLight& light() const { return light_; }
+
+ private:
+  bool on_ = false;
+  Span<double> emitLeft_;
+  double shotDirect_[3] = {0, 0, 0};
+  Span<uint8_t> smoothPatch_;  // 1 per patch of a smoothed polygon
+  bool showIndirect_ = false;
+  DirectLight light_;
+};
+
+}  // namespace vismask

@@ -1,0 +1,64 @@
+// ElementTree: the receivers under an environment's patches, a quadtree per
+// patch (element.h): the roots first (element i is patch i's), then a pool
+// that splits draw four children at a time from, and with per-pixel direct
+// light each element's indirect power. Carved from the environment's arena
+// (Layout).
+#pragma once
+#include <cstdint>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "vismask/core/arena.h"
+#include "vismask/core/span.h"
+#include "vismask/solve/element.h"
+#include "vismask/solve/patch.h"
+
+namespace vismask {
+
+class ElementTree {
+ public:
+  // Room for `numPatches` roots and options.perPatch pool elements a patch,
+  // and with `indirect` three channels of indirect power each (also from a
+  // measuring arena).
+  void Layout(Arena& arena, uint32_t numPatches, const ElementOptions& options, bool indirect);
+  // Every patch a single leaf of its area, the pool unused, no indirect power.
+  void Reset(Span<const Patch> patches);
+
+  Element& operator[](uint32_t e) { return elements_[e]; }
+  const Element& operator[](uint32_t e) const { return elements_[e]; }
+  size_t size() const { return elements_.size(); }
+  Span<const Element> all() const { return elements_; }
+  uint32_t used() const { return used_; }
+  // Checkpoint: the elements used, beside the arena's bytes (which hold them).
+  void SetUsed(uint32_t used) { used_ = used; }
+
+  // The leaf of patch `patch` (a triangle or not) holding `st`, which is
+  // left in the leaf's own parameters; with `path`, the children taken are
+  // appended there (*depth of them, at most the element depth).
+  uint32_t Descend(bool triangle, uint32_t patch, glm::vec2* st, uint8_t* path,
+                   uint32_t* depth) const;
+  // What MaybeSplit did.
+  enum class Split { kNone, kSplit, kRefused };
+  // Splits leaf `e` of patch `p` (reached from the root by the children
+  // `path[0..depth)`) if its quarters differ beyond noise; kRefused when
+  // the pool is used up.
+  Split MaybeSplit(const Patch& p, uint32_t e, const uint8_t* path, uint32_t depth);
+
+  // Per-pixel direct light: leaf e's indirect power (W, channel c), added
+  // to; and its indirect radiosity (0 without).
+  bool hasIndirect() const { return !indirect_.empty(); }
+  void AddIndirect(uint32_t e, int c, double power) { indirect_[3 * size_t(e) + c] += power; }
+  glm::dvec3 Indirect(uint32_t e) const {
+    if (indirect_.empty()) return glm::dvec3(0.0);
+    return glm::dvec3(indirect_[3 * e], indirect_[3 * e + 1], indirect_[3 * e + 2]) /
+           static_cast<double>(elements_[e].area);
+  }
+
+ private:
+  ElementOptions options_;
+  Span<Element> elements_;
+  Span<double> indirect_;
+  uint32_t used_ = 0;
+};
+
+}  // namespace vismask

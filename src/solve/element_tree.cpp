@@ -1,0 +1,101 @@
+// ElementTree: its layout, reset, descent and splits.
+#include "vismask/solve/element_tree.h"
+
+#include <cmath>
+#include <glm/geometric.hpp>
+
+namespace vismask {
+
+void ElementTree::Layout(Arena& arena, uint32_t numPatches, const ElementOptions& options,
+                         bool indirect) {
+  options_ = options;
+  elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options.perPatch));
+  indirect_ = arena.Alloc<double>(indirect ? 3 * size_t(numPatches) * (1 + options.perPatch) : 0);
+}
+
+void ElementTree::Reset(Span<const Patch> patches) {
+  for (uint32_t i = 0; i < patches.size(); ++i) {
+    if (!indirect_.empty())
+      for (int c = 0; c < 3; ++c) indirect_[3 * i + c] = 0.0;
+    Element& root = elements_[i];
+    root = Element{};
+    root.area = patches[i].area;
+    root.child = kNoElement;
+  }
+  used_ = static_cast<uint32_t>(patches.size());
+}
+
+ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uint8_t* path,
+                                           uint32_t depth) {
+  const bool triangle = p.numCorners == 3;
+  Element& el = elements_[e];
+  // The element's corners in the patch's parameters, down its path.
+  glm::vec2 corners[4], next[4];
+  int n = RootCorners(triangle, corners);
+  for (uint32_t d = 0; d < depth; ++d) {
+    ChildCorners(triangle, corners, path[d], next);
+    for (int k = 0; k < n; ++k) corners[k] = next[k];
+  }
+  // Each quarter's area, from its corners on the patch.
+  double quarterArea[4];
+  for (uint32_t q = 0; q < 4; ++q) {
+    ChildCorners(triangle, corners, q, next);
+    glm::vec3 w[4];
+    for (int k = 0; k < n; ++k) w[k] = PatchPoint(p, next[k]);
+    glm::vec3 cr =
+        n == 3 ? glm::cross(w[1] - w[0], w[2] - w[0]) : glm::cross(w[2] - w[0], w[3] - w[1]);
+    quarterArea[q] = 0.5 * glm::length(glm::dvec3(cr));
+  }
+  double areaSum = quarterArea[0] + quarterArea[1] + quarterArea[2] + quarterArea[3];
+  double power[4], total = 0.0;
+  for (uint32_t q = 0; q < 4; ++q) {
+    power[q] = el.quarter[q][0] + el.quarter[q][1] + el.quarter[q][2];
+    total += power[q];
+  }
+  if (!(total > 0.0) || !(el.squares > 0.0)) return Split::kNone;
+  // Against an even spread, quarter q expects f_q = area_q / area of the
+  // power, with variance f_q * (sum of the hits' squared powers).
+  double chi2 = 0.0, spread = 0.0;
+  for (uint32_t q = 0; q < 4; ++q) {
+    double f = quarterArea[q] / areaSum, expect = f * total;
+    chi2 += (power[q] - expect) * (power[q] - expect) / (f * el.squares);
+    double rel = power[q] / expect - 1.0;
+    spread += f * rel * rel;
+  }
+  if (chi2 <= options_.chi2 || std::sqrt(spread) <= options_.threshold) return Split::kNone;
+  if (used_ + 4 > elements_.size()) return Split::kRefused;
+  uint32_t first = used_;
+  used_ += 4;
+  for (uint32_t q = 0; q < 4; ++q) {
+    Element& ch = elements_[first + q];
+    ch = Element{};
+    ch.area = static_cast<float>(quarterArea[q] * (el.area / areaSum));
+    ch.child = kNoElement;
+    ch.depth = el.depth + 1;
+    for (int c = 0; c < 3; ++c) {
+      double older = el.received[c] -
+                     (el.quarter[0][c] + el.quarter[1][c] + el.quarter[2][c] + el.quarter[3][c]);
+      ch.received[c] = older * (quarterArea[q] / areaSum) + el.quarter[q][c];
+      // The indirect part in the same proportion as the whole.
+      if (!indirect_.empty())
+        indirect_[3 * size_t(first + q) + c] =
+            el.received[c] > 0.0 ? indirect_[3 * size_t(e) + c] * (ch.received[c] / el.received[c])
+                                 : 0.0;
+    }
+  }
+  el.child = first;
+  return Split::kSplit;
+}
+
+uint32_t ElementTree::Descend(bool triangle, uint32_t patch, glm::vec2* st, uint8_t* path,
+                              uint32_t* depth) const {
+  uint32_t e = patch;
+  while (elements_[e].child != kNoElement) {
+    uint32_t k = ChildOf(triangle, st);
+    if (path) path[(*depth)++] = static_cast<uint8_t>(k);
+    e = elements_[e].child + k;
+  }
+  return e;
+}
+
+}  // namespace vismask
