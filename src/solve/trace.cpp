@@ -174,8 +174,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   const bool marks = masks && out && options_.maskMethod != MaskMethod::kB;
   MaskBits hitPixels, passedPixels;
   if (methodC) {
-    hitPixels = ScratchMask(2);
-    passedPixels = ScratchMask(3);
+    hitPixels = exchange_.ScratchMask(2);
+    passedPixels = exchange_.ScratchMask(3);
     hitPixels.SetAllClosed();
     passedPixels.SetAllClosed();
   }
@@ -200,11 +200,11 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
       float t0, t1;
       if (!Slabs(ray, box_, &t0, &t1)) continue;  // never passes through here
       if (masks) {
-        pixel = EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_);
+        pixel = EntryPixel(ray, t0, centre, sampler.frame, local, exchange_.directions());
         if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
       }
     } else if (marks) {
-      pixel = maskDirections_.CosinePixel(u[4], local);
+      pixel = exchange_.directions().CosinePixel(u[4], local);
     }
     ++tally.traced;
     Hit hit;
@@ -233,7 +233,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // whichever pixels a shot decides, so a pixel means the same to every
   // shot that reads it from the cache.
   if (masks && out && options_.maskMethod == MaskMethod::kB && (read || known)) {
-    MaskBits decide = ScratchMask(3);
+    MaskBits decide = exchange_.ScratchMask(3);
     decide.CopyFrom(*out);
     if (read) decide.And(*read);
     if (known) {
@@ -287,14 +287,14 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
   const CentreRays rays{centre + CentreLift(shooter.globalId) * sampler.frame.n, sampler.frame,
-                        &maskDirections_};
+                        &exchange_.directions()};
   // From inside this box, a direction that cannot leave through a face
   // with a neighbour beyond it reaches no other environment: nobody
   // downstream reads its pixel, which closes without a ray.
   bool inside = true;
   for (int a = 0; a < 3; ++a) inside &= centre[a] >= box_.lo[a] && centre[a] <= box_.hi[a];
-  if (inside && numExits_ < 6)
-    stats_.maskNoExit += KeepExits(Span<const Patch>(exits_, numExits_), rays, mask);
+  if (inside && exchange_.exits().size() < 6)
+    stats_.maskNoExit += KeepExits(exchange_.exits(), rays, mask);
   uint32_t cast = mask->CountOpen();
   stats_.maskRays += cast;
   // By patch or by ray, whichever costs less (the same bits either way):
@@ -323,7 +323,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
 // a miss), which Distribute adds to.
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
   bool miss = false;
-  if (!cache_.Find(i, centre, known, &miss)) return false;
+  if (!exchange_.cache().Find(i, centre, known, &miss)) return false;
   if (miss && !PartCentres()) CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
   return true;
 }

@@ -15,16 +15,14 @@
 #include "vismask/core/arena.h"
 #include "vismask/core/span.h"
 #include "vismask/scene/mesh.h"
-#include "vismask/solve/centre_mask_cache.h"
 #include "vismask/solve/direct_book.h"
 #include "vismask/solve/display_lattice.h"
 #include "vismask/solve/element_tree.h"
 #include "vismask/solve/env_options.h"
-#include "vismask/solve/foreign_queue.h"
+#include "vismask/solve/exchange_state.h"
 #include "vismask/solve/ledger.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/max_tree.h"
-#include "vismask/solve/outbox.h"
 #include "vismask/solve/outside_set.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
@@ -62,11 +60,11 @@ class Environment {
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
   // Packets: this round's, their delivery (env_queue.cpp), their share here.
-  const Outbox& outbox() const { return outbox_; }
-  void ClearOutbox() { outbox_.Clear(); }
+  const Outbox& outbox() const { return exchange_.outbox(); }
+  void ClearOutbox() { exchange_.outbox().Clear(); }
   void Deliver(const uint8_t* packet);
   double FlightShareAt(const uint8_t* packet) const;
-  uint32_t queuedCount() const { return queue_.count(); }
+  uint32_t queuedCount() const { return exchange_.queue().count(); }
   // The power booked as shot but not yet delivered (env_flight.cpp).
   void FlightPower(double power[3]) const;
 
@@ -172,12 +170,8 @@ class Environment {
   // Packets (env_queue.cpp, env_flight.cpp).
   void Forward(PacketHeader header, const MaskBits& mask, const MaskBits* routes = nullptr);
   int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
-  MaskBits ScratchMask(uint32_t k) const;
-  MaskBits RouteMask(int face) const { return ScratchMask(2 + static_cast<uint32_t>(face)); }
   double FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
                      const int to[3]) const;
-  uint32_t FlightRes() const;
-  void FillFlightCols();
   // Receiving (env_receive.cpp).
   void Receive(uint32_t j, const double share[3], const glm::vec3& x);
 
@@ -185,12 +179,9 @@ class Environment {
   EnvGrid envGrid_;  // the partition (grid_ is the ray-casting grid)
   int cell_[3] = {0, 0, 0};
   Bounds box_;
-  Patch exits_[6] = {};  // the faces of box_ another environment lies beyond (KeepExits)
-  uint32_t numExits_ = 0;
   uint32_t numNeighbours_ = 0;
   EnvOptions options_;
   MaskShape shape_;
-  MaskDirections maskDirections_;  // B and C with neighbours: the pixels' centre rays
   uint32_t packetBytes_ = 0;
   Arena arena_ = Arena::Measure();
   Span<Patch> patches_;
@@ -206,12 +197,7 @@ class Environment {
   Grid grid_;
   MaxTree tree_;
   OutsideSet outside_;
-  // Exchange state: empty for an environment without neighbours.
-  ForeignQueue queue_;
-  Span<uint64_t> scratchWords_;  // working masks (ScratchMask)
-  CentreMaskCache cache_;
-  Outbox outbox_;
-  Span<double> flightCols_;  // FlightShare: cos(phi), sin(phi) of each column's centre
+  ExchangeState exchange_;  // empty for an environment without neighbours
   uint32_t newForwards_ = 0;
   double readPerRay_ = 0.0, allCost_ = 0.0;  // FillReadCosts
   bool mayRead_ = false;
