@@ -33,8 +33,8 @@ void ExchangeState::Layout(Arena& arena, const EnvOptions& options, uint32_t num
                         : partCentres                          ? 4
                                                                : 2;
   scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape.words());
-  const bool centreRays = neighbours && (options.maskMethod == MaskMethod::kB ||
-                                         options.maskMethod == MaskMethod::kC);
+  const bool centreRays =
+      neighbours && (options.maskMethod == MaskMethod::kB || options.maskMethod == MaskMethod::kC);
   // The pixels' centre directions: B's and C's centre rays, and FlightShare for A, B and C.
   maskDirections_.Layout(arena, neighbours ? shape.res : 0);
   // FlightShare's column directions: (cos, sin) of each column's phi.
