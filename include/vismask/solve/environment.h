@@ -83,13 +83,9 @@ class Environment {
   // Per-pixel direct light (--direct-samples; DirectBook).
   bool directPerPixel() const { return options_.directSamples > 0; }
   void SetDisplayIndirect(bool on) { direct_.SetShowIndirect(on && directPerPixel()); }
-  bool displayIndirect() const { return direct_.showIndirect(); }
-  bool ShowsIndirect(uint32_t i) const { return direct_.ShowsIndirect(i); }
+  const DirectBook& direct() const { return direct_; }
   uint32_t directSamples() const { return options_.directSamples; }
-  const DirectLight& directLight() const { return direct_.light(); }
   float rayEpsilon() const { return options_.rayEpsilon; }
-  glm::dvec3 Indirect(uint32_t e) const { return elements_.Indirect(e); }
-  void EmissionUnshot(double out[3]) const { direct_.EmissionUnshot(out); }
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return packetBytes_; }
