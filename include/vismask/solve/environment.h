@@ -76,10 +76,6 @@ class Environment {
   uint32_t elementsUsed() const { return elements_.used(); }
   const DisplayLattice& lattice() const { return lattice_; }
   DisplayLattice& lattice() { return lattice_; }
-  Span<const glm::vec3> vertices() const { return lattice_.vertices(); }
-  Span<const glm::vec3> vertexRadiosity() const { return lattice_.radiosity(); }
-  Span<const SmoothVertex> smoothVertices() const { return lattice_.smoothVertices(); }
-  uint32_t numSharedVertices() const { return lattice_.numShared(); }
   // Per-pixel direct light (--direct-samples; DirectBook).
   bool directPerPixel() const { return options_.directSamples > 0; }
   void SetDisplayIndirect(bool on) { direct_.SetShowIndirect(on && directPerPixel()); }
