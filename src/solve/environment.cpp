@@ -89,8 +89,8 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   // queue and the rest, footprint_.queue and .packets); PartCentres needs
   // the read costs.
   FillReadCosts(numPatches);
-  exchange_.Layout(arena, options_, numPatches, numNeighbours_ > 0, shape_, packetBytes_,
-                   PartCentres(), &footprint_);
+  exchange_.Layout(arena, options_, numPatches, numNeighbours_ > 0, shape_,
+                   numNeighbours_ > 0 ? PacketBytes(shape_) : 0, PartCentres(), &footprint_);
   footprint_.total = ArenaRoundUp(arena.used());
   footprint_.numPatches = numPatches;
   footprint_.gridCells = uint64_t(plan.res[0]) * plan.res[1] * plan.res[2];
@@ -194,7 +194,6 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   exchange_.FindExits(grid, cell_, box_);
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
                               : MaskShape{};
-  packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   staged_ = std::make_unique<Staged>();
   OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
                   &staged_->outside);

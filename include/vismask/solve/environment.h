@@ -59,12 +59,11 @@ class Environment {
   // A centre ray's work: the integer cube root of the grid's cells, at least 1.
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
-  // Packets: this round's, their delivery (env_queue.cpp), their share here.
-  const Outbox& outbox() const { return exchange_.outbox(); }
+  // Packets: the exchange state (its outbox), delivery (env_queue.cpp), share here.
+  const ExchangeState& exchange() const { return exchange_; }
   void ClearOutbox() { exchange_.outbox().Clear(); }
   void Deliver(const uint8_t* packet);
   double FlightShareAt(const uint8_t* packet) const;
-  uint32_t queuedCount() const { return exchange_.queue().count(); }
   // The power booked as shot but not yet delivered (env_flight.cpp).
   void FlightPower(double power[3]) const;
 
@@ -84,7 +83,7 @@ class Environment {
   float rayEpsilon() const { return options_.rayEpsilon; }
 
   uint32_t index() const { return index_; }
-  uint32_t packetBytes() const { return packetBytes_; }
+  uint32_t packetBytes() const { return exchange_.outbox().packetBytes(); }
   bool hasNeighbours() const { return numNeighbours_ > 0; }
   const Bounds& box() const { return box_; }
   Span<const Patch> patches() const { return patches_; }
@@ -174,7 +173,6 @@ class Environment {
   uint32_t numNeighbours_ = 0;
   EnvOptions options_;
   MaskShape shape_;
-  uint32_t packetBytes_ = 0;
   Arena arena_ = Arena::Measure();
   Span<Patch> patches_;
   Span<PatchGeom> geom_;
