@@ -14,6 +14,7 @@
 #include "vismask/solve/environment.h"
 #include "vismask/solve/rng.h"
 #include "vismask/solve/sampling.h"
+#include "vismask/solve/work.h"
 
 namespace vismask {
 

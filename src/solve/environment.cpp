@@ -255,6 +255,12 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   return footprint_;
 }
 
+void Environment::Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
+                       const std::vector<uint32_t>& ids, const EnvOptions& options) {
+  Prepare(grid, index, mesh, ids, options);
+  Build();
+}
+
 bool Environment::Build() {
   uint32_t n = static_cast<uint32_t>(staged_->patches.size());
   if (!Arena::Reserve(footprint_.total, &arena_)) return false;

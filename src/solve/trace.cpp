@@ -224,7 +224,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     Hit hit;
     if (!grid_.Intersect(ray, skip, &hit)) {
       if (methodC) passedPixels.Open(pixel);
-      if (LeavesScene(ray))
+      if (ExitFace(ray) < 0)  // leaves the scene
         for (int c = 0; c < 3; ++c) tally.lost[c] += shot.share[c];
       continue;
     }

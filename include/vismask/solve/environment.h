@@ -1,10 +1,10 @@
 // Environment: the unit that owns memory. One local environment holds its own
 // patches (geometry, material, energy), its own uniform grid over them, its
-// own shooter-selection tree, its queue of foreign shooters and its packet
-// buffers, all carved from one arena sized exactly at init. A
-// single-environment run is one of these with no neighbours; it reserves no
-// queue, mask or packet bytes. No environment reads another's geometry: what
-// it knows of a foreign shooter is what its packet carries.
+// own shooter-selection tree and its exchange state (ExchangeState: foreign
+// shooters queued, packet buffers), all carved from one arena sized exactly
+// at init. A single-environment run is one of these with no neighbours; it
+// reserves no queue, mask or packet bytes. No environment reads another's
+// geometry: what it knows of a foreign shooter is what its packet carries.
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
@@ -27,7 +27,6 @@
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
-#include "vismask/solve/work.h"
 
 namespace vismask {
 
@@ -40,15 +39,12 @@ class Environment {
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
 
-  // Init in two halves (environment.cpp): Prepare measures, Build makes the arena.
+  // Init in two halves (environment.cpp): Prepare measures, Build makes the arena (Init: both).
   const EnvFootprint& Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                               const std::vector<uint32_t>& ids, const EnvOptions& options);
   bool Build();
   void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh, const std::vector<uint32_t>& ids,
-            const EnvOptions& options) {
-    Prepare(grid, index, mesh, ids, options);
-    Build();
-  }
+            const EnvOptions& options);
   const EnvFootprint& footprint() const { return footprint_; }
   // Emission: B = Ke, unshot power = Ke * area; ledger and queue restart.
   void Reset();
@@ -106,9 +102,7 @@ class Environment {
   // Checkpoint and resume between rounds (checkpoint.h; environment.cpp).
   EnvState SaveState() const;
   bool RestoreState(const EnvState& s);
-  Span<const uint8_t> arenaBytes() const {
-    return Span<const uint8_t>(arena_.data(), arena_.capacity());
-  }
+  Span<const uint8_t> arenaBytes() const { return {arena_.data(), arena_.capacity()}; }
   Span<uint8_t> mutableArenaBytes() { return Span<uint8_t>(arena_.data(), arena_.capacity()); }
 
   // --max-seconds's plan (trace.cpp), and the power a ray carries.
@@ -144,7 +138,6 @@ class Environment {
   void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
   void Book(const ShotTally& tally);
   int ExitFace(const Ray& ray) const;
-  bool LeavesScene(const Ray& ray) const { return ExitFace(ray) < 0; }
   // Centre rays (B, C; trace.cpp) and B's reading shots (env_read.cpp).
   void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
   bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
