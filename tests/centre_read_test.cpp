@@ -61,8 +61,9 @@ Shots Follow(const EnvGrid& grid, int source, CentreChoice choice, int shots, ui
   for (int s = 0; s < shots; ++s) {
     std::vector<std::vector<uint8_t>> pending;
     auto take = [&](Environment* e) {
-      for (uint32_t k = 0; k < e->outbox().count(); ++k) {
-        const uint8_t* p = e->outbox().Packet(k);
+      const Outbox& outbox = e->exchange().outbox();
+      for (uint32_t k = 0; k < outbox.count(); ++k) {
+        const uint8_t* p = outbox.Packet(k);
         pending.emplace_back(p, p + e->packetBytes());
         const PacketHeader h = ReadHeader(p);
         out.readShots += (h.flags & kReadsOnly) != 0;

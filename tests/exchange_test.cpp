@@ -66,10 +66,11 @@ TEST(ExchangeTest, RoundTotalsAreThoseAfterDelivery) {
       for (uint32_t i = 0; i < 4; ++i)
         envs.ptrs[i]->RunRound(8, AdmittedForwards(round, i, 4, queue, totals.maxOutstanding), 0);
       for (Environment* e : envs.ptrs) {
-        sent += e->outbox().count();
+        const Outbox& outbox = e->exchange().outbox();
+        sent += outbox.count();
         // The share the sender put in each packet is the receiver's own.
-        for (uint32_t k = 0; k < e->outbox().count(); ++k) {
-          const uint8_t* packet = e->outbox().Packet(k);
+        for (uint32_t k = 0; k < outbox.count(); ++k) {
+          const uint8_t* packet = outbox.Packet(k);
           PacketHeader h = ReadHeader(packet);
           float own = method == MaskMethod::kR
                           ? 0.0f

@@ -156,8 +156,8 @@ int GatherLoads(RunState* r, int code, GlbMesh* exportMesh) {
   };
   LoadReport mine{code, 0, 0, 0, 0, 0};
   for (auto& e : r->envs) {
-    mine.shared += e->numSharedVertices();
-    mine.smooth += e->smoothVertices().size();
+    mine.shared += e->lattice().numShared();
+    mine.smooth += e->lattice().smoothVertices().size();
     mine.twins += e->numTwins();
     mine.vertices += e->footprint().numVertices;
     mine.triangles += e->footprint().numTriangles;

@@ -80,10 +80,10 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
     // (LeafRadiosity), interpolated as the whole was; the direct part is
     // gathered at each shaded point.
     DirectHook hook;
-    const bool direct = facing && env.ShowsIndirect(i) && !env.directLight().empty();
+    const bool direct = facing && env.direct().ShowsIndirect(i) && !env.direct().light().empty();
     if (direct) {
       constexpr float kInvPi = 0.318309886183790672f;
-      hook.light = &env.directLight();
+      hook.light = &env.direct().light();
       hook.grid = &env.grid();
       hook.patch = i;
       hook.twin = env.twinOf(i);

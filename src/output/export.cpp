@@ -8,10 +8,10 @@ namespace vismask::run {
 // (RenderImage).
 GlbMesh ExportMeshOf(const Environment& env) {
   GlbMesh m;
-  Span<const glm::vec3> v = env.vertices();
+  Span<const glm::vec3> v = env.lattice().vertices();
   m.vertices = v.size();
   for (const Patch& p : env.patches()) m.triangles += p.numCorners == 4 ? 2 : 1;
-  Span<const glm::vec3> b = env.vertexRadiosity();
+  Span<const glm::vec3> b = env.lattice().radiosity();
   for (size_t i = 0; i < v.size(); ++i) {
     const glm::vec3 radiance = DisplayRadiance(b[i]);
     for (int a = 0; a < 3; ++a) {
@@ -101,8 +101,8 @@ void WriteExport(RunState* r) {
   const float scale = GlbRadianceScale(whole);
   Stream vertices(r, kGlbVertexBytes);
   for (Environment* env : r->envPtrs) {
-    Span<const glm::vec3> pos = env->vertices();
-    Span<const glm::vec3> b = env->vertexRadiosity();
+    Span<const glm::vec3> pos = env->lattice().vertices();
+    Span<const glm::vec3> b = env->lattice().radiosity();
     for (size_t v = 0; v < pos.size(); ++v)
       PutGlbVertex(pos[v], DisplayRadiance(b[v]), scale, vertices.Next());
   }
@@ -119,7 +119,7 @@ void WriteExport(RunState* r) {
       if (p.numCorners == 4)
         PutGlbTriangle(base + v[0], base + v[2], base + v[3], triangles.Next());
     }
-    firstVertex += env->vertices().size();
+    firstVertex += env->lattice().vertices().size();
   }
   triangles.Flush();
   if (r->isRoot())

@@ -35,8 +35,8 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
       RankEnvs re = EnvsOfRank(total, ranks, q);
       uint64_t shared = 0;
       for (uint32_t e = re.first; e < re.first + re.count; ++e) {
-        shared += envs[e]->numSharedVertices();
-        r.anySmooth |= !envs[e]->smoothVertices().empty();
+        shared += envs[e]->lattice().numShared();
+        r.anySmooth |= !envs[e]->lattice().smoothVertices().empty();
       }
       r.sharedCapacity = std::max(r.sharedCapacity, shared);
     }

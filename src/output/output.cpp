@@ -265,7 +265,7 @@ int WriteOutputs(RunState* r, const SolveResult& res) {
     s.arenaBytes = e.arenaCapacity();
     s.work = e.workSteps();
     s.patches = e.patches().size();
-    s.vertices = e.vertices().size();
+    s.vertices = e.lattice().vertices().size();
     s.gridCells = e.grid().cellCount();
     s.gridRefs = e.grid().plan().refs;
     s.elementsUsed = e.elementsUsed();

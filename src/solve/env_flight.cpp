@@ -16,37 +16,12 @@ void Environment::FlightPower(double power[3]) const {
   const bool methodR = options_.maskMethod == MaskMethod::kR;
   for (int c = 0; c < 3; ++c) power[c] = methodR ? ledger_.inFlight[c] : 0.0;
   if (methodR) return;
-  queue_.AddFlightPower(power);
+  exchange_.queue().AddFlightPower(power);
   // The packets not yet delivered: their receivers' shares (Forward).
-  for (uint32_t k = 0; k < outbox_.count(); ++k) {
-    PacketHeader h = ReadHeader(outbox_.Packet(k));
+  const Outbox& outbox = exchange_.outbox();
+  for (uint32_t k = 0; k < outbox.count(); ++k) {
+    PacketHeader h = ReadHeader(outbox.Packet(k));
     for (int c = 0; c < 3; ++c) power[c] += h.power[c] * h.flightShare;
-  }
-}
-
-// Without a mask, FlightShare looks at directions on a hemisphere of this resolution.
-constexpr uint32_t kNoMaskRes = 16;
-
-// FlightShare's hemisphere resolution (the mask's, or kNoMaskRes without
-// one) and its table of column directions, made once.
-uint32_t Environment::FlightRes() const {
-  return shape_.empty() ? kNoMaskRes : shape_.res;
-}
-
-void Environment::FillFlightCols() {
-  if (flightCols_.empty()) return;
-  // A rotation by one column's angle per column, from half a column: the
-  // very recurrence FlightShare used to run in every row, so the same bits.
-  const uint32_t cols = 4 * FlightRes();
-  const double step = 6.283185307179586 / cols;
-  const double cs = std::cos(step), sn = std::sin(step);
-  double c = std::cos(0.5 * step), s = std::sin(0.5 * step);
-  for (uint32_t col = 0; col < cols; ++col) {
-    flightCols_[2 * col] = c;
-    flightCols_[2 * col + 1] = s;
-    double rc = c * cs - s * sn;
-    s = s * cs + c * sn;
-    c = rc;
   }
 }
 
@@ -62,10 +37,10 @@ double Environment::FlightShareAt(const uint8_t* packet) const {
 // from h.fromEnv into the receiver's `box` (at grid cell `to`). Worked out
 // by the sender (Forward), with the receiver's box as the receiver makes
 // it (EnvGrid::EnvBox); every environment has the same tables
-// (maskDirections_, flightCols_).
+// (ExchangeState's directions and flight columns).
 double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
                                 const int to[3]) const {
-  const uint32_t res = FlightRes(), cols = 4 * res;
+  const uint32_t res = exchange_.flightRes(), cols = 4 * res;
   int from[3];
   envGrid_.Cell(static_cast<int>(h.fromEnv), from);
   int axis = 0;
@@ -81,7 +56,7 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, cons
   centre /= static_cast<float>(shooter.numCorners);
   const glm::vec3 o = centre + CentreLift(shooter.globalId) * f.n;
   const double halfPi = 1.5707963267948966;
-  const double* colCs = flightCols_.data();
+  const double* colCs = exchange_.flightCols();
   auto isOpen = [bits](uint32_t p) { return !bits || ((bits[p >> 3] >> (p & 7)) & 1u); };
   // Whether the centre direction of (row, col) crosses the face into this box.
   auto crosses = [&](double st, double ct, uint32_t col) {
@@ -102,9 +77,9 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, cons
   // than the rounding of `crosses` are counted without it (the same count:
   // tests/env_test.cpp).
   PolygonView view;
-  const CentreRays rays{o, f, &maskDirections_};
+  const CentreRays rays{o, f, &exchange_.directions()};
   const bool framed =
-      bits && maskDirections_.res() == res &&
+      bits && exchange_.directions().res() == res &&
       FaceView(BoxFace(box, axis, from[axis] < to[axis] ? 0 : 1), rays, 1e-7, 1e-7, &view);
   double share = 0.0;
   for (uint32_t row = 0; row < res; ++row) {

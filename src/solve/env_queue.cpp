@@ -14,16 +14,9 @@
 #include "vismask/solve/environment.h"
 #include "vismask/solve/rng.h"
 #include "vismask/solve/sampling.h"
+#include "vismask/solve/work.h"
 
 namespace vismask {
-
-// Method C's two working masks: pixels some ray hit in, and pixels some ray
-// passed unoccluded. R's route masks (RouteMask), one a face of the box
-// (2 * axis + (step > 0)), follow the first two.
-MaskBits Environment::ScratchMask(uint32_t k) const {
-  size_t w = shape_.words();
-  return MaskBits(scratchWords_.subspan(k * w, w), shape_);
-}
 
 // The grid cells downstream of this environment for a shooter from
 // `sourceEnv` (at most 6, into `next`), and how many there are.
@@ -61,7 +54,7 @@ void Environment::Forward(PacketHeader h, const MaskBits& mask, const MaskBits* 
     for (int a = 0; a < 3; ++a)
       if (c[a] != cell_[a]) face = 2 * a + (c[a] > cell_[a]);
     if (routes && routes[face].CountOpen(0, h.rays) == 0) continue;
-    uint8_t* packet = outbox_.Add();
+    uint8_t* packet = exchange_.outbox().Add();
     h.toEnv = static_cast<uint32_t>(envGrid_.Index(c[0], c[1], c[2]));
     if (routes) {
       routes[face].Pack(MaskBytes(packet), h.rays);
@@ -115,13 +108,13 @@ void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uin
     Distribute(p, skip, power, key, rays, nullptr, nullptr);
     return;
   }
-  MaskBits out = ScratchMask(0);
+  MaskBits out = exchange_.ScratchMask(0);
   out.SetAllOpen();
   PacketHeader shot = ShotHeader(p, power, key, shotIndex, index_, rays);
   if (options_.maskMethod == MaskMethod::kR) {
     out.CloseFrom(rays);  // bits past the shot's rays
     MaskBits routes[6];
-    for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
+    for (int f = 0; f < 6; ++f) routes[f] = exchange_.RouteMask(f);
     TraceAlive(p, skip, power, key, rays, false, out, routes);
     Forward(shot, out, routes);
   } else {
@@ -133,7 +126,7 @@ void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uin
     if (readOnly) {
       shot.flags |= kReadsOnly;
       ++stats_.readShots;
-      read = ScratchMask(2);
+      read = exchange_.ScratchMask(2);
       ReadPixels(shot, &read);
     }
     Distribute(p, skip, power, key, rays, nullptr, &out, hit ? &centre : nullptr, knownPixels,
@@ -173,9 +166,10 @@ void Environment::ShootOutside(uint32_t k) {
 
 void Environment::ShootForeign(uint32_t s) {
   direct_.BookForeignShot();  // a foreign shot's light is indirect here
-  const ForeignQueue::Slot& slot = queue_.slot(s);
-  MaskBits in = queue_.Mask(s);
-  MaskBits out = ScratchMask(0);
+  ForeignQueue& queue = exchange_.queue();
+  const ForeignQueue::Slot& slot = queue.slot(s);
+  MaskBits in = queue.Mask(s);
+  MaskBits out = exchange_.ScratchMask(0);
   if (options_.maskMethod != MaskMethod::kR) out.CopyFrom(in);  // R routes its rays instead
   Patch shooter = PatchFromHeader(slot.header);
   // The outgoing mask only where there is someone downstream to send it to
@@ -184,14 +178,14 @@ void Environment::ShootForeign(uint32_t s) {
   bool forward = Downstream(slot.header.sourceEnv, next) > 0;
   MaskBits routes[6];
   if (options_.maskMethod == MaskMethod::kR) {
-    for (int f = 0; f < 6; ++f) routes[f] = RouteMask(f);
+    for (int f = 0; f < 6; ++f) routes[f] = exchange_.RouteMask(f);
     TraceAlive(shooter, kNoPatch, slot.header.power, slot.header.shotKey, slot.header.rays, true,
                in, routes);
   } else {
     MaskBits read;
     const bool readOnly = forward && (slot.header.flags & kReadsOnly);
     if (readOnly) {
-      read = ScratchMask(2);
+      read = exchange_.ScratchMask(2);
       ReadPixels(slot.header, &read);
     }
     Distribute(shooter, kNoPatch, slot.header.power, ForeignStream(slot.header.shotKey, index_),
@@ -200,7 +194,7 @@ void Environment::ShootForeign(uint32_t s) {
   }
   ++stats_.foreignShots;
   if (forward) Forward(slot.header, out, options_.maskMethod == MaskMethod::kR ? routes : nullptr);
-  queue_.Release(s);
+  queue.Release(s);
 }
 
 // Delivery, in a fixed order (sender, then send order) for reproducible
@@ -218,7 +212,7 @@ void Environment::Deliver(const uint8_t* packet) {
     expected = 0;
     for (int a = 0; a < 3; ++a) expected += cell_[a] != source[a];
   }
-  queue_.Deliver(packet, h, options_.maskMethod, expected, ScratchMask(1));
+  exchange_.queue().Deliver(packet, h, options_.maskMethod, expected, exchange_.ScratchMask(1));
 }
 
 // The work rounds are measured in, counted, never timed (work.h): the
@@ -257,8 +251,9 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
       }
     }
     bool localOk = localKey > 0.0 && (numNeighbours_ == 0 || newForwards_ > 0);
-    int s = numNeighbours_ > 0 ? queue_.BestReady() : -1;
-    if (s >= 0 && (!localOk || queue_.slot(static_cast<uint32_t>(s)).key >= localKey)) {
+    const ForeignQueue& queue = exchange_.queue();
+    int s = numNeighbours_ > 0 ? queue.BestReady() : -1;
+    if (s >= 0 && (!localOk || queue.slot(static_cast<uint32_t>(s)).key >= localKey)) {
       ShootForeign(static_cast<uint32_t>(s));
     } else if (localOk && local == kOutsideIdBase) {
       ShootOutside(static_cast<uint32_t>(outside));

@@ -116,7 +116,7 @@ void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const PatchS
     Ray ray = MakeShotRay(sampler, h.shooterId, u, &local);
     float t0, t1;
     if (!Slabs(ray, box, &t0, &t1)) continue;
-    visit(EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_));
+    visit(EntryPixel(ray, t0, centre, sampler.frame, local, exchange_.directions()));
   }
 }
 

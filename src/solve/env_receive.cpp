@@ -59,7 +59,7 @@ uint32_t Environment::LeafAt(uint32_t patch, glm::vec2 st) const {
 
 // A leaf's display radiosity: emission + received / area + kd * ambient,
 // the reflected part scaled by PatchTexture::scale when textured; only the
-// indirect part when ShowsIndirect.
+// indirect part when DirectBook::ShowsIndirect.
 glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const {
   const Patch& p = patches_[patch];
   const Element& el = elements_[e];
@@ -67,8 +67,8 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
   const PatchTexture* t = patchTexture(patch);
   // Per-pixel direct light: the patch's indirect radiosity, every leaf alike
   // (the direct part, which has the detail, is gathered per pixel).
-  if (ShowsIndirect(patch)) {
-    glm::dvec3 ind = Indirect(e);
+  if (direct_.ShowsIndirect(patch)) {
+    glm::dvec3 ind = elements_.Indirect(e);
     for (int c = 0; c < 3; ++c)
       b[c] = static_cast<float>(static_cast<double>(p.ke[c]) +
                                 (ind[c] + p.kd[c] * ambient[c]) * (t ? t->scale[c] : 1.0f));

@@ -85,28 +85,12 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   part(&footprint_.textures);
   grid_.Layout(arena, plan);
   part(&footprint_.grid);
-  // Exchange buffers only where there is someone to exchange with.
-  uint32_t q = numNeighbours_ > 0 ? options_.queueCapacity : 0;
-  queue_.Layout(arena, q, shape_);
-  part(&footprint_.queue);
+  // Exchange buffers only where there is someone to exchange with (its
+  // queue and the rest, footprint_.queue and .packets); PartCentres needs
+  // the read costs.
   FillReadCosts(numPatches);
-  // Out and incoming; C's hit and passed, or B's read and decide; R's six route masks.
-  size_t scratchMasks = numNeighbours_ == 0                     ? 0
-                        : options_.maskMethod == MaskMethod::kR ? 8
-                        : PartCentres()                         ? 4
-                                                                : 2;
-  scratchWords_ = arena.Alloc<uint64_t>(scratchMasks * shape_.words());
-  const bool centreRays = numNeighbours_ > 0 && (options_.maskMethod == MaskMethod::kB ||
-                                                 options_.maskMethod == MaskMethod::kC);
-  // The pixels' centre directions: B's and C's centre rays, and FlightShare for A, B and C.
-  maskDirections_.Layout(arena, numNeighbours_ > 0 ? shape_.res : 0);
-  // FlightShare's column directions: (cos, sin) of each column's phi.
-  const bool flight = numNeighbours_ > 0 && options_.maskMethod != MaskMethod::kR;
-  flightCols_ = arena.Alloc<double>(flight ? 2 * 4 * size_t(FlightRes()) : 0);
-  // The centre-mask cache: a slot per patch while they fit.
-  cache_.Layout(arena, centreRays, numPatches, options_.maskCacheBytes, shape_, PartCentres());
-  outbox_.Layout(arena, numNeighbours_ > 0 ? 6 * options_.roundShots : 0, packetBytes_);
-  part(&footprint_.packets);
+  exchange_.Layout(arena, options_, numPatches, numNeighbours_ > 0, shape_,
+                   numNeighbours_ > 0 ? PacketBytes(shape_) : 0, PartCentres(), &footprint_);
   footprint_.total = ArenaRoundUp(arena.used());
   footprint_.numPatches = numPatches;
   footprint_.gridCells = uint64_t(plan.res[0]) * plan.res[1] * plan.res[2];
@@ -207,15 +191,9 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   box_ = grid.EnvBox(static_cast<int>(index));
   numNeighbours_ = 0;
   for (int a = 0; a < 3; ++a) numNeighbours_ += (cell_[a] > 0) + (cell_[a] + 1 < grid.n[a]);
-  numExits_ = 0;
-  for (int a = 0; a < 3; ++a)
-    for (int side = 0; side < 2; ++side) {
-      if (side == 0 ? cell_[a] == 0 : cell_[a] + 1 == grid.n[a]) continue;
-      exits_[numExits_++] = BoxFace(box_, a, side);
-    }
+  exchange_.FindExits(grid, cell_, box_);
   shape_ = numNeighbours_ > 0 ? MaskShapeOf(options.maskMethod, options.maskRes, options.rays)
                               : MaskShape{};
-  packetBytes_ = numNeighbours_ > 0 ? PacketBytes(shape_) : 0;
   staged_ = std::make_unique<Staged>();
   OutsideShooters(grid, static_cast<int>(index), options.outside, options.outsideTiles,
                   &staged_->outside);
@@ -277,6 +255,12 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   return footprint_;
 }
 
+void Environment::Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
+                       const std::vector<uint32_t>& ids, const EnvOptions& options) {
+  Prepare(grid, index, mesh, ids, options);
+  Build();
+}
+
 bool Environment::Build() {
   uint32_t n = static_cast<uint32_t>(staged_->patches.size());
   if (!Arena::Reserve(footprint_.total, &arena_)) return false;
@@ -301,9 +285,7 @@ bool Environment::Build() {
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())
     ++centreStepsPerRay_;
-  maskDirections_.Fill();
-  FillFlightCols();
-  cache_.Clear();
+  exchange_.Build();
   staged_.reset();  // the heap copies, no longer needed
   Reset();
   return true;
@@ -333,8 +315,7 @@ void Environment::Reset() {
   // radiosity power R as an emitter's b * area does (the power shot so far
   // is R - unshot).
   outside_.Reset(&ledger_);
-  queue_.Clear();
-  outbox_.Clear();
+  exchange_.Clear();
 }
 
 // EnvState's fields beside what holds each here, one list for both ways:
@@ -359,7 +340,7 @@ void Environment::StateFields(Env& env, State& s) {
   held(s.centreSteps, env.centreSteps_);
   held(s.centreWork, env.centreWork_);
   viaPart(s.nextElement, env.elements_, &ElementTree::used, &ElementTree::SetUsed);
-  viaPart(s.queued, env.queue_, &ForeignQueue::count, &ForeignQueue::SetCount);
+  viaPart(s.queued, env.exchange_.queue(), &ForeignQueue::count, &ForeignQueue::SetCount);
   held(s.ledger, env.ledger_);
   held(s.stats, env.stats_);
 }
@@ -373,7 +354,7 @@ EnvState Environment::SaveState() const {
   std::memset(static_cast<void*>(&s), 0, sizeof s);  // padding too: the same bytes every time
   s.arenaUsed = arena_.used();
   s.numPatches = patches_.size();
-  s.outCount = outbox_.count();
+  s.outCount = exchange_.outbox().count();
   s.index = index_;
   StateFields(*this, s);
   return s;
@@ -384,7 +365,7 @@ bool Environment::RestoreState(const EnvState& s) {
       s.outCount != 0 || s.nextElement > elements_.size())
     return false;
   StateFields(*this, s);
-  outbox_.Clear();
+  exchange_.outbox().Clear();
   return true;
 }
 

@@ -61,8 +61,9 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
     // What --sky and --sun lost at once never lit the scene: the stop rules
     // count without it (EnergyLedger::outsideLost; 0 without them).
     r.emitted = Sum3(l.emitted) - Sum3(l.outsideLost);
-    r.held = uint64_t(e->queuedCount()) + e->outbox().count();
-    r.shootable = e->queuedCount() + e->outbox().count() + e->HasLocalUnshot();
+    const uint32_t queued = e->exchange().queue().count(), out = e->exchange().outbox().count();
+    r.held = uint64_t(queued) + out;
+    r.shootable = queued + out + e->HasLocalUnshot();
     r.shots = e->stats().shots + e->stats().foreignShots;
     r.rays = e->stats().rays;
     r.forwardsCreated = e->stats().forwardsCreated;
@@ -159,8 +160,9 @@ RoundTotals ExchangeRound(Span<Environment* const> envs, const RankEnvs& rankEnv
         std::memcpy(block, x->mine.data(), x->reportBytes);
         used = x->reportBytes;
         for (Environment* src : envs) {
-          for (uint32_t k = 0; k < src->outbox().count(); ++k) {
-            const uint8_t* packet = src->outbox().Packet(k);
+          const Outbox& outbox = src->exchange().outbox();
+          for (uint32_t k = 0; k < outbox.count(); ++k) {
+            const uint8_t* packet = outbox.Packet(k);
             uint32_t to = ReadHeader(packet).toEnv;
             if (to < re.first || to >= re.first + re.count) continue;
             CHECK(used + x->packetBytes <= x->blockBytes);
@@ -189,8 +191,10 @@ RoundTotals ExchangeRound(Span<Environment* const> envs, const RankEnvs& rankEnv
   auto visit = [&](auto&& take) {
     for (int r = 0; r < ranks; ++r) {
       if (r == me) {
-        for (Environment* src : envs)
-          for (uint32_t k = 0; k < src->outbox().count(); ++k) take(src->outbox().Packet(k));
+        for (Environment* src : envs) {
+          const Outbox& outbox = src->exchange().outbox();
+          for (uint32_t k = 0; k < outbox.count(); ++k) take(outbox.Packet(k));
+        }
       } else {
         for (size_t off = x->reportBytes; off < x->received[r]; off += x->packetBytes)
           take(x->recv[r].data() + off);

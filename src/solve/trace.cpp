@@ -48,6 +48,24 @@ SkyShares SkySharesOf(const OutsideLight& lit, bool sobol, const Frame& frame, u
   return s;
 }
 
+// What a shot's rays start from, the same for Distribute and TraceAlive:
+// the shooter's sampler, its ray points from `stream`, the even share of
+// `power` a ray carries, and the sky map's shares (SkySharesOf).
+struct ShotSetup {
+  ShotSetup(const EnvOptions& options, const Patch& shooter, const double power[3], uint64_t stream,
+            uint32_t rays)
+      : sampler(MakePatchSampler(shooter)),
+        points(options.sobol, stream),
+        sky(SkySharesOf(options.outside, options.sobol, sampler.frame, shooter.globalId, stream,
+                        rays, power)) {
+    for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
+  }
+  PatchSampler sampler;
+  RayPoints points;
+  SkyShares sky;
+  double share[3];
+};
+
 // Method C: an open pixel of *out whose rays only hit closes; *hit becomes
 // the pixels left to the centre ray: open, and with both kinds of ray or
 // none. Word by word (bits past the last pixel are 0 in all three).
@@ -66,10 +84,12 @@ void SplitByRays(MaskBits* out, MaskBits* hit, const MaskBits& passed) {
 // What a shot's rays did here, summed in ray order and booked once a shot
 // (Distribute and TraceAlive share it).
 struct Environment::ShotTally {
+  explicit ShotTally(const Patch& shooter)
+      : outside(OutsideKindOf(shooter.globalId) != OutsideKind::kNone) {}
   uint64_t traced = 0, hits = 0;
   double lost[3] = {0, 0, 0};     // left the scene
   double backHit[3] = {0, 0, 0};  // absorbed by back faces
-  bool outside = false;           // an outside shooter's rays (EnergyLedger::outsideLost)
+  bool outside;                   // an outside shooter's rays (EnergyLedger::outsideLost)
 };
 
 // Ray r of a shot of shooter `id` from its five uniforms: ShotRay for a
@@ -174,49 +194,43 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   const bool marks = masks && out && options_.maskMethod != MaskMethod::kB;
   MaskBits hitPixels, passedPixels;
   if (methodC) {
-    hitPixels = ScratchMask(2);
-    passedPixels = ScratchMask(3);
+    hitPixels = exchange_.ScratchMask(2);
+    passedPixels = exchange_.ScratchMask(3);
     hitPixels.SetAllClosed();
     passedPixels.SetAllClosed();
   }
-  PatchSampler sampler = MakePatchSampler(shooter);
-  RayPoints points(options_.sobol, stream);
-  double share[3];
-  for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
-  const SkyShares sky = SkySharesOf(options_.outside, options_.sobol, sampler.frame,
-                                    shooter.globalId, stream, rays, power);
-  ShotTally tally;
-  tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
+  ShotSetup shot(options_, shooter, power, stream, rays);
+  ShotTally tally(shooter);
   const glm::vec3 centre = CentreOf(shooter);
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
-    points.Next(r, u, true);
+    shot.points.Next(r, u, true);
     glm::vec3 local;
-    Ray ray = MakeShotRay(sampler, shooter.globalId, u, &local);
+    Ray ray = MakeShotRay(shot.sampler, shooter.globalId, u, &local);
     double ratio[3];
-    if (sky.map) sky.Of(ray.d, share, ratio);
+    if (shot.sky.map) shot.sky.Of(ray.d, shot.share, ratio);
     uint32_t pixel = 0;
     if (foreign) {
       float t0, t1;
       if (!Slabs(ray, box_, &t0, &t1)) continue;  // never passes through here
       if (masks) {
-        pixel = EntryPixel(ray, t0, centre, sampler.frame, local, maskDirections_);
+        pixel = EntryPixel(ray, t0, centre, shot.sampler.frame, local, exchange_.directions());
         if (in && !in->IsOpen(pixel)) continue;  // occluded upstream
       }
     } else if (marks) {
-      pixel = maskDirections_.CosinePixel(u[4], local);
+      pixel = exchange_.directions().CosinePixel(u[4], local);
     }
     ++tally.traced;
     Hit hit;
     if (!grid_.Intersect(ray, skip, &hit)) {
       if (methodC) passedPixels.Open(pixel);
-      if (LeavesScene(ray))
-        for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
+      if (ExitFace(ray) < 0)  // leaves the scene
+        for (int c = 0; c < 3; ++c) tally.lost[c] += shot.share[c];
       continue;
     }
     if (masks && out && options_.maskMethod == MaskMethod::kA) out->Close(pixel);
     if (methodC) hitPixels.Open(pixel);
-    Land(ray, hit, share, &tally);
+    Land(ray, hit, shot.share, &tally);
   }
   Book(tally);
 
@@ -233,7 +247,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // whichever pixels a shot decides, so a pixel means the same to every
   // shot that reads it from the cache.
   if (masks && out && options_.maskMethod == MaskMethod::kB && (read || known)) {
-    MaskBits decide = ScratchMask(3);
+    MaskBits decide = exchange_.ScratchMask(3);
     decide.CopyFrom(*out);
     if (read) decide.And(*read);
     if (known) {
@@ -287,14 +301,14 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
   centre /= static_cast<float>(shooter.numCorners);
   const CentreRays rays{centre + CentreLift(shooter.globalId) * sampler.frame.n, sampler.frame,
-                        &maskDirections_};
+                        &exchange_.directions()};
   // From inside this box, a direction that cannot leave through a face
   // with a neighbour beyond it reaches no other environment: nobody
   // downstream reads its pixel, which closes without a ray.
   bool inside = true;
   for (int a = 0; a < 3; ++a) inside &= centre[a] >= box_.lo[a] && centre[a] <= box_.hi[a];
-  if (inside && numExits_ < 6)
-    stats_.maskNoExit += KeepExits(Span<const Patch>(exits_, numExits_), rays, mask);
+  if (inside && exchange_.exits().size() < 6)
+    stats_.maskNoExit += KeepExits(exchange_.exits(), rays, mask);
   uint32_t cast = mask->CountOpen();
   stats_.maskRays += cast;
   // By patch or by ray, whichever costs less (the same bits either way):
@@ -323,7 +337,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
 // a miss), which Distribute adds to.
 bool Environment::CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known) {
   bool miss = false;
-  if (!cache_.Find(i, centre, known, &miss)) return false;
+  if (!exchange_.cache().Find(i, centre, known, &miss)) return false;
   if (miss && !PartCentres()) CastCentres(patches_[i], Skip(i, twinOf(i)), centre);
   return true;
 }
@@ -340,43 +354,37 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   DCHECK(alive.bits() >= rays);
   // Only the shot's rays are read from the routes (Forward packs them alone).
   for (int f = 0; f < 6; ++f) routes[f].ClosePrefix(rays);
-  PatchSampler sampler = MakePatchSampler(shooter);
-  RayPoints points(options_.sobol, shotKey);
-  double share[3];
-  for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
-  const SkyShares sky = SkySharesOf(options_.outside, options_.sobol, sampler.frame,
-                                    shooter.globalId, shotKey, rays, power);
-  ShotTally tally;
-  tally.outside = OutsideKindOf(shooter.globalId) != OutsideKind::kNone;
+  ShotSetup shot(options_, shooter, power, shotKey, rays);
+  ShotTally tally(shooter);
   uint64_t left = 0;
   // With a sky map: the rays that left less those that entered, each
   // counted by its share's ratio to power / rays (SkyShares).
   double flight[3] = {0, 0, 0}, ratio[3];
   auto trace = [&](uint32_t r, const float u[5]) {
     glm::vec3 local;
-    Ray ray = MakeShotRay(sampler, shooter.globalId, u, &local);
+    Ray ray = MakeShotRay(shot.sampler, shooter.globalId, u, &local);
     ++tally.traced;
-    if (sky.map) {
-      sky.Of(ray.d, share, ratio);
+    if (shot.sky.map) {
+      shot.sky.Of(ray.d, shot.share, ratio);
       if (foreign)
         for (int c = 0; c < 3; ++c) flight[c] -= ratio[c];
     }
     Hit hit;
     if (grid_.Intersect(ray, skip, &hit)) {
-      Land(ray, hit, share, &tally);
+      Land(ray, hit, shot.share, &tally);
       return;
     }
     int face = ExitFace(ray);
     if (face < 0) {
-      for (int c = 0; c < 3; ++c) tally.lost[c] += share[c];
+      for (int c = 0; c < 3; ++c) tally.lost[c] += shot.share[c];
     } else {
       routes[face].Open(r);  // on to the neighbour across the face it leaves by
       ++left;
-      if (sky.map)
+      if (shot.sky.map)
         for (int c = 0; c < 3; ++c) flight[c] += ratio[c];
     }
   };
-  if (points.randomAccess()) {
+  if (shot.points.randomAccess()) {
     // Sobol' points by index: the live rays only, word by word, in ray order
     // (only the words of the shot's rays: Unpack leaves the others alone).
     Span<uint64_t> words = alive.words();
@@ -385,7 +393,7 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
       for (uint64_t bits = words[w]; bits != 0; bits &= bits - 1) {
         const uint32_t r = static_cast<uint32_t>(64 * w) + CountTrailingZeros(bits);
         float u[5];
-        points.Next(r, u);
+        shot.points.Next(r, u);
         trace(r, u);
       }
   } else {
@@ -393,7 +401,7 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
     // the same ray everywhere.
     for (uint32_t r = 0; r < rays; ++r) {
       float u[5];
-      points.Next(r, u);
+      shot.points.Next(r, u);
       if (alive.IsOpen(r)) trace(r, u);
     }
   }
@@ -404,8 +412,8 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   const uint64_t entered = foreign ? tally.traced : 0;
   for (int c = 0; c < 3; ++c)
     ledger_.inFlight[c] +=
-        sky.map ? flight[c] * sky.even[c]
-                : (static_cast<double>(left) - static_cast<double>(entered)) * share[c];
+        shot.sky.map ? flight[c] * shot.sky.even[c]
+                     : (static_cast<double>(left) - static_cast<double>(entered)) * shot.share[c];
 }
 
 // --max-seconds's plan: the seconds `rays` form-factor-like rays take here.

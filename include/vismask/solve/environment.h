@@ -1,10 +1,10 @@
 // Environment: the unit that owns memory. One local environment holds its own
 // patches (geometry, material, energy), its own uniform grid over them, its
-// own shooter-selection tree, its queue of foreign shooters and its packet
-// buffers, all carved from one arena sized exactly at init. A
-// single-environment run is one of these with no neighbours; it reserves no
-// queue, mask or packet bytes. No environment reads another's geometry: what
-// it knows of a foreign shooter is what its packet carries.
+// own shooter-selection tree and its exchange state (ExchangeState: foreign
+// shooters queued, packet buffers), all carved from one arena sized exactly
+// at init. A single-environment run is one of these with no neighbours; it
+// reserves no queue, mask or packet bytes. No environment reads another's
+// geometry: what it knows of a foreign shooter is what its packet carries.
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
@@ -15,21 +15,18 @@
 #include "vismask/core/arena.h"
 #include "vismask/core/span.h"
 #include "vismask/scene/mesh.h"
-#include "vismask/solve/centre_mask_cache.h"
 #include "vismask/solve/direct_book.h"
 #include "vismask/solve/display_lattice.h"
 #include "vismask/solve/element_tree.h"
 #include "vismask/solve/env_options.h"
-#include "vismask/solve/foreign_queue.h"
+#include "vismask/solve/exchange_state.h"
 #include "vismask/solve/ledger.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/max_tree.h"
-#include "vismask/solve/outbox.h"
 #include "vismask/solve/outside_set.h"
 #include "vismask/solve/packet.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
-#include "vismask/solve/work.h"
 
 namespace vismask {
 
@@ -42,15 +39,12 @@ class Environment {
   Environment(const Environment&) = delete;
   Environment& operator=(const Environment&) = delete;
 
-  // Init in two halves (environment.cpp): Prepare measures, Build makes the arena.
+  // Init in two halves (environment.cpp): Prepare measures, Build makes the arena (Init: both).
   const EnvFootprint& Prepare(const EnvGrid& grid, uint32_t index, const Mesh& mesh,
                               const std::vector<uint32_t>& ids, const EnvOptions& options);
   bool Build();
   void Init(const EnvGrid& grid, uint32_t index, const Mesh& mesh, const std::vector<uint32_t>& ids,
-            const EnvOptions& options) {
-    Prepare(grid, index, mesh, ids, options);
-    Build();
-  }
+            const EnvOptions& options);
   const EnvFootprint& footprint() const { return footprint_; }
   // Emission: B = Ke, unshot power = Ke * area; ledger and queue restart.
   void Reset();
@@ -61,12 +55,11 @@ class Environment {
   // A centre ray's work: the integer cube root of the grid's cells, at least 1.
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 
-  // Packets: this round's, their delivery (env_queue.cpp), their share here.
-  const Outbox& outbox() const { return outbox_; }
-  void ClearOutbox() { outbox_.Clear(); }
+  // Packets: the exchange state (its outbox), delivery (env_queue.cpp), share here.
+  const ExchangeState& exchange() const { return exchange_; }
+  void ClearOutbox() { exchange_.outbox().Clear(); }
   void Deliver(const uint8_t* packet);
   double FlightShareAt(const uint8_t* packet) const;
-  uint32_t queuedCount() const { return queue_.count(); }
   // The power booked as shot but not yet delivered (env_flight.cpp).
   void FlightPower(double power[3]) const;
 
@@ -78,23 +71,15 @@ class Environment {
   uint32_t elementsUsed() const { return elements_.used(); }
   const DisplayLattice& lattice() const { return lattice_; }
   DisplayLattice& lattice() { return lattice_; }
-  Span<const glm::vec3> vertices() const { return lattice_.vertices(); }
-  Span<const glm::vec3> vertexRadiosity() const { return lattice_.radiosity(); }
-  Span<const SmoothVertex> smoothVertices() const { return lattice_.smoothVertices(); }
-  uint32_t numSharedVertices() const { return lattice_.numShared(); }
   // Per-pixel direct light (--direct-samples; DirectBook).
   bool directPerPixel() const { return options_.directSamples > 0; }
   void SetDisplayIndirect(bool on) { direct_.SetShowIndirect(on && directPerPixel()); }
-  bool displayIndirect() const { return direct_.showIndirect(); }
-  bool ShowsIndirect(uint32_t i) const { return direct_.ShowsIndirect(i); }
+  const DirectBook& direct() const { return direct_; }
   uint32_t directSamples() const { return options_.directSamples; }
-  const DirectLight& directLight() const { return direct_.light(); }
   float rayEpsilon() const { return options_.rayEpsilon; }
-  glm::dvec3 Indirect(uint32_t e) const { return elements_.Indirect(e); }
-  void EmissionUnshot(double out[3]) const { direct_.EmissionUnshot(out); }
 
   uint32_t index() const { return index_; }
-  uint32_t packetBytes() const { return packetBytes_; }
+  uint32_t packetBytes() const { return exchange_.outbox().packetBytes(); }
   bool hasNeighbours() const { return numNeighbours_ > 0; }
   const Bounds& box() const { return box_; }
   Span<const Patch> patches() const { return patches_; }
@@ -117,9 +102,7 @@ class Environment {
   // Checkpoint and resume between rounds (checkpoint.h; environment.cpp).
   EnvState SaveState() const;
   bool RestoreState(const EnvState& s);
-  Span<const uint8_t> arenaBytes() const {
-    return Span<const uint8_t>(arena_.data(), arena_.capacity());
-  }
+  Span<const uint8_t> arenaBytes() const { return {arena_.data(), arena_.capacity()}; }
   Span<uint8_t> mutableArenaBytes() { return Span<uint8_t>(arena_.data(), arena_.capacity()); }
 
   // --max-seconds's plan (trace.cpp), and the power a ray carries.
@@ -155,7 +138,6 @@ class Environment {
   void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
   void Book(const ShotTally& tally);
   int ExitFace(const Ray& ray) const;
-  bool LeavesScene(const Ray& ray) const { return ExitFace(ray) < 0; }
   // Centre rays (B, C; trace.cpp) and B's reading shots (env_read.cpp).
   void CastCentres(const Patch& shooter, Skip skip, MaskBits* mask);
   bool CachedCentre(uint32_t i, MaskBits* centre, MaskBits* known);
@@ -172,12 +154,8 @@ class Environment {
   // Packets (env_queue.cpp, env_flight.cpp).
   void Forward(PacketHeader header, const MaskBits& mask, const MaskBits* routes = nullptr);
   int Downstream(uint32_t sourceEnv, int (*next)[3]) const;
-  MaskBits ScratchMask(uint32_t k) const;
-  MaskBits RouteMask(int face) const { return ScratchMask(2 + static_cast<uint32_t>(face)); }
   double FlightShare(const PacketHeader& h, const uint8_t* bits, const Bounds& box,
                      const int to[3]) const;
-  uint32_t FlightRes() const;
-  void FillFlightCols();
   // Receiving (env_receive.cpp).
   void Receive(uint32_t j, const double share[3], const glm::vec3& x);
 
@@ -185,13 +163,9 @@ class Environment {
   EnvGrid envGrid_;  // the partition (grid_ is the ray-casting grid)
   int cell_[3] = {0, 0, 0};
   Bounds box_;
-  Patch exits_[6] = {};  // the faces of box_ another environment lies beyond (KeepExits)
-  uint32_t numExits_ = 0;
   uint32_t numNeighbours_ = 0;
   EnvOptions options_;
   MaskShape shape_;
-  MaskDirections maskDirections_;  // B and C with neighbours: the pixels' centre rays
-  uint32_t packetBytes_ = 0;
   Arena arena_ = Arena::Measure();
   Span<Patch> patches_;
   Span<PatchGeom> geom_;
@@ -206,12 +180,7 @@ class Environment {
   Grid grid_;
   MaxTree tree_;
   OutsideSet outside_;
-  // Exchange state: empty for an environment without neighbours.
-  ForeignQueue queue_;
-  Span<uint64_t> scratchWords_;  // working masks (ScratchMask)
-  CentreMaskCache cache_;
-  Outbox outbox_;
-  Span<double> flightCols_;  // FlightShare: cos(phi), sin(phi) of each column's centre
+  ExchangeState exchange_;  // empty for an environment without neighbours
   uint32_t newForwards_ = 0;
   double readPerRay_ = 0.0, allCost_ = 0.0;  // FillReadCosts
   bool mayRead_ = false;
