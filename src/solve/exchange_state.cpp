@@ -63,8 +63,8 @@ uint32_t ExchangeState::flightRes() const {
 
 void ExchangeState::FillFlightCols() {
   if (flightCols_.empty()) return;
-  // A rotation by one column's angle per column, from half a column: the
-  // very recurrence FlightShare used to run in every row, so the same bits.
+  // A rotation by one column's angle per column, from half a column: a
+  // recurrence computed once per environment, whose bits every row reads.
   const uint32_t cols = 4 * flightRes();
   const double step = 6.283185307179586 / cols;
   const double cs = std::cos(step), sn = std::sin(step);
