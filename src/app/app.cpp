@@ -243,14 +243,14 @@ int EndedEarly(RunState* r, const SolveResult& res) {
 // Rank 0's last line: shots, solve time, the view, where the image went.
 void PrintDone(const RunState* r, const SolveResult& res) {
   char view[128] = "--camera";
-  if (r->hasSide)
-    std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side),
-                  r->sideChosen ? " (chosen)" : "");
-  else if (r->inside)
-    std::snprintf(
-        view, sizeof view, "view from inside (chosen: the %s side sees %s)",
-        ViewSideName(r->viewChoice.side),
-        r->viewChoice.sideBack > r->viewChoice.sideFront ? "mostly back faces" : "one wall");
+  if (r->cam.hasSide)
+    std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->cam.side),
+                  r->cam.sideChosen ? " (chosen)" : "");
+  else if (r->cam.inside)
+    std::snprintf(view, sizeof view, "view from inside (chosen: the %s side sees %s)",
+                  ViewSideName(r->cam.viewChoice.side),
+                  r->cam.viewChoice.sideBack > r->cam.viewChoice.sideFront ? "mostly back faces"
+                                                                           : "one wall");
   os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
                static_cast<unsigned long long>(res.shots), res.seconds, view,
                r->options.outDir.c_str());
