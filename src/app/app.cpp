@@ -211,28 +211,25 @@ int EndedEarly(RunState* r, const SolveResult& res) {
     }
     return r->transport->Finish(128 + sig);
   }
-  if (res.reason == StopReason::kStalled) {  // no outputs: the solve did not finish
+  // No outputs: the solve did not finish (kStalled), or would never (kNoLoss).
+  if (res.reason == StopReason::kStalled || res.reason == StopReason::kNoLoss) {
     if (r->isRoot()) {
       for (auto& f : r->files) f.Discard();
-      os::PrintErr(
-          "vismask: the solve stalled after %llu shots: %llu rounds without a shot "
-          "while %.3g of the emitted power was unshot or in flight (the admission of "
-          "new records let no environment shoot; try a larger --queue)\n",
-          static_cast<unsigned long long>(res.shots),
-          static_cast<unsigned long long>(r->rankEnvs.total), res.unshotFraction);
-    }
-    return r->transport->Finish(kExitStalled);
-  }
-  if (res.reason == StopReason::kNoLoss) {  // no outputs: the solve would never finish
-    if (r->isRoot()) {
-      for (auto& f : r->files) f.Discard();
-      os::PrintErr(
-          "vismask: the solve stalled after %llu shots: the unshot power went from %.4g%% to "
-          "%.4g%% of the emitted, not down by %g%% of itself, while %g times as much power was "
-          "shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
-          "give them a Kd below 1, or stop sooner with --max-shots or --max-seconds)\n",
-          static_cast<unsigned long long>(res.shots), 100.0 * res.stallFrom, 100.0 * res.stallTo,
-          100.0 * kStallFall, kStallShot);
+      if (res.reason == StopReason::kStalled)
+        os::PrintErr(
+            "vismask: the solve stalled after %llu shots: %llu rounds without a shot "
+            "while %.3g of the emitted power was unshot or in flight (the admission of "
+            "new records let no environment shoot; try a larger --queue)\n",
+            static_cast<unsigned long long>(res.shots),
+            static_cast<unsigned long long>(r->rankEnvs.total), res.unshotFraction);
+      else
+        os::PrintErr(
+            "vismask: the solve stalled after %llu shots: the unshot power went from %.4g%% to "
+            "%.4g%% of the emitted, not down by %g%% of itself, while %g times as much power was "
+            "shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
+            "give them a Kd below 1, or stop sooner with --max-shots or --max-seconds)\n",
+            static_cast<unsigned long long>(res.shots), 100.0 * res.stallFrom, 100.0 * res.stallTo,
+            100.0 * kStallFall, kStallShot);
     }
     return r->transport->Finish(kExitStalled);
   }
