@@ -227,13 +227,20 @@ std::string CheckPixelBytes(size_t left, int w, int h, int bytesPerPixel, const 
   return "";
 }
 
-}  // namespace
-
-Status ReadPfm(const std::string& path, PfmImage* image) {
+// Reads the file at `path` whole and decodes it with `fromBytes`.
+template <typename Image>
+Status ReadImageFile(const std::string& path, Image* image,
+                     Status (*fromBytes)(const std::string&, const std::string&, Image*)) {
   std::string bytes;
   std::string err = ReadBytes(path, &bytes);
   if (!err.empty()) return Status::At(path, 0, err);
-  return ReadPfmFromBytes(path, bytes, image);
+  return fromBytes(path, bytes, image);
+}
+
+}  // namespace
+
+Status ReadPfm(const std::string& path, PfmImage* image) {
+  return ReadImageFile(path, image, ReadPfmFromBytes);
 }
 
 Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmImage* image) {
@@ -290,10 +297,7 @@ Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmIm
 }
 
 Status ReadPgm(const std::string& path, PgmImage* image) {
-  std::string bytes;
-  std::string err = ReadBytes(path, &bytes);
-  if (!err.empty()) return Status::At(path, 0, err);
-  return ReadPgmFromBytes(path, bytes, image);
+  return ReadImageFile(path, image, ReadPgmFromBytes);
 }
 
 Status ReadPgmFromBytes(const std::string& name, const std::string& bytes, PgmImage* image) {
