@@ -58,6 +58,9 @@ Tokens Tokenize(const std::string& line);
 std::string MapName(const std::string& line, const Tokens& t, bool* hadOptions);
 // A piece of the input quoted in a message (at most 32 bytes, escaped).
 std::string Quote(const std::string& s);
+// Appends byte c to *out: as it is if it is printable ASCII other than a
+// backslash, else as \xNN (Quote's and the texture decoders' messages).
+void AppendEscaped(std::string* out, unsigned char c);
 // Whether an unknown MTL key may be named in a warning.
 bool LooksLikeKey(const std::string& s);
 // Reads a whole file (regular files only, at most kMaxFileBytes); returns an
