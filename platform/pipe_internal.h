@@ -35,6 +35,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "rank_wait.h"
 #include "vismask/core/span.h"
 #include "vismask/core/status.h"
 #include "vismask/parallel/transport.h"
@@ -46,22 +47,16 @@ constexpr int kMaxPipeRanks = kMaxRanks;
 constexpr uint64_t kFinishWord = ~uint64_t{0};
 constexpr size_t kWordBytes = sizeof(uint64_t);
 
-class PipeTransport final : public Transport {
+class PipeTransport final : public WaitingTransport {
  public:
   PipeTransport() = default;
-  PipeTransport(const PipeTransport&) = delete;
-  PipeTransport& operator=(const PipeTransport&) = delete;
   ~PipeTransport() override;
 
-  int rank() const override { return rank_; }
-  int size() const override { return size_; }
   const char* name() const override { return "pipe"; }
 
   void AllToAll(const Span<const uint8_t>* send, const Span<uint8_t>* recv,
                 size_t* recvBytes) override;
   void AllGather(const void* mine, size_t bytes, void* all) override;
-  void Send(int to, const void* data, size_t bytes) override;
-  void Recv(int from, void* data, size_t bytes) override;
   int Finish(int exitCode) override;
 
   // Creates the pipes and forks the children; each process leaves with its
@@ -69,6 +64,8 @@ class PipeTransport final : public Transport {
   Status Start(int ranks, double timeout);
 
  private:
+  void PointToPoint(int peer, void* data, size_t bytes, bool recv) override;
+
   // This process's ends of the pipes to and from one peer.
   struct Peer {
     int readFd = -1;
@@ -103,8 +100,6 @@ class PipeTransport final : public Transport {
   // Ends the run: `peer` has been silent for `limit` seconds (reading: this
   // rank waited for its bytes; else for it to take this rank's).
   [[noreturn]] void Silent(int peer, bool reading, double limit);
-  // The wait limit now (transport.h), 0 for none.
-  double WaitLimit() const;
   // Rank 0 about to exit: resume stopped children, so that they can take
   // the SIGTERM rank 0's death sends them.
   void ContinueChildren();
@@ -121,14 +116,9 @@ class PipeTransport final : public Transport {
   void CloseAll();
   void RestoreSigpipe();
 
-  int rank_ = 0;
-  int size_ = 1;
-  bool finished_ = false;
   bool sigpipeSaved_ = false;
   bool sigusr1Saved_ = false;
   pid_t rankZeroPid_ = 0;
-  double timeout_ = 0.0;      // --rank-timeout; 0: none
-  double longestWait_ = 0.0;  // the longest Pump so far, seconds
   struct sigaction oldSigpipe_ = {};
   struct sigaction oldSigusr1_ = {};
   // When each awaited peer last made its pipe ready in the current Pump.

@@ -54,8 +54,8 @@ bool Exists(const char* path) {
   return ::stat(path, &st) == 0;
 }
 
-InFile::~InFile() {
-  if (fd_ >= 0) close(fd_);
+FdOwner::~FdOwner() {
+  if (fd_ >= 0) ::close(fd_);
 }
 
 namespace {
@@ -281,10 +281,6 @@ void OutFile::Discard() {
     ::unlink(tmpPath_);
   }
   ReleaseTempSlot(&tempSlot_);
-}
-
-DirLock::~DirLock() {
-  if (fd_ >= 0) ::close(fd_);
 }
 
 bool DirLock::Acquire(const char* dir, char* why) {

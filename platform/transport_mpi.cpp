@@ -58,23 +58,17 @@ constexpr int kTagPoint = 0, kTagAllToAll = 1, kTagAllGather = 2, kTagFinish = 3
 constexpr double kSpinSeconds = 1e-3;
 constexpr double kMinNap = 5e-5, kMaxNap = 1e-3;
 
-class MpiTransport final : public Transport {
+class MpiTransport final : public WaitingTransport {
  public:
   MpiTransport() = default;
-  MpiTransport(const MpiTransport&) = delete;
-  MpiTransport& operator=(const MpiTransport&) = delete;
   ~MpiTransport() override;
 
-  int rank() const override { return rank_; }
-  int size() const override { return size_; }
   const char* name() const override { return "mpi"; }
   int ranksOnHost() const override { return ranksOnHost_; }
 
   void AllToAll(const Span<const uint8_t>* send, const Span<uint8_t>* recv,
                 size_t* recvBytes) override;
   void AllGather(const void* mine, size_t bytes, void* all) override;
-  void Send(int to, const void* data, size_t bytes) override;
-  void Recv(int from, void* data, size_t bytes) override;
   int Finish(int exitCode) override;
 
   // MPI_Init, errors returned instead of aborting, and the request arrays.
@@ -89,17 +83,11 @@ class MpiTransport final : public Transport {
   // Completes the posted requests; ends the run if a peer stays silent.
   void Wait(const char* call);
   [[noreturn]] void Silent(int peer, bool reading, double limit);
-  double WaitLimit() const;
-  // Send (recv false) or Recv: moves `bytes` in messages of at most kChunkBytes.
-  void PointToPoint(int peer, void* data, size_t bytes, bool recv);
+  // Moves `bytes` in messages of at most kChunkBytes.
+  void PointToPoint(int peer, void* data, size_t bytes, bool recv) override;
 
-  int rank_ = 0;
-  int size_ = 1;
   int ranksOnHost_ = 1;  // the size of this rank's shared-memory communicator
   bool started_ = false;
-  bool finished_ = false;
-  double timeout_ = 0.0;      // --rank-timeout; 0: none
-  double longestWait_ = 0.0;  // the longest Wait so far, seconds
   // The requests of one call (at most a receive and a send per peer), made in Start.
   int posted_ = 0;
   std::unique_ptr<MPI_Request[]> requests_;
@@ -209,12 +197,8 @@ void MpiTransport::Post(int rc, int peer, bool recv, const char* call) {
   ++posted_;
 }
 
-double MpiTransport::WaitLimit() const {
-  return RankWaitLimit(timeout_, longestWait_);
-}
-
 void MpiTransport::Silent(int peer, bool reading, double limit) {
-  PrintSilentRank(rank_, peer, reading, limit, timeout_);
+  PrintSilent(peer, reading, limit);
   os::RemoveTempFiles();
   MPI_Abort(MPI_COMM_WORLD, kExitLostRank);
   std::_Exit(kExitLostRank);  // MPI_Abort does not return
@@ -276,8 +260,7 @@ void MpiTransport::Wait(const char* call) {
     }
   }
   if (noted >= 0) os::NoteWaiting(rank_, -1);
-  double waited = os::Seconds() - start;
-  if (waited > longestWait_) longestWait_ = waited;
+  NoteWait(os::Seconds() - start);
 }
 
 void MpiTransport::AllToAll(const Span<const uint8_t>* send, const Span<uint8_t>* recv,
@@ -331,18 +314,8 @@ void MpiTransport::AllGather(const void* mine, size_t bytes, void* all) {
   if (own != mine && bytes > 0) std::memmove(own, mine, bytes);
 }
 
-void MpiTransport::Send(int to, const void* data, size_t bytes) {
-  PointToPoint(to, const_cast<void*>(data), bytes, false);
-}
-
-void MpiTransport::Recv(int from, void* data, size_t bytes) {
-  PointToPoint(from, data, bytes, true);
-}
-
 void MpiTransport::PointToPoint(int peer, void* data, size_t bytes, bool recv) {
   const char* call = recv ? "Recv" : "Send";
-  CHECK_MSG(!finished_, "transport used after Finish");
-  CHECK(peer >= 0 && peer < size_ && peer != rank_);
   uint8_t* p = static_cast<uint8_t*>(data);
   // At least one message, so an empty Send still meets its Recv.
   size_t offset = 0;

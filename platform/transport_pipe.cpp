@@ -51,27 +51,21 @@ void PipeTransport::AllGather(const void* mine, size_t bytes, void* all) {
   if (own != mine && bytes > 0) std::memmove(own, mine, bytes);
 }
 
-void PipeTransport::Send(int to, const void* data, size_t bytes) {
-  CHECK_MSG(!finished_, "transport used after Finish");
-  CHECK(to >= 0 && to < size_ && to != rank_);
+void PipeTransport::PointToPoint(int peer, void* data, size_t bytes, bool recv) {
   CheckPeers();
-  out_[to] = OutFrame();
-  out_[to].active = true;
-  out_[to].word = bytes;
-  out_[to].data = static_cast<const uint8_t*>(data);
-  out_[to].bytes = bytes;
-  Pump(false);
-}
-
-void PipeTransport::Recv(int from, void* data, size_t bytes) {
-  CHECK_MSG(!finished_, "transport used after Finish");
-  CHECK(from >= 0 && from < size_ && from != rank_);
-  CheckPeers();
-  in_[from] = InFrame();
-  in_[from].active = true;
-  in_[from].exact = true;
-  in_[from].data = static_cast<uint8_t*>(data);
-  in_[from].capacity = bytes;
+  if (recv) {
+    in_[peer] = InFrame();
+    in_[peer].active = true;
+    in_[peer].exact = true;
+    in_[peer].data = static_cast<uint8_t*>(data);
+    in_[peer].capacity = bytes;
+  } else {
+    out_[peer] = OutFrame();
+    out_[peer].active = true;
+    out_[peer].word = bytes;
+    out_[peer].data = static_cast<const uint8_t*>(data);
+    out_[peer].bytes = bytes;
+  }
   Pump(false);
 }
 

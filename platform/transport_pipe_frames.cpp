@@ -29,10 +29,6 @@ const char* ErrnoReason(int err) {
 
 }  // namespace
 
-double PipeTransport::WaitLimit() const {
-  return RankWaitLimit(timeout_, longestWait_);
-}
-
 void PipeTransport::AcceptWord(int peer) {
   InFrame& f = in_[peer];
   if (f.atFinish) {
@@ -140,8 +136,7 @@ void PipeTransport::Pump(bool atFinish) {
       }
     }
     if (n == 0) {
-      double waited = os::Seconds() - start;
-      if (waited > longestWait_) longestWait_ = waited;
+      NoteWait(os::Seconds() - start);
       return;
     }
     int ready = ::poll(pollFds_, static_cast<nfds_t>(n), kPollMs);

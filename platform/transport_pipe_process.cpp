@@ -227,7 +227,7 @@ void PipeTransport::Silent(int peer, bool reading, double limit) {
   sigemptyset(&term);
   sigaddset(&term, SIGTERM);
   ::sigprocmask(SIG_BLOCK, &term, nullptr);
-  PrintSilentRank(rank_, peer, reading, limit, timeout_);
+  PrintSilent(peer, reading, limit);
   if (rank_ == 0) {
     os::RemoveTempFiles();
     if (!peers_[peer].reaped && peers_[peer].pid > 0) ::kill(peers_[peer].pid, SIGKILL);

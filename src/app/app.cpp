@@ -211,28 +211,25 @@ int EndedEarly(RunState* r, const SolveResult& res) {
     }
     return r->transport->Finish(128 + sig);
   }
-  if (res.reason == StopReason::kStalled) {  // no outputs: the solve did not finish
+  // No outputs: the solve did not finish (kStalled), or would never (kNoLoss).
+  if (res.reason == StopReason::kStalled || res.reason == StopReason::kNoLoss) {
     if (r->isRoot()) {
       for (auto& f : r->files) f.Discard();
-      os::PrintErr(
-          "vismask: the solve stalled after %llu shots: %llu rounds without a shot "
-          "while %.3g of the emitted power was unshot or in flight (the admission of "
-          "new records let no environment shoot; try a larger --queue)\n",
-          static_cast<unsigned long long>(res.shots),
-          static_cast<unsigned long long>(r->rankEnvs.total), res.unshotFraction);
-    }
-    return r->transport->Finish(kExitStalled);
-  }
-  if (res.reason == StopReason::kNoLoss) {  // no outputs: the solve would never finish
-    if (r->isRoot()) {
-      for (auto& f : r->files) f.Discard();
-      os::PrintErr(
-          "vismask: the solve stalled after %llu shots: the unshot power went from %.4g%% to "
-          "%.4g%% of the emitted, not down by %g%% of itself, while %g times as much power was "
-          "shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
-          "give them a Kd below 1, or stop sooner with --max-shots or --max-seconds)\n",
-          static_cast<unsigned long long>(res.shots), 100.0 * res.stallFrom, 100.0 * res.stallTo,
-          100.0 * kStallFall, kStallShot);
+      if (res.reason == StopReason::kStalled)
+        os::PrintErr(
+            "vismask: the solve stalled after %llu shots: %llu rounds without a shot "
+            "while %.3g of the emitted power was unshot or in flight (the admission of "
+            "new records let no environment shoot; try a larger --queue)\n",
+            static_cast<unsigned long long>(res.shots),
+            static_cast<unsigned long long>(r->rankEnvs.total), res.unshotFraction);
+      else
+        os::PrintErr(
+            "vismask: the solve stalled after %llu shots: the unshot power went from %.4g%% to "
+            "%.4g%% of the emitted, not down by %g%% of itself, while %g times as much power was "
+            "shot: power goes round where nothing absorbs it (faces of Kd 1 closing a cavity? "
+            "give them a Kd below 1, or stop sooner with --max-shots or --max-seconds)\n",
+            static_cast<unsigned long long>(res.shots), 100.0 * res.stallFrom, 100.0 * res.stallTo,
+            100.0 * kStallFall, kStallShot);
     }
     return r->transport->Finish(kExitStalled);
   }
@@ -243,14 +240,14 @@ int EndedEarly(RunState* r, const SolveResult& res) {
 // Rank 0's last line: shots, solve time, the view, where the image went.
 void PrintDone(const RunState* r, const SolveResult& res) {
   char view[128] = "--camera";
-  if (r->hasSide)
-    std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->side),
-                  r->sideChosen ? " (chosen)" : "");
-  else if (r->inside)
-    std::snprintf(
-        view, sizeof view, "view from inside (chosen: the %s side sees %s)",
-        ViewSideName(r->viewChoice.side),
-        r->viewChoice.sideBack > r->viewChoice.sideFront ? "mostly back faces" : "one wall");
+  if (r->cam.hasSide)
+    std::snprintf(view, sizeof view, "view %s%s", ViewSideName(r->cam.side),
+                  r->cam.sideChosen ? " (chosen)" : "");
+  else if (r->cam.inside)
+    std::snprintf(view, sizeof view, "view from inside (chosen: the %s side sees %s)",
+                  ViewSideName(r->cam.viewChoice.side),
+                  r->cam.viewChoice.sideBack > r->cam.viewChoice.sideFront ? "mostly back faces"
+                                                                           : "one wall");
   os::PrintErr("vismask: %llu shots, %.2f s solve, %s; wrote %s/image.png\n",
                static_cast<unsigned long long>(res.shots), res.seconds, view,
                r->options.outDir.c_str());

@@ -175,35 +175,6 @@ int GatherLoads(RunState* r, int code, GlbMesh* exportMesh) {
   return kExitOk;
 }
 
-// The camera: --camera, the scene file's own, or a side of the box (chosen,
-// or --view), or a view from inside where the sides see little.
-void SetCamera(RunState* r, const Prepared& p) {
-  const Options& o = r->options;
-  if (o.hasCamera) {
-    r->camera = o.camera;
-  } else if (!o.hasView && p.scene.camera.has) {
-    // The scene file's own camera (glTF) wins over a chosen side.
-    r->cameraFromScene = true;
-    r->camera.eye = p.scene.camera.eye;
-    r->camera.target = p.scene.camera.target;
-    r->camera.up = p.scene.camera.up;
-    r->camera.fovyDeg = p.scene.camera.fovyDeg;
-  } else {
-    r->hasSide = true;
-    r->sideChosen = !o.hasView;
-    r->side = o.hasView ? o.view : p.side;
-    r->camera = SideCamera(p.scene.bounds, r->side);
-    // Where the sides see mostly back faces or one wall: a view from inside.
-    r->viewProbed = p.viewProbed && !o.hasView;
-    r->viewChoice = p.view;
-    if (r->viewProbed && p.view.inside) {
-      r->hasSide = false;
-      r->inside = true;
-      r->camera = InsideCamera(p.scene.bounds, p.view.candidate);
-    }
-  }
-}
-
 // Rank 0's output directory: made, locked, an interrupted commit finished,
 // killed runs' temporaries removed, the outputs opened under temporary names.
 int OpenOutputs(RunState* r) {
@@ -264,6 +235,34 @@ int OpenOutputs(RunState* r) {
 }
 
 }  // namespace
+
+CameraChoice ChooseCamera(const Options& o, const Prepared& p) {
+  CameraChoice c;
+  if (o.hasCamera) {
+    c.camera = o.camera;
+  } else if (!o.hasView && p.scene.camera.has) {
+    // The scene file's own camera (glTF) wins over a chosen side.
+    c.fromScene = true;
+    c.camera.eye = p.scene.camera.eye;
+    c.camera.target = p.scene.camera.target;
+    c.camera.up = p.scene.camera.up;
+    c.camera.fovyDeg = p.scene.camera.fovyDeg;
+  } else {
+    c.hasSide = true;
+    c.sideChosen = !o.hasView;
+    c.side = o.hasView ? o.view : p.side;
+    c.camera = SideCamera(p.scene.bounds, c.side);
+    // Where the sides see mostly back faces or one wall: a view from inside.
+    c.viewProbed = p.viewProbed && !o.hasView;
+    c.viewChoice = p.view;
+    if (c.viewProbed && p.view.inside) {
+      c.hasSide = false;
+      c.inside = true;
+      c.camera = InsideCamera(p.scene.bounds, p.view.candidate);
+    }
+  }
+  return c;
+}
 
 // Init: load, partition, mesh and measure this rank's environments, check
 // the memory budget, then make the arenas, build, and open the output files
@@ -347,8 +346,8 @@ int Init(RunState* r) {
   p.clock.Done("grid and arenas", os::Seconds() - gridStart);
   r->initStages = p.clock.stages;
 
-  SetCamera(r, p);
-  if (!MakeView(r->camera, o.width, o.height, &r->view))
+  r->cam = ChooseCamera(o, p);
+  if (!MakeView(r->cam.camera, o.width, o.height, &r->view))
     return FailInit(r, Status::Error("vismask: --camera: degenerate camera"));
 
   if (!Arena::Reserve(measure.used(), &r->rankArena))

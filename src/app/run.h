@@ -89,6 +89,18 @@ constexpr int kBandRows = 16;         // framebuffer rows per transfer to rank 0
 constexpr size_t kExportChunkBytes = 2048 * kGlbVertexBytes;
 static_assert(kExportChunkBytes % kGlbTriangleBytes == 0, "whole triangles per chunk");
 
+// The camera a render uses, and where it comes from (ChooseCamera).
+struct CameraChoice {
+  Camera camera;
+  bool hasSide = false;     // a side's: --view or chosen (not --camera)
+  bool sideChosen = false;  // the side is chosen by ChooseViewSide (not --view)
+  bool fromScene = false;   // the scene file's camera (glTF), no --camera or --view
+  ViewSide side = ViewSide::kFront;
+  bool inside = false;      // an inside candidate's (InsideCamera)
+  bool viewProbed = false;  // the sides were probed and no --view given: viewChoice
+  ViewChoice viewChoice;
+};
+
 // Everything a run needs after init, carved from arenas at init.
 struct RunState {
   Options options;
@@ -100,17 +112,8 @@ struct RunState {
   float patchSize = 0.0f;
   std::vector<std::unique_ptr<Environment>> envs;  // this rank's, made at init
   std::vector<Environment*> envPtrs;
-  Camera camera;            // the one used (--camera or a side's)
-  bool hasSide = false;     // the camera is a side's: --view or chosen (not --camera)
-  bool sideChosen = false;  // chosen by ChooseViewSide (not --view)
-  bool cameraFromScene = false;
-  std::vector<std::pair<std::string, double>>
-      initStages;  // InitClock's, for run.json  // the scene file's camera (glTF), no --camera or
-                   // --view
-  ViewSide side = ViewSide::kFront;
-  bool inside = false;  // the chosen camera is an inside candidate's (InsideCamera)
-  ViewChoice viewChoice;
-  bool viewProbed = false;
+  CameraChoice cam;  // the camera used, and where it came from
+  std::vector<std::pair<std::string, double>> initStages;  // InitClock's, for run.json
   View view;
   Arena rankArena = Arena::Measure();  // exchange and output buffers of this rank
   ExchangeBuffers exchange;
@@ -352,6 +355,10 @@ Status PrepareEnvs(const Prepared& p, uint32_t first, uint32_t end,
 // The patches (twins included) of the environments p holds.
 uint64_t OwnPatches(const Prepared& p);
 std::vector<uint8_t> TexturesUsed(const Prepared& p, uint32_t first, uint32_t count);
+// --camera, the scene file's own, a side of the box (chosen, or --view),
+// or a view from inside where the sides see little: the camera of render
+// and of scene-dump.
+CameraChoice ChooseCamera(const Options& o, const Prepared& p);
 int Init(RunState* r);
 void PrintWarnings(const SceneTextures& t);
 void WritePatchesCsv(RunState* r);

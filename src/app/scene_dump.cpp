@@ -111,32 +111,14 @@ int SceneDump(const Options& o) {
   s = StreamObj(p.info, o.load, [&](uint32_t, const Polygon& poly) { polygons.push_back(poly); });
   if (!s.ok()) return Fail(s);
 
-  // The camera, as render_init.cpp chooses it.
-  Camera camera;
-  const char* from = "side";
-  bool hasSide = false;
-  ViewSide side = ViewSide::kFront;
-  if (o.hasCamera) {
-    camera = o.camera;
-    from = "--camera";
-  } else if (!o.hasView && p.scene.camera.has) {
-    camera.eye = p.scene.camera.eye;
-    camera.target = p.scene.camera.target;
-    camera.up = p.scene.camera.up;
-    camera.fovyDeg = p.scene.camera.fovyDeg;
-    from = "scene";
-  } else {
-    hasSide = true;
-    side = o.hasView ? o.view : p.side;
-    camera = SideCamera(p.scene.bounds, side);
-    if (p.viewProbed && !o.hasView && p.view.inside) {
-      hasSide = false;
-      from = "inside";
-      camera = InsideCamera(p.scene.bounds, p.view.candidate);
-    }
-  }
+  // The camera render would use.
+  const CameraChoice cam = ChooseCamera(o, p);
+  const char* from = cam.fromScene ? "scene"
+                     : cam.inside  ? "inside"
+                     : cam.hasSide ? "side"
+                                   : "--camera";
   View view;
-  if (!MakeView(camera, o.width, o.height, &view))
+  if (!MakeView(cam.camera, o.width, o.height, &view))
     return Fail(Status::Error("vismask: --camera: degenerate camera"));
 
   const bool gltf = IsGltfPath(o.scene);
@@ -179,10 +161,10 @@ int SceneDump(const Options& o) {
   j += ", \"hi\": ";
   Vec(&j, p.scene.bounds.hi);
   j += "},\n  \"camera\": ";
-  CameraJson(&j, camera);
+  CameraJson(&j, cam.camera);
   j += std::string(", \"from\": \"") + from + "\", \"view\": " +
-       (hasSide ? std::string("\"") + ViewSideName(side) + "\"" : std::string("null")) +
-       ", \"view_auto\": " + (hasSide && !o.hasView ? "true" : "false") + "},\n";
+       (cam.hasSide ? std::string("\"") + ViewSideName(cam.side) + "\"" : std::string("null")) +
+       ", \"view_auto\": " + (cam.hasSide && cam.sideChosen ? "true" : "false") + "},\n";
   j += "  \"front_camera\": ";
   CameraJson(&j, SideCamera(p.scene.bounds, ViewSide::kFront));
   j += "},\n  \"sky\": ";

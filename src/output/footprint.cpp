@@ -89,7 +89,12 @@ struct FootprintReport {
     }
     return s;
   }
+  // vismask footprint --json, and its tables: appended to *out.
+  void Json(std::string* out) const;
+  void Text(std::string* out) const;
 };
+
+using ull = unsigned long long;
 
 // printf into *out (a line of up to 511 bytes).
 template <typename... Args>
@@ -100,139 +105,116 @@ void Add(std::string* out, const char* fmt, Args... args) {
 }
 
 // vismask footprint --json.
-void FootprintJson(const FootprintReport& r, std::string* out) {
-  const Options& o = r.o;
-  const Prepared& p = r.p;
-  const FootprintFigures& fig = r.fig;
-  const auto& envs = fig.envs;
-  const auto& probes = fig.probes;
-  const auto& rankTotal = fig.rankTotal;
-  const auto& rankEnvBytes = fig.rankEnvBytes;
-  const uint32_t total = r.total;
-  const int ranks = r.ranks;
-  auto add = [out](const char* fmt, auto... args) { Add(out, fmt, args...); };
-  auto planes = [&r](int a) { return r.Planes(a); };
-  using ull = unsigned long long;
-  const auto& rankOwn = fig.rankOwn;
-  const FootprintFigures& base = r.base;
-  const uint64_t mostPatches = r.mostPatches;
-  const double balance = r.balance;
+void FootprintReport::Json(std::string* out) const {
   *out += "{\n  \"scene\": " + JsonQuoted(o.scene) + ",\n";
-  add("  \"mask_method\": \"%s\",\n  \"packet_size_bytes\": %u,\n", MaskMethodName(o.maskMethod),
-      p.packetBytes);
+  Add(out, "  \"mask_method\": \"%s\",\n  \"packet_size_bytes\": %u,\n",
+      MaskMethodName(o.maskMethod), p.packetBytes);
   if (!o.exportPath.empty())  // the .glb --export would write
-    add("  \"export\": {\"vertices\": %llu, \"triangles\": %llu, \"max_file_bytes\": %llu},\n",
+    Add(out, "  \"export\": {\"vertices\": %llu, \"triangles\": %llu, \"max_file_bytes\": %llu},\n",
         (ull)fig.exportMesh.vertices, (ull)fig.exportMesh.triangles,
         (ull)GlbMaxFileBytes(fig.exportMesh));
   // What --two-sided / --two-sided-emitters cost against the one-sided
   // mesh (all patches, all ranks; total_bytes: every rank's arenas).
-  add("  \"two_sided\": {\"two_sided\": %s, \"two_sided_emitters\": %s, \"patches\": %llu, "
+  Add(out,
+      "  \"two_sided\": {\"two_sided\": %s, \"two_sided_emitters\": %s, \"patches\": %llu, "
       "\"twin_patches\": %llu, \"one_sided_patches\": %llu, \"environment_arena_bytes\": %llu, "
       "\"one_sided_environment_arena_bytes\": %llu, \"total_bytes\": %llu, "
       "\"one_sided_total_bytes\": %llu, \"extra_bytes\": %lld},\n",
       o.twoSided ? "true" : "false", o.twoSidedEmitters ? "true" : "false", (ull)fig.patches,
       (ull)fig.twins, (ull)base.patches, (ull)fig.envBytes, (ull)base.envBytes, (ull)fig.total,
       (ull)base.total, (long long)fig.total - (long long)base.total);
-  add("  \"split\": {\"balanced\": %s, \"grid\": [%d, %d, %d], \"most_patches\": %llu, "
+  Add(out,
+      "  \"split\": {\"balanced\": %s, \"grid\": [%d, %d, %d], \"most_patches\": %llu, "
       "\"patch_balance\": %.6f, \"planes\": [[%s], [%s], [%s]]},\n",
       p.grid.balanced ? "true" : "false", p.grid.n[0], p.grid.n[1], p.grid.n[2], (ull)mostPatches,
-      balance, planes(0).c_str(), planes(1).c_str(), planes(2).c_str());
+      balance, Planes(0).c_str(), Planes(1).c_str(), Planes(2).c_str());
   *out += "  \"environments\": [\n";
   for (uint32_t e = 0; e < total; ++e) {
-    const EnvFootprint& f = envs[e]->footprint();
-    add("    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"twin_patches\": %llu, "
+    const EnvFootprint& f = fig.envs[e]->footprint();
+    Add(out,
+        "    {\"env\": %u, \"rank\": %d, \"patches\": %llu, \"twin_patches\": %llu, "
         "\"grid_cells\": %llu, "
         "\"patch_bytes\": %llu, \"element_bytes\": %llu, \"vertex_bytes\": %llu, \"grid_bytes\": "
         "%llu, "
         "\"queue_bytes\": %llu, \"packet_bytes\": %llu, \"texcoord_bytes\": %llu, "
         "\"arena_bytes\": %llu}%s\n",
-        e, RankOfEnv(e, total, ranks), (ull)f.numPatches, (ull)envs[e]->numTwins(),
+        e, RankOfEnv(e, total, ranks), (ull)f.numPatches, (ull)fig.envs[e]->numTwins(),
         (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices, (ull)f.grid,
         (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total, e + 1 < total ? "," : "");
   }
   *out += "  ],\n  \"ranks\": [\n";
   for (int k = 0; k < ranks; ++k) {
-    const RunState& r = probes[k];
-    add("    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
+    const RunState& r = fig.probes[k];
+    Add(out,
+        "    {\"rank\": %d, \"environments\": %u, \"environment_arena_bytes\": %llu, "
         "\"exchange_bytes\": %llu, \"image_bytes\": %llu, \"output_bytes\": %llu, "
         "\"texture_bytes\": %llu, \"export_bytes\": %llu, \"rank_arena_bytes\": %llu, "
         "\"total_bytes\": %llu, \"init_peak_bytes\": %llu, \"budget_bytes\": %llu, "
         "\"checkpoint_bytes\": %llu}%s\n",
-        k, r.rankEnvs.count, (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
-        (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)r.rankExportBytes, (ull)rankOwn[k],
-        (ull)rankTotal[k], (ull)fig.rankInitPeak[k],
-        (ull)std::max(rankTotal[k], fig.rankInitPeak[k]), (ull)fig.rankCheckpoint[k],
-        k + 1 < ranks ? "," : "");
+        k, r.rankEnvs.count, (ull)fig.rankEnvBytes[k], (ull)r.rankExchangeBytes,
+        (ull)r.rankImageBytes, (ull)r.rankOutputBytes, (ull)r.rankTextureBytes,
+        (ull)r.rankExportBytes, (ull)fig.rankOwn[k], (ull)fig.rankTotal[k],
+        (ull)fig.rankInitPeak[k], (ull)std::max(fig.rankTotal[k], fig.rankInitPeak[k]),
+        (ull)fig.rankCheckpoint[k], k + 1 < ranks ? "," : "");
   }
   *out += "  ]\n}\n";
 }
 
 // vismask footprint's tables.
-void FootprintText(const FootprintReport& r, std::string* out) {
-  const Options& o = r.o;
-  const Prepared& p = r.p;
-  const FootprintFigures& fig = r.fig;
-  const auto& envs = fig.envs;
-  const auto& probes = fig.probes;
-  const auto& rankTotal = fig.rankTotal;
-  const auto& rankEnvBytes = fig.rankEnvBytes;
-  const uint32_t total = r.total;
-  const int ranks = r.ranks;
-  auto add = [out](const char* fmt, auto... args) { Add(out, fmt, args...); };
-  auto planes = [&r](int a) { return r.Planes(a); };
-  using ull = unsigned long long;
-  const FootprintFigures& base = r.base;
-  const uint64_t mostPatches = r.mostPatches;
-  const double balance = r.balance;
-  add("vismask footprint: %s, %u environment%s, %d rank%s, mask %s %s=%u (%u-byte packets), "
+void FootprintReport::Text(std::string* out) const {
+  Add(out,
+      "vismask footprint: %s, %u environment%s, %d rank%s, mask %s %s=%u (%u-byte packets), "
       "%dx%d image\n\n",
       o.scene.c_str(), total, total == 1 ? "" : "s", ranks, ranks == 1 ? "" : "s",
       MaskMethodName(o.maskMethod), o.maskMethod == MaskMethod::kR ? "N" : "R",
       o.maskMethod == MaskMethod::kR ? RayCap(o) : o.maskRes, p.packetBytes, o.width, o.height);
-  add("%4s %4s %9s %10s %12s %12s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches",
+  Add(out, "%4s %4s %9s %10s %12s %12s %12s %12s %12s %12s %12s %13s\n", "env", "rank", "patches",
       "grid_cells", "patches_B", "elements_B", "vertices_B", "grid_B", "queue_B", "packets_B",
       "texcoord_B", "arena_B");
   for (uint32_t e = 0; e < total; ++e) {
-    const EnvFootprint& f = envs[e]->footprint();
+    const EnvFootprint& f = fig.envs[e]->footprint();
     int k = RankOfEnv(e, total, ranks);
-    add("%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
+    Add(out, "%4u %4d %9llu %10llu %12llu %12llu %12llu %12llu %12llu %12llu %12llu %13llu\n", e, k,
         (ull)f.numPatches, (ull)f.gridCells, (ull)f.patches, (ull)f.elements, (ull)f.vertices,
         (ull)f.grid, (ull)f.queue, (ull)f.packets, (ull)f.textures, (ull)f.total);
   }
-  add("\nsplit %dx%dx%d (%s): the most patches in one environment %llu, %.3f x the mean\n",
+  Add(out, "\nsplit %dx%dx%d (%s): the most patches in one environment %llu, %.3f x the mean\n",
       p.grid.n[0], p.grid.n[1], p.grid.n[2], p.grid.balanced ? "balanced, --envs auto" : "uniform",
       (ull)mostPatches, balance);
   for (int a = 0; a < 3; ++a)
-    if (p.grid.n[a] > 1) add("  %c planes: %s\n", "xyz"[a], planes(a).c_str());
-  add("\n%4s %4s %14s %12s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B", "exchange_B",
-      "image_B", "output_B", "texture_B", "total_B");
+    if (p.grid.n[a] > 1) Add(out, "  %c planes: %s\n", "xyz"[a], Planes(a).c_str());
+  Add(out, "\n%4s %4s %14s %12s %12s %12s %12s %13s\n", "rank", "envs", "env_arenas_B",
+      "exchange_B", "image_B", "output_B", "texture_B", "total_B");
   for (int k = 0; k < ranks; ++k) {
-    const RunState& r = probes[k];
-    add("%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.rankEnvs.count,
-        (ull)rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
-        (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)rankTotal[k]);
+    const RunState& r = fig.probes[k];
+    Add(out, "%4d %4u %14llu %12llu %12llu %12llu %12llu %13llu\n", k, r.rankEnvs.count,
+        (ull)fig.rankEnvBytes[k], (ull)r.rankExchangeBytes, (ull)r.rankImageBytes,
+        (ull)r.rankOutputBytes, (ull)r.rankTextureBytes, (ull)fig.rankTotal[k]);
   }
   if (!o.exportPath.empty())
-    add("\n--export: %llu vertices, %llu triangles, a .glb of at most %llu bytes; %llu bytes of\n"
+    Add(out,
+        "\n--export: %llu vertices, %llu triangles, a .glb of at most %llu bytes; %llu bytes of\n"
         "buffers on rank 0%s (in total_B): counts, a %llu-byte chunk the mesh streams through,\n"
         "and rank 0's %llu-byte head of the .glb\n",
         (ull)fig.exportMesh.vertices, (ull)fig.exportMesh.triangles,
-        (ull)GlbMaxFileBytes(fig.exportMesh), (ull)probes[0].rankExportBytes,
+        (ull)GlbMaxFileBytes(fig.exportMesh), (ull)fig.probes[0].rankExportBytes,
         ranks > 1
-            ? (", " + std::to_string(probes[1].rankExportBytes) + " on each other rank").c_str()
+            ? (", " + std::to_string(fig.probes[1].rankExportBytes) + " on each other rank").c_str()
             : "",
         (ull)kExportChunkBytes, (ull)kGlbHeadBytes);
   if (p.twins.any())
-    add("\n%s: %llu patches, %llu of them twins (one-sided: %llu); %llu bytes in all ranks' "
+    Add(out,
+        "\n%s: %llu patches, %llu of them twins (one-sided: %llu); %llu bytes in all ranks' "
         "arenas, %+lld (%+.1f%%) against one-sided\n",
         o.twoSided ? "--two-sided" : "--two-sided-emitters", (ull)fig.patches, (ull)fig.twins,
         (ull)base.patches, (ull)fig.total, (long long)fig.total - (long long)base.total,
         100.0 * (static_cast<double>(fig.total) / static_cast<double>(base.total) - 1.0));
-  add("\n%4s %14s %14s %14s\n", "rank", "init_peak_B", "budget_B", "checkpoint_B");
+  Add(out, "\n%4s %14s %14s %14s\n", "rank", "init_peak_B", "budget_B", "checkpoint_B");
   for (int k = 0; k < ranks; ++k)
-    add("%4d %14llu %14llu %14llu\n", k, (ull)fig.rankInitPeak[k],
-        (ull)std::max(rankTotal[k], fig.rankInitPeak[k]), (ull)fig.rankCheckpoint[k]);
-  add("\nbytes are arena reservations (the whole of a solve's memory after init); a rank's\n"
+    Add(out, "%4d %14llu %14llu %14llu\n", k, (ull)fig.rankInitPeak[k],
+        (ull)std::max(fig.rankTotal[k], fig.rankInitPeak[k]), (ull)fig.rankCheckpoint[k]);
+  Add(out,
+      "\nbytes are arena reservations (the whole of a solve's memory after init); a rank's\n"
       "process also holds its binary and libraries (see run.json's memory section).\n"
       "init_peak_B bounds init's own peak (the scene read in passes, the meshes and\n"
       "staged copies beside the arenas); budget_B, the larger, is what --mem-budget must "
@@ -276,9 +258,9 @@ int Footprint(const Options& o) {
                                total, o.ranks, mostPatches, balance};
   std::string out;
   if (o.json)
-    FootprintJson(report, &out);
+    report.Json(&out);
   else
-    FootprintText(report, &out);
+    report.Text(&out);
   return WriteStdout(out.data(), out.size()) ? kExitOk : kExitOutput;
 }
 

@@ -227,24 +227,51 @@ std::string CheckPixelBytes(size_t left, int w, int h, int bytesPerPixel, const 
   return "";
 }
 
-}  // namespace
+// The header of a PFM or PGM: "MAGIC W H LAST", then the single whitespace
+// byte before the pixels.
+template <typename Last>
+struct ImageHeader {
+  std::string magic;
+  int w = 0, h = 0;
+  Last last = 0;     // PFM: the scale; PGM: maxval
+  size_t start = 0;  // the pixels' offset in `bytes`
+};
+// The header at the start of `bytes`, as a stream reads it. False unless
+// all four fields are there, the magic is `magic` and W and H are positive
+// (LAST is the caller's to check).
+template <typename Last>
+bool ReadHeader(const std::string& bytes, const char* magic, ImageHeader<Last>* hd) {
+  MemoryBuf buf(bytes.data(), bytes.size());
+  std::istream in(&buf);
+  in >> hd->magic >> hd->w >> hd->h >> hd->last;
+  if (!in || hd->magic != magic || hd->w <= 0 || hd->h <= 0) return false;
+  in.get();
+  hd->start = buf.Offset();
+  return true;
+}
 
-Status ReadPfm(const std::string& path, PfmImage* image) {
+// Reads the file at `path` whole and decodes it with `fromBytes`.
+template <typename Image>
+Status ReadImageFile(const std::string& path, Image* image,
+                     Status (*fromBytes)(const std::string&, const std::string&, Image*)) {
   std::string bytes;
   std::string err = ReadBytes(path, &bytes);
   if (!err.empty()) return Status::At(path, 0, err);
-  return ReadPfmFromBytes(path, bytes, image);
+  return fromBytes(path, bytes, image);
+}
+
+}  // namespace
+
+Status ReadPfm(const std::string& path, PfmImage* image) {
+  return ReadImageFile(path, image, ReadPfmFromBytes);
 }
 
 Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmImage* image) {
-  MemoryBuf buf(bytes.data(), bytes.size());
-  std::istream in(&buf);
-  std::string magic;
-  int w = 0, h = 0;
-  double scale = 0.0;
-  in >> magic >> w >> h >> scale;
-  if (!in || magic != "PF" || w <= 0 || h <= 0 || scale == 0.0 || !std::isfinite(scale))
+  ImageHeader<double> hd;
+  if (!ReadHeader(bytes, "PF", &hd) || hd.last == 0.0 || !std::isfinite(hd.last))
     return Status::At(name, 0, "not a colour PFM (expected 'PF', width, height, scale)");
+  const int w = hd.w, h = hd.h;
+  const double scale = hd.last;
   // The scale's sign is the byte order; its magnitude would scale every
   // pixel, which vismask does not do: only 1 and -1 are read.
   if (scale != 1.0 && scale != -1.0)
@@ -252,8 +279,7 @@ Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmIm
                       "PFM scale " + std::to_string(scale) +
                           ": only 1 (big-endian) and -1 (little-endian) are read (any other "
                           "would scale the pixels)");
-  in.get();  // the single whitespace byte after the scale
-  const size_t start = buf.Offset();
+  const size_t start = hd.start;
   std::string err = CheckPixelBytes(bytes.size() - start, w, h, 12, "PFM");
   if (!err.empty()) return Status::At(name, 0, err);
   const size_t extra = bytes.size() - start - size_t(w) * size_t(h) * 12;
@@ -290,23 +316,16 @@ Status ReadPfmFromBytes(const std::string& name, const std::string& bytes, PfmIm
 }
 
 Status ReadPgm(const std::string& path, PgmImage* image) {
-  std::string bytes;
-  std::string err = ReadBytes(path, &bytes);
-  if (!err.empty()) return Status::At(path, 0, err);
-  return ReadPgmFromBytes(path, bytes, image);
+  return ReadImageFile(path, image, ReadPgmFromBytes);
 }
 
 Status ReadPgmFromBytes(const std::string& name, const std::string& bytes, PgmImage* image) {
-  MemoryBuf buf(bytes.data(), bytes.size());
-  std::istream in(&buf);
-  std::string magic;
-  int w = 0, h = 0, maxval = 0;
-  in >> magic >> w >> h >> maxval;
-  if (!in || magic != "P5" || w <= 0 || h <= 0 || maxval <= 0 || maxval > 255)
+  ImageHeader<int> hd;
+  if (!ReadHeader(bytes, "P5", &hd) || hd.last <= 0 || hd.last > 255)
     return Status::At(name, 0,
                       "not an 8-bit binary PGM (expected 'P5', width, height, maxval <= 255)");
-  in.get();  // the single whitespace byte after maxval
-  const size_t start = buf.Offset();
+  const int w = hd.w, h = hd.h;
+  const size_t start = hd.start;
   std::string err = CheckPixelBytes(bytes.size() - start, w, h, 1, "PGM");
   if (!err.empty()) return Status::At(name, 0, err);
   const uint8_t* p = reinterpret_cast<const uint8_t*>(bytes.data()) + start;

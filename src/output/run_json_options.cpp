@@ -58,7 +58,7 @@ void Exposure(Fields& f, const Context& c) {
   f.Bool("exposure_auto", !c.o.hasExposure);
 }
 void CameraKeys(Fields& f, const Context& c) {
-  const Camera& k = c.r.camera;  // as --camera takes it: eye, target, up, fovy
+  const Camera& k = c.r.cam.camera;  // as --camera takes it: eye, target, up, fovy
   f.Key("camera").Printf("[%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g]", k.eye.x,
                          k.eye.y, k.eye.z, k.target.x, k.target.y, k.target.z, k.up.x, k.up.y,
                          k.up.z, k.fovyDeg);
@@ -70,13 +70,13 @@ void CameraKeys(Fields& f, const Context& c) {
 // the scene's.
 void ViewKeys(Fields& f, const Context& c) {
   const RunState& r = c.r;
-  if (r.hasSide)
-    f.Key("view").Printf("\"%s\"", ViewSideName(r.side));
+  if (r.cam.hasSide)
+    f.Key("view").Printf("\"%s\"", ViewSideName(r.cam.side));
   else
-    f.Key("view").Printf("%s", r.inside ? "\"inside\"" : "null");
-  f.Bool("view_auto", r.sideChosen);
-  const ViewChoice& v = r.viewChoice;
-  if (!r.viewProbed)
+    f.Key("view").Printf("%s", r.cam.inside ? "\"inside\"" : "null");
+  f.Bool("view_auto", r.cam.sideChosen);
+  const ViewChoice& v = r.cam.viewChoice;
+  if (!r.cam.viewProbed)
     f.Key("view_choice").Printf("null");
   else {
     TextWriter& w = f.Key("view_choice");
@@ -93,7 +93,7 @@ void ViewKeys(Fields& f, const Context& c) {
     for (int k = 0; k < kInsideCandidates; ++k) w.Printf("%s%.6g", k ? ", " : "", v.lit[k]);
     w.Printf("]}");
   }
-  f.Bool("camera_from_scene", r.cameraFromScene);
+  f.Bool("camera_from_scene", r.cam.fromScene);
 }
 // --sky (radiance) and --sun (towards it, irradiance, angular diameter): null without.
 void Sky(Fields& f, const Context& c) {

@@ -141,10 +141,8 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
   bool haveMaterial = false;
   std::string lineText;
   int line = 0;
-  while (lines.Next(&lineText)) {
-    ++line;
-    const Tokens t = Tokenize(lineText);
-    if (t.empty()) continue;
+  Tokens t;
+  while (lines.NextStatement(&lineText, &line, &t)) {
     const std::string& key = t[0];
     const size_t args = t.size() - 1;
     if (key == "newmtl") {

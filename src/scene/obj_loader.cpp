@@ -96,10 +96,8 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
   std::string text;
   std::vector<Polygon> pieces;  // what one face became
   int line = 0;
-  while (lines.Next(&text)) {
-    ++line;
-    const Tokens t = Tokenize(text);
-    if (t.empty()) continue;
+  Tokens t;
+  while (lines.NextStatement(&text, &line, &t)) {
     const std::string& key = t[0];
     const size_t args = t.size() - 1;
     if (key == "v") {

@@ -58,6 +58,9 @@ Tokens Tokenize(const std::string& line);
 std::string MapName(const std::string& line, const Tokens& t, bool* hadOptions);
 // A piece of the input quoted in a message (at most 32 bytes, escaped).
 std::string Quote(const std::string& s);
+// Appends byte c to *out: as it is if it is printable ASCII other than a
+// backslash, else as \xNN (Quote's and the texture decoders' messages).
+void AppendEscaped(std::string* out, unsigned char c);
 // Whether an unknown MTL key may be named in a warning.
 bool LooksLikeKey(const std::string& s);
 // Reads a whole file (regular files only, at most kMaxFileBytes); returns an
@@ -123,6 +126,17 @@ class LineSource {
   virtual ~LineSource() = default;
   // The next line into *line; false at the end (or on a read error: error()).
   virtual bool Next(std::string* line) = 0;
+  // The next line that is not blank or only a comment: the line into
+  // *text, its tokens into *tokens, *number advanced past every line read
+  // (the line numbers of the caller's messages); false at the end.
+  bool NextStatement(std::string* text, int* number, Tokens* tokens) {
+    while (Next(text)) {
+      ++*number;
+      *tokens = Tokenize(*text);
+      if (!tokens->empty()) return true;
+    }
+    return false;
+  }
   // An error met on the way ("cannot read (...)", a line too long, a binary
   // file), empty if none, and the line it is at (0: the file as a whole).
   virtual std::string error() const { return ""; }

@@ -99,17 +99,19 @@ std::string Num(double x) {
 std::string Quote(const std::string& s) {
   constexpr size_t kMax = 32;
   std::string q = "'";
-  for (size_t i = 0; i < s.size() && i < kMax; ++i) {
-    unsigned char c = static_cast<unsigned char>(s[i]);
-    if (c >= 0x20 && c < 0x7f && c != '\\') {
-      q += static_cast<char>(c);
-    } else {
-      char hex[8];
-      std::snprintf(hex, sizeof hex, "\\x%02x", c);
-      q += hex;
-    }
-  }
+  for (size_t i = 0; i < s.size() && i < kMax; ++i)
+    AppendEscaped(&q, static_cast<unsigned char>(s[i]));
   return q + (s.size() > kMax ? "'..." : "'");
+}
+
+void AppendEscaped(std::string* out, unsigned char c) {
+  if (c >= 0x20 && c < 0x7f && c != '\\') {
+    *out += static_cast<char>(c);
+  } else {
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "\\x%02x", c);
+    *out += hex;
+  }
 }
 
 // Whether an unknown MTL key may be named in a warning: a short identifier,

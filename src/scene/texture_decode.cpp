@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "scene_parse.h"
 #include "vismask/core/os.h"
 #include "vismask/scene/jpeg.h"
 #include "vismask/scene/texture.h"
@@ -70,16 +71,8 @@ namespace {
 // come from the file (a terminal escape, say).
 std::string EscapedReason(const char* reason) {
   std::string out;
-  for (const char* c = reason; *c != '\0' && out.size() < 200; ++c) {
-    const unsigned char b = static_cast<unsigned char>(*c);
-    if (b >= 0x20 && b < 0x7f && b != '\\') {
-      out += static_cast<char>(b);
-    } else {
-      char hex[8];
-      std::snprintf(hex, sizeof hex, "\\x%02x", b);
-      out += hex;
-    }
-  }
+  for (const char* c = reason; *c != '\0' && out.size() < 200; ++c)
+    objload::AppendEscaped(&out, static_cast<unsigned char>(*c));
   return out;
 }
 

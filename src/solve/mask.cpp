@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "vismask/core/enum_name.h"
 #include "vismask/core/fast_trig.h"
 
 namespace vismask {
@@ -14,31 +15,13 @@ constexpr double kTwoPi = 6.283185307179586;
 }  // namespace
 
 const char* MaskMethodName(MaskMethod m) {
-  switch (m) {
-    case MaskMethod::kNone:
-      return "none";
-    case MaskMethod::kA:
-      return "A";
-    case MaskMethod::kB:
-      return "B";
-    case MaskMethod::kC:
-      return "C";
-    case MaskMethod::kR:
-      return "R";
-  }
-  return "?";
+  static constexpr const char* kNames[] = {"none", "A", "B", "C", "R"};
+  return EnumName<MaskMethod::kR>(m, kNames);
 }
 
 const char* CentreChoiceName(CentreChoice c) {
-  switch (c) {
-    case CentreChoice::kAll:
-      return "all";
-    case CentreChoice::kRead:
-      return "read";
-    case CentreChoice::kAuto:
-      return "auto";
-  }
-  return "?";
+  static constexpr const char* kNames[] = {"all", "read", "auto"};
+  return EnumName<CentreChoice::kAuto>(c, kNames);
 }
 
 MaskShape MaskShapeOf(MaskMethod m, uint32_t maskRes, uint32_t rays) {

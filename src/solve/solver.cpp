@@ -6,28 +6,15 @@
 #include <cstring>
 #include <new>
 
+#include "vismask/core/enum_name.h"
 #include "vismask/core/os.h"
 
 namespace vismask {
 
 const char* StopReasonName(StopReason r) {
-  switch (r) {
-    case StopReason::kConverged:
-      return "converged";
-    case StopReason::kMaxShots:
-      return "max-shots";
-    case StopReason::kMaxSeconds:
-      return "max-seconds";
-    case StopReason::kRayBudget:
-      return "ray-budget";
-    case StopReason::kStalled:
-      return "stalled";
-    case StopReason::kNoLoss:
-      return "no_loss";
-    case StopReason::kInterrupted:
-      return "interrupted";
-  }
-  return "?";
+  static constexpr const char* kNames[] = {"converged", "max-shots", "max-seconds", "ray-budget",
+                                           "stalled",   "no_loss",   "interrupted"};
+  return EnumName<StopReason::kInterrupted>(r, kNames);
 }
 
 uint32_t AdmittedForwards(uint64_t round, uint32_t env, uint32_t numEnvs, uint64_t capacity,

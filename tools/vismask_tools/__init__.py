@@ -4,7 +4,8 @@
   runner     running vismask (with a run cache keyed by the command line), timed commands
   reps       repeated runs: counts checked equal, timings as median (min–max)
   files      JSON, CSV, PFM, PGM and PNG files, run.json
-  images     image error (relative RMSE, as `vismask compare`), difference images
+  images     image error (relative RMSE, as `vismask compare`), difference images,
+             the emitter mask's dilation (tools/reference and its Blender script)
   stats      medians with their min-max, percentages
   plot       gnuplot
   markdown   Markdown tables and generated sections of docs/*.md

@@ -21,6 +21,11 @@ import time
 import bpy
 from mathutils import Matrix, Vector
 
+# The package's mask dilation, as tools/reference's supersampling uses it
+# (Blender's Python has the standard library the package needs).
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from vismask_tools.images import dilated_mask  # noqa: E402
+
 
 def Fail(msg):
     print("reference-blender: " + msg, file=sys.stderr)
@@ -244,12 +249,7 @@ def WriteMask(path, emit, w, h, dilate):
             k = 4 * (row + x)
             if emit[k] > 0.0 or emit[k + 1] > 0.0 or emit[k + 2] > 0.0:
                 hit[y * w + x] = 1
-    mask = bytearray(w * h)
-    for i in [i for i in range(w * h) if hit[i]]:
-        y, x = divmod(i, w)
-        for yy in range(max(0, y - dilate), min(h, y + dilate + 1)):
-            for xx in range(max(0, x - dilate), min(w, x + dilate + 1)):
-                mask[yy * w + xx] = 255
+    mask = dilated_mask(hit, w, h, dilate)
     with open(path, "wb") as f:
         f.write(b"P5\n%d %d\n255\n" % (w, h))
         f.write(bytes(mask))

@@ -308,34 +308,37 @@ def resume_run(c):
         return None
     r = {"nodes": n, "args": args, "kill_round": c.resume_kill_round, "victim": c.resume_victim}
     sim = ["tools/cluster-sim", "--nodes", str(n), "--link", "1gbit", "--report"]
+    def sim_render(name, extra, more=lambda rj: {}):
+        """A render on the N nodes into resume-NAME/out with `extra` options:
+        its wall time (cluster-sim's), solve time and rounds, then more(its
+        run.json), then whether its outputs are the one-process run's; None
+        if it failed."""
+        d = c.path("resume-" + name)
+        fresh(d)
+        out = os.path.join(d, "out")
+        rc, err, wall = run(sim + [os.path.join(d, "report.json"), "--", "render", scene] + args +
+                            ["--out", out, "--quiet"] + extra)
+        if rc != 0:
+            log(err[-3000:])
+            return None
+        rj = run_json(out)
+        fig = {"wall": load_json(os.path.join(d, "report.json"))["wall_seconds"],
+               "solve": rj["timings"]["solve_seconds"], "rounds": rj["result"]["rounds"]}
+        fig.update(more(rj))
+        fig["identical"] = same_bytes(out, ref)
+        return fig
+
     # The uninterrupted run, and what a checkpoint a round costs.
-    d = c.path("resume-whole")
-    fresh(d)
-    rc, err, wall = run(sim + [os.path.join(d, "report.json"), "--", "render", scene] + args +
-                        ["--out", os.path.join(d, "out"), "--quiet"])
-    if rc != 0:
-        log(err[-3000:])
+    r["whole"] = sim_render("whole", [])
+    if r["whole"] is None:
         return None
-    rj = run_json(os.path.join(d, "out"))
-    r["whole"] = {"wall": load_json(os.path.join(d, "report.json"))["wall_seconds"],
-                  "solve": rj["timings"]["solve_seconds"], "rounds": rj["result"]["rounds"],
-                  "identical": same_bytes(os.path.join(d, "out"), ref)}
-    d = c.path("resume-every")
-    fresh(d)
-    ck_every = os.path.join(d, "ck")
-    rc, err, wall = run(sim + [os.path.join(d, "report.json"), "--", "render", scene] + args +
-                        ["--out", os.path.join(d, "out"), "--quiet", "--checkpoint", ck_every,
-                         "--checkpoint-every", "0"])
-    if rc != 0:
-        log(err[-3000:])
+    r["every"] = sim_render(
+        "every", ["--checkpoint", c.path("resume-every", "ck"), "--checkpoint-every", "0"],
+        lambda rj: {"written": rj["checkpoint"]["written"],
+                    "write_seconds": rj["checkpoint"]["rank0_write_seconds"],
+                    "rank_bytes": rj["checkpoint"]["rank_bytes"]})
+    if r["every"] is None:
         return None
-    rj = run_json(os.path.join(d, "out"))
-    r["every"] = {"wall": load_json(os.path.join(d, "report.json"))["wall_seconds"],
-                  "solve": rj["timings"]["solve_seconds"], "rounds": rj["result"]["rounds"],
-                  "written": rj["checkpoint"]["written"],
-                  "write_seconds": rj["checkpoint"]["rank0_write_seconds"],
-                  "rank_bytes": rj["checkpoint"]["rank_bytes"],
-                  "identical": same_bytes(os.path.join(d, "out"), ref)}
     # Killed: rank `victim` (a whole node: its one rank) once the manifest holds round K.
     d = c.path("resume-killed")
     fresh(d)

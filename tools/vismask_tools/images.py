@@ -22,6 +22,18 @@ def diff_png(path, w, h, a, b, gain, region=None):
     write_png(path, w, h, out)
 
 
+def dilated_mask(hit, w, h, d):
+    """255 within d pixels (a (2d+1)^2 square) of every true entry of `hit`
+    (w x h, rows in order), else 0: the bytes of a PGM's pixels."""
+    mask = bytearray(w * h)
+    for i in [i for i in range(w * h) if hit[i]]:
+        y, x = divmod(i, w)
+        for yy in range(max(0, y - d), min(h, y + d + 1)):
+            for xx in range(max(0, x - d), min(w, x + d + 1)):
+                mask[yy * w + xx] = 255
+    return mask
+
+
 def neighbours(i, w, h):
     x, y = i % w, i // w
     for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):

@@ -18,6 +18,7 @@ import time
 
 from . import ROOT
 from .files import read_pfm
+from .images import dilated_mask
 from .scene_dump import Blobs, Camera, CameraArgs, Dump, InputError, LightArgs, Mesh
 
 kVersion = 1  # of the conventions and the Blender script: part of the cache key
@@ -101,12 +102,7 @@ def Image(a, argv):
     hit = [any(mask[(K * y + j) * W + K * x + i] for j in range(K) for i in range(K))
            for y in range(h) for x in range(w)]
     extra = kMaskDilate - kMaskDilate // K
-    small = bytearray(w * h)
-    for k in [k for k in range(w * h) if hit[k]]:
-        y, x = divmod(k, w)
-        for yy in range(max(0, y - extra), min(h, y + extra + 1)):
-            for xx in range(max(0, x - extra), min(w, x + extra + 1)):
-                small[yy * w + xx] = 255
+    small = dilated_mask(hit, w, h, extra)
     meta.update({"width": w, "height": h, "supersample": K, "rendered_size": [W, K * h],
                  "masked_pixels": sum(1 for v in small if v),
                  "mask": meta["mask"] + " at the rendered size; OR over %dx%d, dilated %d px more"

@@ -142,13 +142,8 @@ class Grid {
   // takes its header only (SubGridOf); the sub-grid's cells are laid out the
   // same way in subStart() (SubCellRefs, SubCellPlaneOf).
   Span<const uint32_t> cellStart() const { return cellStart_; }
-  Span<const uint32_t> CellRefs(size_t c) const {
-    uint32_t b = cellStart_[c], e = cellStart_[c + 1];
-    return b == e ? Span<const uint32_t>() : Span<const uint32_t>(refs_.data() + b + 1, e - b - 1);
-  }
-  uint32_t CellPlaneOf(size_t c) const {
-    return cellStart_[c] == cellStart_[c + 1] ? kNoPlane : refs_[cellStart_[c]];
-  }
+  Span<const uint32_t> CellRefs(size_t c) const { return RefsAt(cellStart_, c); }
+  uint32_t CellPlaneOf(size_t c) const { return HeaderAt(cellStart_, c); }
   Span<const CellPlane> planes() const { return planes_; }
   // The sub-grid of top cell c, or nullptr.
   const SubGrid* SubGridOf(size_t c) const {
@@ -157,18 +152,24 @@ class Grid {
   }
   Span<const SubGrid> subGrids() const { return subs_; }
   // Sub-grid cell s (SubGrid::first + its index in the sub-grid).
-  Span<const uint32_t> SubCellRefs(size_t s) const {
-    uint32_t b = subStart_[s], e = subStart_[s + 1];
-    return b == e ? Span<const uint32_t>() : Span<const uint32_t>(refs_.data() + b + 1, e - b - 1);
-  }
-  uint32_t SubCellPlaneOf(size_t s) const {
-    return subStart_[s] == subStart_[s + 1] ? kNoPlane : refs_[subStart_[s]];
-  }
+  Span<const uint32_t> SubCellRefs(size_t s) const { return RefsAt(subStart_, s); }
+  uint32_t SubCellPlaneOf(size_t s) const { return HeaderAt(subStart_, s); }
   Span<const uint64_t> subOccupied() const { return subOccupied_; }
   // Bit c of word c / 64: cell c holds at least one reference.
   Span<const uint64_t> occupied() const { return occupied_; }
 
  private:
+  // Cell i of a level whose cells take words start[i] .. start[i + 1] - 1
+  // of refs_ (the top level: cellStart_; the sub-grids': subStart_): its
+  // patches, and its header (kNoPlane for an empty cell).
+  Span<const uint32_t> RefsAt(Span<const uint32_t> start, size_t i) const {
+    uint32_t b = start[i], e = start[i + 1];
+    return b == e ? Span<const uint32_t>() : Span<const uint32_t>(refs_.data() + b + 1, e - b - 1);
+  }
+  uint32_t HeaderAt(Span<const uint32_t> start, size_t i) const {
+    return start[i] == start[i + 1] ? kNoPlane : refs_[start[i]];
+  }
+
   // A walk's state between its levels: the ray (tMax just past the best hit
   // so far), where the walk stops (the ray's end t1 or the best hit), the
   // best hit, and the patches tested.

@@ -110,17 +110,27 @@ struct FilePart {
 // the rename) or "renamed" (before the directory's sync).
 bool WriteFileAtomic(const char* path, const FilePart* parts, int n, uint32_t* crc, char* why);
 
+// What owns a file descriptor, fd_ (-1: none): InFile, OutFile and
+// DirLock. It is closed on destruction (if still open) and never copied.
+class FdOwner {
+ public:
+  FdOwner(const FdOwner&) = delete;
+  FdOwner& operator=(const FdOwner&) = delete;
+  bool isOpen() const { return fd_ >= 0; }
+
+ protected:
+  FdOwner() = default;
+  ~FdOwner();
+
+  int fd_ = -1;
+};
+
 // A regular file opened for reading (the loaders at init: OBJ, MTL, PFM,
 // PGM, textures, a .glb's header). Read fills `buf` with up to n bytes, fewer
 // only at the end of the file: the count, 0 at the end, -1 on an error
 // (*why: strerror's text). Closed on destruction.
-class InFile {
+class InFile : public FdOwner {
  public:
-  InFile() = default;
-  ~InFile();
-  InFile(const InFile&) = delete;
-  InFile& operator=(const InFile&) = delete;
-
   // Opens `path`, which must be a regular file: a device (/dev/zero), a
   // FIFO (never waited for), a directory or a socket is refused, *why
   // "not a regular file (a FIFO)" and kind() naming it.
@@ -128,13 +138,11 @@ class InFile {
   int64_t Read(void* buf, size_t n, std::string* why);
   // The file's size in bytes, -1 on an error.
   int64_t Size() const;
-  bool isOpen() const { return fd_ >= 0; }
   // After Open refused a file that is not a regular one: what it is ("a
   // FIFO", "a character device", ...); null otherwise.
   const char* kind() const { return kind_; }
 
  private:
-  int fd_ = -1;
   const char* kind_ = nullptr;
 };
 
@@ -143,12 +151,10 @@ class InFile {
 // so an interrupted run never leaves a file that looks complete. Discard()
 // (or destruction without a commit), a fatal signal (above) and
 // RemoveTempFiles() remove the temporary file.
-class OutFile {
+class OutFile : public FdOwner {
  public:
   OutFile() = default;
   ~OutFile();
-  OutFile(const OutFile&) = delete;
-  OutFile& operator=(const OutFile&) = delete;
 
   // Opens the temporary file for writing, created anew (O_EXCL) and never
   // through a symbolic link (O_NOFOLLOW): a regular file already of that
@@ -163,7 +169,6 @@ class OutFile {
   // Closes and renames to the final name. False (with *why, kWhyBytes) on failure.
   bool Commit(char* why);
   void Discard();
-  bool isOpen() const { return fd_ >= 0; }
   const char* path() const { return path_; }
   const char* tmpPath() const { return tmpPath_; }
   // What Write has been given since Open: its byte count and CRC-32 (as
@@ -177,7 +182,6 @@ class OutFile {
   // failed.
   bool Close(char* why);
 
-  int fd_ = -1;
   int tempSlot_ = -1;   // the temporary name's entry in the signal handler's table
   int writeErrno_ = 0;  // errno of the first failed write, 0 if none
   uint64_t bytes_ = 0;
@@ -221,12 +225,8 @@ int FinishInterruptedCommit(const char* dir, int* renamed, char* why);
 // process's end (flock on DIR/.vismask.lock, which holds the holder's pid).
 // A second run into the same directory is refused instead of the two
 // splicing each other's files.
-class DirLock {
+class DirLock : public FdOwner {
  public:
-  DirLock() = default;
-  ~DirLock();
-  DirLock(const DirLock&) = delete;
-  DirLock& operator=(const DirLock&) = delete;
   // False (with *why, naming the holder's pid when known) if another
   // process holds the lock (inUse()) or the lock file cannot be made: it
   // is opened without following a symbolic link, and must be a regular
@@ -237,7 +237,6 @@ class DirLock {
   bool inUse() const { return inUse_; }
 
  private:
-  int fd_ = -1;
   bool inUse_ = false;
 };
 
