@@ -91,7 +91,9 @@ class Environment {
   const DirectLight& directLight() const { return direct_.light(); }
   float rayEpsilon() const { return options_.rayEpsilon; }
   glm::dvec3 Indirect(uint32_t e) const { return elements_.Indirect(e); }
-  void EmissionUnshot(double out[3]) const { direct_.EmissionUnshot(out); }
+  // The emission not yet shot whose first bounce the pixels gather: the
+  // emitters' and, with the sun gathered, the sun shooters' unshot power.
+  void EmissionUnshot(double out[3]) const;
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return packetBytes_; }
