@@ -310,6 +310,19 @@ bool DirectLight::SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, 
   return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
 }
 
+bool DirectLight::SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin,
+                                const glm::vec3& x, const glm::vec3& n, uint32_t k, float epsilon,
+                                uint32_t* hint, bool* usable) const {
+  // u1 = 1: the cone's edge; u2: the azimuth.
+  const glm::vec3 d =
+      -SunConeDirection(sunToward_, sunDegrees_, 1.0f, static_cast<float>(k) / kSunRimRays);
+  *usable = glm::dot(n, d) > 0.0f;
+  if (!*usable) return false;
+  Ray ray{x, d, epsilon, std::numeric_limits<float>::infinity()};
+  const Skip skip(receiver, twin);
+  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+}
+
 bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin,
                              const glm::vec3& x, const glm::vec3& n, glm::vec2 u, float epsilon,
                              uint32_t* hint, glm::vec3* weight) const {

@@ -32,15 +32,24 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     const glm::vec3 sun = h.light->UnoccludedSun(h.normal);
     sunShare = std::fmin(1.0f, (sun.x + sun.y + sun.z) / (e0.x + e0.y + e0.z));
   }
-  // The outline corners, from the centre. The sun has no corners: with no
-  // area emitter the first samples alone decide (cornersSeen == corners == 0).
-  const uint32_t corners = h.light->numCorners();
-  bool cornersTell = (corners > 0 && corners <= kMaxCornerRays) || (corners == 0 && sunShare > 0.0f);
+  // The outline corners, from the centre, and with the sun the points of
+  // its rim (with no area emitter, those alone).
+  const uint32_t outline = h.light->numCorners();
+  const uint32_t corners = outline + (sunShare > 0.0f ? kSunRimRays : 0u);
+  bool cornersTell = outline <= kMaxCornerRays && corners > 0;
   uint32_t cornersSeen = 0;
-  for (uint32_t k = 0; k < corners && cornersTell; ++k) {
+  for (uint32_t k = 0; k < outline && cornersTell; ++k) {
     bool usable;
     cornersSeen += h.light->CornerVisible(*h.grid, h.patch, h.twin, x0, h.normal, k, h.epsilon,
                                           h.hint, &usable)
+                       ? 1u
+                       : 0u;
+    cornersTell = usable;
+  }
+  for (uint32_t k = outline; k < corners && cornersTell; ++k) {
+    bool usable;
+    cornersSeen += h.light->SunRimVisible(*h.grid, h.patch, h.twin, x0, h.normal, k - outline,
+                                          h.epsilon, h.hint, &usable)
                        ? 1u
                        : 0u;
     cornersTell = usable;

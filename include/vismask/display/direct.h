@@ -28,7 +28,8 @@
 // triangles by area). The sun (--sun) is a second kind of
 // source: E0 its irradiance times the cosine at x, V from rays along
 // directions uniform in its disc that must leave the scene (an unbounded
-// occlusion test). A sample picks the kind with u.x, the sun with the share
+// occlusion test); the corners of its disc are kSunRimRays points on its
+// rim. A sample picks the kind with u.x, the sun with the share
 // of E0 it brings at x, and stretches u.x back to [0, 1) within the kind.
 // The sky (--sky) stays in the solve (docs/design/direct-light.md).
 #pragma once
@@ -48,6 +49,9 @@ constexpr uint32_t kFirstDirectSamples = 4;
 // The most outline corners GatherDirect sends a ray to (more: it samples
 // every point fully).
 constexpr uint32_t kMaxCornerRays = 16;
+// The rays GatherDirect sends to the sun's rim (its disc's corners): a
+// straight shadow edge across the disc leaves rim points on both sides.
+constexpr uint32_t kSunRimRays = 8;
 
 class DirectLight {
  public:
@@ -113,6 +117,13 @@ class DirectLight {
   // behind its polygon: the ray tells nothing).
   uint32_t numCorners() const { return static_cast<uint32_t>(corners_.size()); }
   bool CornerVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                     const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
+                     bool* usable) const;
+
+  // Whether the ray from x (normal n) towards point k of kSunRimRays on the
+  // sun's rim leaves the scene (*usable false when that direction lies on
+  // or below x's horizon: the ray tells nothing).
+  bool SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                      const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
                      bool* usable) const;
 
