@@ -158,13 +158,20 @@ TEST(DirectSunTest, ImageMeanIsTheSolveAlonesAndPatchesKeepTheirBytes) {
   std::string csv[2];
   for (int k = 0; k < 2; ++k) {
     const std::string out = dir.File("out" + std::to_string(k));
-    std::vector<std::string> args = {"render",      "scenes/skylight.obj",
-                                     "--out",       out,
-                                     "--camera",    "0.4,2.2,0.4,3,0.3,3,0,1,0,70",
-                                     "--width",     "48",
-                                     "--height",    "48",
-                                     "--sun",       "1,4,0.5,3,3,3",
-                                     "--quiet",     "--direct-samples",
+    std::vector<std::string> args = {"render",
+                                     "scenes/skylight.obj",
+                                     "--out",
+                                     out,
+                                     "--camera",
+                                     "0.4,2.2,0.4,3,0.3,3,0,1,0,70",
+                                     "--width",
+                                     "48",
+                                     "--height",
+                                     "48",
+                                     "--sun",
+                                     "1,4,0.5,3,3,3",
+                                     "--quiet",
+                                     "--direct-samples",
                                      k == 0 ? "0" : "32"};
     test::RunResult r = test::RunMain(args);
     ASSERT_EQ(r.code, 0) << r.err;

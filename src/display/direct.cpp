@@ -283,7 +283,8 @@ bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, con
   // [0, 1) within it; the weight over the kind's share.
   if (u.x < sunShare || emitters_.empty()) {
     const float s = std::fmin(u.x / sunShare, 0.99999994f);
-    const bool vis = SampleSun(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
+    const bool vis =
+        SampleSun(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
     *weight /= std::fmin(sunShare, 1.0f);
     return vis;
   }
@@ -323,9 +324,9 @@ bool DirectLight::SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t tw
   return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
 }
 
-bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin,
-                             const glm::vec3& x, const glm::vec3& n, glm::vec2 u, float epsilon,
-                             uint32_t* hint, glm::vec3* weight) const {
+bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                             const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
+                             glm::vec3* weight) const {
   *weight = glm::vec3(0.0f);
   if (emitters_.empty()) return false;
   // The emitter: the first whose cumulative share exceeds u.x.

@@ -1,10 +1,11 @@
 // DirectBook: an environment's bookkeeping for per-pixel direct light
 // (--direct-samples; docs/design/direct-light.md): per patch the emission
 // not yet shot, the share of the current shot that is emission (3
-// channels; an outside shooter's sun shot is all emission), which patches belong to a smoothed polygon (they show the
-// solved whole), whether the image shows the indirect part, and the
-// emitters the pixels gather from. Carved from the environment's arena
-// (Layout); it holds nothing without per-pixel direct light.
+// channels; an outside shooter's sun shot is all emission), which patches
+// belong to a smoothed polygon (they show the solved whole), whether the
+// image shows the indirect part, and the emitters the pixels gather from.
+// Carved from the environment's arena (Layout); it holds nothing without
+// per-pixel direct light.
 #pragma once
 #include <cstdint>
 
@@ -26,8 +27,7 @@ class DirectBook {
               const DirectLight::Counts& counts);
   // The emitters from `patches` and the sun of `outside`, and which patches
   // have a smooth vertex of `lattice` (init: uses the heap).
-  void Build(Span<const Patch> patches, const DisplayLattice& lattice,
-             const OutsideLight& outside);
+  void Build(Span<const Patch> patches, const DisplayLattice& lattice, const OutsideLight& outside);
   // Patch i's emission still unshot is all of `unshot` (a solve's start).
   void ResetPatch(uint32_t i, const double unshot[3]) {
     if (!emitLeft_.empty())
