@@ -208,6 +208,21 @@ TEST(AllocTest, DirectLightPerPixelAllocatesNothingAfterInit) {
   }
 }
 
+// The sun in the per-pixel gather (its rim rays, its samples, the solve's
+// sun shots booked as direct), in both rasters, with an area emitter beside
+// it (the Cornell box: the two kinds share the samples) and without one.
+TEST(AllocTest, PerPixelSunAllocatesNothingAfterInit) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const char* raster : {"on", "off"})
+    for (const char* scene : {"scenes/skylight.obj", "scenes/cornell.obj"}) {
+      CountedRender run(scene, std::string("--sun 1,4,0.5,3,3,3 --direct-samples 32 --max-shots "
+                                           "300 --width 64 --height 48 --aa ") +
+                                   raster);
+      ASSERT_EQ(run.code, 0) << scene << ": " << run.err;
+      EXPECT_EQ(run.allocations, 0) << scene << ", --aa " << raster << ": heap after init";
+    }
+}
+
 TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   // The defaults (power allocation with partial shots, Sobol' samples,

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "direct_test_util.h"
 #include "grid_test_util.h"
 #include "test_util.h"
 #include "vismask/output/image_io.h"
@@ -129,25 +130,6 @@ void WriteFloorScene(const std::string& dir, double side, double height, double 
                   "newmtl black\nKd 0 0 0\n");
 }
 
-// Renders dir/s.obj looking straight down at the origin from height 0.5
-// (fov 90: the image spans [-0.5, 0.5] of the floor), size x size.
-PfmImage RenderDown(const test::TempDir& dir, int size, const std::string& flags) {
-  std::vector<std::string> args = {
-      "render",   dir.File("s.obj"),        "--out",   dir.File("out"),
-      "--camera", "0,0.5,0,0,0,0,0,0,1,90", "--width", std::to_string(size),
-      "--height", std::to_string(size),     "--quiet"};
-  for (const std::string& w : test::Words(flags)) args.push_back(w);
-  test::RunResult r = test::RunMain(args);
-  EXPECT_EQ(r.code, 0) << r.err;
-  PfmImage img;
-  EXPECT_TRUE(ReadPfm(dir.File("out/image.pfm"), &img).ok());
-  return img;
-}
-
-float Pixel(const PfmImage& img, int x, int y) {
-  return img.pixels[3 * (size_t(y) * img.width + x)];
-}
-
 TEST(DirectTest, FloorUnderASquareEmitterMatchesTheClosedForm) {
   test::TempDir dir;
   WriteFloorScene(dir.path(), 1.0, 1.0, 0.0);
@@ -164,22 +146,6 @@ TEST(DirectTest, FloorUnderASquareEmitterMatchesTheClosedForm) {
       worst = std::max(worst, std::fabs(Pixel(img, i, j) / expect - 1.0));
     }
   EXPECT_LT(worst, 0.01) << "the floor's radiance: kd E / pi, E the closed form";
-}
-
-// The 10%-90% width of the rise across row `y` of `img`, in pixels.
-double EdgeWidth(const PfmImage& img, int y) {
-  std::vector<double> row(img.width);
-  for (int x = 0; x < img.width; ++x) row[x] = Pixel(img, x, y);
-  double lo = *std::min_element(row.begin(), row.end());
-  double hi = *std::max_element(row.begin(), row.end());
-  auto cross = [&](double level) {
-    double t = lo + level * (hi - lo);
-    for (int x = 1; x < img.width; ++x)
-      if ((row[x - 1] - t) * (row[x] - t) <= 0.0 && row[x - 1] != row[x])
-        return x - 1 + (t - row[x - 1]) / (row[x] - row[x - 1]);
-    return -1.0;
-  };
-  return std::fabs(cross(0.9) - cross(0.1));
 }
 
 TEST(DirectTest, HardShadowEdgeIsAsSharpAsItsGeometry) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <limits>
 #include <map>
 #include <tuple>
 #include <vector>
@@ -258,12 +259,74 @@ glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n) const 
     }
     sum += std::fabs(s) * kInv2Pi * glm::dvec3(g.ke);
   }
+  if (hasSun_) sum += glm::dvec3(UnoccludedSun(n));
   return glm::vec3(sum);
+}
+
+void DirectLight::SetSun(const OutsideLight& light) {
+  hasSun_ = light.HasSun();
+  sun_ = light.sun;
+  sunToward_ = light.sunToward;
+  sunDegrees_ = light.sunDegrees;
+}
+
+glm::vec3 DirectLight::UnoccludedSun(const glm::vec3& n) const {
+  if (!hasSun_) return glm::vec3(0.0f);
+  return sun_ * std::fmax(0.0f, glm::dot(n, sunToward_));
 }
 
 bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                          const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
-                         glm::vec3* weight) const {
+                         glm::vec3* weight, float sunShare) const {
+  if (!(sunShare > 0.0f)) return SampleArea(grid, receiver, twin, x, n, u, epsilon, hint, weight);
+  // The kind from u.x (the sun below sunShare), u.x stretched back to
+  // [0, 1) within it; the weight over the kind's share.
+  if (u.x < sunShare || emitters_.empty()) {
+    const float s = std::fmin(u.x / sunShare, 0.99999994f);
+    const bool vis =
+        SampleSun(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
+    *weight /= std::fmin(sunShare, 1.0f);
+    return vis;
+  }
+  const float s = std::fmin((u.x - sunShare) / (1.0f - sunShare), 0.99999994f);
+  const bool vis = SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
+  *weight /= 1.0f - sunShare;
+  return vis;
+}
+
+bool DirectLight::SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                            const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
+                            glm::vec3* weight) const {
+  *weight = glm::vec3(0.0f);
+  // A direction uniform in solid angle within the sun's disc: the radiance
+  // E / (the disc's solid angle) times the cosine over the pdf 1 / (the
+  // disc's solid angle) is E times the cosine.
+  const glm::vec3 d = -SunConeDirection(sunToward_, sunDegrees_, u.x, u.y);
+  const float cosX = glm::dot(n, d);
+  if (!(cosX > 0.0f)) return false;
+  *weight = sun_ * cosX;
+  // The ray must leave the scene: nothing in the way, however far.
+  Ray ray{x, d, epsilon, std::numeric_limits<float>::infinity()};
+  const Skip skip(receiver, twin);
+  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+}
+
+bool DirectLight::SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin,
+                                const glm::vec3& x, const glm::vec3& n, uint32_t k, float epsilon,
+                                uint32_t* hint, bool* usable) const {
+  // u1 = 1: the cone's edge; u2: the azimuth.
+  const glm::vec3 d =
+      -SunConeDirection(sunToward_, sunDegrees_, 1.0f, static_cast<float>(k) / kSunRimRays);
+  *usable = glm::dot(n, d) > 0.0f;
+  if (!*usable) return false;
+  Ray ray{x, d, epsilon, std::numeric_limits<float>::infinity()};
+  const Skip skip(receiver, twin);
+  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+}
+
+bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                             const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
+                             glm::vec3* weight) const {
   *weight = glm::vec3(0.0f);
   if (emitters_.empty()) return false;
   // The emitter: the first whose cumulative share exceeds u.x.

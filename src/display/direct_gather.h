@@ -2,6 +2,7 @@
 // shared by the two rasters (internal to raster_aa.cpp and
 // raster_point.cpp).
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
@@ -17,21 +18,38 @@ namespace vismask {
 // the visible share of the samples, weighted by what each would bring: a
 // ray from the centre to each outline corner and the first
 // kFirstDirectSamples, and the rest of h.samples only where those disagree
-// (some reach the emitters, some do not). Allocates nothing.
+// (some reach the emitters, some do not). With a sun, a share of the
+// samples in proportion to its part of E0 go to its disc. Allocates nothing.
 template <class PointOf>
 glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, PointOf pointOf) {
   auto onPlane = [&](glm::vec3 x) { return x - h.normal * glm::dot(h.normal, x - h.planePoint); };
   const glm::vec3 x0 = onPlane(centre);
   const glm::vec3 e0 = h.light->Unoccluded(x0, h.normal);
   if (!(e0.x > 0.0f || e0.y > 0.0f || e0.z > 0.0f)) return glm::vec3(0.0f);
-  // The outline corners, from the centre.
-  const uint32_t corners = h.light->numCorners();
-  bool cornersTell = corners > 0 && corners <= kMaxCornerRays;
+  // The sun's share of the samples: its share of E0 (channels summed).
+  float sunShare = 0.0f;
+  if (h.light->hasSun()) {
+    const glm::vec3 sun = h.light->UnoccludedSun(h.normal);
+    sunShare = std::fmin(1.0f, (sun.x + sun.y + sun.z) / (e0.x + e0.y + e0.z));
+  }
+  // The outline corners, from the centre, and with the sun the points of
+  // its rim (with no area emitter, those alone).
+  const uint32_t outline = h.light->numCorners();
+  const uint32_t corners = outline + (sunShare > 0.0f ? kSunRimRays : 0u);
+  bool cornersTell = outline <= kMaxCornerRays && corners > 0;
   uint32_t cornersSeen = 0;
-  for (uint32_t k = 0; k < corners && cornersTell; ++k) {
+  for (uint32_t k = 0; k < outline && cornersTell; ++k) {
     bool usable;
     cornersSeen += h.light->CornerVisible(*h.grid, h.patch, h.twin, x0, h.normal, k, h.epsilon,
                                           h.hint, &usable)
+                       ? 1u
+                       : 0u;
+    cornersTell = usable;
+  }
+  for (uint32_t k = outline; k < corners && cornersTell; ++k) {
+    bool usable;
+    cornersSeen += h.light->SunRimVisible(*h.grid, h.patch, h.twin, x0, h.normal, k - outline,
+                                          h.epsilon, h.hint, &usable)
                        ? 1u
                        : 0u;
     cornersTell = usable;
@@ -44,7 +62,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
       break;
     glm::vec3 w;
     bool vis = h.light->Sample(*h.grid, h.patch, h.twin, onPlane(pointOf(k)), h.normal,
-                               DirectLightSample(pixel, k), h.epsilon, h.hint, &w);
+                               DirectLightSample(pixel, k), h.epsilon, h.hint, &w, sunShare);
     if (!(w.x > 0.0f || w.y > 0.0f || w.z > 0.0f)) continue;
     ++counted;
     all += w;

@@ -15,8 +15,12 @@ void DirectBook::Layout(Arena& arena, uint32_t numPatches, bool on, bool smooth,
   light_.Layout(arena, on ? counts : DirectLight::Counts{});
 }
 
-void DirectBook::Build(Span<const Patch> patches, const DisplayLattice& lattice) {
-  if (on_) light_.Build(patches);
+void DirectBook::Build(Span<const Patch> patches, const DisplayLattice& lattice,
+                       const OutsideLight& outside) {
+  if (on_) {
+    light_.Build(patches);
+    light_.SetSun(outside);
+  }
   // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
   // patch of theirs) as they were: their patches show the solved whole.
   if (!smoothPatch_.empty()) {

@@ -152,6 +152,9 @@ void Environment::ShootOutside(uint32_t k) {
   const uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
   double fraction = 1.0;
   const uint32_t rays = ShotRays(o.unshot, key, &fraction);
+  // Per-pixel direct light: a sun shot's first bounce is the gather's
+  // (direct), a sky shot's the solve's (indirect).
+  direct_.BookOutsideShot(OutsideKindOf(p.globalId));
   double power[3];
   for (int c = 0; c < 3; ++c) {
     power[c] = fraction < 1.0 ? o.unshot[c] * fraction : o.unshot[c];

@@ -1,6 +1,7 @@
 // Environment, what it receives: the radiosity a ray brings to a patch
 // (Receive), the leaf of the element tree it lands in (element_tree.cpp
-// splits them) and its display radiosity (LeafAt, LeafRadiosity), then the
+// splits them), its display radiosity (LeafAt, LeafRadiosity) and the
+// emission not yet shot that the pixels gather (EmissionUnshot), then the
 // display radiosity at mesh vertices (ComputeVertexRadiosity). The rest of
 // Environment is in environment.cpp (layout and init), trace.cpp (rays) and
 // env_queue.cpp (shots and the queue).
@@ -105,6 +106,13 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
     }
   }
   lattice_.Finish(patches_);
+}
+
+void Environment::EmissionUnshot(double out[3]) const {
+  direct_.EmissionUnshot(out);
+  for (uint32_t k = 0; k < outside_.size(); ++k)
+    if (direct_.Gathers(OutsideKindOf(outside_[k].shooter.patch.globalId)))
+      for (int c = 0; c < 3; ++c) out[c] += outside_[k].unshot[c];
 }
 
 }  // namespace vismask

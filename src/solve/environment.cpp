@@ -280,7 +280,7 @@ bool Environment::Build() {
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
   lattice_.Build(staged_->lattice, patches_);
   grid_.Build(patches_, geom_);
-  direct_.Build(patches_, lattice_);
+  direct_.Build(patches_, lattice_, options_.outside);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())

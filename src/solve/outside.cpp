@@ -222,14 +222,18 @@ void SkyMap::Integrate() {
 }
 
 glm::vec3 SunRayDirection(const OutsideLight& light, float u1, float u2) {
-  const glm::vec3 w = -light.sunToward;
+  return SunConeDirection(light.sunToward, light.sunDegrees, u1, u2);
+}
+
+glm::vec3 SunConeDirection(const glm::vec3& toward, float degrees, float u1, float u2) {
+  const glm::vec3 w = -toward;
   // A frame about w (Duff et al. 2017, branchless).
   const float sign = std::copysign(1.0f, w.z);
   const float a = -1.0f / (sign + w.z);
   const float b = w.x * w.y * a;
   const glm::vec3 t(1.0f + sign * w.x * w.x * a, sign * b, -sign * w.x);
   const glm::vec3 bt(b, sign + w.y * w.y * a, -w.y);
-  const float half = 0.5f * light.sunDegrees * 0.017453292519943295f;
+  const float half = 0.5f * degrees * 0.017453292519943295f;
   const float cosMax = std::cos(half);
   const float cosT = 1.0f - u1 * (1.0f - cosMax);
   const float sinT = std::sqrt(std::fmax(0.0f, 1.0f - cosT * cosT));

@@ -381,7 +381,7 @@ AmbientReport AmbientOf(const Environment& env) {
     r.emitted[c] = env.ledger().emitted[c];
     r.radiosity[c] = env.ledger().radiosity[c];
   }
-  env.direct().EmissionUnshot(r.emission);
+  env.EmissionUnshot(r.emission);
   for (const Patch& p : env.patches())
     for (int c = 0; c < 3; ++c) r.kdArea[c] += static_cast<double>(p.kd[c]) * p.area;
   return r;

@@ -61,3 +61,42 @@ def average_pfm(paths, out):
     n = len(imgs)
     px = [sum(img[2][i] for img in imgs) / n for i in range(w * h * 3)]
     write_pfm(out, w, h, px)
+
+
+def edge_width(w, h, px):
+    """The median 10%-90% width, in pixels along rows, of the edges of the
+    brightest region of a flat RGB image (channels summed): each row that
+    crosses the region with at least 4 pixels at 90% of the row's range
+    (and its neighbours too, so the region's corners are left out) gives
+    its left and right rise, each interpolated between pixel centres."""
+    lum = [px[3 * k] + px[3 * k + 1] + px[3 * k + 2] for k in range(w * h)]
+    top = max(lum)
+
+    def crossing(row, xs, level):
+        prev = None
+        for x in xs:
+            if prev is not None and (row[prev] - level) * (row[x] - level) <= 0 and row[x] != row[prev]:
+                return prev + (level - row[prev]) / (row[x] - row[prev]) * (x - prev)
+            prev = x
+        return None
+
+    def wide(y):
+        if y < 0 or y >= h:
+            return False
+        row = lum[y * w:(y + 1) * w]
+        lo, hi = min(row), max(row)
+        return hi > 0.5 * top and sum(v >= lo + 0.9 * (hi - lo) for v in row) >= 4
+
+    widths = []
+    for y in range(h):
+        if not (wide(y - 1) and wide(y) and wide(y + 1)):
+            continue
+        row = lum[y * w:(y + 1) * w]
+        lo, hi = min(row), max(row)
+        t10, t90 = lo + 0.1 * (hi - lo), lo + 0.9 * (hi - lo)
+        for xs in (range(w), range(w - 1, -1, -1)):
+            a, b = crossing(row, xs, t10), crossing(row, xs, t90)
+            if a is not None and b is not None:
+                widths.append(abs(b - a))
+    widths.sort()
+    return widths[len(widths) // 2] if widths else float("nan")

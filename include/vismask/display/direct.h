@@ -25,11 +25,13 @@
 // is chosen by a 2D point u: u.x picks an emitter patch in proportion to
 // its power (area times Ke, channels summed) and is stretched back to
 // [0, 1) within it; the point is uniform over the patch (a quad as two
-// triangles by area). The sun and the sky plug in as more kinds of source
-// (DESIGN, Direct light per pixel): a direction (the sun: E0 = its
-// irradiance times the cosine, V from rays along directions in its disc
-// that must leave the scene) and a hemisphere (the sky: E0 the unoccluded
-// sky's, V from cosine-weighted rays that leave the scene).
+// triangles by area). The sun (--sun) is a second kind of
+// source: E0 its irradiance times the cosine at x, V from rays along
+// directions uniform in its disc that must leave the scene (an unbounded
+// occlusion test); the corners of its disc are kSunRimRays points on its
+// rim. A sample picks the kind with u.x, the sun with the share
+// of E0 it brings at x, and stretches u.x back to [0, 1) within the kind.
+// The sky (--sky) stays in the solve (docs/design/direct-light.md).
 #pragma once
 #include <cstdint>
 #include <glm/vec2.hpp>
@@ -38,6 +40,7 @@
 #include "vismask/accel/grid.h"
 #include "vismask/core/arena.h"
 #include "vismask/core/span.h"
+#include "vismask/solve/outside.h"
 #include "vismask/solve/patch.h"
 
 namespace vismask {
@@ -46,6 +49,9 @@ constexpr uint32_t kFirstDirectSamples = 4;
 // The most outline corners GatherDirect sends a ray to (more: it samples
 // every point fully).
 constexpr uint32_t kMaxCornerRays = 16;
+// The rays GatherDirect sends to the sun's rim (its disc's corners): a
+// straight shadow edge across the disc leaves rim points on both sides.
+constexpr uint32_t kSunRimRays = 8;
 
 class DirectLight {
  public:
@@ -83,18 +89,27 @@ class DirectLight {
   void Layout(Arena& arena, const Counts& counts);
   // Fills them from `patches` (which must outlive this; init: uses the heap).
   void Build(Span<const Patch> patches);
-  bool empty() const { return emitters_.empty(); }
+  // The sun of `light` as a source (none when it has no --sun).
+  void SetSun(const OutsideLight& light);
+  bool empty() const { return emitters_.empty() && !hasSun_; }
+  bool hasSun() const { return hasSun_; }
 
-  // The unoccluded irradiance at x (unit normal n), per channel.
+  // The unoccluded irradiance at x (unit normal n), per channel: the area
+  // emitters' and the sun's.
   glm::vec3 Unoccluded(const glm::vec3& x, const glm::vec3& n) const;
-  // One shadow sample from x toward the emitter point u picks: what it
+  // The sun's part of it: its irradiance times the cosine between n and the
+  // direction towards its centre (0 below the horizon).
+  glm::vec3 UnoccludedSun(const glm::vec3& n) const;
+  // One shadow sample from x toward the source point u picks: what it
   // would bring (*weight, per channel; 0 when the point faces away or lies
   // below x's horizon) and whether the ray reaches it (through `grid`,
   // ends excluded by `epsilon` scene units, receiver and `twin` skipped;
-  // *hint: Grid::Occluded's, or null). Allocates nothing.
+  // *hint: Grid::Occluded's, or null). `sunShare`: the share of the samples
+  // that go to the sun (u.x below it), the rest to the area emitters; a
+  // sun ray must leave the scene. Allocates nothing.
   bool Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-              const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
-              glm::vec3* weight) const;
+              const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint, glm::vec3* weight,
+              float sunShare = 0.0f) const;
 
   // The emitters' outline corners (each polygon's, where its outline turns), and whether the ray
   // from x (normal n) to corner k reaches it
@@ -102,6 +117,13 @@ class DirectLight {
   // behind its polygon: the ray tells nothing).
   uint32_t numCorners() const { return static_cast<uint32_t>(corners_.size()); }
   bool CornerVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                     const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
+                     bool* usable) const;
+
+  // Whether the ray from x (normal n) towards point k of kSunRimRays on the
+  // sun's rim leaves the scene (*usable false when that direction lies on
+  // or below x's horizon: the ray tells nothing).
+  bool SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                      const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
                      bool* usable) const;
 
@@ -116,6 +138,18 @@ class DirectLight {
   Span<Corner> corners_;
   Span<uint32_t> patchIndex_;  // the groups' patches (local indices)
   Span<const Patch> patches_;
+  // The sun: its irradiance on a surface facing it, the unit direction
+  // towards it and its angular diameter (degrees).
+  bool hasSun_ = false;
+  glm::vec3 sun_{0.0f}, sunToward_{0.0f, 0.0f, 1.0f};
+  float sunDegrees_ = 0.0f;
+
+  bool SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                  const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
+                  glm::vec3* weight) const;
+  bool SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                 const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
+                 glm::vec3* weight) const;
 };
 
 // The k-th sample of pixel `pixel` (row-major index) of the per-pixel

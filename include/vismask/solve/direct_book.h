@@ -1,10 +1,11 @@
 // DirectBook: an environment's bookkeeping for per-pixel direct light
 // (--direct-samples; docs/design/direct-light.md): per patch the emission
 // not yet shot, the share of the current shot that is emission (3
-// channels), which patches belong to a smoothed polygon (they show the
-// solved whole), whether the image shows the indirect part, and the
-// emitters the pixels gather from. Carved from the environment's arena
-// (Layout); it holds nothing without per-pixel direct light.
+// channels; an outside shooter's sun shot is all emission), which patches
+// belong to a smoothed polygon (they show the solved whole), whether the
+// image shows the indirect part, and the emitters the pixels gather from.
+// Carved from the environment's arena (Layout); it holds nothing without
+// per-pixel direct light.
 #pragma once
 #include <cstdint>
 
@@ -12,6 +13,7 @@
 #include "vismask/core/span.h"
 #include "vismask/display/direct.h"
 #include "vismask/solve/display_lattice.h"
+#include "vismask/solve/outside.h"
 #include "vismask/solve/patch.h"
 
 namespace vismask {
@@ -23,9 +25,9 @@ class DirectBook {
   // (also from a measuring arena).
   void Layout(Arena& arena, uint32_t numPatches, bool on, bool smooth,
               const DirectLight::Counts& counts);
-  // The emitters from `patches`, and which of them have a smooth vertex of
-  // `lattice` (init: uses the heap).
-  void Build(Span<const Patch> patches, const DisplayLattice& lattice);
+  // The emitters from `patches` and the sun of `outside`, and which patches
+  // have a smooth vertex of `lattice` (init: uses the heap).
+  void Build(Span<const Patch> patches, const DisplayLattice& lattice, const OutsideLight& outside);
   // Patch i's emission still unshot is all of `unshot` (a solve's start).
   void ResetPatch(uint32_t i, const double unshot[3]) {
     if (!emitLeft_.empty())
@@ -39,6 +41,17 @@ class DirectBook {
   // with one environment only: DESIGN, Direct light per pixel).
   void BookForeignShot() {
     for (double& d : shotDirect_) d = 0.0;
+  }
+  // An outside shooter's shot (--sky, --sun): all direct when the pixels
+  // gather its kind (the sun), else all indirect (the sky, which the
+  // solve alone shows).
+  void BookOutsideShot(OutsideKind kind) {
+    for (double& d : shotDirect_) d = Gathers(kind) ? 1.0 : 0.0;
+  }
+  // Whether the unshot power of an outside shooter of `kind` is emission
+  // the pixels gather (its first bounce shown per pixel).
+  bool Gathers(OutsideKind kind) const {
+    return on_ && kind == OutsideKind::kSun && light_.hasSun();
   }
   double shotDirect(int c) const { return shotDirect_[c]; }
   void EmissionUnshot(double out[3]) const;

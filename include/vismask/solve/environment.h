@@ -77,6 +77,8 @@ class Environment {
   const DirectBook& direct() const { return direct_; }
   uint32_t directSamples() const { return options_.directSamples; }
   float rayEpsilon() const { return options_.rayEpsilon; }
+  // Unshot emission whose first bounce the pixels gather (emitters', gathered suns').
+  void EmissionUnshot(double out[3]) const;
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return exchange_.outbox().packetBytes(); }

@@ -136,5 +136,7 @@ struct SkyShares {
 // The direction of travel of a sun ray from two uniforms: uniform in solid
 // angle within the sun's cone, about -sunToward.
 glm::vec3 SunRayDirection(const OutsideLight& light, float u1, float u2);
+// The same for a sun towards `toward` (unit) of angular diameter `degrees`.
+glm::vec3 SunConeDirection(const glm::vec3& toward, float degrees, float u1, float u2);
 
 }  // namespace vismask
