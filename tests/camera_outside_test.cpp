@@ -155,9 +155,12 @@ TEST(CameraOutsideTest, RunJsonRecordsTheOutsideLight) {
   const ViewChoice geometric = Choose(room, nullptr);
   for (int sun = 0; sun < 2; ++sun) {
     const OutsideLight light = sun ? Sun() : Sky();
-    std::vector<std::string> args = {"render",   dir.File("room.obj"), "--out", dir.File("out"),
-                                     "--rays",   "64",                 "--max-shots", "5",
-                                     "--width",  "16",                 "--height",    "16",
+    std::vector<std::string> args = {"render",      dir.File("room.obj"),
+                                     "--out",       dir.File("out"),
+                                     "--rays",      "64",
+                                     "--max-shots", "5",
+                                     "--width",     "16",
+                                     "--height",    "16",
                                      "--quiet"};
     if (sun) {
       args.insert(args.end(), {"--sun", "0.1,1,0.05,3,3,3"});

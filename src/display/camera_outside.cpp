@@ -25,7 +25,8 @@ Camera FarCamera(const glm::vec3& centre, float reach, const glm::dvec3& toward)
   c.eye = centre + static_cast<float>(distance) * glm::vec3(toward);
   c.target = centre;
   c.up = std::fabs(toward.y) < 0.9 ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-  c.fovyDeg = static_cast<float>(2.0 * kDegrees * std::atan(0.52 * reach / (distance - 0.5 * reach)));
+  c.fovyDeg =
+      static_cast<float>(2.0 * kDegrees * std::atan(0.52 * reach / (distance - 0.5 * reach)));
   return c;
 }
 
@@ -104,7 +105,7 @@ double ViewProbe::FarSeen(const Probe& q, const glm::dvec3& x, uint32_t polygon)
       const glm::dvec3 m(q.normal[k]), hit = eye + q.depth[k] * q.dir[k];
       const double facing = glm::dot(m, d);
       const double t = std::fabs(facing) > 1e-9 * dist ? glm::dot(m, hit - eye) / facing
-                                                        : q.depth[k] * glm::length(q.dir[k]) / dist;
+                                                       : q.depth[k] * glm::length(q.dir[k]) / dist;
       if (!(t > 0.0 && t * dist < dist - slack)) seen += w;
     }
   return weight > 0.0 ? seen / weight : 1.0;
