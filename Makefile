@@ -443,7 +443,9 @@ cluster-resume:
 # build/fuzz/scene_fuzz, the OBJ/MTL loader (seeds tests/fuzz/corpus),
 # build/fuzz/image_fuzz, the PFM and PGM readers (seeds
 # tests/fuzz/image-corpus), and build/fuzz/texture_fuzz, the texture reader
-# (stb_image through vismask's checks; seeds tests/fuzz/texture-corpus).
+# (stb_image through vismask's checks; seeds tests/fuzz/texture-corpus), and
+# build/fuzz/sky_fuzz, the --sky FILE.hdr reader (stb_image's Radiance HDR
+# decoder through vismask's checks; seeds tests/fuzz/sky-corpus).
 # make fuzz runs each for FUZZ_SECONDS (or FUZZ_RUNS executions, when given), one after the other; new inputs go to
 # build/fuzz/corpus-TARGET, a crash to build/fuzz/TARGET-crash-* (and make
 # fails). The targets link the library's objects compiled by clang with
@@ -457,7 +459,7 @@ FUZZ_RUNS ?=
 FUZZ_REPORT_RUNS ?= 10000000
 FUZZ_REPORT_SECONDS ?=
 FUZZ_CXX ?= clang++
-FUZZ_TARGETS := scene image texture
+FUZZ_TARGETS := scene image texture sky
 FUZZ_BIN := $(patsubst %,build/fuzz/%_fuzz,$(FUZZ_TARGETS))
 FUZZ_CXXFLAGS := -std=c++17 -O1 -g -Wall -Wextra -fsanitize=address,undefined -fno-sanitize-recover=undefined \
                  -Iinclude -Iplatform -I/usr/include/stb -MMD -MP

@@ -404,5 +404,46 @@ TEST(OutsideTest, BadSkyMapsExitTwoNamingTheFile) {
   EXPECT_EQ(big.width, 1024u);
 }
 
+// A fuzz finding (tests/fuzz/sky_fuzz.cpp): run-length data that ends
+// inside a scanline made stb_image read zeros past the end as a run count
+// of 0 and loop for ever. It is refused before decoding; every prefix of a
+// valid run-length map is refused or decoded, and none hangs.
+TEST(OutsideTest, SkyMapWhoseRunsEndInsideAScanlineIsRefused) {
+  SkyMap map;
+  Status s = ReadSkyMap("tests/data/hdr-rle-cut.hdr", &map);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.ToString().find("corrupt HDR: its run-length data ends inside scanline 0 of 2"),
+            std::string::npos)
+      << s.ToString();
+  // The same where the header ends at a line that starts with a NUL byte
+  // (stb_image reads its lines as C strings: an empty one).
+  s = ReadSkyMap("tests/data/hdr-rle-cut-nul-header.hdr", &map);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.ToString().find("corrupt HDR: its run-length data ends inside scanline"),
+            std::string::npos)
+      << s.ToString();
+  // Two scanlines of 8 texels, each channel a literal dump or a run.
+  std::string whole = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 8\n";
+  for (int row = 0; row < 2; ++row) {
+    whole += std::string("\x02\x02\x00\x08", 4);
+    whole += '\x08';
+    for (int i = 0; i < 8; ++i) whole += static_cast<char>(100 + 10 * i + row);
+    whole += std::string("\x88\x40\x88\x20\x88\x81", 6);  // G, B, E as runs of 8
+  }
+  ASSERT_TRUE(DecodeSkyMap(whole, "whole.hdr", &map).ok());
+  EXPECT_EQ(map.width, 8u);
+  EXPECT_EQ(map.height, 2u);
+  int refused = 0;
+  for (size_t n = 0; n < whole.size(); ++n) {
+    SkyMap part;
+    const Status p = DecodeSkyMap(whole.substr(0, n), "part.hdr", &part);
+    refused += p.ToString().find("run-length data ends inside") != std::string::npos;
+  }
+  // Every cut inside the two scanlines' runs (15 bytes each) but one each:
+  // just before the last run's value byte, where the 0 read in its place
+  // is a value and the scanline is whole.
+  EXPECT_EQ(refused, 2 * 14);
+}
+
 }  // namespace
 }  // namespace vismask

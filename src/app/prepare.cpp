@@ -376,7 +376,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   // Before pass 2 allocates: the parser's arrays, the camera's probe and
   // the emitter check against the budget; then the pieces as they come.
   const uint64_t passBytes = p->held + kInitBaseBytes + info.ParserBytes() +
-                             ViewProbe::HeapBytes() + (root ? p->checkBytes : 0);
+                             ViewProbe::HeapBytes(p->outside) + (root ? p->checkBytes : 0);
   if (p->budget > 0 && passBytes > p->budget) {
     if (p->overBudget)
       p->overBudget(passBytes,
@@ -387,6 +387,7 @@ Status PrepareScene(const Options& o, Prepared* p, uint32_t first, uint32_t end,
   if (chooseSide && !info.camera.has) {
     pass.probe = std::make_unique<ViewProbe>(info.bounds);
     pass.probe->SetLights(lights);
+    pass.probe->SetOutside(p->outside);
   }
   if (root) {
     pass.check =

@@ -36,7 +36,7 @@ uint64_t Prepared::InitPeak(uint32_t first, uint32_t end, bool root, uint64_t en
   // Per environment of the whole grid: its counts.
   held += kInitBaseBytes + textureBytes + 4 * sizeof(double) * envPatches.size();
   const uint64_t parse =
-      info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes() + (root ? checkBytes : 0);
+      info.ParserBytes() + pieceBytes + ViewProbe::HeapBytes(outside) + (root ? checkBytes : 0);
   const uint64_t mesh = pieceBytes + stagedBytes + meshBytes;
   // The pieces are freed before the arenas are made, but their small blocks
   // may stay in the process's heap: counted, so that the bound holds for

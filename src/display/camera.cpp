@@ -116,6 +116,7 @@ void ViewProbe::Start(Probe& probe, const Camera& camera, int n) {
 
 ViewProbe::ViewProbe(const Bounds& bounds) {
   reach_ = glm::length(bounds.hi - bounds.lo);
+  centre_ = 0.5f * (bounds.lo + bounds.hi);
   for (int s = 0; s < kNumViewSides; ++s)
     Start(probes_[s], SideCamera(bounds, static_cast<ViewSide>(s)), kViewProbeRays);
   // Inside candidates only in a box with room to stand in.
@@ -189,6 +190,9 @@ void ViewProbe::Add(uint32_t index, const Polygon& p, bool twoSided) {
   for (Probe& probe : probes_) AddTo(probe, index, p, false, false);
   for (Probe& probe : inside_) AddTo(probe, index, p, true, twoSided);
   for (int k = 0; k < numLights_; ++k) AddTo(lightProbes_[k], index, p, true, true);
+  if (sun_ > 0.0) AddTo(sunProbe_, index, p, true, true);
+  if (hasSky_)
+    for (Probe& probe : skyProbes_) AddTo(probe, index, p, true, true);
 }
 
 void ViewProbe::AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided) {
@@ -309,6 +313,9 @@ ViewSide ViewProbe::Side() const {
 ViewChoice ViewProbe::Choose() const {
   ViewChoice c;
   c.side = Side();
+  c.lamps = numLights_;
+  c.sun = sun_ > 0.0;
+  c.sky = hasSky_;
   const Probe& s = probes_[static_cast<int>(c.side)];
   const double n2 = static_cast<double>(s.n) * s.n;
   uint32_t front = 0, back = 0, planes[7] = {0, 0, 0, 0, 0, 0, 0};
@@ -329,7 +336,8 @@ ViewChoice ViewProbe::Choose() const {
   // A candidate's score: its front hits off the orientation most of them
   // share, so that a view of one wall or of a block up close scores little
   // and one across a room (floor, walls, ceiling) much; its lit score the
-  // same with each hit counted by the light estimated there (ViewLight).
+  // same with each hit counted by the lamps' light estimated there
+  // (ViewLight), plus every hit's light from outside (SetOutside).
   double bestScore = -1.0, bestLit = 0.0;
   int litCandidate = -1;
   double share[kInsideCandidates] = {};  // front hits over the probe's rays
@@ -338,25 +346,28 @@ ViewChoice ViewProbe::Choose() const {
     const Probe& q = inside_[k];
     if (!q.ok) continue;
     uint32_t f = 0, by[7] = {0, 0, 0, 0, 0, 0, 0};
-    double lit = 0.0, litBy[7] = {0, 0, 0, 0, 0, 0, 0};
+    double lit = 0.0, litBy[7] = {0, 0, 0, 0, 0, 0, 0}, outside = 0.0;
     const glm::dvec3 eye(q.view.eye);
     for (size_t i = 0; i < q.front.size(); ++i)
       if (q.front[i]) {
         ++f;
         ++by[q.plane[i]];
-        if (numLights_ == 0) continue;
+        if (numLights_ == 0 && sun_ == 0.0 && !hasSky_) continue;
         const glm::dvec3 x = eye + q.depth[i] * q.dir[i];
         glm::dvec3 n(q.normal[i]);
         if (glm::dot(n, q.dir[i]) > 0.0) n = -n;  // a two-sided polygon's back
         const double e = LightAt(x, n);
         lit += e;
         litBy[q.plane[i]] += e;
+        outside += OutsideAt(x, n, q.index[i]);
       }
     const double m2 = static_cast<double>(q.n) * q.n;
     const double score = (f - *std::max_element(by + 1, by + 7)) / m2;
     share[k] = f / m2;
     c.geometric[k] = score;
-    c.lit[k] = (lit - *std::max_element(litBy + 1, litBy + 7)) / m2;
+    // Light from outside counts whole: it comes in as patches (the sun's
+    // through a skylight, on the floor) that the lamps' rule would miss.
+    c.lit[k] = (lit - *std::max_element(litBy + 1, litBy + 7) + outside) / m2;
     if (score > bestScore) {
       bestScore = score;
       c.candidate = k;
@@ -378,15 +389,6 @@ ViewChoice ViewProbe::Choose() const {
   c.inside = poor && c.candidate >= 0 && c.candidateFront > c.sideFront &&
              c.candidateFront >= 0.5 && c.candidateScore >= 0.1 * c.candidateFront;
   return c;
-}
-
-uint64_t ViewProbe::HeapBytes() {
-  constexpr uint64_t per =
-      sizeof(glm::dvec3) + 2 * sizeof(double) + sizeof(uint32_t) + 2 + sizeof(glm::vec3);
-  constexpr uint64_t n2 = uint64_t{kViewProbeRays} * kViewProbeRays;
-  constexpr uint64_t m2 = uint64_t{kInsideProbeRays} * kInsideProbeRays;
-  constexpr uint64_t l2 = uint64_t{kLightProbeRays} * kLightProbeRays;
-  return (kNumViewSides * n2 + kInsideCandidates * m2 + kViewLights * l2) * per;
 }
 
 void VisibleFrontRays(const Scene& scene, uint32_t rays[kNumViewSides]) {

@@ -91,7 +91,9 @@ void ViewKeys(Fields& f, const Context& c) {
     for (int k = 0; k < kInsideCandidates; ++k) w.Printf("%s%.6g", k ? ", " : "", v.geometric[k]);
     w.Printf("], \"inside_lit_scores\": [");
     for (int k = 0; k < kInsideCandidates; ++k) w.Printf("%s%.6g", k ? ", " : "", v.lit[k]);
-    w.Printf("]}");
+    // The light the lit scores count: lamps, and the sun's and the sky's from outside.
+    w.Printf("], \"inside_lit_by\": {\"lamps\": %d, \"sun\": %s, \"sky\": %s}}", v.lamps,
+             v.sun ? "true" : "false", v.sky ? "true" : "false");
   }
   f.Bool("camera_from_scene", r.cam.fromScene);
 }

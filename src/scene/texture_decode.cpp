@@ -176,6 +176,57 @@ std::string BadBmpPalette(const unsigned char* b, size_t n) {
          " colours needed)";
 }
 
+// A Radiance HDR file whose run-length data ends inside a scanline:
+// stb_image 2.27 reads bytes past the end as 0, a run count of 0 that
+// never advances, and loops for ever. Read as stb_image reads it (the
+// header's lines, then each scanline's four channels); "" if the data
+// lasts, or stb_image takes the scanlines as flat (finite) or refuses them.
+std::string CutHdrRuns(const unsigned char* b, size_t n, int w, int h) {
+  if (w < 8 || w >= 32768) return "";  // flat data: stb_image reads every texel once
+  size_t at = 0;
+  auto get8 = [&]() -> int { return at < n ? b[at++] : 0; };
+  // stbi__hdr_gettoken: up to a '\n' or the end; whether the line is empty
+  // as a C string (none, or a NUL first).
+  auto line = [&]() {
+    int len = 0;
+    bool empty = true;
+    for (int c = get8(); at < n && c != '\n'; c = get8()) {
+      if (len == 0) empty = c == 0;
+      if (++len == 1023) {
+        while (at < n && get8() != '\n') {
+        }
+        break;
+      }
+    }
+    return empty;
+  };
+  line();            // #?RADIANCE
+  while (!line()) {  // the header, to an empty line
+  }
+  line();  // -Y h +X w
+  for (int j = 0; j < h; ++j) {
+    const int c1 = get8(), c2 = get8(), hi = get8();
+    if (c1 != 2 || c2 != 2 || (hi & 0x80)) return "";  // flat from here
+    if (((hi << 8) | get8()) != w) return "";          // refused by stb_image
+    for (int k = 0; k < 4; ++k)
+      for (int i = 0; i < w;) {
+        if (at >= n)
+          return "its run-length data ends inside scanline " + std::to_string(j) + " of " +
+                 std::to_string(h);
+        int count = get8();
+        if (count > 128) {
+          get8();
+          count -= 128;
+        } else {
+          at = std::min(n, at + static_cast<size_t>(count));
+        }
+        if (count > w - i) return "";  // refused by stb_image
+        i += count;
+      }
+  }
+  return "";
+}
+
 }  // namespace
 
 namespace {
@@ -232,6 +283,17 @@ Status ReadSkyMap(const std::string& path, SkyMap* map, uint64_t budget) {
   std::string bytes;
   Status s = ReadImageBytes(path, budget, fail, &bytes);
   if (!s.ok()) return s;
+  return DecodeSkyMap(bytes, path, map, budget);
+}
+
+Status DecodeSkyMap(const std::string& bytes, const std::string& path, SkyMap* map,
+                    uint64_t budget) {
+  auto fail = [&](const std::string& why) {
+    return Status::Error("vismask: --sky: cannot read sky map '" + path + "': " + why);
+  };
+  if (bytes.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
+    return fail(std::to_string(bytes.size()) + " bytes, more than the " +
+                std::to_string(std::numeric_limits<int>::max()) + " a sky map file may have");
   const stbi_uc* encoded = reinterpret_cast<const stbi_uc*>(bytes.data());
   const int n = static_cast<int>(bytes.size());
   if (!stbi_is_hdr_from_memory(encoded, n)) return fail("not a Radiance HDR image");
@@ -250,6 +312,8 @@ Status ReadSkyMap(const std::string& path, SkyMap* map, uint64_t budget) {
     return fail("decoding its " + std::to_string(w) + "x" + std::to_string(h) + " texels needs " +
                 std::to_string(need) + " bytes, more than the " + std::to_string(budget) +
                 " --mem-budget leaves it at init");
+  const std::string cut = CutHdrRuns(encoded, bytes.size(), w, h);
+  if (!cut.empty()) return fail("corrupt HDR: " + cut);
   float* data = stbi_loadf_from_memory(encoded, n, &w, &h, &comp, 3);
   if (!data)
     return fail(stbi_failure_reason() ? EscapedReason(stbi_failure_reason()) : "decoder failed");

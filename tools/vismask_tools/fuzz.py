@@ -29,7 +29,8 @@ def section(data):
              "after the seeds and at the end of the run; *corpus* the inputs kept at the end "
              "(`corp:`). A crash, sanitizer report, leak, timeout (10 s) or RSS above 2 GB would "
              "stop the run and be saved as an artifact; each one found so far is fixed and its "
-             "input kept as a test in `make test` (tests/scene_test.cpp, tests/image_test.cpp).\n")
+             "input kept as a test in `make test` (tests/scene_test.cpp, tests/image_test.cpp, "
+             "tests/hardening3_test.cpp, tests/outside_test.cpp).\n")
     L.append("| target | reads | seeds | executions | seconds | exec/s | cov (seeds, end) | ft (seeds, end) "
              "| corpus at end | peak RSS MB | result | run on |")
     L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vismask/scene/scene.h"
+#include "vismask/solve/outside.h"
 
 namespace vismask {
 
@@ -89,6 +90,21 @@ struct ViewLight {
 constexpr int kViewLights = 4;
 constexpr int kLightProbeRays = 32;
 
+// Light from outside counts too (--sky, --sun; outside.h), each as light
+// along fixed directions seen through shadow maps taken from far outside
+// the box (kSunProbeRays^2 rays over the box for the sun, whose light
+// makes sharp patches, kOutsideProbeRays^2 for each sky direction; the eye
+// 8 box diagonals away, so that its rays run within 4 degrees of the
+// direction): the sun gives E max(0, n.s) where its map sees x (E the
+// channels' mean; its angular diameter left out); the sky, kViewSkyDirections directions w
+// (the 26 from a cube's centre to its faces', edges' and corners' centres),
+// the sum of L(w) max(0, n.w) W over those whose map sees x, L the uniform
+// sky's radiance or the map's along w (the channels' mean), W the weight
+// that gives a plane facing an axis, open to the sky, pi L.
+constexpr int kViewSkyDirections = 26;
+constexpr int kOutsideProbeRays = 32;
+constexpr int kSunProbeRays = 96;
+
 // What the probe chose: the best side, how its image fares (the share of
 // its rays whose nearest hit is a front face, of those that hit a back face,
 // and whether one plane's orientation holds 90% of its front hits), and
@@ -114,6 +130,9 @@ struct ViewChoice {
   double geometric[kInsideCandidates] = {};
   double lit[kInsideCandidates] = {};
   bool byLight = false;
+  // What the lit scores count: the lamps (ViewLight), the sun, the sky.
+  int lamps = 0;
+  bool sun = false, sky = false;
 };
 
 // A camera's derived basis for projection onto a width x height image.
@@ -144,11 +163,16 @@ class ViewProbe {
   // The lamps the lit score estimates light from (at most kViewLights
   // taken), before the first Add.
   void SetLights(const std::vector<ViewLight>& lights);
+  // The light from outside the lit score estimates too (--sky, --sun:
+  // kViewSkyDirections; a sky map's radiance along them is read here),
+  // before the first Add.
+  void SetOutside(const OutsideLight& light);
   void Rays(uint32_t rays[kNumViewSides]) const;  // as VisibleFrontRays
   ViewSide Side() const;                          // as ChooseViewSide
   // The side, and whether an inside candidate replaces it (ViewChoice).
   ViewChoice Choose() const;
-  static uint64_t HeapBytes();
+  // The heap the probe holds at most, its outside light's shadow maps included.
+  static uint64_t HeapBytes(const OutsideLight& light);
 
  private:
   struct Probe {
@@ -165,13 +189,29 @@ class ViewProbe {
   void Start(Probe& probe, const Camera& camera, int n);
   // The estimated irradiance at x (normal n, facing the viewer) from the lights.
   double LightAt(const glm::dvec3& x, const glm::dvec3& n) const;
+  // The same from the sun and the sky (camera_outside.cpp), at x on
+  // polygon `polygon` (its index in Add).
+  double OutsideAt(const glm::dvec3& x, const glm::dvec3& n, uint32_t polygon) const;
+  // The share (0 to 1) of x on `polygon` the far shadow map `probe` sees
+  // (nothing nearer its eye).
+  double FarSeen(const Probe& probe, const glm::dvec3& x, uint32_t polygon) const;
   void AddTo(Probe& probe, uint32_t index, const Polygon& p, bool clip, bool twoSided);
   Probe probes_[kNumViewSides];
   Probe inside_[kInsideCandidates];
   ViewLight lights_[kViewLights];
   Probe lightProbes_[kViewLights];  // from each lamp along its normal: its shadow map
   int numLights_ = 0;
+  // The sun's irradiance (0: none) and direction towards it, and its map.
+  double sun_ = 0.0;
+  glm::dvec3 sunToward_{0.0, 1.0, 0.0};
+  Probe sunProbe_;
+  // Each sky direction's radiance times its weight (0: no sky), and its map.
+  double sky_[kViewSkyDirections] = {};
+  glm::dvec3 skyDir_[kViewSkyDirections];
+  Probe skyProbes_[kViewSkyDirections];
+  bool hasSky_ = false;
   float reach_ = 0.0f;  // the box's diagonal
+  glm::vec3 centre_{0.0f};
   std::vector<glm::dvec2> poly_;
 };
 

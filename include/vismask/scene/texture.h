@@ -105,6 +105,11 @@ Status DecodeTexture(const std::string& bytes, const std::string& path, const st
 constexpr uint64_t kSkyDecodeBytesPerTexel = 24;  // stb_image's floats and the staged copy
 constexpr uint64_t kMaxSkyTexels = uint64_t{1} << 26;
 Status ReadSkyMap(const std::string& path, SkyMap* map, uint64_t budget = 0);
+// ReadSkyMap's decoding of a file's `bytes` (in memory; `path` names it in
+// messages), with the same checks: the sky-map fuzz target's entry
+// (tests/fuzz/sky_fuzz.cpp).
+Status DecodeSkyMap(const std::string& bytes, const std::string& path, SkyMap* map,
+                    uint64_t budget = 0);
 
 // The affine map x -> uv = (dot(u.xyz, x) + u.w, dot(v.xyz, x) + v.w) on a
 // polygon's plane, fitted to its corners' uv (least squares; exact for a
