@@ -359,7 +359,7 @@ parallel: deps
 # render natively and under qemu with the same arguments, compared byte for
 # byte (and, if they differ, by relative RMSE and the largest relative
 # difference in B). qemu runs the target's binaries with its libc from
-# /usr/TRIPLET (the cross toolchain) and zlib from the sysroot. The tests run
+# /usr/TRIPLET (the cross toolchain) and zlib and libjpeg from the sysroot. The tests run
 # the real binary through VISMASK_BIN: a script that starts it under qemu
 # (binfmt_misc is not needed), with no -mpi beside it, so the MPI runs are
 # skipped (the host's mpirun cannot start the target's vismask-mpi).
@@ -379,7 +379,7 @@ test-cross:
 else
 QEMU_ARCH := $(if $(filter arm64,$(DEB_ARCH)),aarch64,$(if $(filter armhf,$(DEB_ARCH)),arm,$(DEB_ARCH)))
 QEMU := qemu-$(QEMU_ARCH)-static
-QEMU_RUN := $(QEMU) -L /usr/$(TRIPLET) -E LD_LIBRARY_PATH=$(abspath $(SYSROOT))/lib/$(TRIPLET)
+QEMU_RUN := $(QEMU) -L /usr/$(TRIPLET) -E LD_LIBRARY_PATH=$(abspath $(SYSROOT))/lib/$(TRIPLET):$(abspath $(SYSROOT))/usr/lib/$(TRIPLET)
 CROSS_OUT := $(BUILD)/test-cross
 
 $(BUILD)/qemu/vismask: $(BUILD)/vismask
