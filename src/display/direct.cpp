@@ -129,6 +129,13 @@ double EdgeTerm(const glm::vec3& a, const glm::vec3& b, const glm::vec3& n) {
   return theta * glm::dot(glm::dvec3(n), c) / s;
 }
 
+// Whether `ray` reaches its end past everything but the receiver and its
+// twin (*hint: Grid::Occluded's, or null): every shadow ray's last step.
+bool Unblocked(const Grid& grid, const Ray& ray, uint32_t receiver, uint32_t twin, uint32_t* hint) {
+  const Skip skip(receiver, twin);
+  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+}
+
 }  // namespace
 
 DirectLight::Counts DirectLight::Count(Span<const Patch> patches) {
@@ -306,9 +313,8 @@ bool DirectLight::SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, 
   if (!(cosX > 0.0f)) return false;
   *weight = sun_ * cosX;
   // The ray must leave the scene: nothing in the way, however far.
-  Ray ray{x, d, epsilon, std::numeric_limits<float>::infinity()};
-  const Skip skip(receiver, twin);
-  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+  return Unblocked(grid, Ray{x, d, epsilon, std::numeric_limits<float>::infinity()}, receiver, twin,
+                   hint);
 }
 
 bool DirectLight::SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin,
@@ -319,9 +325,8 @@ bool DirectLight::SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t tw
       -SunConeDirection(sunToward_, sunDegrees_, 1.0f, static_cast<float>(k) / kSunRimRays);
   *usable = glm::dot(n, d) > 0.0f;
   if (!*usable) return false;
-  Ray ray{x, d, epsilon, std::numeric_limits<float>::infinity()};
-  const Skip skip(receiver, twin);
-  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+  return Unblocked(grid, Ray{x, d, epsilon, std::numeric_limits<float>::infinity()}, receiver, twin,
+                   hint);
 }
 
 bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
@@ -353,9 +358,7 @@ bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin,
   *weight = e.scale * (cosX * cosY / (r2 * r2));
   float t = epsilon / std::sqrt(r2);
   if (!(t < 0.5f)) return true;
-  Ray ray{x, d, t, 1.0f - t};
-  const Skip skip(receiver, twin);
-  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+  return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint);
 }
 
 bool DirectLight::CornerVisible(const Grid& grid, uint32_t receiver, uint32_t twin,
@@ -372,9 +375,7 @@ bool DirectLight::CornerVisible(const Grid& grid, uint32_t receiver, uint32_t tw
   *usable = true;
   float t = epsilon / std::sqrt(r2);
   if (!(t < 0.5f)) return true;
-  Ray ray{x, d, t, 1.0f - t};
-  const Skip skip(receiver, twin);
-  return !(hint ? grid.Occluded(ray, skip, hint) : grid.Occluded(ray, skip));
+  return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint);
 }
 
 glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k) {
