@@ -148,6 +148,16 @@ void ViewProbe::SetLights(const std::vector<ViewLight>& lights) {
   }
 }
 
+bool ViewProbe::Probe::Project(const glm::dvec3& x, glm::dvec3* d, double* sx, double* sy) const {
+  *d = x - glm::dvec3(view.eye);
+  const double z = glm::dot(*d, glm::dvec3(view.forward));
+  if (!(z > 0.0)) return false;
+  const double halfN = 0.5 * n;
+  *sx = halfN + view.focal * glm::dot(*d, glm::dvec3(view.right)) / z;
+  *sy = halfN - view.focal * glm::dot(*d, glm::dvec3(view.up)) / z;
+  return true;
+}
+
 double ViewProbe::LightAt(const glm::dvec3& x, const glm::dvec3& n) const {
   constexpr double kPi = 3.141592653589793;
   double sum = 0.0;
@@ -164,13 +174,9 @@ double ViewProbe::LightAt(const glm::dvec3& x, const glm::dvec3& n) const {
     // Seen from the lamp: x's pixel in its shadow map, x lit when no hit
     // there (or at a neighbour, the map's own resolution) is nearer than x
     // by more than 2% of the distance.
-    const View& v = q.view;
-    const glm::dvec3 d = x - glm::dvec3(v.eye);
-    const double z = glm::dot(d, glm::dvec3(v.forward));
-    if (!(z > 0.0)) continue;
-    const double halfN = 0.5 * q.n;
-    const double sx = halfN + v.focal * glm::dot(d, glm::dvec3(v.right)) / z;
-    const double sy = halfN - v.focal * glm::dot(d, glm::dvec3(v.up)) / z;
+    glm::dvec3 d;
+    double sx, sy;
+    if (!q.Project(x, &d, &sx, &sy)) continue;
     if (!(sx >= 0.0 && sx < q.n && sy >= 0.0 && sy < q.n)) continue;  // outside the cone
     const int px = static_cast<int>(sx), py = static_cast<int>(sy);
     const double dist = glm::length(d);

@@ -67,13 +67,10 @@ void ViewProbe::SetOutside(const OutsideLight& light) {
 
 double ViewProbe::FarSeen(const Probe& q, const glm::dvec3& x, uint32_t polygon) const {
   if (!q.ok) return 0.0;
-  const View& v = q.view;
-  const glm::dvec3 eye(v.eye), d = x - eye;
-  const double z = glm::dot(d, glm::dvec3(v.forward));
-  if (!(z > 0.0)) return 0.0;
-  const double halfN = 0.5 * q.n;
-  const double sx = halfN + v.focal * glm::dot(d, glm::dvec3(v.right)) / z;
-  const double sy = halfN - v.focal * glm::dot(d, glm::dvec3(v.up)) / z;
+  glm::dvec3 d;
+  double sx, sy;
+  if (!q.Project(x, &d, &sx, &sy)) return 0.0;
+  const glm::dvec3 eye(q.view.eye);
   if (!(sx >= 0.0 && sx < q.n && sy >= 0.0 && sy < q.n)) return 1.0;  // beyond the box
   // The four pixels whose centres surround x, weighted bilinearly; each
   // shadows x when the plane of what it sees, followed to x's own ray,

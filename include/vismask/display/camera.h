@@ -185,6 +185,10 @@ class ViewProbe {
     std::vector<uint8_t> plane;     // the hit's orientation: 1 + 2 * axis + (normal < 0); 0: none
     std::vector<glm::vec3> normal;  // the hit polygon's normal
     int n = kViewProbeRays;
+    // Where x falls in this probe's image (*sx, *sy in pixels from the top
+    // left; outside [0, n) beyond it), and *d = x - eye; false when x is
+    // not in front of the eye.
+    bool Project(const glm::dvec3& x, glm::dvec3* d, double* sx, double* sy) const;
   };
   void Start(Probe& probe, const Camera& camera, int n);
   // The estimated irradiance at x (normal n, facing the viewer) from the lights.
