@@ -32,6 +32,23 @@ void ExchangeBuffers::Layout(Arena& arena, const RankEnvs& envs, int ranks, uint
 
 namespace {
 
+// to.*field += from.*field for each field, in the order given.
+template <class T, class... M>
+void AddFields(T* to, const T& from, M T::*... field) {
+  ((to->*field += from.*field), ...);
+}
+
+}  // namespace
+
+void EnvSums::Add(const EnvSums& o) {
+  using S = EnvSums;
+  AddFields(this, o, &S::unshot, &S::flight, &S::lost, &S::emitted, &S::radiosity, &S::kdArea,
+            &S::area, &S::work, &S::steps, &S::shots, &S::rays, &S::forwardsCreated, &S::held,
+            &S::shootable);
+}
+
+namespace {
+
 double Sum3(const double v[3]) {
   return v[0] + v[1] + v[2];
 }
@@ -110,23 +127,10 @@ RoundTotals SumTotals(const RankEnvs& rankEnvs, int ranks, const ExchangeBuffers
   };
   for (uint32_t env = 0; env < rankEnvs.total; ++env) {
     const EnvReport& r = report(env);
-    tot.unshot += r.unshot;
-    tot.flight += r.flight;
-    tot.lost += r.lost;
-    tot.shootable += r.shootable;
-    tot.held += r.held;
-    tot.emitted += r.emitted;
-    tot.shots += r.shots;
-    tot.rays += r.rays;
-    tot.forwardsCreated += r.forwardsCreated;
-    tot.radiosity += r.radiosity;
-    tot.kdArea += r.kdArea;
-    tot.area += r.area;
+    tot.Add(r);
     if (r.envCpu > tot.envCpuMax) tot.envCpuMax = r.envCpu;
     if (r.roundSteps > tot.envStepsMax) tot.envStepsMax = r.roundSteps;
-    tot.steps += r.steps;
     if (r.roundWork > tot.envWorkMax) tot.envWorkMax = r.roundWork;
-    tot.work += r.work;
   }
   for (uint32_t env = 0; env < rankEnvs.total; ++env) {
     const EnvReport& r = report(env);

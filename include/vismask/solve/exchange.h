@@ -16,14 +16,34 @@
 
 namespace vismask {
 
+// What adds up across environments: each environment's share in its
+// EnvReport, their sums, taken in environment order, in RoundTotals.
+struct EnvSums {
+  double unshot = 0.0;  // local unshot power plus the power in flight booked here
+  double flight = 0.0;  // the latter (Environment::FlightPower), channels summed
+  double lost = 0.0;    // emitted - absorbed - escaped - unshot (both parts): the loss
+  double emitted = 0.0;
+  double radiosity = 0.0;  // sum of b * area, channels summed
+  double kdArea = 0.0;     // sum of kd * area, channels averaged (constant)
+  double area = 0.0;       // (constant)
+  uint64_t work = 0;       // work so far (Environment::workSteps)
+  uint64_t steps = 0;      // grid steps so far (EnvStats::gridSteps)
+  uint64_t shots = 0;      // local and foreign
+  uint64_t rays = 0;       // form-factor rays traced
+  uint64_t forwardsCreated = 0;
+  // Queued shooters and outbox packets: a bound on the shots whose rays
+  // are still on their way (Method R, SolveOptions::routed).
+  uint64_t held = 0;
+  // Local patches with unshot power (0 or 1: any), queued shooters and
+  // packets in the outbox.
+  uint64_t shootable = 0;
+  void Add(const EnvSums& other);  // field by field
+};
+
 // What every environment reports between rounds, gathered from all ranks and
 // summed in environment order, so every rank takes the same decisions
 // whatever the grouping.
-struct EnvReport {
-  double unshot;  // local unshot power plus the power in flight booked here
-  double flight;  // the latter (Environment::FlightPower), channels summed
-  double lost;    // emitted - absorbed - escaped - unshot (both parts); summed: the loss
-  double emitted;
+struct EnvReport : EnvSums {
   double elapsed;       // seconds since the solve began, on this rank's clock
   double waited;        // this rank's SolveResult::waitSeconds so far (first entry of a rank)
   double roundCpu;      // CPU seconds of this rank's shots in the last round (first entry)
@@ -31,26 +51,10 @@ struct EnvReport {
   double envCpu;        // CPU seconds of this environment's shots in the last round
   uint64_t roundSteps;  // grid steps of this environment's shots in the last round
   uint64_t roundWork;   // their work (Environment::workSteps), what rounds are sized by
-  uint64_t work;        // work so far
-  uint64_t steps;       // grid steps so far (EnvStats::gridSteps)
-  uint64_t shots;       // local and foreign
-  uint64_t rays;        // form-factor rays traced
-  uint64_t forwardsCreated;
   uint64_t foreignShots;
-  uint64_t held;       // foreign shooters queued and packets in the outbox
-  uint64_t shootable;  // local patches with unshot power (0 or 1: any), queued shooters and
-                       // packets in the outbox
-  double radiosity;    // sum of b * area, channels summed
-  double kdArea;       // sum of kd * area, channels averaged (constant)
-  double area;         // (constant)
 };
 
-struct RoundTotals {
-  double unshot = 0.0;  // local unshot and in flight
-  double flight = 0.0;  // in flight only
-  double lost = 0.0;    // the ledger's residual less the power in flight
-  uint64_t shootable = 0;
-  double emitted = 0.0;
+struct RoundTotals : EnvSums {
   double elapsed = 0.0;      // rank 0's clock
   double waitedMax = 0.0;    // the most any rank has waited
   double roundCpuMax = 0.0;  // the most CPU any rank used for the last round's shots
@@ -60,22 +64,11 @@ struct RoundTotals {
   // every rank learns it at the same round, writes a checkpoint and ends.
   uint64_t interrupt = 0;
   double envCpuMax = 0.0;     // the most CPU any environment used for them
-  uint64_t steps = 0;         // grid steps, all environments, so far
   uint64_t envStepsMax = 0;   // the most grid steps any environment did in the last round
   uint64_t rankStepsMax = 0;  // the most any rank's environments did in it, together
-  uint64_t work = 0;          // the same three in work (Environment::workSteps)
-  uint64_t envWorkMax = 0;
+  uint64_t envWorkMax = 0;    // the same two in work (Environment::workSteps)
   uint64_t rankWorkMax = 0;
-  uint64_t shots = 0;
-  uint64_t rays = 0;
-  uint64_t forwardsCreated = 0;
   uint64_t maxOutstanding = 0;  // the most foreign shooters any env may still receive
-  // Queued shooters and outbox packets, all environments: a bound on the
-  // shots whose rays are still on their way (Method R, SolveOptions::routed).
-  uint64_t held = 0;
-  double radiosity = 0.0;
-  double kdArea = 0.0;
-  double area = 0.0;
 };
 
 // A rank's exchange buffers, carved from its arena at init: one send and one
