@@ -139,12 +139,9 @@ Status Loader::LoadMtl(const std::string& path, const std::string& objPath, int 
   TextLines lines(text);
   std::vector<Material>& materials = *materials_;
   bool haveMaterial = false;
-  std::string lineText;
-  int line = 0;
-  Tokens t;
-  while (lines.NextStatement(&lineText, &line, &t)) {
-    const std::string& key = t[0];
-    const size_t args = t.size() - 1;
+  Statement statement;
+  while (lines.NextStatement(&statement)) {
+    const auto& [lineText, line, t, key, args] = statement;
     if (key == "newmtl") {
       if (args != 1) return Status::At(path, line, "'newmtl' needs 1 name, got " + Str(args));
       std::string where = path + ":" + std::to_string(line);

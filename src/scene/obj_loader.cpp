@@ -93,13 +93,10 @@ Status Loader::LoadObj(const std::string& path, LineSource& lines, const Polygon
   bool haveMaterial = false;
   uint32_t material = 0;
   uint32_t smoothing = 0;
-  std::string text;
   std::vector<Polygon> pieces;  // what one face became
-  int line = 0;
-  Tokens t;
-  while (lines.NextStatement(&text, &line, &t)) {
-    const std::string& key = t[0];
-    const size_t args = t.size() - 1;
+  Statement statement;
+  while (lines.NextStatement(&statement)) {
+    const auto& [text, line, t, key, args] = statement;
     if (key == "v") {
       if (args != 3 && args != 4)
         return Status::At(path, line, "'v' needs 3 or 4 numbers, got " + Str(args));

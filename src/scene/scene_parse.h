@@ -118,6 +118,15 @@ std::string NotDiffuse(const Finish& f);
 // Parses "a b c" (or one number) leniently, for keys only read to warn.
 bool LenientFloats(const Tokens& t, size_t count, double* out);
 
+// One statement of an OBJ or MTL file (LineSource::NextStatement).
+struct Statement {
+  std::string text;  // the line as read
+  int line = 0;      // its number
+  Tokens tokens;
+  std::string key;  // tokens[0]
+  size_t args = 0;  // tokens after the key
+};
+
 // The lines of a text, one at a time: split at LF, CR LF or a lone CR (old
 // Mac files), the last line kept even without one, no empty line after a
 // final line end; a leading UTF-8 byte-order mark dropped.
@@ -126,14 +135,18 @@ class LineSource {
   virtual ~LineSource() = default;
   // The next line into *line; false at the end (or on a read error: error()).
   virtual bool Next(std::string* line) = 0;
-  // The next line that is not blank or only a comment: the line into
-  // *text, its tokens into *tokens, *number advanced past every line read
-  // (the line numbers of the caller's messages); false at the end.
-  bool NextStatement(std::string* text, int* number, Tokens* tokens) {
-    while (Next(text)) {
-      ++*number;
-      *tokens = Tokenize(*text);
-      if (!tokens->empty()) return true;
+  // The next line that is not blank or only a comment into *s: its text,
+  // tokens, key (the first token) and argument count, s->line advanced
+  // past every line read (the line numbers of the caller's messages);
+  // false at the end.
+  bool NextStatement(Statement* s) {
+    while (Next(&s->text)) {
+      ++s->line;
+      s->tokens = Tokenize(s->text);
+      if (s->tokens.empty()) continue;
+      s->key = s->tokens[0];
+      s->args = s->tokens.size() - 1;
+      return true;
     }
     return false;
   }
