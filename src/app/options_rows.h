@@ -15,15 +15,20 @@ namespace option_rows {
 // rather than silently becoming 0 (--patch-size 0 is "automatic").
 constexpr double kFloatMin = 1.17549435e-38;
 
+using O = Options;  // the rows name fields as &O::field
+
 // A row under construction: the kind's constructor, then what applies.
 struct Row {
   OptionSpec s;
   Row& Given(bool Options::*g) { return s.given = g, *this; }
   Row& Open(bool lo, bool hi) { return s.loOpen = lo, s.hiOpen = hi, *this; }
   Row& Tiny(const char* words) { return s.tiny = words, *this; }
-  Row& Help(const char* arg, const char* help) { return s.arg = arg, s.help = help, *this; }
+  // The help is written as a raw string that starts on the line after
+  // its opening R"(: that first line end is not part of the text.
+  static const char* Text(const char* help) { return help + (*help == '\n'); }
+  Row& Help(const char* arg, const char* help) { return s.arg = arg, s.help = Text(help), *this; }
   Row& More(const char* label, const char* help) {
-    return s.moreLabel = label, s.moreHelp = help, *this;
+    return s.moreLabel = label, s.moreHelp = Text(help), *this;
   }
   Row& Usage() { return s.usage = true, *this; }
   Row& Envs() { return s.section = HelpSection::kEnvironments, *this; }
@@ -85,12 +90,13 @@ Status ParseEmit(const std::string& a, const std::string& v, Options* o);
 Status ParseStrict(const std::string&, const std::string&, Options* o);
 Status ParseJson(const std::string&, const std::string&, Options* o);
 
-// The rows, a section each, in --help all's order.
-void AddSolveRows(std::vector<Row>* t);
-void AddImageRows(std::vector<Row>* t);
-void AddSceneRows(std::vector<Row>* t);
-void AddEnvironmentRows(std::vector<Row>* t);
-void AddRunRows(std::vector<Row>* t);
+// The rows, a section each (in --help all's order: solve, image, scene,
+// environments, run).
+std::vector<Row> SolveRows();
+std::vector<Row> ImageRows();
+std::vector<Row> SceneRows();
+std::vector<Row> EnvironmentRows();
+std::vector<Row> RunRows();
 
 }  // namespace option_rows
 }  // namespace vismask

@@ -2,203 +2,191 @@
 // when it stops, and the image (options_rows.h).
 #include "options_rows.h"
 
-namespace vismask {
-namespace option_rows {
-
-using O = Options;
+namespace vismask::option_rows {
 
 // Where the run writes, how big a solve is and when it stops.
-void AddSolveRows(std::vector<Row>* t) {
-  t->insert(t->end(),
-            {
-                Text("--out", &O::outDir, "a directory")
-                    .Help("DIR", "output directory (default out/); created if missing")
-                    .Usage()
-                    .MayDiffer(),
-                Custom("--export", ParseExport)
-                    .Help("FILE.glb",
-                          "also write the solved mesh as binary glTF 2.0 to\n"
-                          "FILE.glb (a path from the current directory, not\n"
-                          "under --out; its directory must exist): every\n"
-                          "patch's lattice vertices and triangles, COLOR_0 the\n"
-                          "linear display radiance image.pfm shows there\n"
-                          "(emission included, unclamped), an unlit material;\n"
-                          "scene units and the OBJ's axes")
-                    .Usage()
-                    .MayDiffer()
-                    .Json("export"),
-                Number("--patch-size", &O::patchSize, 0.0, 3.4e38, "a length > 0")
-                    .Open(true, false)
-                    .Tiny("a length float can hold (>= 1.2e-38; smaller is 0)")
-                    .Help("L",
-                          "longest patch edge, scene units (default: largest\n"
-                          "scene extent / 28)")
-                    .Usage()
-                    .Json("patch_size"),
-                Choice("--ray-alloc", &O::rayAlloc, "power|fixed")
-                    .Given(&O::hasRayAlloc)
-                    .Help("power|fixed",
-                          "how many Monte Carlo rays a shot traces. power (the\n"
-                          "default): in proportion to the shot's unshot power,\n"
-                          "--emitted-rays for the whole emitted power, at least\n"
-                          "--min-rays; a shot worth more than --max-rays shoots\n"
-                          "that share of its power and keeps the rest for later\n"
-                          "shots. fixed: --rays every shot (the old default)")
-                    .Json("ray_alloc"),
-                Count("--rays", &O::rays, 1, 1e8, "an integer in [1, 1e8]")
-                    .Given(&O::hasRays)
-                    .Help("N",
-                          "fixed: Monte Carlo rays per shot (4096); given alone it\n"
-                          "selects --ray-alloc fixed")
-                    .Json("rays"),
-                Count("--emitted-rays", &O::emittedRays, 1, 1e12, "an integer in [1, 1e12]")
-                    .Given(&O::hasEmittedRays)
-                    .Help("M",
-                          "power: the rays the emitted power is worth (4000000);\n"
-                          "a shot of power P traces M * P / emitted power rays,\n"
-                          "rounded up or down at random from the shot's stream")
-                    .Json("emitted_rays"),
-                Count("--min-rays", &O::minRays, 1, 1e8, "an integer in [1, 1e8]")
-                    .Help("F", "power: the fewest rays a shot traces (default 16)")
-                    .Json("min_rays"),
-                Count("--max-rays", &O::maxRays, 1, 1e8, "an integer in [1, 1e8]")
-                    .Help("C",
-                          "power: the most rays a shot traces (default 8192);\n"
-                          "also Method R's packet bits")
-                    .Json("max_rays"),
-                Choice("--sampler", &O::sobol, "sobol|random")
-                    .Help("S",
-                          "sobol (default): scrambled Sobol' points over a\n"
-                          "shot's origin x direction; random: independent draws")
-                    .Json("sampler"),
-                Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
-                    .Help("N", "stop once N form-factor rays have been traced")
-                    .Json("ray_budget"),
-                Count("--elements", &O::elementsPerPatch, 0, 1024, "an integer in [0, 1024]")
-                    .Help("K",
-                          "receivers finer than shooters: each patch is a\n"
-                          "quadtree of elements that split where the radiosity\n"
-                          "received changes fast (shadow edges, contact shadows,\n"
-                          "corners); the pool holds K elements per patch beyond\n"
-                          "the patches themselves (default 8; 0: no refinement).\n"
-                          "When it is used up refinement stops (run.json says so)"),
-                Count("--element-depth", &O::elementDepth, 0, 16, "an integer in [0, 16]")
-                    .Help("D",
-                          "the deepest an element splits, 0-16 (default 4: 1/16\n"
-                          "of the patch's edge)"),
-                Number("--element-spread", &O::elementSpread, 0.0, 100.0, "a number in [0, 100]")
-                    .Help("S",
-                          "an element splits only where its quarters' radiosity\n"
-                          "differs by more than S (relative RMS, default 0.1) and\n"
-                          "more than its Monte Carlo noise explains"),
-                Number("--element-chi2", &O::elementChi2, 0.0, 1e6, "a number in [0, 1e6]")
-                    .Help("X",
-                          "... explains: chi-square (3 dof) of its quarters\n"
-                          "against an even spread above X (default 20)"),
-                Count("--seed", &O::seed, 0, kNoLimit, "an unsigned 64-bit integer")
-                    .Help("S", "random seed, unsigned 64-bit (default 1)")
-                    .Json("seed"),
-                Number("--stop-unshot", &O::stopUnshot, 0.0, 1.0, "a number in [0, 1)")
-                    .Open(false, true)
-                    .Help("F",
-                          "stop when unshot power < F * emitted power, 0 <= F < 1\n"
-                          "(default 1e-3); 0 needs another stop as well")
-                    .Json("stop_unshot"),
-                Count("--max-shots", &O::maxShots, 1, kNoLimit, "a positive integer")
-                    .Help("N", "stop after N shots (default: no limit)")
-                    .Json("max_shots"),
-                Number("--max-seconds", &O::maxSeconds, 0.0, kNoLimit, "a number of seconds > 0")
-                    .Open(true, false)
-                    .Help("T",
-                          "stop after T seconds of solving (default: no limit;\n"
-                          "a time limit makes the result depend on speed).\n"
-                          "Without --emitted-rays (one rank, power allocation)\n"
-                          "it plans them: the rays a solve that ends within\n"
-                          "about T can afford, from the rays per second timed\n"
-                          "through the scene's grid at init (run.json:\n"
-                          "emitted_rays, emitted_rays_planned)")
-                    .Usage()
-                    .Json("max_seconds"),
-            });
+std::vector<Row> SolveRows() {
+  return {
+      Text("--out", &O::outDir, "a directory")
+          .Help("DIR", "output directory (default out/); created if missing")
+          .Usage()
+          .MayDiffer(),
+      Custom("--export", ParseExport)
+          .Help("FILE.glb", R"(
+also write the solved mesh as binary glTF 2.0 to
+FILE.glb (a path from the current directory, not
+under --out; its directory must exist): every
+patch's lattice vertices and triangles, COLOR_0 the
+linear display radiance image.pfm shows there
+(emission included, unclamped), an unlit material;
+scene units and the OBJ's axes)")
+          .Usage()
+          .MayDiffer()
+          .Json("export"),
+      Number("--patch-size", &O::patchSize, 0.0, 3.4e38, "a length > 0")
+          .Open(true, false)
+          .Tiny("a length float can hold (>= 1.2e-38; smaller is 0)")
+          .Help("L", R"(
+longest patch edge, scene units (default: largest
+scene extent / 28))")
+          .Usage()
+          .Json("patch_size"),
+      Choice("--ray-alloc", &O::rayAlloc, "power|fixed")
+          .Given(&O::hasRayAlloc)
+          .Help("power|fixed", R"(
+how many Monte Carlo rays a shot traces. power (the
+default): in proportion to the shot's unshot power,
+--emitted-rays for the whole emitted power, at least
+--min-rays; a shot worth more than --max-rays shoots
+that share of its power and keeps the rest for later
+shots. fixed: --rays every shot (the old default))")
+          .Json("ray_alloc"),
+      Count("--rays", &O::rays, 1, 1e8, "an integer in [1, 1e8]")
+          .Given(&O::hasRays)
+          .Help("N", R"(
+fixed: Monte Carlo rays per shot (4096); given alone it
+selects --ray-alloc fixed)")
+          .Json("rays"),
+      Count("--emitted-rays", &O::emittedRays, 1, 1e12, "an integer in [1, 1e12]")
+          .Given(&O::hasEmittedRays)
+          .Help("M", R"(
+power: the rays the emitted power is worth (4000000);
+a shot of power P traces M * P / emitted power rays,
+rounded up or down at random from the shot's stream)")
+          .Json("emitted_rays"),
+      Count("--min-rays", &O::minRays, 1, 1e8, "an integer in [1, 1e8]")
+          .Help("F", "power: the fewest rays a shot traces (default 16)")
+          .Json("min_rays"),
+      Count("--max-rays", &O::maxRays, 1, 1e8, "an integer in [1, 1e8]")
+          .Help("C", R"(
+power: the most rays a shot traces (default 8192);
+also Method R's packet bits)")
+          .Json("max_rays"),
+      Choice("--sampler", &O::sobol, "sobol|random")
+          .Help("S", R"(
+sobol (default): scrambled Sobol' points over a
+shot's origin x direction; random: independent draws)")
+          .Json("sampler"),
+      Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
+          .Help("N", "stop once N form-factor rays have been traced")
+          .Json("ray_budget"),
+      Count("--elements", &O::elementsPerPatch, 0, 1024, "an integer in [0, 1024]").Help("K", R"(
+receivers finer than shooters: each patch is a
+quadtree of elements that split where the radiosity
+received changes fast (shadow edges, contact shadows,
+corners); the pool holds K elements per patch beyond
+the patches themselves (default 8; 0: no refinement).
+When it is used up refinement stops (run.json says so))"),
+      Count("--element-depth", &O::elementDepth, 0, 16, "an integer in [0, 16]").Help("D", R"(
+the deepest an element splits, 0-16 (default 4: 1/16
+of the patch's edge))"),
+      Number("--element-spread", &O::elementSpread, 0.0, 100.0, "a number in [0, 100]")
+          .Help("S", R"(
+an element splits only where its quarters' radiosity
+differs by more than S (relative RMS, default 0.1) and
+more than its Monte Carlo noise explains)"),
+      Number("--element-chi2", &O::elementChi2, 0.0, 1e6, "a number in [0, 1e6]").Help("X", R"(
+... explains: chi-square (3 dof) of its quarters
+against an even spread above X (default 20))"),
+      Count("--seed", &O::seed, 0, kNoLimit, "an unsigned 64-bit integer")
+          .Help("S", "random seed, unsigned 64-bit (default 1)")
+          .Json("seed"),
+      Number("--stop-unshot", &O::stopUnshot, 0.0, 1.0, "a number in [0, 1)")
+          .Open(false, true)
+          .Help("F", R"(
+stop when unshot power < F * emitted power, 0 <= F < 1
+(default 1e-3); 0 needs another stop as well)")
+          .Json("stop_unshot"),
+      Count("--max-shots", &O::maxShots, 1, kNoLimit, "a positive integer")
+          .Help("N", "stop after N shots (default: no limit)")
+          .Json("max_shots"),
+      Number("--max-seconds", &O::maxSeconds, 0.0, kNoLimit, "a number of seconds > 0")
+          .Open(true, false)
+          .Help("T", R"(
+stop after T seconds of solving (default: no limit;
+a time limit makes the result depend on speed).
+Without --emitted-rays (one rank, power allocation)
+it plans them: the rays a solve that ends within
+about T can afford, from the rays per second timed
+through the scene's grid at init (run.json:
+emitted_rays, emitted_rays_planned))")
+          .Usage()
+          .Json("max_seconds"),
+  };
 }
 
 // The image: its size, camera, exposure and filtering.
-void AddImageRows(std::vector<Row>* t) {
-  t->insert(t->end(),
-            {
-                Count("--width", &O::width, 1, 16384, "an integer in [1, 16384]")
-                    .Help("W", "image width in pixels (default 512)")
-                    .Usage()
-                    .Json("width"),
-                Count("--height", &O::height, 1, 16384, "an integer in [1, 16384]")
-                    .Help("H", "image height in pixels (default 512)")
-                    .Usage()
-                    .Json("height"),
-                Custom("--camera", ParseCamera)
-                    .Given(&O::hasCamera)
-                    .Help("ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy_deg",
-                          "eye, target, up and vertical field of view (default:\n"
-                          "the --view side that shows the most front-facing\n"
-                          "surface, front on a tie)")
-                    .Usage()
-                    .Json("camera"),
-                Choice("--view", &O::view, "front|back|left|right|top|bottom")
-                    .Given(&O::hasView)
-                    .Help("SIDE",
-                          "front | back | left | right | top | bottom: frame the\n"
-                          "scene's bounding box from that side, its larger extent\n"
-                          "filling the view: front from -z looking +z, back from\n"
-                          "+z, left from +x and right from -x (as they appear in\n"
-                          "the front view), top from +y, bottom from -y. Without\n"
-                          "--view or --camera, the side is chosen by rays from\n"
-                          "each side's eye: the most image showing the front of\n"
-                          "a polygon, occlusion included. Not with --camera")
-                    .Usage()
-                    .Json("view"),
-                Number("--exposure", &O::exposure, 0.0, 3.4e38, "a number > 0")
-                    .Open(true, false)
-                    .Tiny("a number float can hold (>= 1.2e-38; smaller is 0)")
-                    .Given(&O::hasExposure)
-                    .Help("E", "linear exposure for image.png (default: automatic)")
-                    .Usage()
-                    .Json("exposure"),
-                Choice("--aa", &O::aa, "on|off")
-                    .Help("on|off",
-                          "on: each pixel is the exact area-weighted mean of what\n"
-                          "it sees (a 1-pixel box filter: every piece's coverage\n"
-                          "of the pixel square, computed analytically); off: the\n"
-                          "pixel centre only, quads as two Gouraud triangles\n"
-                          "(the images before --aa existed); default on")
-                    .Json("aa"),
-                Count("--direct-samples", &O::directSamples, 0, 1024, "an integer in [0, 1024]")
-                    .Help("N",
-                          "direct light gathered per pixel, 0..1024: the image's\n"
-                          "direct part is the exact unoccluded irradiance of the\n"
-                          "emitters times the share of N shadow rays that reach\n"
-                          "them (rays to the emitters' corners and 4 first; all\n"
-                          "N only where those disagree); the solve supplies the\n"
-                          "rest; 0: the solved radiosity alone (the images\n"
-                          "before it). Default 32 with one environment, 0 with\n"
-                          "several (where it is refused)")
-                    .Json("direct_samples"),
-                Choice("--smooth", &O::smooth, "on|off")
-                    .Help("on|off",
-                          "on: where polygons with a smoothing group ('s N') or\n"
-                          "vertex normals ('vn') meet, the image shades across\n"
-                          "them smoothly, within the crease angle; default on")
-                    .Json("smooth"),
-                Number("--crease", &O::creaseDeg, 0.0, 180.0, "an angle in [0, 180] degrees")
-                    .Help("DEG",
-                          "smoothing's crease angle, 0..180: the most two vertex\n"
-                          "normals, or two faces of one smoothing group, may\n"
-                          "differ by and be shaded as one surface (default 30)")
-                    .Json("crease"),
-                Flag("--quiet", &O::quiet)
-                    .Help(nullptr, "no progress line on stderr")
-                    .Usage()
-                    .MayDiffer(),
-            });
+std::vector<Row> ImageRows() {
+  return {
+      Count("--width", &O::width, 1, 16384, "an integer in [1, 16384]")
+          .Help("W", "image width in pixels (default 512)")
+          .Usage()
+          .Json("width"),
+      Count("--height", &O::height, 1, 16384, "an integer in [1, 16384]")
+          .Help("H", "image height in pixels (default 512)")
+          .Usage()
+          .Json("height"),
+      Custom("--camera", ParseCamera)
+          .Given(&O::hasCamera)
+          .Help("ex,ey,ez,tx,ty,tz,ux,uy,uz,fovy_deg", R"(
+eye, target, up and vertical field of view (default:
+the --view side that shows the most front-facing
+surface, front on a tie))")
+          .Usage()
+          .Json("camera"),
+      Choice("--view", &O::view, "front|back|left|right|top|bottom")
+          .Given(&O::hasView)
+          .Help("SIDE", R"(
+front | back | left | right | top | bottom: frame the
+scene's bounding box from that side, its larger extent
+filling the view: front from -z looking +z, back from
++z, left from +x and right from -x (as they appear in
+the front view), top from +y, bottom from -y. Without
+--view or --camera, the side is chosen by rays from
+each side's eye: the most image showing the front of
+a polygon, occlusion included. Not with --camera)")
+          .Usage()
+          .Json("view"),
+      Number("--exposure", &O::exposure, 0.0, 3.4e38, "a number > 0")
+          .Open(true, false)
+          .Tiny("a number float can hold (>= 1.2e-38; smaller is 0)")
+          .Given(&O::hasExposure)
+          .Help("E", "linear exposure for image.png (default: automatic)")
+          .Usage()
+          .Json("exposure"),
+      Choice("--aa", &O::aa, "on|off")
+          .Help("on|off", R"(
+on: each pixel is the exact area-weighted mean of what
+it sees (a 1-pixel box filter: every piece's coverage
+of the pixel square, computed analytically); off: the
+pixel centre only, quads as two Gouraud triangles
+(the images before --aa existed); default on)")
+          .Json("aa"),
+      Count("--direct-samples", &O::directSamples, 0, 1024, "an integer in [0, 1024]")
+          .Help("N", R"(
+direct light gathered per pixel, 0..1024: the image's
+direct part is the exact unoccluded irradiance of the
+emitters times the share of N shadow rays that reach
+them (rays to the emitters' corners and 4 first; all
+N only where those disagree); the solve supplies the
+rest; 0: the solved radiosity alone (the images
+before it). Default 32 with one environment, 0 with
+several (where it is refused))")
+          .Json("direct_samples"),
+      Choice("--smooth", &O::smooth, "on|off")
+          .Help("on|off", R"(
+on: where polygons with a smoothing group ('s N') or
+vertex normals ('vn') meet, the image shades across
+them smoothly, within the crease angle; default on)")
+          .Json("smooth"),
+      Number("--crease", &O::creaseDeg, 0.0, 180.0, "an angle in [0, 180] degrees")
+          .Help("DEG", R"(
+smoothing's crease angle, 0..180: the most two vertex
+normals, or two faces of one smoothing group, may
+differ by and be shaded as one surface (default 30))")
+          .Json("crease"),
+      Flag("--quiet", &O::quiet).Help(nullptr, "no progress line on stderr").Usage().MayDiffer(),
+  };
 }
 
-}  // namespace option_rows
-}  // namespace vismask
+}  // namespace vismask::option_rows

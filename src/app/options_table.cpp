@@ -148,14 +148,10 @@ using option_rows::Row;
 
 const std::vector<OptionSpec>& OptionTable() {
   static const std::vector<OptionSpec> table = [] {
-    std::vector<Row> rows;
-    option_rows::AddSolveRows(&rows);
-    option_rows::AddImageRows(&rows);
-    option_rows::AddSceneRows(&rows);
-    option_rows::AddEnvironmentRows(&rows);
-    option_rows::AddRunRows(&rows);
     std::vector<OptionSpec> specs;
-    for (const Row& r : rows) specs.push_back(r.s);
+    for (auto section : {option_rows::SolveRows, option_rows::ImageRows, option_rows::SceneRows,
+                         option_rows::EnvironmentRows, option_rows::RunRows})
+      for (const Row& r : section()) specs.push_back(r.s);
     return specs;
   }();
   return table;
