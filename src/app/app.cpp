@@ -28,8 +28,8 @@ class ReferenceProbe : public ErrorProbe {
 // --max-seconds's plan: the rays timed through the grid at init, and the
 // share of the budget's rays (at that rate) the plan gives the solve: a
 // solve's ray also lands, books and splits elements, and its shots' tail
-// of small shots costs more than its rays (measured on the Cornell box:
-// DESIGN, Anytime).
+// of small shots costs more than its rays (docs/design/direct-light.md,
+// Anytime).
 constexpr uint32_t kPlanRays = 20000;
 constexpr double kPlanShare = 0.25;
 

@@ -269,7 +269,7 @@ inline int FailInit(const RunState* r, const Status& s) {
 // (scene_stream.h) and cut into environments, of which this rank keeps its
 // own pieces and counts every environment's patches. Heap; dropped at the
 // end of init.
-// Init's stages and their seconds (issue 40): each that takes over a second
+// Init's stages and their seconds: each that takes over a second
 // says so on stderr when `report` (rank 0 without --quiet); run.json lists
 // them all (init_stages).
 struct InitClock {

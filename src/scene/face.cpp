@@ -86,7 +86,7 @@ bool EdgesMeet(const std::vector<glm::dvec3>& c, glm::dvec3 normal, size_t* ei, 
   return false;
 }
 
-// The loader's checks before issue 16: sets the normal and area of a good
+// The loader's basic checks: sets the normal and area of a good
 // face; else returns why it is not one (the messages --strict prints).
 std::string FinishPolygon(Polygon* p) {
   const size_t n = p->corners.size();

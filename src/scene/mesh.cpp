@@ -136,7 +136,8 @@ Status PlanPolygon(const std::string& objPath, const Polygon& poly, uint32_t ind
   }
   // A convex polygon of many corners whose ear-clipped slivers would make
   // more than twice its area and outline in patches: as strips, when they
-  // make fewer (issue 42: a disc of 10,000 corners made a million patches).
+  // make fewer (a disc's slivers each take patches of their own, far more
+  // than its area needs).
   // Any triangulation has n - 2 patches at least: past the bound by that
   // alone, the strips are taken without triangulating.
   const glm::dvec3 normal(poly.normal);

@@ -38,8 +38,8 @@ constexpr size_t kTextProbeBytes = 1024;
 // image is not all denormals.
 constexpr double kMaxCoordinate = 1e15;
 // A scene far from the origin for its size: its float coordinates step by
-// more than this share of its extent (Cornell moved by 3e6 in each axis:
-// steps of 0.25 on a 559 box, image 0.56% off; by 1e7: 55% off).
+// more than this share of its extent: past it, the rounding of patch
+// corners and ray hits shows in the image (tests/scene_text_test.cpp).
 constexpr double kMaxStepShare = 2.5e-4;
 constexpr double kMinFaceSize = 1e-15;
 constexpr double kMaxRadiosity = 1e36;

@@ -115,7 +115,7 @@ Status LoadMaterialTextures(const std::string& objPath, std::vector<Material>* m
     r.ofMaterial[m] = it->second;
     if (mat.kd == glm::vec3(0.0f)) {
       // The map alone is the reflectance: white texels reflect everything,
-      // as Kd 1 does (issue 16 accepts it; a scene that then cannot lose
+      // as Kd 1 does (accepted; a scene that then cannot lose
       // power is the loader's to refuse).
       r.kdOfMaterial[m] = glm::vec3(1.0f);
       zeroKd += (zeroKd.empty() ? "'" : ", '") + mat.name + "'";

@@ -11,15 +11,15 @@
 
 namespace vismask {
 
-// auto's costs, in centre rays cast (a centre ray's walk: about 1 200 to
-// 1 600 instructions, callgrind, the Cornell box in 2 environments at the
-// defaults and at R = 100, 4 096 rays). Regenerating a ray downstream (its
-// sample, ray, box test and entry pixel) costs about half of one (640 to
-// 760); a read pixel takes about half a centre ray a ray of the shot (some
-// rays share pixels, some pixels are known or closed upstream); about 0.4
-// of a mask's pixels take a centre ray where every open one is cast
-// (KeepExits and the closing upstream pass over the rest); and casting a
-// mask patch by patch costs about four centre rays a patch (CastCentres).
+// auto's costs, in centre rays cast (a centre ray's walk is the unit; the
+// weights are instruction counts relative to it: docs/design/masks.md).
+// Regenerating a ray downstream (its sample, ray, box test and entry pixel)
+// costs about half of one; a read pixel about half a centre ray a ray of
+// the shot (some rays share pixels, some pixels are known or closed
+// upstream); a mask where every open pixel is cast takes a centre ray for
+// fewer than half its pixels (KeepExits and the closing upstream pass over
+// the rest); and casting a mask patch by patch costs about four centre rays
+// a patch (CastCentres).
 // The source's own cast counts in full, though a local shooter's mask is
 // kept for its later shots: which shots read must not depend on the cache.
 constexpr double kRegenCost = 0.5;

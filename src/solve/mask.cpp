@@ -93,7 +93,7 @@ constexpr double kEdgeMargin = 1e-10;
 // 1.8e-7 u2 + 2.4e-7 of 2 pi u2: the float constant and one rounding), and
 // x = r cosf(phi), y = r sinf(phi) (each within about two float ulps of r,
 // so their angle within about 2e-7 of phi): under 7e-7 in all, and the
-// margin is 14 times that. At R = 100 it sends 0.13% of the rays to Pixel.
+// margin is 14 times that, and sends few rays to Pixel.
 constexpr double kSampleAngleMargin = 1e-5;
 }  // namespace
 
@@ -104,7 +104,7 @@ void MaskDirections::Layout(Arena& arena, uint32_t res) {
   colCos_ = arena.Alloc<double>(size_t(4) * res);
   colSin_ = arena.Alloc<double>(size_t(4) * res);
   // Eight z bins a row and two p bins a column: at most one edge a bin,
-  // but the rows within 0.06 rad of the normal (0.4% of cosine rays).
+  // but the rows within 0.06 rad of the normal (few cosine rays).
   rowBins_ = res > 0 ? PowerOfTwo(8 * res) : 0;
   colBins_ = res > 0 ? PowerOfTwo(2 * res) : 0;
   rowScale_ = rowBins_;

@@ -237,7 +237,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   // Method B: the mask from the centre alone, one ray through each pixel
   // still open upstream (the paper's B). Mixing in A's marks would close
   // every pixel where any off-centre ray hit, losing the rays of that pixel
-  // that pass on: about 14% of the power of the closed box in 2x2x2.
+  // that pass on: power that then never arrives (the closed box's ledger).
   // Method C: a pixel whose rays all hit closes, one whose rays all passed
   // stays open; only pixels with both, or with no ray, take the centre ray.
   // B deciding only the open pixels some ray downstream will read (*read,
@@ -312,9 +312,8 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   uint32_t cast = mask->CountOpen();
   stats_.maskRays += cast;
   // By patch or by ray, whichever costs less (the same bits either way):
-  // a patch's view costs about four centre rays' walks (measured with
-  // callgrind on the experiments' set-up: even at R = 33, 368 patches and
-  // about 1 500 open pixels).
+  // a patch's view costs about four centre rays' walks (env_read.cpp's
+  // costs, docs/design/masks.md).
   uint64_t work;
   if (4 * patches_.size() <= cast) {
     stats_.maskRaysByPatch += cast;

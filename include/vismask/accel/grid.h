@@ -70,12 +70,11 @@ struct SubGrid {
 // minRefs references (0: none, a uniform grid) that do not all lie on one
 // surface's plane (such a cell is passed whole by a ray leaving the plane,
 // CellPlane), at about `density` cells per reference, at most maxRes cells
-// per axis. Chosen by callgrind's instructions a cosine ray and by the bench
-// (bench/analysis.md): on the furnished interiors (tools/gen-interior) 32
-// and 1 walk 2.2 to 4.8 times fewer instructions than the uniform grid; 16
-// saved 1-5% more there but gave the building and the large Cornell boxes
-// thousands of sub-grids, 40% more bytes and a slower walk (memory), where
-// 32 gives them none or a few.
+// per axis. Chosen by the instructions a cosine ray takes and by the bench
+// (bench/analysis.md has the figures): 32 nests the furnished interiors'
+// dense cells, where a lower bound would also nest the building's and the
+// large Cornell boxes' evenly filled cells, costing bytes and a slower walk
+// for nothing.
 struct GridNest {
   uint32_t minRefs = 32;
   float density = 1.0f;

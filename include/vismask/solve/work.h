@@ -17,19 +17,16 @@ struct WorkCosts {
   uint64_t ray, hit, shot;
 };
 // The hemisphere methods (none, A, B, C): from each environment's CPU
-// seconds a round regressed on its counts (issue 20; the Cornell box in 2
-// environments and the building in 16): a ray costs 34 to 67 steps beside
-// its walk and a shot 7 000 to 19 000. The hit term is what made two
-// environments' CPU per unit of work agree: the Cornell box's upper half
-// (--envs auto:2) lands 37% more of its rays than the lower, and with rays
-// and walks alone it took 8% more CPU per unit; with it they agree within 1%.
+// seconds a round regressed on its counts (docs/design/queues-rounds.md):
+// what a ray, a landing and a shot cost beside their walks, in steps. The
+// hit term keeps the CPU per unit of work of two environments that land
+// different shares of their rays alike.
 constexpr WorkCosts kMaskWork{32, 40, 12288};
-// Method R, whose shots carry no hemisphere: instructions (callgrind, the
-// Cornell box in 2 environments at the defaults) over the 56 a grid step
-// takes: a ray's sample, regeneration and exit face about 570 (10 steps), a
-// landing about 520 (9), a shot's sampler, slot, packets and delivery about
-// 2 300 (41). Charging it B's 12 288 ended the rounds of an environment that
-// makes many small foreign shots long before its CPU share.
+// Method R, whose shots carry no hemisphere: the instructions of a ray's
+// sample, regeneration and exit face, of a landing, and of a shot's sampler,
+// slot, packets and delivery, over a grid step's. A hemisphere method's shot
+// charge would end the rounds of an environment that makes many small
+// foreign shots long before its CPU share.
 constexpr WorkCosts kRayBitsWork{10, 9, 41};
 inline const WorkCosts& WorkCostsOf(MaskMethod m) {
   return m == MaskMethod::kR ? kRayBitsWork : kMaskWork;
