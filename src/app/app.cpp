@@ -25,18 +25,26 @@ class ReferenceProbe : public ErrorProbe {
   RunState* r_;
 };
 
-// --max-seconds's plan: the rays timed through the grid at init, and the
-// share of the budget's rays (at that rate) the plan gives the solve: a
-// solve's ray also lands, books and splits elements, and its shots' tail
-// of small shots costs more than its rays (docs/design/direct-light.md,
-// Anytime).
+// --max-seconds's plan: the rays timed through the grid at init; the share
+// of the budget's rays at that rate the plan fills (the rest is the margin
+// for what a solve's ray does beside its walk: it lands, books and splits
+// elements); and the shots a patch makes at --min-rays in a converging
+// solve's tail, per bounce (docs/design/direct-light.md, Anytime).
 constexpr uint32_t kPlanRays = 20000;
-constexpr double kPlanShare = 0.25;
+constexpr double kPlanShare = 0.7;
+constexpr double kTailShotsPerPatch = 2.0;
+// A budget the tail alone would overrun ends cut, whatever the plan: then
+// the emitters' own shots get this share of its rays, so that what is
+// shot before the cut is shot with rays enough.
+constexpr double kCutShare = 0.25;
 
 // --max-seconds T without --emitted-rays (one rank, power allocation):
 // the emitted rays a solve that converges within about T can afford, from
-// the rays per second this machine traces through the scene's grids now,
-// and the rays a solve traces for each emitted one (1 / (1 - mean kd)).
+// the rays per second this machine traces through the scene's grids now.
+// The solve traces about 1 / (1 - mean kd) rays for each emitted one, and
+// its tail of small shots at least --min-rays each whatever the emitted
+// rays: the plan is what the budget's rays leave once the tail is paid
+// (at least kCutShare of them).
 // The solve then ends converged, or nearly, rather than cut off early in
 // a plan made for a longer one. Only ever fewer rays than the default.
 void PlanBudget(RunState* r) {
@@ -44,18 +52,22 @@ void PlanBudget(RunState* r) {
   if (!(o.maxSeconds > 0.0) || o.hasEmittedRays || o.rayAlloc != Options::RayAlloc::kPower ||
       r->transport->size() != 1 || r->envPtrs.empty())
     return;
-  double seconds = 0.0, area = 0.0, kdArea = 0.0;
+  double seconds = 0.0, area = 0.0, kdArea = 0.0, patches = 0.0;
   uint64_t rays = 0;
   for (Environment* env : r->envPtrs) {
     seconds += env->TimeRays(kPlanRays);
     rays += kPlanRays;
     area += env->totalArea();
     kdArea += env->kdArea();
+    patches += static_cast<double>(env->patches().size());
   }
   if (!(seconds > 0.0) || !(area > 0.0)) return;
   const double rho = std::fmin(kdArea / area, 0.95);
+  const double rate = static_cast<double>(rays) / seconds;
+  const double tail = kTailShotsPerPatch * patches * o.minRays / (1.0 - rho);
   const double emitted =
-      kPlanShare * (static_cast<double>(rays) / seconds) * o.maxSeconds * (1.0 - rho);
+      std::fmax(kPlanShare * rate * o.maxSeconds - tail, kCutShare * rate * o.maxSeconds) *
+      (1.0 - rho);
   const uint64_t planned = static_cast<uint64_t>(std::fmax(emitted, 10000.0));
   if (planned >= o.emittedRays) return;
   for (Environment* env : r->envPtrs)
