@@ -143,7 +143,7 @@ int Verify(const Options& o) {
   std::vector<Listed> listed;
   if (!ParseOutputs(json, &listed) || listed.empty()) {
     os::PrintErr(
-        "vismask: verify: '%s' has no commit record (\"outputs\"; a vismask before issue 42 "
+        "vismask: verify: '%s' has no commit record (\"outputs\"; an older vismask "
         "wrote it, or it is damaged)\n",
         runJson.c_str());
     return kExitOutput;
