@@ -24,7 +24,8 @@ template <class PointOf>
 glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, PointOf pointOf) {
   auto onPlane = [&](glm::vec3 x) { return x - h.normal * glm::dot(h.normal, x - h.planePoint); };
   const glm::vec3 x0 = onPlane(centre);
-  const glm::vec3 e0 = h.light->Unoccluded(x0, h.normal);
+  const Span<float> groupCdf = h.light->groupScratch();
+  const glm::vec3 e0 = h.light->Unoccluded(x0, h.normal, groupCdf);
   if (!(e0.x > 0.0f || e0.y > 0.0f || e0.z > 0.0f)) return glm::vec3(0.0f);
   // The sun's share of the samples: its share of E0 (channels summed).
   float sunShare = 0.0f;
@@ -62,7 +63,8 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
       break;
     glm::vec3 w;
     bool vis = h.light->Sample(*h.grid, h.patch, h.twin, onPlane(pointOf(k)), h.normal,
-                               DirectLightSample(pixel, k), h.epsilon, h.hint, &w, sunShare);
+                               DirectLightSample(pixel, k), groupCdf, h.epsilon, h.hint, &w,
+                               sunShare);
     if (!(w.x > 0.0f || w.y > 0.0f || w.z > 0.0f)) continue;
     ++counted;
     all += w;
