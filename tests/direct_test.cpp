@@ -90,11 +90,11 @@ TEST(DirectTest, ShadowSamplesAverageToTheClosedForm) {
     const uint32_t n = 4096;
     glm::dvec3 sum(0.0);
     uint32_t visible = 0;
-    light.Unoccluded(x, up, light.groupScratch());
+    light.Unoccluded(x, up, light.tallies());
     for (uint32_t k = 0; k < n; ++k) {
       glm::vec3 w;
       visible += light.Sample(b.grid, kNoPatch, kNoPatch, x, up, DirectLightSample(7, k),
-                              light.groupScratch(), 1e-4f, nullptr, &w)
+                              light.tallies(), 1e-4f, nullptr, &w)
                      ? 1u
                      : 0u;
       sum += glm::dvec3(w);

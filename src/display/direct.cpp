@@ -153,7 +153,7 @@ DirectLight::Counts DirectLight::Count(Span<const Patch> patches) {
 void DirectLight::Layout(Arena& arena, const Counts& counts) {
   emitters_ = arena.Alloc<Emitter>(counts.emitters);
   groups_ = arena.Alloc<Group>(counts.groups);
-  groupScratch_ = arena.Alloc<float>(counts.groups);
+  tallies_ = arena.Alloc<Tally>(counts.groups);
   edges_ = arena.Alloc<Edge>(counts.edges);
   corners_ = arena.Alloc<Corner>(counts.corners);
 }
@@ -229,15 +229,15 @@ glm::vec3 DirectLight::PointOn(const Patch& p, float split, glm::vec2 u) {
 }
 
 glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n,
-                                  Span<float> groupCdf) const {
-  CHECK(groupCdf.empty() || groupCdf.size() == groups_.size());
+                                  Span<Tally> tally) const {
+  CHECK(tally.empty() || tally.size() == groups_.size());
   constexpr double kInv2Pi = 0.159154943091895336;
   glm::dvec3 sum(0.0);
   double cumulative = 0.0;  // the groups' E0 so far, channels summed
   uint32_t lastLit = 0;     // one past the last group that brings any
   for (uint32_t gi = 0; gi < groups_.size(); ++gi) {
     const Group& g = groups_[gi];
-    if (!groupCdf.empty()) groupCdf[gi] = static_cast<float>(cumulative);
+    if (!tally.empty()) tally[gi] = Tally{static_cast<float>(cumulative), {}, {}, {}};
     // Only the front of an emitter emits.
     if (!(glm::dot(g.normal, x - g.point) > 0.0f)) continue;
     // Wholly above x's horizon: its outline edges.
@@ -267,17 +267,18 @@ glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n,
     }
     const glm::dvec3 e = std::fabs(s) * kInv2Pi * glm::dvec3(g.ke);
     sum += e;
-    if (groupCdf.empty() || !(e.x + e.y + e.z > 0.0)) continue;
+    if (tally.empty() || !(e.x + e.y + e.z > 0.0)) continue;
     cumulative += e.x + e.y + e.z;
-    groupCdf[gi] = static_cast<float>(cumulative);
+    tally[gi].cdf = static_cast<float>(cumulative);
+    tally[gi].e0 = glm::vec3(e);
     lastLit = gi + 1;
   }
   // Each group's cumulative share; the last that brings any ends at 1
   // exactly, so rounding never picks a group that brings nothing.
-  for (uint32_t gi = 0; gi < groupCdf.size(); ++gi)
-    groupCdf[gi] = lastLit == 0          ? 0.0f
-                   : gi + 1 >= lastLit ? 1.0f
-                                       : static_cast<float>(groupCdf[gi] / cumulative);
+  for (uint32_t gi = 0; gi < tally.size(); ++gi)
+    tally[gi].cdf = lastLit == 0          ? 0.0f
+                    : gi + 1 >= lastLit ? 1.0f
+                                        : static_cast<float>(tally[gi].cdf / cumulative);
   if (hasSun_) sum += glm::dvec3(UnoccludedSun(n));
   return glm::vec3(sum);
 }
@@ -295,13 +296,17 @@ glm::vec3 DirectLight::UnoccludedSun(const glm::vec3& n) const {
 }
 
 bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                         const glm::vec3& n, glm::vec2 u, Span<const float> groupCdf,
-                         float epsilon, uint32_t* hint, glm::vec3* weight, float sunShare) const {
+                         const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
+                         uint32_t* hint, glm::vec3* weight, float sunShare,
+                         uint32_t* source) const {
+  uint32_t unused;
+  source = source ? source : &unused;
   if (!(sunShare > 0.0f))
-    return SampleArea(grid, receiver, twin, x, n, u, groupCdf, epsilon, hint, weight);
+    return SampleArea(grid, receiver, twin, x, n, u, tally, epsilon, hint, weight, source);
   // The kind from u.x (the sun below sunShare), u.x stretched back to
   // [0, 1) within it; the weight over the kind's share.
   if (u.x < sunShare || emitters_.empty()) {
+    *source = numGroups();
     const float s = std::fmin(u.x / sunShare, 0.99999994f);
     const bool vis =
         SampleSun(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
@@ -310,7 +315,7 @@ bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, con
   }
   const float s = std::fmin((u.x - sunShare) / (1.0f - sunShare), 0.99999994f);
   const bool vis =
-      SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), groupCdf, epsilon, hint, weight);
+      SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), tally, epsilon, hint, weight, source);
   *weight /= 1.0f - sunShare;
   return vis;
 }
@@ -368,17 +373,19 @@ uint32_t Pick(Cdf cdf, uint32_t size, float x, float* stretched, float* share) {
 }  // namespace
 
 bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                             const glm::vec3& n, glm::vec2 u, Span<const float> groupCdf,
-                             float epsilon, uint32_t* hint, glm::vec3* weight) const {
+                             const glm::vec3& n, glm::vec2 u, Span<const Tally> tally,
+                             float epsilon, uint32_t* hint, glm::vec3* weight,
+                             uint32_t* source) const {
   *weight = glm::vec3(0.0f);
   if (emitters_.empty()) return false;
-  CHECK(groupCdf.size() == groups_.size());
+  CHECK(tally.size() == groups_.size());
   // The group, in proportion to its unoccluded irradiance at x; then a
   // patch of it in proportion to its power (the group's cumulative shares
   // in its emitters' cdfHi).
   float sx, groupShare, patchShare;
-  const Group& g = groups_[Pick([&](uint32_t i) { return groupCdf[i]; },
-                                static_cast<uint32_t>(groupCdf.size()), u.x, &sx, &groupShare)];
+  *source = Pick([&](uint32_t i) { return tally[i].cdf; }, static_cast<uint32_t>(tally.size()),
+                 u.x, &sx, &groupShare);
+  const Group& g = groups_[*source];
   if (!(groupShare > 0.0f)) return false;
   const Emitter* list = &emitters_[g.firstPatch];
   const Emitter& e =

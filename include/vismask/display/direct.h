@@ -89,6 +89,14 @@ class DirectLight {
   struct Counts {
     uint32_t emitters = 0, groups = 0, edges = 0, corners = 0;
   };
+  // One group at the point being gathered: its cumulative share of the area
+  // emitters' unoccluded irradiance there (channels summed), its own part
+  // of it (per channel), and its samples' weights, all and those that
+  // reached it (the gather's sums).
+  struct Tally {
+    float cdf;
+    glm::vec3 e0, seen, all;
+  };
 
   // What `patches` need (init: uses the heap).
   static Counts Count(Span<const Patch> patches);
@@ -102,11 +110,11 @@ class DirectLight {
   bool hasSun() const { return hasSun_; }
 
   // The unoccluded irradiance at x (unit normal n), per channel: the area
-  // emitters' and the sun's. With `groupCdf` (numGroups() entries), also
-  // each area group's cumulative share of the area emitters' part there
-  // (channels summed; the last group that brings any at 1, all 0 when none
-  // does), which Sample picks a group by.
-  glm::vec3 Unoccluded(const glm::vec3& x, const glm::vec3& n, Span<float> groupCdf = {}) const;
+  // emitters' and the sun's. With `tally` (numGroups() entries), also each
+  // area group's part and cumulative share of the area emitters' part
+  // there (the last group that brings any at 1, all 0 when none does),
+  // which Sample picks a group by; its sums are set to 0.
+  glm::vec3 Unoccluded(const glm::vec3& x, const glm::vec3& n, Span<Tally> tally = {}) const;
   // The sun's part of it: its irradiance times the cosine between n and the
   // direction towards its centre (0 below the horizon).
   glm::vec3 UnoccludedSun(const glm::vec3& n) const;
@@ -115,18 +123,20 @@ class DirectLight {
   // the point faces away or lies below x's horizon, or no group brings
   // any) and whether the ray reaches it (through `grid`, ends excluded by
   // `epsilon` scene units, receiver and `twin` skipped; *hint:
-  // Grid::Occluded's, or null). `groupCdf`: what Unoccluded at x gave.
+  // Grid::Occluded's, or null). `tally`: what Unoccluded at x gave.
   // `sunShare`: the share of the samples that go to the sun (u.x below
   // it), the rest to the area emitters; a sun ray must leave the scene.
+  // *source (unless null): the group sampled, numGroups() for the sun.
   // Allocates nothing.
   bool Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-              const glm::vec3& n, glm::vec2 u, Span<const float> groupCdf, float epsilon,
-              uint32_t* hint, glm::vec3* weight, float sunShare = 0.0f) const;
+              const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
+              uint32_t* hint, glm::vec3* weight, float sunShare = 0.0f,
+              uint32_t* source = nullptr) const;
 
   uint32_t numGroups() const { return static_cast<uint32_t>(groups_.size()); }
-  // numGroups() floats laid out with the lists, for the groups' shares at
-  // the point being gathered (the display gathers one point at a time).
-  Span<float> groupScratch() const { return groupScratch_; }
+  // numGroups() tallies laid out with the lists, for the point being
+  // gathered (the display gathers one point at a time).
+  Span<Tally> tallies() const { return tallies_; }
 
   // The emitters' outline corners (each polygon's, where its outline turns), and whether the ray
   // from x (normal n) to corner k reaches it
@@ -153,7 +163,7 @@ class DirectLight {
   Span<Group> groups_;
   Span<Edge> edges_;
   Span<Corner> corners_;
-  Span<float> groupScratch_;
+  Span<Tally> tallies_;
   Span<const Patch> patches_;
   // The sun: its irradiance on a surface facing it, the unit direction
   // towards it and its angular diameter (degrees).
@@ -162,8 +172,8 @@ class DirectLight {
   float sunDegrees_ = 0.0f;
 
   bool SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                  const glm::vec3& n, glm::vec2 u, Span<const float> groupCdf, float epsilon,
-                  uint32_t* hint, glm::vec3* weight) const;
+                  const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
+                  uint32_t* hint, glm::vec3* weight, uint32_t* source) const;
   bool SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                  const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
                  glm::vec3* weight) const;
