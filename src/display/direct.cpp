@@ -228,8 +228,7 @@ glm::vec3 DirectLight::PointOn(const Patch& p, float split, glm::vec2 u) {
   return (1.0f - b1 - b2) * c + b1 * a + b2 * b;
 }
 
-glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n,
-                                  Span<Tally> tally) const {
+glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n, Span<Tally> tally) const {
   CHECK(tally.empty() || tally.size() == groups_.size());
   constexpr double kInv2Pi = 0.159154943091895336;
   glm::dvec3 sum(0.0);
@@ -276,7 +275,7 @@ glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n,
   // Each group's cumulative share; the last that brings any ends at 1
   // exactly, so rounding never picks a group that brings nothing.
   for (uint32_t gi = 0; gi < tally.size(); ++gi)
-    tally[gi].cdf = lastLit == 0          ? 0.0f
+    tally[gi].cdf = lastLit == 0        ? 0.0f
                     : gi + 1 >= lastLit ? 1.0f
                                         : static_cast<float>(tally[gi].cdf / cumulative);
   if (hasSun_) sum += glm::dvec3(UnoccludedSun(n));
@@ -314,8 +313,8 @@ bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, con
     return vis;
   }
   const float s = std::fmin((u.x - sunShare) / (1.0f - sunShare), 0.99999994f);
-  const bool vis =
-      SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), tally, epsilon, hint, weight, source);
+  const bool vis = SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), tally, epsilon, hint,
+                              weight, source);
   *weight /= 1.0f - sunShare;
   return vis;
 }
@@ -383,8 +382,8 @@ bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin,
   // patch of it in proportion to its power (the group's cumulative shares
   // in its emitters' cdfHi).
   float sx, groupShare, patchShare;
-  *source = Pick([&](uint32_t i) { return tally[i].cdf; }, static_cast<uint32_t>(tally.size()),
-                 u.x, &sx, &groupShare);
+  *source = Pick([&](uint32_t i) { return tally[i].cdf; }, static_cast<uint32_t>(tally.size()), u.x,
+                 &sx, &groupShare);
   const Group& g = groups_[*source];
   if (!(groupShare > 0.0f)) return false;
   const Emitter* list = &emitters_[g.firstPatch];

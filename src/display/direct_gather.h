@@ -64,8 +64,8 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     glm::vec3 w;
     uint32_t source;
     bool vis = h.light->Sample(*h.grid, h.patch, h.twin, onPlane(pointOf(k)), h.normal,
-                               DirectLightSample(pixel, k), tally, h.epsilon, h.hint, &w,
-                               sunShare, &source);
+                               DirectLightSample(pixel, k), tally, h.epsilon, h.hint, &w, sunShare,
+                               &source);
     if (!(w.x > 0.0f || w.y > 0.0f || w.z > 0.0f)) continue;
     ++counted;
     all += w;
@@ -96,8 +96,9 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
         if (sAll[c] > 0.0f) v[c] = e[c] * (sSeen[c] / sAll[c]);
     return v;
   };
-  glm::vec3 sum = sunShare > 0.0f ? part(h.light->UnoccludedSun(h.normal), sunShare, sunSeen, sunAll)
-                                  : glm::vec3(0.0f);
+  glm::vec3 sum = sunShare > 0.0f
+                      ? part(h.light->UnoccludedSun(h.normal), sunShare, sunSeen, sunAll)
+                      : glm::vec3(0.0f);
   float below = 0.0f;
   for (const DirectLight::Tally& t : tally) {
     if (t.e0.x + t.e0.y + t.e0.z > 0.0f)

@@ -64,8 +64,8 @@ class DirectLight {
   // One emitter patch: sampled for V (in its group's order).
   struct Emitter {
     uint32_t patch;  // local index
-    float cdfHi;  // the cumulative share of its group's power up to and including this one
-    float split;  // a quad: the share of its area in triangle (0, 1, 2); a triangle: 1
+    float cdfHi;     // the cumulative share of its group's power up to and including this one
+    float split;     // a quad: the share of its area in triangle (0, 1, 2); a triangle: 1
     // Ke / pi over the pdf per unit area within the group:
     // Ke * (the group's weight) / (weight / area) / pi.
     glm::vec3 scale;
