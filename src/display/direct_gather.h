@@ -83,7 +83,9 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     if (all[c] > 0.0f) share[c] = seen[c] / all[c];
   uint32_t lit = sunShare > 0.0f ? 1u : 0u;
   for (const DirectLight::Tally& t : tally) lit += t.e0.x + t.e0.y + t.e0.z > 0.0f ? 1u : 0u;
-  if (lit <= 1) return h.scale * e0 * share;
+  // One source lit, or every sample reached its point or none did (fully
+  // lit, umbra): the whole's share, exactly 1 or 0 in the latter.
+  if (lit <= 1 || visible == 0 || visible == counted) return h.scale * e0 * share;
   // Several sources lit: each one that drew at least a sample's worth
   // (drawn x its share >= 1) gives its part times its own samples' visible
   // share, so its count of samples does not matter; the others, which may
