@@ -2,7 +2,8 @@
 // irradiance and its shadow-ray samples against the closed form under a
 // square emitter; whole renders: a floor under a square emitter matches the
 // closed form, lamps behind a wall bring nothing while those in view
-// bring their closed form, a hard shadow edge is as sharp as its geometry, the
+// bring their closed form (exactly where all are in view), a hard shadow
+// edge is as sharp as its geometry, the
 // indirect part has no step at patch edges, a quarter of the rays gives
 // the converged image's mean.
 #include "vismask/display/direct.h"
@@ -237,6 +238,34 @@ TEST(DirectTest, LampsBehindAWallBringNothingAndTheOthersTheirClosedForm) {
     }
   EXPECT_LT(std::sqrt(sum2 / (n * n)), 0.01) << "the relative RMS error, 32 shadow rays a pixel";
   EXPECT_LT(worst, 0.05) << "the worst pixel's relative error";
+}
+
+TEST(DirectTest, LampsAllInViewGiveTheirClosedFormExactly) {
+  // The four near lamps and six far ones, all on the near side of the
+  // wall: every shadow ray reaches its lamp, so every pixel is the closed
+  // form (to float rounding), the far lamps' few samples notwithstanding.
+  test::TempDir dir;
+  std::vector<Lamp> lamps = HiddenLamps();
+  for (Lamp& l : lamps)
+    if (l.x > 1.0) l.x = -l.x - 1.0;
+  WriteLampsScene(dir.path(), lamps);
+  const int n = 16;
+  PfmImage img = RenderDown(dir, n, "--aa off --direct-samples 32 --patch-size 2");
+  ASSERT_EQ(img.width, n);
+  // Pixel (i, j) sees the floor point (-u, 0, -v), u and v as in the other
+  // floor tests (the image's right is -x, its top +z).
+  double worst = 0.0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double u = 0.5 * ((i + 0.5) / n * 2.0 - 1.0), v = 0.5 * ((j + 0.5) / n * 2.0 - 1.0);
+      double e = 0.0;
+      for (const Lamp& l : lamps) {
+        const double h = l.side / 2;
+        e += l.ke * FormFactor(l.x - h, l.x + h, l.z - h, l.z + h, l.y, -u, -v);
+      }
+      worst = std::max(worst, std::fabs(Pixel(img, i, j) / (0.5 * e / kPi) - 1.0));
+    }
+  EXPECT_LT(worst, 1e-3);
 }
 
 TEST(DirectTest, HardShadowEdgeIsAsSharpAsItsGeometry) {
