@@ -1,11 +1,11 @@
 // Direct light gathered per pixel (direct.h): the exact unoccluded
 // irradiance and its shadow-ray samples against the closed form under a
-// square emitter; whole renders: a floor under a square emitter matches the
-// closed form, lamps behind a wall bring nothing while those in view
-// bring their closed form (exactly where all are in view), a hard shadow
-// edge is as sharp as its geometry, the
-// indirect part has no step at patch edges, a quarter of the rays gives
-// the converged image's mean.
+// square emitter, and the samples' spread over two emitters by their
+// shares of it; whole renders: a floor under a square emitter matches the
+// closed form, lamps behind a wall bring nothing while those in view bring
+// their closed form (exactly where all are in view), a hard shadow edge is
+// as sharp as its geometry, the indirect part has no step at patch edges,
+// a quarter of the rays gives the converged image's mean.
 #include "vismask/display/direct.h"
 
 #include <gtest/gtest.h>

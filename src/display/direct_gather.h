@@ -14,12 +14,14 @@ namespace vismask {
 
 // The radiance hook `h` adds for pixel index `pixel` at the shaded point
 // `centre`; pointOf(k) gives the point sample k's shadow ray leaves from
-// (points are projected onto the receiver's plane). E0 at the centre times
-// the visible share of the samples, weighted by what each would bring: a
-// ray from the centre to each outline corner and the first
-// kFirstDirectSamples, and the rest of h.samples only where those disagree
-// (some reach the emitters, some do not). With a sun, a share of the
-// samples in proportion to its part of E0 go to its disc. Allocates nothing.
+// (points are projected onto the receiver's plane). Each source's E0 at
+// the centre times the visible share of its samples, weighted by what each
+// would bring (direct.h): a ray from the centre to each outline corner and
+// the first kFirstDirectSamples, and the rest of h.samples only where
+// those disagree (some reach the emitters, some do not). The samples go to
+// the emitting polygons in proportion to their parts of E0 and, with a
+// sun, to its disc in proportion to its part. The groups' tallies are the
+// light's scratch (one gather at a time). Allocates nothing.
 template <class PointOf>
 glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, PointOf pointOf) {
   auto onPlane = [&](glm::vec3 x) { return x - h.normal * glm::dot(h.normal, x - h.planePoint); };

@@ -5,13 +5,18 @@
 // interpolates that as it did the whole, and adds, at each point the raster
 // shades, the irradiance from the emitters gathered there (this file).
 //
-// The estimate at a point x is E0(x) * V(x): E0 the unoccluded irradiance,
-// exact (Lambert's formula for a polygon of uniform exitance: E = Ke/(2 pi)
-// * sum over its edges of the angle they subtend times the cosine of their
-// plane with the normal), and V the visible share, estimated with shadow
-// rays to sample points on the emitters weighted by what each would bring
-// (a ratio estimator). Where every sample agrees (fully lit, or umbra) V is
-// 1 or 0 exactly, so the noise is only in penumbrae. The shadow rays are
+// The estimate at a point x is, per source (an emitting polygon, or the
+// sun), E0(x) * V(x): E0 the unoccluded irradiance, exact (Lambert's
+// formula for a polygon of uniform exitance: E = Ke/(2 pi) * sum over its
+// edges of the angle they subtend times the cosine of their plane with the
+// normal), and V the visible share, estimated with shadow rays to sample
+// points on the sources weighted by what each would bring (a ratio
+// estimator): each source's own samples give its V, so a source hidden
+// from x counts as nothing and one in full view as its E0, whatever share
+// of the samples each drew; a source drawing less than one sample in
+// expectation counts by what its samples bring over all drawn. Where every
+// sample agrees (fully lit, or umbra) V is 1 or 0 exactly for the whole,
+// so the noise is only in penumbrae. The shadow rays are
 // adaptive: one to each corner of the emitters' outlines and the first
 // kFirstDirectSamples; the rest of the N only where those disagree. (A
 // straight silhouette edge across a convex emitter leaves a corner on each
@@ -27,11 +32,9 @@
 // a patch of the group in proportion to its power (area times Ke, channels
 // summed), each time stretched back to [0, 1) within the choice; the point
 // is uniform over the patch (a quad as two triangles by area). So the
-// samples go to the groups in the shares they bring at x, and a sample's
-// weight is about E0 whichever group it lands on: with many emitters, most
-// of them far or faint from x, the samples are not spent on those, and the
-// visible share is, per group, close to the share of its samples that
-// reach it. The sun (--sun) is a second kind of
+// samples go to the groups in the shares they bring at x: with many
+// emitters, most of them far, faint or facing away from x, the samples are
+// not spent on those. The sun (--sun) is a second kind of
 // source: E0 its irradiance times the cosine at x, V from rays along
 // directions uniform in its disc that must leave the scene (an unbounded
 // occlusion test); the corners of its disc are kSunRimRays points on its
