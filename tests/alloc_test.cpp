@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "direct_test_util.h"
 #include "test_util.h"
 #include "vismask/core/phase.h"
 
@@ -220,6 +221,28 @@ TEST(AllocTest, PerPixelSunAllocatesNothingAfterInit) {
                                    raster);
       ASSERT_EQ(run.code, 0) << scene << ": " << run.err;
       EXPECT_EQ(run.allocations, 0) << scene << ", --aa " << raster << ": heap after init";
+    }
+}
+
+TEST(AllocTest, PerPixelGatherOverSeveralLampsAllocatesNothingAfterInit) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  // Ten lamps (emitter groups), some behind a wall: the groups' shares and
+  // tallies at each shaded point, alone and with the sun as one more source.
+  test::TempDir scene;
+  std::vector<Lamp> lamps;
+  for (double x : {-0.4, 0.4, 1.8, 2.4})
+    for (double z : {-0.4, 0.4}) lamps.push_back({x, x > 1.0 ? 1.2 : 0.8, z, 0.3, 10.0});
+  lamps.push_back({0.0, 2.0, 0.0, 0.5, 5.0});
+  lamps.push_back({2.0, 2.0, 0.0, 0.5, 5.0});
+  WriteLampsScene(scene.path(), lamps);
+  for (const char* raster : {"on", "off"})
+    for (const char* sun : {"", "--sun 1,4,0.5,3,3,3"}) {
+      CountedRender run(scene.File("s.obj"),
+                        std::string("--camera 0,0.5,0,0,0,0,0,0,1,90 --direct-samples 32 "
+                                    "--patch-size 2 --width 48 --height 48 --aa ") +
+                            raster + " " + sun);
+      ASSERT_EQ(run.code, 0) << run.err;
+      EXPECT_EQ(run.allocations, 0) << "--aa " << raster << " " << sun << ": heap after init";
     }
 }
 

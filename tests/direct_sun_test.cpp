@@ -61,10 +61,10 @@ TEST(DirectSunTest, UnoccludedAndSamplesGiveItsIrradianceTimesTheCosine) {
   for (uint32_t k = 0; k < n; ++k) {
     glm::vec3 w, w2;
     open += light.Sample(b.grid, kNoPatch, kNoPatch, glm::vec3(5.0f, 0.0f, 5.0f), up,
-                         DirectLightSample(3, k), 1e-4f, nullptr, &w, 1.0f);
+                         DirectLightSample(3, k), {}, 1e-4f, nullptr, &w, 1.0f);
     sum += glm::dvec3(w);
     under += light.Sample(b.grid, kNoPatch, kNoPatch, glm::vec3(0.5f, 0.9f, 0.3f), up,
-                          DirectLightSample(3, k), 1e-4f, nullptr, &w2, 1.0f);
+                          DirectLightSample(3, k), {}, 1e-4f, nullptr, &w2, 1.0f);
   }
   EXPECT_EQ(open, n);
   EXPECT_EQ(under, 0u);

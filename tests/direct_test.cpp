@@ -1,9 +1,11 @@
 // Direct light gathered per pixel (direct.h): the exact unoccluded
 // irradiance and its shadow-ray samples against the closed form under a
-// square emitter; whole renders: a floor under a square emitter matches the
-// closed form, a hard shadow edge is as sharp as its geometry, the
-// indirect part has no step at patch edges, a quarter of the rays gives
-// the converged image's mean.
+// square emitter, and the samples' spread over two emitters by their
+// shares of it; whole renders: a floor under a square emitter matches the
+// closed form, lamps behind a wall bring nothing while those in view bring
+// their closed form (exactly where all are in view), a hard shadow edge is
+// as sharp as its geometry, the indirect part has no step at patch edges,
+// a quarter of the rays gives the converged image's mean.
 #include "vismask/display/direct.h"
 
 #include <gtest/gtest.h>
@@ -90,10 +92,11 @@ TEST(DirectTest, ShadowSamplesAverageToTheClosedForm) {
     const uint32_t n = 4096;
     glm::dvec3 sum(0.0);
     uint32_t visible = 0;
+    light.Unoccluded(x, up, light.tallies());
     for (uint32_t k = 0; k < n; ++k) {
       glm::vec3 w;
-      visible += light.Sample(b.grid, kNoPatch, kNoPatch, x, up, DirectLightSample(7, k), 1e-4f,
-                              nullptr, &w)
+      visible += light.Sample(b.grid, kNoPatch, kNoPatch, x, up, DirectLightSample(7, k),
+                              light.tallies(), 1e-4f, nullptr, &w)
                      ? 1u
                      : 0u;
       sum += glm::dvec3(w);
@@ -103,6 +106,51 @@ TEST(DirectTest, ShadowSamplesAverageToTheClosedForm) {
     EXPECT_NEAR(sum.x / n, 2.0 * f, 0.01 * 2.0 * f) << px;
     EXPECT_NEAR(sum.y / n, 1.0 * f, 0.01 * 1.0 * f) << px;
   }
+}
+
+TEST(DirectTest, SamplesGoToEachGroupByItsShareOfTheIrradianceThere) {
+  // The square emitter, and a larger, brighter one higher up and aside:
+  // the second has most of the power, the first about half the
+  // irradiance at x.
+  gridtest::TestScene s = EmitterScene();
+  gridtest::AddSubdividedQuad(1, 2.0f, 1.0f, 3.0f, -1.0f, 1.0f, -1, 1, &s);
+  for (size_t i = 4; i < s.patches.size(); ++i) s.patches[i].ke = glm::vec3(8.0f);
+  gridtest::BuiltGrid b;
+  gridtest::BuildGrid(s, 1.0f, &b);
+  Span<const Patch> patches(s.patches.data(), s.patches.size());
+  Arena arena(64 * 1024);
+  DirectLight light;
+  light.Layout(arena, DirectLight::Count(patches));
+  light.Build(patches);
+  ASSERT_EQ(light.numGroups(), 2u);
+  const glm::vec3 up(0.0f, 1.0f, 0.0f), x(0.2f, 0.0f, -0.3f);
+  const Span<DirectLight::Tally> tally = light.tallies();
+  const glm::vec3 e0 = light.Unoccluded(x, up, tally);
+  // The groups' parts add up to the whole, and the first's share of it
+  // (channels summed) is where the cumulative shares split.
+  const glm::vec3 parts = tally[0].e0 + tally[1].e0;
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(parts[c], e0[c], 1e-5 * e0[c]);
+  const float first = (tally[0].e0.x + tally[0].e0.y + tally[0].e0.z) / (e0.x + e0.y + e0.z);
+  EXPECT_NEAR(tally[0].cdf, first, 1e-6);
+  EXPECT_EQ(tally[1].cdf, 1.0f);
+  ASSERT_GT(first, 0.2f);
+  ASSERT_LT(first, 0.8f);
+  const uint32_t n = 4096;
+  uint32_t drawn[2] = {0, 0};
+  glm::dvec3 sum(0.0);
+  for (uint32_t k = 0; k < n; ++k) {
+    glm::vec3 w;
+    uint32_t source = 2;
+    light.Sample(b.grid, kNoPatch, kNoPatch, x, up, DirectLightSample(5, k), tally, 1e-4f, nullptr,
+                 &w, 0.0f, &source);
+    ASSERT_LT(source, 2u);
+    ++drawn[source];
+    sum += glm::dvec3(w);
+  }
+  // Halton points: the counts are the shares to within a couple of samples.
+  EXPECT_NEAR(drawn[0], n * first, 2.0);
+  // The weights average to the unoccluded irradiance.
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / n, e0[c], 0.01 * e0[c]) << c;
 }
 
 // --- whole renders --------------------------------------------------------------
@@ -146,6 +194,78 @@ TEST(DirectTest, FloorUnderASquareEmitterMatchesTheClosedForm) {
       worst = std::max(worst, std::fabs(Pixel(img, i, j) / expect - 1.0));
     }
   EXPECT_LT(worst, 0.01) << "the floor's radiance: kd E / pi, E the closed form";
+}
+
+// Four small lamps over the floor seen (symmetric about both axes, so the
+// image's orientation does not matter) and six larger, brighter ones
+// behind the wall at x = 1: those bring most of the power and a good part
+// of the unoccluded irradiance at the floor seen, and none of its light.
+std::vector<Lamp> HiddenLamps() {
+  std::vector<Lamp> lamps;
+  for (double x : {-0.4, 0.4})
+    for (double z : {-0.4, 0.4}) lamps.push_back({x, 0.8, z, 0.3, 10.0});
+  for (double x : {1.8, 2.4})
+    for (double z : {-1.2, 0.0, 1.2}) lamps.push_back({x, 1.2, z, 0.5, 20.0});
+  return lamps;
+}
+
+TEST(DirectTest, LampsBehindAWallBringNothingAndTheOthersTheirClosedForm) {
+  test::TempDir dir;
+  const std::vector<Lamp> lamps = HiddenLamps();
+  WriteLampsScene(dir.path(), lamps);
+  const int n = 32;
+  PfmImage img = RenderDown(dir, n, "--aa off --direct-samples 32 --patch-size 2");
+  ASSERT_EQ(img.width, n);
+  // Pixel (i, j) sees the floor point 0.5 * ((i + 0.5) / n * 2 - 1) along
+  // each axis (up to the signs, which the near lamps' symmetry makes moot):
+  // its radiance is kd / pi times the near lamps' irradiance. A lamp in
+  // full view or hidden counts exactly once it draws samples; one that
+  // draws less than one in expectation counts by what its samples bring
+  // (the worst pixels), so the bound on one pixel is looser than on all.
+  double worst = 0.0, sum2 = 0.0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      double u = 0.5 * ((i + 0.5) / n * 2.0 - 1.0), v = 0.5 * ((j + 0.5) / n * 2.0 - 1.0);
+      double e = 0.0;
+      for (const Lamp& l : lamps) {
+        if (l.x > 1.0) continue;
+        const double h = l.side / 2;
+        e += l.ke * FormFactor(l.x - h, l.x + h, l.z - h, l.z + h, l.y, u, v);
+      }
+      const double error = Pixel(img, i, j) / (0.5 * e / kPi) - 1.0;
+      worst = std::max(worst, std::fabs(error));
+      sum2 += error * error;
+    }
+  EXPECT_LT(std::sqrt(sum2 / (n * n)), 0.01) << "the relative RMS error, 32 shadow rays a pixel";
+  EXPECT_LT(worst, 0.05) << "the worst pixel's relative error";
+}
+
+TEST(DirectTest, LampsAllInViewGiveTheirClosedFormExactly) {
+  // The four near lamps and six far ones, all on the near side of the
+  // wall: every shadow ray reaches its lamp, so every pixel is the closed
+  // form (to float rounding), the far lamps' few samples notwithstanding.
+  test::TempDir dir;
+  std::vector<Lamp> lamps = HiddenLamps();
+  for (Lamp& l : lamps)
+    if (l.x > 1.0) l.x = -l.x - 1.0;
+  WriteLampsScene(dir.path(), lamps);
+  const int n = 16;
+  PfmImage img = RenderDown(dir, n, "--aa off --direct-samples 32 --patch-size 2");
+  ASSERT_EQ(img.width, n);
+  // Pixel (i, j) sees the floor point (-u, 0, -v), u and v as in the other
+  // floor tests (the image's right is -x, its top +z).
+  double worst = 0.0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double u = 0.5 * ((i + 0.5) / n * 2.0 - 1.0), v = 0.5 * ((j + 0.5) / n * 2.0 - 1.0);
+      double e = 0.0;
+      for (const Lamp& l : lamps) {
+        const double h = l.side / 2;
+        e += l.ke * FormFactor(l.x - h, l.x + h, l.z - h, l.z + h, l.y, -u, -v);
+      }
+      worst = std::max(worst, std::fabs(Pixel(img, i, j) / (0.5 * e / kPi) - 1.0));
+    }
+  EXPECT_LT(worst, 1e-3);
 }
 
 TEST(DirectTest, HardShadowEdgeIsAsSharpAsItsGeometry) {

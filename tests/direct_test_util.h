@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "test_util.h"
@@ -27,6 +28,41 @@ inline PfmImage RenderDown(const test::TempDir& dir, int size, const std::string
   PfmImage img;
   EXPECT_TRUE(ReadPfm(dir.File("out/image.pfm"), &img).ok());
   return img;
+}
+
+// A lamp of WriteLampsScene: a square of side `side` centred at (x, y, z),
+// facing down, of exitance `ke` (every channel).
+struct Lamp {
+  double x, y, z, side, ke;
+};
+
+// The floor [-10, 10]^2 at y = 0 (Kd 0.5, facing up), a black wall in the
+// plane x = 1 (y 0 to 3, z -10 to 10) and `lamps` (Kd 0), written to
+// dir/s.obj and dir/s.mtl: the floor at x < 1 sees the lamps on its side
+// and none of those beyond the wall, and nothing reflects onto it.
+inline void WriteLampsScene(const std::string& dir, const std::vector<Lamp>& lamps) {
+  std::string obj =
+      "mtllib s.mtl\n"
+      "v -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\n"
+      "v 1 0 -10\nv 1 0 10\nv 1 3 10\nv 1 3 -10\n"
+      "usemtl floor\nf 1 4 3 2\nusemtl black\nf 5 6 7 8\n";
+  std::string mtl = "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl black\nKd 0 0 0\n";
+  int v = 9;
+  for (size_t i = 0; i < lamps.size(); ++i) {
+    const Lamp& l = lamps[i];
+    const double h = l.side / 2;
+    for (const auto& c : {std::pair<double, double>{-h, -h}, {h, -h}, {h, h}, {-h, h}})
+      obj += "v " + std::to_string(l.x + c.first) + " " + std::to_string(l.y) + " " +
+             std::to_string(l.z + c.second) + "\n";
+    const std::string name = "lamp" + std::to_string(i);
+    obj += "usemtl " + name + "\nf " + std::to_string(v) + " " + std::to_string(v + 1) + " " +
+           std::to_string(v + 2) + " " + std::to_string(v + 3) + "\n";
+    const std::string ke = std::to_string(l.ke);
+    mtl += "newmtl " + name + "\nKd 0 0 0\nKe " + ke + " " + ke + " " + ke + "\n";
+    v += 4;
+  }
+  test::WriteFile(dir + "/s.obj", obj);
+  test::WriteFile(dir + "/s.mtl", mtl);
 }
 
 inline float Pixel(const PfmImage& img, int x, int y) {

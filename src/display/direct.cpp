@@ -152,8 +152,8 @@ DirectLight::Counts DirectLight::Count(Span<const Patch> patches) {
 
 void DirectLight::Layout(Arena& arena, const Counts& counts) {
   emitters_ = arena.Alloc<Emitter>(counts.emitters);
-  patchIndex_ = arena.Alloc<uint32_t>(counts.emitters);
   groups_ = arena.Alloc<Group>(counts.groups);
+  tallies_ = arena.Alloc<Tally>(counts.groups);
   edges_ = arena.Alloc<Edge>(counts.edges);
   corners_ = arena.Alloc<Corner>(counts.corners);
 }
@@ -162,6 +162,7 @@ void DirectLight::Build(Span<const Patch> patches) {
   patches_ = patches;
   Plan plan = MakePlan(patches);
   CHECK(plan.groups.size() == groups_.size());
+  constexpr double kInvPi = 0.318309886183790672;
   uint32_t np = 0, ne = 0;
   for (size_t g = 0; g < plan.groups.size(); ++g) {
     Group& gr = groups_[g];
@@ -171,10 +172,32 @@ void DirectLight::Build(Span<const Patch> patches) {
     gr.ke = first.ke;
     gr.firstPatch = np;
     gr.numPatches = static_cast<uint32_t>(plan.groups[g].size());
+    // The group's sampling list in patch index order: a patch in
+    // proportion to its power (area times Ke, channels summed) within it.
+    double total = 0.0;
     for (uint32_t i : plan.groups[g]) {
-      CHECK(np < patchIndex_.size());
-      patchIndex_[np++] = i;
+      CHECK(np < emitters_.size());
+      const Patch& p = patches[i];
+      Emitter& e = emitters_[np++];
+      e = Emitter{};
+      e.patch = i;
+      float a0 = TriangleArea(p.corner[0], p.corner[1], p.corner[2]);
+      float a1 = p.numCorners == 4 ? TriangleArea(p.corner[0], p.corner[2], p.corner[3]) : 0.0f;
+      e.split = a0 + a1 > 0.0f ? a0 / (a0 + a1) : 1.0f;
+      total += static_cast<double>(p.area) * (p.ke.r + p.ke.g + p.ke.b);
+      e.cdfHi = static_cast<float>(total);
     }
+    for (uint32_t j = gr.firstPatch; j < np; ++j) {
+      Emitter& e = emitters_[j];
+      const Patch& p = patches[e.patch];
+      double w = static_cast<double>(p.area) * (p.ke.r + p.ke.g + p.ke.b);
+      // pdf per unit area of a point on e, the group given: (w / total) / area.
+      double k = w > 0.0 ? total / w * p.area * kInvPi : 0.0;
+      e.scale = glm::vec3(static_cast<float>(p.ke.r * k), static_cast<float>(p.ke.g * k),
+                          static_cast<float>(p.ke.b * k));
+      e.cdfHi = total > 0.0 ? static_cast<float>(e.cdfHi / total) : 1.0f;
+    }
+    emitters_[np - 1].cdfHi = 1.0f;
     gr.firstEdge = ne;
     gr.numEdges = static_cast<uint32_t>(plan.edges[g].size());
     for (const auto& e : plan.edges[g]) {
@@ -182,38 +205,10 @@ void DirectLight::Build(Span<const Patch> patches) {
       edges_[ne++] = Edge{e.first, e.second};
     }
   }
-  CHECK(np == patchIndex_.size() && ne == edges_.size());
+  CHECK(np == emitters_.size() && ne == edges_.size());
   CHECK(plan.corners.size() == corners_.size());
   for (size_t k = 0; k < corners_.size(); ++k)
     corners_[k] = Corner{plan.corners[k], plan.cornerGroup[k]};
-  // The sampling list in patch index order.
-  double total = 0.0;
-  uint32_t n = 0;
-  for (uint32_t i = 0; i < patches.size(); ++i) {
-    const Patch& p = patches[i];
-    if (!Emits(p)) continue;
-    CHECK(n < emitters_.size());
-    Emitter& e = emitters_[n++];
-    e = Emitter{};
-    e.patch = i;
-    float a0 = TriangleArea(p.corner[0], p.corner[1], p.corner[2]);
-    float a1 = p.numCorners == 4 ? TriangleArea(p.corner[0], p.corner[2], p.corner[3]) : 0.0f;
-    e.split = a0 + a1 > 0.0f ? a0 / (a0 + a1) : 1.0f;
-    total += static_cast<double>(p.area) * (p.ke.r + p.ke.g + p.ke.b);
-    e.cdfHi = static_cast<float>(total);
-  }
-  CHECK(n == emitters_.size());
-  constexpr double kInvPi = 0.318309886183790672;
-  for (Emitter& e : emitters_) {
-    const Patch& p = patches[e.patch];
-    double w = static_cast<double>(p.area) * (p.ke.r + p.ke.g + p.ke.b);
-    // pdf per unit area of a point on e: (w / total) / area.
-    double k = w > 0.0 ? total / w * p.area * kInvPi : 0.0;
-    e.scale = glm::vec3(static_cast<float>(p.ke.r * k), static_cast<float>(p.ke.g * k),
-                        static_cast<float>(p.ke.b * k));
-    e.cdfHi = total > 0.0 ? static_cast<float>(e.cdfHi / total) : 1.0f;
-  }
-  if (!emitters_.empty()) emitters_[emitters_.size() - 1].cdfHi = 1.0f;
 }
 
 glm::vec3 DirectLight::PointOn(const Patch& p, float split, glm::vec2 u) {
@@ -233,10 +228,15 @@ glm::vec3 DirectLight::PointOn(const Patch& p, float split, glm::vec2 u) {
   return (1.0f - b1 - b2) * c + b1 * a + b2 * b;
 }
 
-glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n) const {
+glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n, Span<Tally> tally) const {
+  CHECK(tally.empty() || tally.size() == groups_.size());
   constexpr double kInv2Pi = 0.159154943091895336;
   glm::dvec3 sum(0.0);
-  for (const Group& g : groups_) {
+  double cumulative = 0.0;  // the groups' E0 so far, channels summed
+  uint32_t lastLit = 0;     // one past the last group that brings any
+  for (uint32_t gi = 0; gi < groups_.size(); ++gi) {
+    const Group& g = groups_[gi];
+    if (!tally.empty()) tally[gi] = Tally{static_cast<float>(cumulative), {}, {}, {}};
     // Only the front of an emitter emits.
     if (!(glm::dot(g.normal, x - g.point) > 0.0f)) continue;
     // Wholly above x's horizon: its outline edges.
@@ -250,7 +250,7 @@ glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n) const 
     } else {
       // Across the horizon: each patch clipped to the part above it.
       for (uint32_t j = g.firstPatch; j < g.firstPatch + g.numPatches; ++j) {
-        const Patch& p = patches_[patchIndex_[j]];
+        const Patch& p = patches_[emitters_[j].patch];
         glm::vec3 in[4], out[8];
         int m = 0;
         for (uint32_t k = 0; k < p.numCorners; ++k) in[k] = p.corner[k] - x;
@@ -264,8 +264,20 @@ glm::vec3 DirectLight::Unoccluded(const glm::vec3& x, const glm::vec3& n) const 
         for (int k = 0; k < m; ++k) s += EdgeTerm(out[k], out[(k + 1) % m], n);
       }
     }
-    sum += std::fabs(s) * kInv2Pi * glm::dvec3(g.ke);
+    const glm::dvec3 e = std::fabs(s) * kInv2Pi * glm::dvec3(g.ke);
+    sum += e;
+    if (tally.empty() || !(e.x + e.y + e.z > 0.0)) continue;
+    cumulative += e.x + e.y + e.z;
+    tally[gi].cdf = static_cast<float>(cumulative);
+    tally[gi].e0 = glm::vec3(e);
+    lastLit = gi + 1;
   }
+  // Each group's cumulative share; the last that brings any ends at 1
+  // exactly, so rounding never picks a group that brings nothing.
+  for (uint32_t gi = 0; gi < tally.size(); ++gi)
+    tally[gi].cdf = lastLit == 0        ? 0.0f
+                    : gi + 1 >= lastLit ? 1.0f
+                                        : static_cast<float>(tally[gi].cdf / cumulative);
   if (hasSun_) sum += glm::dvec3(UnoccludedSun(n));
   return glm::vec3(sum);
 }
@@ -283,12 +295,17 @@ glm::vec3 DirectLight::UnoccludedSun(const glm::vec3& n) const {
 }
 
 bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                         const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
-                         glm::vec3* weight, float sunShare) const {
-  if (!(sunShare > 0.0f)) return SampleArea(grid, receiver, twin, x, n, u, epsilon, hint, weight);
+                         const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
+                         uint32_t* hint, glm::vec3* weight, float sunShare,
+                         uint32_t* source) const {
+  uint32_t unused;
+  source = source ? source : &unused;
+  if (!(sunShare > 0.0f))
+    return SampleArea(grid, receiver, twin, x, n, u, tally, epsilon, hint, weight, source);
   // The kind from u.x (the sun below sunShare), u.x stretched back to
   // [0, 1) within it; the weight over the kind's share.
   if (u.x < sunShare || emitters_.empty()) {
+    *source = numGroups();
     const float s = std::fmin(u.x / sunShare, 0.99999994f);
     const bool vis =
         SampleSun(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
@@ -296,7 +313,8 @@ bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, con
     return vis;
   }
   const float s = std::fmin((u.x - sunShare) / (1.0f - sunShare), 0.99999994f);
-  const bool vis = SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
+  const bool vis = SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), tally, epsilon, hint,
+                              weight, source);
   *weight /= 1.0f - sunShare;
   return vis;
 }
@@ -329,25 +347,48 @@ bool DirectLight::SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t tw
                    hint);
 }
 
-bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                             const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
-                             glm::vec3* weight) const {
-  *weight = glm::vec3(0.0f);
-  if (emitters_.empty()) return false;
-  // The emitter: the first whose cumulative share exceeds u.x.
-  size_t lo = 0, hi = emitters_.size() - 1;
+namespace {
+
+// The first of `size` ascending cumulative shares (cdf(i)) above x (the
+// last if none is) and x stretched back to [0, 1) within its interval;
+// *share: the interval's width.
+template <class Cdf>
+uint32_t Pick(Cdf cdf, uint32_t size, float x, float* stretched, float* share) {
+  uint32_t lo = 0, hi = size - 1;
   while (lo < hi) {
-    size_t mid = (lo + hi) / 2;
-    if (u.x < emitters_[mid].cdfHi)
+    uint32_t mid = (lo + hi) / 2;
+    if (x < cdf(mid))
       hi = mid;
     else
       lo = mid + 1;
   }
-  const Emitter& e = emitters_[lo];
-  float below = lo > 0 ? emitters_[lo - 1].cdfHi : 0.0f;
-  float width = e.cdfHi - below;
-  float sx = width > 0.0f ? (u.x - below) / width : 0.0f;
-  sx = std::fmin(std::fmax(sx, 0.0f), 0.99999994f);
+  const float below = lo > 0 ? cdf(lo - 1) : 0.0f;
+  *share = cdf(lo) - below;
+  const float s = *share > 0.0f ? (x - below) / *share : 0.0f;
+  *stretched = std::fmin(std::fmax(s, 0.0f), 0.99999994f);
+  return lo;
+}
+
+}  // namespace
+
+bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
+                             const glm::vec3& n, glm::vec2 u, Span<const Tally> tally,
+                             float epsilon, uint32_t* hint, glm::vec3* weight,
+                             uint32_t* source) const {
+  *weight = glm::vec3(0.0f);
+  if (emitters_.empty()) return false;
+  CHECK(tally.size() == groups_.size());
+  // The group, in proportion to its unoccluded irradiance at x; then a
+  // patch of it in proportion to its power (the group's cumulative shares
+  // in its emitters' cdfHi).
+  float sx, groupShare, patchShare;
+  *source = Pick([&](uint32_t i) { return tally[i].cdf; }, static_cast<uint32_t>(tally.size()), u.x,
+                 &sx, &groupShare);
+  const Group& g = groups_[*source];
+  if (!(groupShare > 0.0f)) return false;
+  const Emitter* list = &emitters_[g.firstPatch];
+  const Emitter& e =
+      list[Pick([&](uint32_t i) { return list[i].cdfHi; }, g.numPatches, sx, &sx, &patchShare)];
   const Patch& p = patches_[e.patch];
   glm::vec3 y = PointOn(p, e.split, glm::vec2(sx, u.y));
   glm::vec3 d = y - x;
@@ -355,7 +396,7 @@ bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin,
   if (!(r2 > 0.0f)) return false;
   float cosX = glm::dot(n, d), cosY = -glm::dot(p.normal, d);
   if (!(cosX > 0.0f) || !(cosY > 0.0f)) return false;
-  *weight = e.scale * (cosX * cosY / (r2 * r2));
+  *weight = e.scale * (cosX * cosY / (r2 * r2)) / groupShare;
   float t = epsilon / std::sqrt(r2);
   if (!(t < 0.5f)) return true;
   return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint);

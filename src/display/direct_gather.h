@@ -14,17 +14,20 @@ namespace vismask {
 
 // The radiance hook `h` adds for pixel index `pixel` at the shaded point
 // `centre`; pointOf(k) gives the point sample k's shadow ray leaves from
-// (points are projected onto the receiver's plane). E0 at the centre times
-// the visible share of the samples, weighted by what each would bring: a
-// ray from the centre to each outline corner and the first
-// kFirstDirectSamples, and the rest of h.samples only where those disagree
-// (some reach the emitters, some do not). With a sun, a share of the
-// samples in proportion to its part of E0 go to its disc. Allocates nothing.
+// (points are projected onto the receiver's plane). Each source's E0 at
+// the centre times the visible share of its samples, weighted by what each
+// would bring (direct.h): a ray from the centre to each outline corner and
+// the first kFirstDirectSamples, and the rest of h.samples only where
+// those disagree (some reach the emitters, some do not). The samples go to
+// the emitting polygons in proportion to their parts of E0 and, with a
+// sun, to its disc in proportion to its part. The groups' tallies are the
+// light's scratch (one gather at a time). Allocates nothing.
 template <class PointOf>
 glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, PointOf pointOf) {
   auto onPlane = [&](glm::vec3 x) { return x - h.normal * glm::dot(h.normal, x - h.planePoint); };
   const glm::vec3 x0 = onPlane(centre);
-  const glm::vec3 e0 = h.light->Unoccluded(x0, h.normal);
+  const Span<DirectLight::Tally> tally = h.light->tallies();
+  const glm::vec3 e0 = h.light->Unoccluded(x0, h.normal, tally);
   if (!(e0.x > 0.0f || e0.y > 0.0f || e0.z > 0.0f)) return glm::vec3(0.0f);
   // The sun's share of the samples: its share of E0 (channels summed).
   float sunShare = 0.0f;
@@ -54,27 +57,59 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
                        : 0u;
     cornersTell = usable;
   }
-  glm::vec3 all(0.0f), seen(0.0f);
-  uint32_t counted = 0, visible = 0;
-  for (uint32_t k = 0; k < h.samples; ++k) {
+  glm::vec3 all(0.0f), seen(0.0f), sunAll(0.0f), sunSeen(0.0f);
+  uint32_t counted = 0, visible = 0, drawn = 0;
+  for (uint32_t k = 0; k < h.samples; ++k, ++drawn) {
     if (k == kFirstDirectSamples && cornersTell && counted > 0 &&
         ((visible == 0 && cornersSeen == 0) || (visible == counted && cornersSeen == corners)))
       break;
     glm::vec3 w;
+    uint32_t source;
     bool vis = h.light->Sample(*h.grid, h.patch, h.twin, onPlane(pointOf(k)), h.normal,
-                               DirectLightSample(pixel, k), h.epsilon, h.hint, &w, sunShare);
+                               DirectLightSample(pixel, k), tally, h.epsilon, h.hint, &w, sunShare,
+                               &source);
     if (!(w.x > 0.0f || w.y > 0.0f || w.z > 0.0f)) continue;
     ++counted;
     all += w;
+    glm::vec3& sourceAll = source < tally.size() ? tally[source].all : sunAll;
+    glm::vec3& sourceSeen = source < tally.size() ? tally[source].seen : sunSeen;
+    sourceAll += w;
     if (vis) {
       ++visible;
       seen += w;
+      sourceSeen += w;
     }
   }
   glm::vec3 share(1.0f);  // no sample saw the emitters in front: unoccluded
   for (int c = 0; c < 3; ++c)
     if (all[c] > 0.0f) share[c] = seen[c] / all[c];
-  return h.scale * e0 * share;
+  uint32_t lit = sunShare > 0.0f ? 1u : 0u;
+  for (const DirectLight::Tally& t : tally) lit += t.e0.x + t.e0.y + t.e0.z > 0.0f ? 1u : 0u;
+  // One source lit, or every sample reached its point or none did (fully
+  // lit, umbra): the whole's share, exactly 1 or 0 in the latter.
+  if (lit <= 1 || visible == 0 || visible == counted) return h.scale * e0 * share;
+  // Several sources lit: each one that drew at least a sample's worth
+  // (drawn x its share >= 1) gives its part times its own samples' visible
+  // share, so its count of samples does not matter; the others, which may
+  // draw none, what their samples brought over all drawn.
+  const float n = static_cast<float>(drawn);
+  auto part = [&](const glm::vec3& e, float p, const glm::vec3& sSeen, const glm::vec3& sAll) {
+    glm::vec3 v = sSeen / n;
+    if (n * p >= 1.0f)
+      for (int c = 0; c < 3; ++c)
+        if (sAll[c] > 0.0f) v[c] = e[c] * (sSeen[c] / sAll[c]);
+    return v;
+  };
+  glm::vec3 sum = sunShare > 0.0f
+                      ? part(h.light->UnoccludedSun(h.normal), sunShare, sunSeen, sunAll)
+                      : glm::vec3(0.0f);
+  float below = 0.0f;
+  for (const DirectLight::Tally& t : tally) {
+    if (t.e0.x + t.e0.y + t.e0.z > 0.0f)
+      sum += part(t.e0, (t.cdf - below) * (1.0f - sunShare), t.seen, t.all);
+    below = t.cdf;
+  }
+  return h.scale * sum;
 }
 
 }  // namespace vismask

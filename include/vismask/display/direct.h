@@ -5,13 +5,18 @@
 // interpolates that as it did the whole, and adds, at each point the raster
 // shades, the irradiance from the emitters gathered there (this file).
 //
-// The estimate at a point x is E0(x) * V(x): E0 the unoccluded irradiance,
-// exact (Lambert's formula for a polygon of uniform exitance: E = Ke/(2 pi)
-// * sum over its edges of the angle they subtend times the cosine of their
-// plane with the normal), and V the visible share, estimated with shadow
-// rays to sample points on the emitters weighted by what each would bring
-// (a ratio estimator). Where every sample agrees (fully lit, or umbra) V is
-// 1 or 0 exactly, so the noise is only in penumbrae. The shadow rays are
+// The estimate at a point x is, per source (an emitting polygon, or the
+// sun), E0(x) * V(x): E0 the unoccluded irradiance, exact (Lambert's
+// formula for a polygon of uniform exitance: E = Ke/(2 pi) * sum over its
+// edges of the angle they subtend times the cosine of their plane with the
+// normal), and V the visible share, estimated with shadow rays to sample
+// points on the sources weighted by what each would bring (a ratio
+// estimator): each source's own samples give its V, so a source hidden
+// from x counts as nothing and one in full view as its E0, whatever share
+// of the samples each drew; a source drawing less than one sample in
+// expectation counts by what its samples bring over all drawn. Where every
+// sample agrees (fully lit, or umbra) V is 1 or 0 exactly for the whole,
+// so the noise is only in penumbrae. The shadow rays are
 // adaptive: one to each corner of the emitters' outlines and the first
 // kFirstDirectSamples; the rest of the N only where those disagree. (A
 // straight silhouette edge across a convex emitter leaves a corner on each
@@ -22,10 +27,14 @@
 // The emitters are a list of area sources: today the environment's patches
 // with Ke > 0, grouped by polygon (the patches of one polygon: for E0 only
 // its outline edges count, the shared inner edges cancel). A sample point
-// is chosen by a 2D point u: u.x picks an emitter patch in proportion to
-// its power (area times Ke, channels summed) and is stretched back to
-// [0, 1) within it; the point is uniform over the patch (a quad as two
-// triangles by area). The sun (--sun) is a second kind of
+// is chosen by a 2D point u: u.x picks a group in proportion to its own
+// unoccluded irradiance at x (Unoccluded computes it group by group), then
+// a patch of the group in proportion to its power (area times Ke, channels
+// summed), each time stretched back to [0, 1) within the choice; the point
+// is uniform over the patch (a quad as two triangles by area). So the
+// samples go to the groups in the shares they bring at x: with many
+// emitters, most of them far, faint or facing away from x, the samples are
+// not spent on those. The sun (--sun) is a second kind of
 // source: E0 its irradiance times the cosine at x, V from rays along
 // directions uniform in its disc that must leave the scene (an unbounded
 // occlusion test); the corners of its disc are kSunRimRays points on its
@@ -55,13 +64,14 @@ constexpr uint32_t kSunRimRays = 8;
 
 class DirectLight {
  public:
-  // One emitter patch: sampled for V.
+  // One emitter patch: sampled for V (in its group's order).
   struct Emitter {
     uint32_t patch;  // local index
-    float cdfHi;     // the cumulative share of the power up to and including this one
+    float cdfHi;     // the cumulative share of its group's power up to and including this one
     float split;     // a quad: the share of its area in triangle (0, 1, 2); a triangle: 1
-    glm::vec3
-        scale;  // Ke / pi over the pdf per unit area: Ke * (total weight) / (weight / area) / pi
+    // Ke / pi over the pdf per unit area within the group:
+    // Ke * (the group's weight) / (weight / area) / pi.
+    glm::vec3 scale;
   };
   // One emitting polygon (its patches, coplanar, one Ke): E0 from its edges
   // that no other of its patches shares.
@@ -70,7 +80,7 @@ class DirectLight {
     glm::vec3 point;   // one of its corners
     glm::vec3 ke;
     uint32_t firstEdge, numEdges;
-    uint32_t firstPatch, numPatches;  // in patchIndex_
+    uint32_t firstPatch, numPatches;  // in emitters_
   };
   struct Edge {
     glm::vec3 a, b;  // in the winding of the patch it came from
@@ -81,6 +91,14 @@ class DirectLight {
   };
   struct Counts {
     uint32_t emitters = 0, groups = 0, edges = 0, corners = 0;
+  };
+  // One group at the point being gathered: its cumulative share of the area
+  // emitters' unoccluded irradiance there (channels summed), its own part
+  // of it (per channel), and its samples' weights, all and those that
+  // reached it (the gather's sums).
+  struct Tally {
+    float cdf;
+    glm::vec3 e0, seen, all;
   };
 
   // What `patches` need (init: uses the heap).
@@ -95,21 +113,33 @@ class DirectLight {
   bool hasSun() const { return hasSun_; }
 
   // The unoccluded irradiance at x (unit normal n), per channel: the area
-  // emitters' and the sun's.
-  glm::vec3 Unoccluded(const glm::vec3& x, const glm::vec3& n) const;
+  // emitters' and the sun's. With `tally` (numGroups() entries), also each
+  // area group's part and cumulative share of the area emitters' part
+  // there (the last group that brings any at 1, all 0 when none does),
+  // which Sample picks a group by; its sums are set to 0.
+  glm::vec3 Unoccluded(const glm::vec3& x, const glm::vec3& n, Span<Tally> tally = {}) const;
   // The sun's part of it: its irradiance times the cosine between n and the
   // direction towards its centre (0 below the horizon).
   glm::vec3 UnoccludedSun(const glm::vec3& n) const;
   // One shadow sample from x toward the source point u picks: what it
-  // would bring (*weight, per channel; 0 when the point faces away or lies
-  // below x's horizon) and whether the ray reaches it (through `grid`,
-  // ends excluded by `epsilon` scene units, receiver and `twin` skipped;
-  // *hint: Grid::Occluded's, or null). `sunShare`: the share of the samples
-  // that go to the sun (u.x below it), the rest to the area emitters; a
-  // sun ray must leave the scene. Allocates nothing.
+  // would bring (*weight, per channel, over the pdf of its choice; 0 when
+  // the point faces away or lies below x's horizon, or no group brings
+  // any) and whether the ray reaches it (through `grid`, ends excluded by
+  // `epsilon` scene units, receiver and `twin` skipped; *hint:
+  // Grid::Occluded's, or null). `tally`: what Unoccluded at x gave.
+  // `sunShare`: the share of the samples that go to the sun (u.x below
+  // it), the rest to the area emitters; a sun ray must leave the scene.
+  // *source (unless null): the group sampled, numGroups() for the sun.
+  // Allocates nothing.
   bool Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-              const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint, glm::vec3* weight,
-              float sunShare = 0.0f) const;
+              const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
+              uint32_t* hint, glm::vec3* weight, float sunShare = 0.0f,
+              uint32_t* source = nullptr) const;
+
+  uint32_t numGroups() const { return static_cast<uint32_t>(groups_.size()); }
+  // numGroups() tallies laid out with the lists, for the point being
+  // gathered (the display gathers one point at a time).
+  Span<Tally> tallies() const { return tallies_; }
 
   // The emitters' outline corners (each polygon's, where its outline turns), and whether the ray
   // from x (normal n) to corner k reaches it
@@ -136,7 +166,7 @@ class DirectLight {
   Span<Group> groups_;
   Span<Edge> edges_;
   Span<Corner> corners_;
-  Span<uint32_t> patchIndex_;  // the groups' patches (local indices)
+  Span<Tally> tallies_;
   Span<const Patch> patches_;
   // The sun: its irradiance on a surface facing it, the unit direction
   // towards it and its angular diameter (degrees).
@@ -145,8 +175,8 @@ class DirectLight {
   float sunDegrees_ = 0.0f;
 
   bool SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                  const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
-                  glm::vec3* weight) const;
+                  const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
+                  uint32_t* hint, glm::vec3* weight, uint32_t* source) const;
   bool SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                  const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
                  glm::vec3* weight) const;
