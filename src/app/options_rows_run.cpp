@@ -165,11 +165,12 @@ pixel centre only, quads as two Gouraud triangles
       Count("--direct-samples", &O::directSamples, 0, 1024, "an integer in [0, 1024]")
           .Help("N", R"(
 direct light gathered per pixel, 0..1024: the image's
-direct part is the exact unoccluded irradiance of the
-emitters times the share of N shadow rays that reach
-them (rays to the emitters' corners and 4 first; all
-N only where those disagree); the solve supplies the
-rest; 0: the solved radiosity alone (the images
+direct part is each emitter's exact unoccluded
+irradiance times the share of its shadow rays that
+reach it, N rays spread over the emitters by what
+each brings there (rays to the emitters' corners and
+4 first; all N only where those disagree); the solve
+supplies the rest; 0: the solved radiosity alone (the images
 before it). Default 32 with one environment, 0 with
 several (where it is refused))")
           .Json("direct_samples"),
