@@ -170,9 +170,9 @@ irradiance times the share of its shadow rays that
 reach it, N rays spread over the emitters by what
 each brings there (rays to the emitters' corners and
 4 first; all N only where those disagree); the solve
-supplies the rest; 0: the solved radiosity alone (the images
-before it). Default 32 with one environment, 0 with
-several (where it is refused))")
+supplies the rest; 0: the solved radiosity alone
+(the images before it). Default 32 with one
+environment, 0 with several (where it is refused))")
           .Json("direct_samples"),
       Choice("--smooth", &O::smooth, "on|off")
           .Help("on|off", R"(
