@@ -117,6 +117,11 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
             << t.file << " row " << r << " col " << c << ": '" << rows[r][c] << "'";
       }
   }
+  // --max-seconds beside the fixed settings, drawn (issue 41).
+  std::string anytime = ReadFile(dir.File("gt-anytime.png"));
+  ASSERT_GT(anytime.size(), 8u);
+  EXPECT_EQ(anytime.substr(1, 3), "PNG");
+  EXPECT_NE(doc.find("(gt-anytime.png)"), std::string::npos);
   // RenderPark measured (make renderpark built it) or a line saying it was not built.
   if (FileExists(dir.File("gt-renderpark-measured.csv"))) {
     auto rp = ReadCsv(dir.File("gt-renderpark-measured.csv"));

@@ -5,6 +5,7 @@ ground-truth step (groundtruth.py)."""
 import os
 
 from .files import csv_dicts
+from .plot import gnuplot
 from .groundtruth import RENDERPARK
 from .gt_references import ORIGINAL
 from .stats import pct
@@ -104,6 +105,11 @@ def report_section(ctx, w, link, table_md):
           "`best_fixed_within`: the fixed setting with the lowest `vs_gt` among those whose "
           "solve took at most T; issue 41's anytime goal is `anytime_over_best_fixed` <= 1.25.\n")
         w(table_md(ctx.result("gt-silhouettes.csv")) + "\n")
+        w("The same runs and RenderPark's (below) drawn: each run's final error at its solve "
+          "time (RenderPark's: its CPU seconds); `--max-seconds T` (orange) beside the fixed "
+          "settings (blue), with the emitter's pixels left out (left) and the silhouettes' as "
+          "well (right):\n")
+        w(f"![anytime against the fixed settings]({link(anytime_plot(ctx))})\n")
         w("RenderPark measured in this run: rpkCpp's hierarchical Galerkin "
           "(tools/renderpark-run: the scene in metres, a one-ray-per-pixel raycast of the "
           "solution), by its own CPU seconds, after the vismask runs above (not interleaved):\n")
@@ -153,6 +159,44 @@ def report_section(ctx, w, link, table_md):
       f"±{100 * g['seam_scale']:.0f}% of the 1-environment image's mean): Method B (left), "
       "Method R (right):\n")
     w(f"![B seam]({link('img/gt-seam-env2-B.png')}) ![R seam]({link('img/gt-seam-env2-R.png')})\n")
+
+
+def anytime_plot(ctx):
+    """gt-anytime.png from gt-silhouettes.csv and gt-renderpark-measured.csv:
+    error against seconds, with and without the silhouettes; returns its name."""
+    name = "gt-anytime.png"
+    rows = csv_dicts(ctx.result("gt-silhouettes.csv"))
+    rpk_csv = ctx.result("gt-renderpark-measured.csv")
+    rpk = csv_dicts(rpk_csv) if os.path.exists(rpk_csv) else []
+
+    def block(points):
+        return "".join(f"{x} {y}\n" for x, y in points) + "e\n"
+
+    panels = []
+    for col, title in (("vs_gt", "emitter's pixels left out"),
+                       ("vs_gt_no_silhouettes", "emitter's and 1-px silhouettes left out")):
+        anytime = [(float(r["solve_seconds"]), float(r[col])) for r in rows if r["max_seconds"]]
+        fixed = [(float(r["solve_seconds"]), float(r[col])) for r in rows if not r["max_seconds"]]
+        plots = ["'-' using 1:2 with points pt 7 ps 1.2 lc rgb '#1f77b4' title 'fixed settings'",
+                 "'-' using 1:2 with linespoints pt 5 ps 1.4 lw 2 lc rgb '#ff7f0e' "
+                 "title '--max-seconds T'"]
+        data = block(sorted(fixed)) + block(anytime)
+        if rpk:
+            plots.append("'-' using 1:2 with linespoints pt 9 ps 1.4 lw 2 lc rgb '#7f7f7f' "
+                         "title 'RenderPark (CPU s)'")
+            data += block([(float(r["cpu_seconds"]), float(r[col])) for r in rpk])
+        panels.append(f"set title \"{title}\"\nplot {', '.join(plots)}\n{data}")
+    gnuplot(f"""set terminal pngcairo size 1000,420 noenhanced font ',10'
+set output '{ctx.result(name)}'
+set multiplot layout 1,2
+set logscale xy
+set grid
+set key top right
+set xlabel 'seconds of solve'
+set ylabel 'relative RMSE against the Cycles ground truth'
+{"".join(panels)}unset multiplot
+""")
+    return name
 
 
 def reading(ctx, w):
