@@ -359,10 +359,11 @@ def closed_box(ctx):
 
 # --- all ----------------------------------------------------------------------------
 
-def meta_info(ctx, start, load_start):
+def meta_info(ctx, start, load_start, commit):
+    """The run's facts; `commit` as taken at the start, the code the runs used."""
     f = facts()
     return dict(command="make experiments" if ctx.scale == "full" else "tools/experiments --quick",
-                commit=f["commit"], date=f["date"], cpu=f["cpu"], cores=f["cores"],
+                commit=commit, date=f["date"], cpu=f["cpu"], cores=f["cores"],
                 load_start=load_start, load_end=loadavg(), seconds=time.time() - start)
 
 
@@ -390,6 +391,7 @@ def main(argv, doc):
         return
     start = time.time()
     load_start = loadavg()
+    commit = facts()["commit"]
     # Every figure from this run: no run is reused from an earlier one.
     shutil.rmtree(ctx.runs, ignore_errors=True)
     os.makedirs(ctx.runs)
@@ -398,4 +400,4 @@ def main(argv, doc):
         log(f"experiments: {name}")
         STEPS[name](ctx)
         log(f"experiments: {name} done in {time.time() - t0:.0f} s")
-    report(ctx, meta_info(ctx, start, load_start))
+    report(ctx, meta_info(ctx, start, load_start, commit))
