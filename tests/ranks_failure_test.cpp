@@ -109,7 +109,10 @@ bool WaitForTheSolve(const std::string& out) {
   return !TempFilesIn(out).empty();
 }
 
-// The children of `parent`, by pid (fork order: rank 1, 2, ... for pipe ranks).
+// The children of `parent` in fork order (rank 1, 2, ... for pipe ranks):
+// pids count up from the parent's and wrap at pid_max, which a machine
+// that has run many processes reaches (32768 by default), so they are
+// ordered by their distance past the parent's pid, not by value.
 std::vector<pid_t> ChildrenOf(pid_t parent, const TempDir& dir) {
   std::string list = dir.File("children");
   std::string cmd = "pgrep -P " + std::to_string(parent) + " > " + list;
@@ -117,7 +120,11 @@ std::vector<pid_t> ChildrenOf(pid_t parent, const TempDir& dir) {
   if (std::system(cmd.c_str()) != 0) return pids;
   std::ifstream in(list);
   for (long pid; in >> pid;) pids.push_back(static_cast<pid_t>(pid));
-  std::sort(pids.begin(), pids.end());
+  long pidMax = 0;
+  std::ifstream("/proc/sys/kernel/pid_max") >> pidMax;
+  if (pidMax <= 0) pidMax = 4194304;  // the kernel's largest
+  auto after = [&](pid_t p) { return ((long(p) - parent) % pidMax + pidMax) % pidMax; };
+  std::sort(pids.begin(), pids.end(), [&](pid_t a, pid_t b) { return after(a) < after(b); });
   return pids;
 }
 
