@@ -37,13 +37,9 @@ TEST(DirectSunTest, UnoccludedAndSamplesGiveItsIrradianceTimesTheCosine) {
   // see the sun through it or not at all.
   gridtest::TestScene s;
   gridtest::AddSubdividedQuad(1, 1.0f, 0.0f, 1.0f, 0.0f, 1.0f, -1, 1, &s);
-  gridtest::BuiltGrid b;
-  gridtest::BuildGrid(s, 1.0f, &b);
-  Span<const Patch> patches(s.patches.data(), s.patches.size());
-  DirectLight light;
-  Arena arena(64 * 1024);
-  light.Layout(arena, DirectLight::Count(patches));
-  light.Build(patches);
+  LitTestScene lit(s);
+  const gridtest::BuiltGrid& b = lit.b;
+  DirectLight& light = lit.light;
   EXPECT_TRUE(light.empty()) << "no emitter and no sun";
   light.SetSun(SunAt(30.0));
   ASSERT_FALSE(light.empty());

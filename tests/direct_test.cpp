@@ -79,13 +79,9 @@ TEST(DirectTest, UnoccludedIrradianceUnderASquareEmitterIsTheClosedForm) {
 
 TEST(DirectTest, ShadowSamplesAverageToTheClosedForm) {
   gridtest::TestScene s = EmitterScene();
-  gridtest::BuiltGrid b;
-  gridtest::BuildGrid(s, 1.0f, &b);
-  Span<const Patch> patches(s.patches.data(), s.patches.size());
-  Arena arena(64 * 1024);
-  DirectLight light;
-  light.Layout(arena, DirectLight::Count(patches));
-  light.Build(patches);
+  LitTestScene lit(s);
+  const gridtest::BuiltGrid& b = lit.b;
+  DirectLight& light = lit.light;
   const glm::vec3 up(0.0f, 1.0f, 0.0f);
   for (float px : {0.0f, 0.45f, 1.5f}) {
     glm::vec3 x(px, 0.0f, 0.2f);
@@ -115,13 +111,9 @@ TEST(DirectTest, SamplesGoToEachGroupByItsShareOfTheIrradianceThere) {
   gridtest::TestScene s = EmitterScene();
   gridtest::AddSubdividedQuad(1, 2.0f, 1.0f, 3.0f, -1.0f, 1.0f, -1, 1, &s);
   for (size_t i = 4; i < s.patches.size(); ++i) s.patches[i].ke = glm::vec3(8.0f);
-  gridtest::BuiltGrid b;
-  gridtest::BuildGrid(s, 1.0f, &b);
-  Span<const Patch> patches(s.patches.data(), s.patches.size());
-  Arena arena(64 * 1024);
-  DirectLight light;
-  light.Layout(arena, DirectLight::Count(patches));
-  light.Build(patches);
+  LitTestScene lit(s);
+  const gridtest::BuiltGrid& b = lit.b;
+  DirectLight& light = lit.light;
   ASSERT_EQ(light.numGroups(), 2u);
   const glm::vec3 up(0.0f, 1.0f, 0.0f), x(0.2f, 0.0f, -0.3f);
   const Span<DirectLight::Tally> tally = light.tallies();

@@ -1,6 +1,7 @@
 // Helpers of the per-pixel direct light tests (direct_test.cpp,
-// direct_sun_test.cpp): a render looking straight down at a floor, a
-// pixel's red channel, the 10%-90% width of an edge across a row.
+// direct_sun_test.cpp): a test scene's grid and emitter lists, a render
+// looking straight down at a floor, a pixel's red channel, the 10%-90%
+// width of an edge across a row.
 #pragma once
 #include <gtest/gtest.h>
 
@@ -10,10 +11,27 @@
 #include <utility>
 #include <vector>
 
+#include "grid_test_util.h"
 #include "test_util.h"
+#include "vismask/core/arena.h"
+#include "vismask/display/direct.h"
 #include "vismask/output/image_io.h"
 
 namespace vismask {
+
+// A test scene's grid (density 1) and its DirectLight, laid out in an arena
+// of their own and built; `s` must outlive it.
+struct LitTestScene {
+  explicit LitTestScene(const gridtest::TestScene& s) {
+    gridtest::BuildGrid(s, 1.0f, &b);
+    Span<const Patch> patches(s.patches.data(), s.patches.size());
+    light.Layout(arena, DirectLight::Count(patches));
+    light.Build(patches);
+  }
+  gridtest::BuiltGrid b;
+  Arena arena{64 * 1024};
+  DirectLight light;
+};
 
 // Renders dir/s.obj looking straight down at the origin from height 0.5
 // (fov 90: the image spans [-0.5, 0.5] of the floor), size x size.
