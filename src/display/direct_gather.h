@@ -30,11 +30,10 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
   const glm::vec3 e0 = h.light->Unoccluded(x0, h.normal, tally);
   if (!(e0.x > 0.0f || e0.y > 0.0f || e0.z > 0.0f)) return glm::vec3(0.0f);
   // The sun's share of the samples: its share of E0 (channels summed).
+  const glm::vec3 sunE0 = h.light->UnoccludedSun(h.normal);  // 0 without a sun
   float sunShare = 0.0f;
-  if (h.light->hasSun()) {
-    const glm::vec3 sun = h.light->UnoccludedSun(h.normal);
-    sunShare = std::fmin(1.0f, (sun.x + sun.y + sun.z) / (e0.x + e0.y + e0.z));
-  }
+  if (h.light->hasSun())
+    sunShare = std::fmin(1.0f, (sunE0.x + sunE0.y + sunE0.z) / (e0.x + e0.y + e0.z));
   // The outline corners, from the centre, and with the sun the points of
   // its rim (with no area emitter, those alone).
   const uint32_t outline = h.light->numCorners();
@@ -58,8 +57,8 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     cornersTell = usable;
   }
   glm::vec3 all(0.0f), seen(0.0f), sunAll(0.0f), sunSeen(0.0f);
-  uint32_t counted = 0, visible = 0, drawn = 0;
-  for (uint32_t k = 0; k < h.samples; ++k, ++drawn) {
+  uint32_t counted = 0, visible = 0, k = 0;  // k: the samples drawn
+  for (; k < h.samples; ++k) {
     if (k == kFirstDirectSamples && cornersTell && counted > 0 &&
         ((visible == 0 && cornersSeen == 0) || (visible == counted && cornersSeen == corners)))
       break;
@@ -92,7 +91,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
   // (drawn x its share >= 1) gives its part times its own samples' visible
   // share, so its count of samples does not matter; the others, which may
   // draw none, what their samples brought over all drawn.
-  const float n = static_cast<float>(drawn);
+  const float n = static_cast<float>(k);
   auto part = [&](const glm::vec3& e, float p, const glm::vec3& sSeen, const glm::vec3& sAll) {
     glm::vec3 v = sSeen / n;
     if (n * p >= 1.0f)
@@ -100,9 +99,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
         if (sAll[c] > 0.0f) v[c] = e[c] * (sSeen[c] / sAll[c]);
     return v;
   };
-  glm::vec3 sum = sunShare > 0.0f
-                      ? part(h.light->UnoccludedSun(h.normal), sunShare, sunSeen, sunAll)
-                      : glm::vec3(0.0f);
+  glm::vec3 sum = sunShare > 0.0f ? part(sunE0, sunShare, sunSeen, sunAll) : glm::vec3(0.0f);
   float below = 0.0f;
   for (const DirectLight::Tally& t : tally) {
     if (t.e0.x + t.e0.y + t.e0.z > 0.0f)
