@@ -299,7 +299,9 @@ TEST(ElementTest, LeavesHoldThePatchsPowerAndRefineAtShadows) {
 
 // The pool is a fixed reservation: when it is used up, refinement stops,
 // the render still completes, and run.json says so; a large enough pool
-// never stops. Refinement changes the display only, never the solve.
+// never stops. With --origins uniform refinement changes the display
+// only, never the solve; by default the rays leave from the leaves, so it
+// changes the solve too.
 TEST(ElementTest, PoolExhaustionStopsRefinementAndSaysSo) {
   TempDir dir;
   const std::vector<std::string> base = {"render",   "scenes/cornell.obj",
@@ -310,9 +312,13 @@ TEST(ElementTest, PoolExhaustionStopsRefinementAndSaysSo) {
                                          "1e-2",     "--patch-size",
                                          "140"};
   for (const char* k : {"0", "1", "64"}) {
-    auto r = RunMain(Join(base, {"--elements", k, "--out", dir.File(k)}));
+    auto r = RunMain(Join(base, {"--elements", k, "--origins", "uniform", "--out", dir.File(k)}));
     ASSERT_EQ(r.code, 0) << r.err;
   }
+  auto byPower = RunMain(Join(base, {"--elements", "64", "--out", dir.File("64p")}));
+  ASSERT_EQ(byPower.code, 0) << byPower.err;
+  EXPECT_NE(test::ReadFile(dir.File("64p/patches.csv")), test::ReadFile(dir.File("64/patches.csv")))
+      << "--origins power left the solve as uniform origins have it";
   std::string none = test::ReadFile(dir.File("0/run.json"));
   std::string small = test::ReadFile(dir.File("1/run.json"));
   std::string large = test::ReadFile(dir.File("64/run.json"));
@@ -379,6 +385,71 @@ TEST(SeamTest, NoStepAtTheEnvironmentPlane) {
         << "rows " << rows.first << "-" << rows.second << ": step " << step2 << " against " << step1
         << " in one environment (mean step " << scale << ")";
   }
+}
+
+}  // namespace
+}  // namespace vismask
+
+namespace vismask {
+namespace {
+
+// A floor whose one patch spans the wall of a closed box (facing in) that
+// stands on half of it, and a lamp over the other half. Light reaches the
+// floor outside the box only; rays leaving from anywhere on the patch carry
+// some of it through the wall into the box (a light leak), rays leaving from
+// where the light landed (--origins power, the default) do not.
+TEST(OriginsTest, RaysLeaveFromWhereTheLightLandedSoNoneLeaksIntoAClosedBox) {
+  TempDir dir;
+  test::WriteFile(dir.File("half.mtl"),
+                  "newmtl white\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n");
+  test::WriteFile(dir.File("half.obj"), R"(mtllib half.mtl
+v 0 0 0
+v 100 0 0
+v 100 0 100
+v 0 0 100
+usemtl white
+f 1 4 3 2
+v 0 0 0
+v 50 0 0
+v 50 0 100
+v 0 0 100
+v 0 50 0
+v 50 50 0
+v 50 50 100
+v 0 50 100
+f 9 10 11 12
+f 6 7 11 10
+f 5 6 10 9
+f 7 8 12 11
+f 8 5 9 12
+v 60 80 30
+v 90 80 30
+v 90 80 70
+v 60 80 70
+usemtl light
+f 13 14 15 16
+)");
+  const std::vector<std::string> base = {
+      "render",  dir.File("half.obj"), "--patch-size", "200",     "--width",
+      "16",      "--height",           "16",           "--quiet", "--emitted-rays",
+      "2000000", "--stop-unshot",      "1e-4"};
+  for (const char* o : {"power", "uniform"}) {
+    auto r = RunMain(Join(base, {"--origins", o, "--out", dir.File(o)}));
+    ASSERT_EQ(r.code, 0) << r.err;
+  }
+  // The box's walls and roof: every patch but the floor (y = 0) and the lamp.
+  auto inside = [&](const char* o) {
+    auto rows = test::ReadCsv(dir.File(std::string(o) + "/patches.csv"));
+    double sum = 0.0;
+    for (size_t i = 1; i < rows.size(); ++i) {
+      double y = std::stod(rows[i][3]), ke = std::stod(rows[i][12]);
+      if (y > 0.0 && ke == 0.0) sum += std::stod(rows[i][15]);
+    }
+    return sum;
+  };
+  double power = inside("power"), uniform = inside("uniform");
+  EXPECT_GT(uniform, 0.01) << "uniform origins should leak light into the box";
+  EXPECT_LT(power, 1e-3 * uniform) << "light leaked into the box from the floor's hidden half";
 }
 
 }  // namespace

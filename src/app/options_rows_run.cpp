@@ -67,6 +67,14 @@ also Method R's packet bits)")
 sobol (default): scrambled Sobol' points over a
 shot's origin x direction; random: independent draws)")
           .Json("sampler"),
+      Choice("--origins", &O::originsByPower, "power|uniform")
+          .Help("O", R"(
+where a patch's rays leave from, with one environment:
+power (default): its elements in proportion to the
+light each received (none from a part hidden under a
+block, or behind a lamp); uniform: anywhere on the
+patch alike (always, with several environments))")
+          .Json("origins"),
       Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
           .Help("N", "stop once N form-factor rays have been traced")
           .Json("ray_budget"),

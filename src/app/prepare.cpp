@@ -324,6 +324,7 @@ void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepar
                            8.0f * std::numeric_limits<float>::epsilon() * largest);
   e.rays = RayCap(o);
   e.sobol = o.sobol;
+  e.originsByPower = o.originsByPower;
   if (o.rayAlloc == Options::RayAlloc::kPower) {
     e.rayQuantum = power / static_cast<double>(o.emittedRays);
     e.minRays = o.minRays;

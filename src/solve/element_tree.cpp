@@ -1,6 +1,7 @@
 // ElementTree: its layout, reset, descent and splits.
 #include "vismask/solve/element_tree.h"
 
+#include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
 
@@ -96,6 +97,53 @@ uint32_t ElementTree::Descend(bool triangle, uint32_t patch, glm::vec2* st, uint
     e = elements_[e].child + k;
   }
   return e;
+}
+
+// The power received under element e, channels summed: its leaves' (an
+// inner element keeps what it held when it split, which its children took).
+double ElementTree::SubtreePower(uint32_t e) const {
+  const Element& el = elements_[e];
+  if (el.child == kNoElement) return el.received[0] + el.received[1] + el.received[2];
+  double sum = 0.0;
+  for (uint32_t k = 0; k < 4; ++k) sum += SubtreePower(el.child + k);
+  return sum;
+}
+
+bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
+                                glm::vec2* st) const {
+  uint32_t e = patch;
+  if (elements_[e].child == kNoElement) return false;
+  glm::vec2 corners[4];
+  int n = RootCorners(triangle, corners);
+  // Down the tree: a child in proportion to the power under it, u[0]
+  // stretched back to [0, 1) within the child's share.
+  double x = u[0];
+  while (elements_[e].child != kNoElement) {
+    double power[4], total = 0.0;
+    for (uint32_t k = 0; k < 4; ++k) total += power[k] = SubtreePower(elements_[e].child + k);
+    if (!(total > 0.0)) return false;
+    uint32_t k = 0;
+    double below = 0.0;
+    while (k < 3 && x * total >= below + power[k]) below += power[k++];
+    while (!(power[k] > 0.0)) --k;  // rounding past the last child with power
+    x = std::min(std::max((x * total - below) / power[k], 0.0), 1.0);
+    glm::vec2 child[4];
+    ChildCorners(triangle, corners, k, child);
+    for (int c = 0; c < n; ++c) corners[c] = child[c];
+    e = elements_[e].child + k;
+  }
+  // Uniform in the leaf, a hair inside it (PatchSampler::Point's margin).
+  constexpr float kMargin = 1e-5f;
+  float a = std::min(std::max(u[1], kMargin), 1.0f - kMargin);
+  float b = std::min(std::max(u[2], kMargin), 1.0f - kMargin);
+  if (triangle) {
+    float su = std::sqrt(a);
+    *st = corners[0] + su * (1.0f - b) * (corners[1] - corners[0]) +
+          su * b * (corners[2] - corners[0]);
+  } else {
+    *st = corners[0] + a * (corners[1] - corners[0]) + b * (corners[3] - corners[0]);
+  }
+  return true;
 }
 
 }  // namespace vismask

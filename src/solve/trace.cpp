@@ -202,11 +202,21 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   ShotSetup shot(options_, shooter, power, stream, rays);
   ShotTally tally(shooter);
   const glm::vec3 centre = CentreOf(shooter);
+  // One environment: a local patch's rays leave from where its light
+  // landed (ElementTree::SampleByPower). With neighbours a foreign
+  // environment regenerates the shot's rays from the patch alone, so they
+  // leave uniformly.
+  const bool byPower = options_.originsByPower && !foreign && numNeighbours_ == 0 &&
+                       OutsideKindOf(shooter.globalId) == OutsideKind::kNone &&
+                       shooter.ke[0] + shooter.ke[1] + shooter.ke[2] == 0.0f;
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     shot.points.Next(r, u, true);
     glm::vec3 local;
     Ray ray = MakeShotRay(shot.sampler, shooter.globalId, u, &local);
+    glm::vec2 st;
+    if (byPower && elements_.SampleByPower(shooter.numCorners == 3, skip.patch, u, &st))
+      ray.o = PatchPoint(shooter, st) + options_.rayEpsilon * shot.sampler.frame.n;
     double ratio[3];
     if (shot.sky.map) shot.sky.Of(ray.d, shot.share, ratio);
     uint32_t pixel = 0;

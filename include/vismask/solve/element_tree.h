@@ -37,6 +37,11 @@ class ElementTree {
   // appended there (*depth of them, at most the element depth).
   uint32_t Descend(bool triangle, uint32_t patch, glm::vec2* st, uint8_t* path,
                    uint32_t* depth) const;
+  // A point of patch `patch` (a triangle or not) drawn in proportion to the
+  // power its leaves received (channels summed), uniform in the chosen
+  // leaf's parameters, from three uniforms: its parameters (s, t). False,
+  // and nothing drawn, when the patch is a single leaf or received nothing.
+  bool SampleByPower(bool triangle, uint32_t patch, const float u[3], glm::vec2* st) const;
   // What MaybeSplit did.
   enum class Split { kNone, kSplit, kRefused };
   // Splits leaf `e` of patch `p` (reached from the root by the children
@@ -55,6 +60,7 @@ class ElementTree {
   }
 
  private:
+  double SubtreePower(uint32_t e) const;
   ElementOptions options_;
   Span<Element> elements_;
   Span<double> indirect_;

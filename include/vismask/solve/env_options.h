@@ -43,6 +43,9 @@ struct EnvOptions {
   double rayQuantum = 0.0;
   uint32_t minRays = 1;
   bool sobol = true;  // scrambled Sobol' points; false: independent PCG32 draws
+  // A local patch's rays leave from where its light landed (its leaves, in
+  // proportion to their power), with one environment; false: uniform.
+  bool originsByPower = true;
   uint64_t seed = 1;  // run seed
   MaskMethod maskMethod = MaskMethod::kB;
   uint32_t maskRes = 50;
