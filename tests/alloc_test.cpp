@@ -202,10 +202,12 @@ TEST(AllocTest, DirectLightPerPixelAllocatesNothingAfterInit) {
     }
     CountedRender run("scenes/cornell.obj",
                       std::string("--max-shots 600 --width 64 --height 48 --direct-samples 8 "
-                                  "--error-every 100 --reference ") +
+                                  "--indirect-filter 4 --error-every 100 --reference ") +
                           refDir.File("ref.pfm") + " --aa " + raster);
     ASSERT_EQ(run.code, 0) << run.err;
     EXPECT_EQ(run.allocations, 0) << "heap allocations after init, --aa " << raster;
+    // The indirect part smoothed on the display lattice.
+    EXPECT_NE(run.Json().find("\"indirect_filter_steps\": 4,"), std::string::npos);
   }
 }
 
@@ -256,6 +258,18 @@ TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
   ASSERT_EQ(run.code, 0);
   EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
   EXPECT_EQ(run.Json().find("\"splits\": 0,"), std::string::npos) << "no element split";
+}
+
+TEST(AllocTest, OriginsByPowerAllocateNothing) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  // One environment: once elements split, a patch's rays leave from its
+  // leaves by their power (ElementTree::SampleByPower, the default).
+  CountedRender run("scenes/cornell.obj",
+                    "--emitted-rays 500000 --width 32 --height 32 --stop-unshot 1e-2");
+  ASSERT_EQ(run.code, 0);
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
+  EXPECT_EQ(run.Json().find("\"splits\": 0,"), std::string::npos) << "no element split";
+  EXPECT_NE(run.Json().find("\"origins\": \"power\""), std::string::npos);
 }
 
 unsigned long long JsonField(const std::string& json, const std::string& key) {

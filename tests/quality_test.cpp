@@ -21,22 +21,10 @@
 namespace vismask {
 namespace {
 
+using test::Join;
+using test::JsonNumber;
 using test::RunMain;
 using test::TempDir;
-
-std::vector<std::string> Join(std::vector<std::string> a, const std::vector<std::string>& b) {
-  a.insert(a.end(), b.begin(), b.end());
-  return a;
-}
-
-// The number after `"key":`, searched from `"section":` on.
-double JsonNumber(const std::string& json, const std::string& key,
-                  const std::string& section = "result") {
-  size_t at = json.find("\"" + key + "\":", json.find("\"" + section + "\":"));
-  EXPECT_NE(at, std::string::npos) << key;
-  if (at == std::string::npos) return std::nan("");
-  return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
-}
 
 // The three numbers of `"key": [a, b, c]` in run.json.
 std::vector<double> Triple(const std::string& json, const std::string& key) {
@@ -385,71 +373,6 @@ TEST(SeamTest, NoStepAtTheEnvironmentPlane) {
         << "rows " << rows.first << "-" << rows.second << ": step " << step2 << " against " << step1
         << " in one environment (mean step " << scale << ")";
   }
-}
-
-}  // namespace
-}  // namespace vismask
-
-namespace vismask {
-namespace {
-
-// A floor whose one patch spans the wall of a closed box (facing in) that
-// stands on half of it, and a lamp over the other half. Light reaches the
-// floor outside the box only; rays leaving from anywhere on the patch carry
-// some of it through the wall into the box (a light leak), rays leaving from
-// where the light landed (--origins power, the default) do not.
-TEST(OriginsTest, RaysLeaveFromWhereTheLightLandedSoNoneLeaksIntoAClosedBox) {
-  TempDir dir;
-  test::WriteFile(dir.File("half.mtl"),
-                  "newmtl white\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n");
-  test::WriteFile(dir.File("half.obj"), R"(mtllib half.mtl
-v 0 0 0
-v 100 0 0
-v 100 0 100
-v 0 0 100
-usemtl white
-f 1 4 3 2
-v 0 0 0
-v 50 0 0
-v 50 0 100
-v 0 0 100
-v 0 50 0
-v 50 50 0
-v 50 50 100
-v 0 50 100
-f 9 10 11 12
-f 6 7 11 10
-f 5 6 10 9
-f 7 8 12 11
-f 8 5 9 12
-v 60 80 30
-v 90 80 30
-v 90 80 70
-v 60 80 70
-usemtl light
-f 13 14 15 16
-)");
-  const std::vector<std::string> base = {
-      "render",  dir.File("half.obj"), "--patch-size", "200",     "--width",
-      "16",      "--height",           "16",           "--quiet", "--emitted-rays",
-      "2000000", "--stop-unshot",      "1e-4"};
-  for (const char* o : {"power", "uniform"}) {
-    auto r = RunMain(Join(base, {"--origins", o, "--out", dir.File(o)}));
-    ASSERT_EQ(r.code, 0) << r.err;
-  }
-  // The box's walls and roof: every patch but the floor (y = 0) and the lamp.
-  auto inside = [&](const char* o) {
-    auto rows = test::ReadCsv(dir.File(std::string(o) + "/patches.csv"));
-    double sum = 0.0;
-    for (size_t i = 1; i < rows.size(); ++i) {
-      double y = std::stod(rows[i][3]), ke = std::stod(rows[i][12]);
-      if (y > 0.0 && ke == 0.0) sum += std::stod(rows[i][15]);
-    }
-    return sum;
-  };
-  double power = inside("power"), uniform = inside("uniform");
-  EXPECT_GT(uniform, 0.01) << "uniform origins should leak light into the box";
-  EXPECT_LT(power, 1e-3 * uniform) << "light leaked into the box from the floor's hidden half";
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -100,6 +101,18 @@ int ShellOutput(const std::string& cmd, int timeoutSeconds, std::string* out) {
   while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out->append(buf, n);
   int status = pclose(p);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::vector<std::string> Join(std::vector<std::string> a, const std::vector<std::string>& b) {
+  a.insert(a.end(), b.begin(), b.end());
+  return a;
+}
+
+double JsonNumber(const std::string& json, const std::string& key, const std::string& section) {
+  size_t at = json.find("\"" + key + "\":", json.find("\"" + section + "\":"));
+  EXPECT_NE(at, std::string::npos) << key;
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(json.c_str() + at + key.size() + 3, nullptr);
 }
 
 }  // namespace vismask::test

@@ -66,6 +66,14 @@ RunResult RunMain(const std::vector<std::string>& args);
 // holds a space; the paths of TempDir hold none).
 std::vector<std::string> Words(const std::string& words);
 
+// `a` followed by `b`: a command line with more words.
+std::vector<std::string> Join(std::vector<std::string> a, const std::vector<std::string>& b);
+
+// The number after `"key":` in run.json, searched from `"section":` on
+// (NaN, and a failure, where there is none).
+double JsonNumber(const std::string& json, const std::string& key,
+                  const std::string& section = "result");
+
 // Rows of a CSV file (header included), split on commas.
 std::vector<std::vector<std::string>> ReadCsv(const std::string& path);
 

@@ -182,6 +182,14 @@ supplies the rest; 0: the solved radiosity alone
 (the images before it). Default 32 with one
 environment, 0 with several (where it is refused))")
           .Json("direct_samples"),
+      Count("--indirect-filter", &O::indirectFilter, 0, 64, "an integer in [0, 64]").Help("K", R"(
+with direct light per pixel, the indirect part is
+smoothed over each polygon's display lattice, K steps
+(each vertex half its own value, half its edge
+neighbours' mean; the outline is extrapolated from
+inside, as without). Not given: from the rays a patch
+received (more steps the fewer: its noise), 0 once
+converged; 0: off. run.json: indirect_filter_steps)"),
       Choice("--smooth", &O::smooth, "on|off")
           .Help("on|off", R"(
 on: where polygons with a smoothing group ('s N') or

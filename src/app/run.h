@@ -69,6 +69,7 @@ struct EnvSummary {
   uint64_t elementCapacity;
   uint64_t leaves;
   uint64_t elementDepth;  // the deepest leaf
+  uint64_t filterSteps;   // the last image's indirect smoothing (Environment::filterSteps)
 };
 
 // One row of patches.csv as a rank sends it to rank 0.

@@ -56,7 +56,19 @@ glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const do
     sum += w * env.LeafRadiosity(i, leaf, ambient);
     weight += w;
   }
-  return weight > 0.0f ? sum / weight : glm::vec3(0.0f);
+  glm::vec3 b = weight > 0.0f ? sum / weight : glm::vec3(0.0f);
+  if (lattice.smoothed()) {
+    // What smoothing moved the corners by, interpolated over the patch.
+    glm::vec3 d[4];
+    for (int k = 0; k < n; ++k)
+      d[k] = lattice.radiosity()[p.vertex[k]] - lattice.Unsmoothed(p.vertex[k]);
+    if (triangle)
+      b += (1.0f - st.x - st.y) * d[0] + st.x * d[1] + st.y * d[2];
+    else
+      b += (1.0f - st.x) * (1.0f - st.y) * d[0] + st.x * (1.0f - st.y) * d[1] + st.x * st.y * d[2] +
+           (1.0f - st.x) * st.y * d[3];
+  }
+  return b;
 }
 
 }  // namespace

@@ -270,6 +270,7 @@ int WriteOutputs(RunState* r, const SolveResult& res) {
     s.gridRefs = e.grid().plan().refs;
     s.elementsUsed = e.elementsUsed();
     s.elementCapacity = e.elements().size();
+    s.filterSteps = e.filterSteps();
     for (const Element& el : e.elements().subspan(0, e.elementsUsed())) {
       s.leaves += el.child == kNoElement;
       if (el.depth > s.elementDepth) s.elementDepth = el.depth;

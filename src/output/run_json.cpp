@@ -187,8 +187,9 @@ void WriteResultError(const RunState* r, const SolveResult& res, TextWriter* out
   TextWriter& w = *out;
   // Sub-patch elements: the pool (roots included), what was used, the
   // leaves drawn, and whether refinement stopped for want of elements.
-  uint64_t used = 0, capacity = 0, leaves = 0, depth = 0, splits = 0, refused = 0;
+  uint64_t used = 0, capacity = 0, leaves = 0, depth = 0, splits = 0, refused = 0, filter = 0;
   for (const EnvSummary& e : r->summary) {
+    filter = e.filterSteps > filter ? e.filterSteps : filter;
     used += e.elementsUsed;
     capacity += e.elementCapacity;
     leaves += e.leaves;
@@ -203,6 +204,7 @@ void WriteResultError(const RunState* r, const SolveResult& res, TextWriter* out
       (unsigned long long)capacity, (unsigned long long)used, (unsigned long long)leaves,
       (unsigned long long)splits, (unsigned long long)depth, (unsigned long long)refused,
       refused > 0 ? "true" : "false");
+  w.Printf("    \"indirect_filter_steps\": %llu,\n", (unsigned long long)filter);
   // Against --reference (null without one): the final image's relative RMSE.
   if (o.reference.empty())
     w.Printf("    \"relative_rmse\": null,\n");

@@ -3,11 +3,13 @@
 #include "vismask/solve/display_lattice.h"
 
 #include <algorithm>
+#include <cmath>
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 namespace vismask {
 
-void DisplayLattice::Layout(Arena& arena, const Staged& staged) {
+void DisplayLattice::Layout(Arena& arena, const Staged& staged, bool smoothing) {
   const size_t n = staged.vertices.size();
   vertices_ = arena.Alloc<glm::vec3>(n);
   radiosity_ = arena.Alloc<glm::vec3>(n);
@@ -17,6 +19,8 @@ void DisplayLattice::Layout(Arena& arena, const Staged& staged) {
   outline_ = arena.Alloc<uint8_t>(n);
   frac_ = arena.Alloc<float>(n);
   inward_ = arena.Alloc<glm::vec3>(n);
+  interior_ = arena.Alloc<uint8_t>(smoothing ? n : 0);
+  raw_ = arena.Alloc<glm::vec3>(smoothing ? 2 * n : 0);
   cutNormal_ = arena.Alloc<glm::vec3>(staged.cut.size());
   smooth_ = arena.Alloc<SmoothVertex>(staged.smooth.size());
   smoothMatched_ = arena.Alloc<uint8_t>(staged.smooth.size());
@@ -51,8 +55,41 @@ void DisplayLattice::Build(const Staged& staged, Span<const Patch> patches) {
     bool outline = q >= 1 && q <= 2 && !isCut_[v] && inward[v] == q;
     outline_[v] = outline ? q : 0;
   }
+  if (!interior_.empty()) MarkInterior(staged, patches);
   for (size_t k = 0; k < staged.smooth.size(); ++k) smooth_[k] = staged.smooth[k];
   for (size_t i = 0; i < staged.smoothEdges.size(); ++i) smoothEdges_[i] = staged.smoothEdges[i];
+}
+
+// Interior vertices: the corners' angles around them add up to a full turn.
+void DisplayLattice::MarkInterior(const Staged& staged, Span<const Patch> patches) {
+  std::vector<double> angle(interior_.size(), 0.0);
+  std::vector<uint32_t> ends(interior_.size(), 0);
+  for (const Patch& p : patches)
+    for (uint32_t k = 0; k < p.numCorners; ++k) {
+      const glm::vec3 &a = p.corner[k], &b = p.corner[(k + 1) % p.numCorners],
+                      &c = p.corner[(k + p.numCorners - 1) % p.numCorners];
+      glm::vec3 u = glm::normalize(b - a), w = glm::normalize(c - a);
+      angle[p.vertex[k]] += std::acos(std::max(-1.0, std::min(1.0, double(glm::dot(u, w)))));
+      ends[p.vertex[k]] += 2;
+    }
+  for (size_t v = 0; v < interior_.size(); ++v)
+    interior_[v] = !isCut_[v] && angle[v] > 6.283185307179586 - 1e-3 && ends[v] < 256
+                       ? static_cast<uint8_t>(ends[v])
+                       : 0;
+  for (const SmoothVertex& sv : staged.smooth) interior_[sv.vertex] = 0;
+  // Smoothed only where every neighbour is interior too: an outline
+  // vertex holds the value half a leaf inside, and extrapolated it is
+  // exact for a linear field but twice as noisy; either beside a smoothed
+  // vertex would move it.
+  std::vector<uint8_t> keep(interior_.size(), 1);
+  for (const Patch& p : patches)
+    for (uint32_t k = 0; k < p.numCorners; ++k) {
+      uint32_t a = p.vertex[k], b = p.vertex[(k + 1) % p.numCorners];
+      if (!interior_[b]) keep[a] = 0;
+      if (!interior_[a]) keep[b] = 0;
+    }
+  for (size_t v = 0; v < interior_.size(); ++v)
+    if (!keep[v]) interior_[v] = 0;
 }
 
 int64_t DisplayLattice::FindSmooth(uint32_t v) const {
@@ -71,15 +108,50 @@ void DisplayLattice::Clear() {
   }
 }
 
-void DisplayLattice::Finish(Span<const Patch> patches) {
-  for (size_t v = 0; v < radiosity_.size(); ++v)
+void DisplayLattice::Finish(Span<const Patch> patches, int smoothSteps) {
+  const size_t n = radiosity_.size();
+  for (size_t v = 0; v < n; ++v)
     if (weight_[v] > 0.0f) radiosity_[v] /= weight_[v];
+  smoothed_ = smoothSteps > 0 && !interior_.empty();
+  if (!smoothed_) {
+    Extrapolate(patches);
+    return;
+  }
+  // raw: the values without smoothing (outline extrapolated), which the
+  // display's leaves inside a patch are moved from; acc: a step's sums. The
+  // smoothed vertices' neighbours are interior, so the outline's means are
+  // never read, and are extrapolated once, from the smoothed values.
+  glm::vec3* raw = raw_.data();
+  glm::vec3* acc = raw_.data() + n;
+  for (size_t v = 0; v < n; ++v) acc[v] = radiosity_[v];
+  Extrapolate(patches);
+  for (size_t v = 0; v < n; ++v) {
+    raw[v] = radiosity_[v];
+    radiosity_[v] = acc[v];
+  }
+  for (int step = 0; step < smoothSteps; ++step) {
+    for (size_t v = 0; v < n; ++v) acc[v] = glm::vec3(0.0f);
+    for (const Patch& p : patches)
+      for (uint32_t k = 0; k < p.numCorners; ++k) {
+        uint32_t a = p.vertex[k], b = p.vertex[(k + 1) % p.numCorners];
+        acc[a] += radiosity_[b];
+        acc[b] += radiosity_[a];
+      }
+    for (size_t v = 0; v < n; ++v)
+      if (interior_[v])
+        radiosity_[v] = 0.5f * radiosity_[v] + 0.5f * acc[v] / static_cast<float>(interior_[v]);
+  }
+  Extrapolate(patches);
+}
+
+void DisplayLattice::Extrapolate(Span<const Patch> patches) {
   // On a polygon's outline the nodal average is the value half a leaf
   // inside, not at the outline: in a concave corner, where the radiosity
   // falls towards the edge, it is too bright there. Extrapolate along
   // the quads' diagonals from the interior vertices beyond them (exact for a
   // linear gradient): f(0) = n0 + (n0 - n1) (s/2) / (1 - s/2), with s the
   // corner leaves' edge as a share of the patch's (s = 1: 2 n0 - n1).
+  for (size_t v = 0; v < radiosity_.size(); ++v) inward_[v] = glm::vec3(0.0f);
   for (const Patch& p : patches) {
     if (p.numCorners != 4) continue;
     for (uint32_t k = 0; k < 4; ++k)

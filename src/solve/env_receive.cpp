@@ -105,7 +105,21 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
       lattice_.Add(p.vertex[k], w, LeafRadiosity(i, leaf, ambient), std::sqrt(w / p.area));
     }
   }
-  lattice_.Finish(patches_);
+  filterSteps_ = direct_.showIndirect() ? IndirectFilterSteps() : 0;
+  lattice_.Finish(patches_, static_cast<int>(filterSteps_));
+}
+
+// The indirect part's smoothing: what --indirect-filter gives, else from
+// the hits a patch received, h: 9 - 2.4 log2(h / 20) steps, within
+// [0, 16]. Its noise falls as h grows, and with it the steps that pay
+// (fitted on the Cornell box against a path-traced reference: about 8
+// steps at 20 hits a patch, 4 at 70, 1 at 180, none from about 300).
+uint32_t Environment::IndirectFilterSteps() const {
+  if (options_.indirectFilter >= 0) return static_cast<uint32_t>(options_.indirectFilter);
+  const double h =
+      static_cast<double>(stats_.hits) / static_cast<double>(std::max<size_t>(patches_.size(), 1));
+  const double steps = std::floor(9.0 - 2.4 * std::log2(std::max(h, 1e-3) / 20.0));
+  return static_cast<uint32_t>(std::min(std::max(steps, 0.0), 16.0));
 }
 
 void Environment::EmissionUnshot(double out[3]) const {

@@ -79,7 +79,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
                               Span<const Patch>(staged_->patches.data(), staged_->patches.size()))
                         : DirectLight::Counts{});
   part(&footprint_.elements);
-  lattice_.Layout(arena, staged_->lattice);
+  lattice_.Layout(arena, staged_->lattice, direct);
   part(&footprint_.vertices);
   patchTex_ = arena.Alloc<PatchTexture>(staged_->tex.empty() ? 0 : numPatches);
   part(&footprint_.textures);

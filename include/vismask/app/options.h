@@ -130,6 +130,10 @@ struct Options {
   // solved radiosity alone. -1 (not given): kDefaultDirectSamples with one
   // environment, 0 with several (ResolveDirect).
   int directSamples = -1;
+  // --indirect-filter K: smoothing steps of the indirect part on the
+  // display lattice (with per-pixel direct light); -1 (not given): from the
+  // hits a patch received (Environment::IndirectFilterSteps).
+  int indirectFilter = -1;
   bool aa = true;  // --aa on|off: exact pixel coverage (a 1-pixel box filter), or centre samples
   // --smooth on|off: share display values across smoothed polygons (smoothing.h).
   bool smooth = true;

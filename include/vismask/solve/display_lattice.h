@@ -28,8 +28,9 @@ class DisplayLattice {
     uint32_t numShared = 0;            // cut or smooth, each once
   };
 
-  // Room for the staged lattice (also from a measuring arena).
-  void Layout(Arena& arena, const Staged& staged);
+  // Room for the staged lattice, with `smoothing` its scratch (also from a
+  // measuring arena).
+  void Layout(Arena& arena, const Staged& staged, bool smoothing);
   // Copies the staged lattice in and marks the outline vertices to
   // extrapolate (from `patches`, in local vertex ids).
   void Build(const Staged& staged, Span<const Patch> patches);
@@ -37,14 +38,21 @@ class DisplayLattice {
   // The radiosity at every vertex: Clear, Add each patch corner's leaf
   // value with its weight (the leaf's area) and its edge's share of the
   // patch's edge, then Finish: the weighted mean, extrapolated to the
-  // polygon's outline along quads' diagonals.
+  // polygon's outline along quads' diagonals. With `smoothSteps` > 0 (laid
+  // out for smoothing) the vertices two edges or more inside the outline
+  // are smoothed first, that many steps: each takes half its value and half
+  // its edge neighbours' mean (a linear field stays as it was), and the
+  // outline is extrapolated from them.
   void Clear();
   void Add(uint32_t v, float weight, const glm::vec3& b, float edgeShare) {
     radiosity_[v] += weight * b;
     weight_[v] += weight;
     frac_[v] += edgeShare;
   }
-  void Finish(Span<const Patch> patches);
+  void Finish(Span<const Patch> patches, int smoothSteps = 0);
+  // Whether the last Finish smoothed, and vertex v's value without it.
+  bool smoothed() const { return smoothed_; }
+  glm::vec3 Unsmoothed(uint32_t v) const { return smoothed_ ? raw_[v] : radiosity_[v]; }
 
   Span<const glm::vec3> vertices() const { return vertices_; }
   Span<const glm::vec3> radiosity() const { return radiosity_; }
@@ -75,6 +83,9 @@ class DisplayLattice {
   }
 
  private:
+  void MarkInterior(const Staged& staged, Span<const Patch> patches);
+  void Extrapolate(Span<const Patch> patches);
+
   Span<glm::vec3> vertices_;
   Span<glm::vec3> radiosity_;
   Span<float> weight_;
@@ -86,12 +97,19 @@ class DisplayLattice {
   Span<uint8_t> outline_;
   Span<float> frac_;
   Span<glm::vec3> inward_;
+  // Smoothing (laid out with it): at a vertex it smooths (its corners'
+  // angles close around it and around each neighbour; not cut or smooth)
+  // the edge ends there, else 0; the values before smoothing, then a
+  // step's sums.
+  Span<uint8_t> interior_;
+  Span<glm::vec3> raw_;
   Span<glm::vec3> cutNormal_;
   uint32_t numCut_ = 0;
   Span<SmoothVertex> smooth_;
   Span<uint8_t> smoothMatched_;
   Span<uint8_t> smoothEdges_;  // bit k: edge k is smooth; empty without smooth vertices
   uint32_t numShared_ = 0;
+  bool smoothed_ = false;
 };
 
 }  // namespace vismask

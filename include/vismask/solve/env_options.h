@@ -63,6 +63,7 @@ struct EnvOptions {
   // radiosity, direct part included). With N > 0 the environment keeps each
   // patch's indirect radiosity apart and its emitter list.
   uint32_t directSamples = 0;
+  int indirectFilter = -1;  // display smoothing steps of the indirect part; -1: by hits a patch
   // --sky, --sun: the light from outside the scene's box (outside.h), in
   // outsideTiles x outsideTiles shooters a face of the box.
   OutsideLight outside;

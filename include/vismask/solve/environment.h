@@ -65,6 +65,8 @@ class Environment {
 
   // Display values (env_receive.cpp): vertices', a leaf's, a patch's leaf at `st`.
   void ComputeVertexRadiosity(const double ambient[3]);
+  uint32_t IndirectFilterSteps() const;  // the indirect part's smoothing for the next image
+  uint32_t filterSteps() const { return filterSteps_; }  // ... and the last image's
   glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
   Span<const Element> elements() const { return elements_.all(); }
@@ -106,7 +108,6 @@ class Environment {
   bool RestoreState(const EnvState& s);
   Span<const uint8_t> arenaBytes() const { return {arena_.data(), arena_.capacity()}; }
   Span<uint8_t> mutableArenaBytes() { return Span<uint8_t>(arena_.data(), arena_.capacity()); }
-
   // --max-seconds's plan (trace.cpp), and the power a ray carries.
   double TimeRays(uint32_t rays) const;
   double rayQuantum() const { return options_.rayQuantum; }
@@ -160,12 +161,11 @@ class Environment {
                      const int to[3]) const;
   // Receiving (env_receive.cpp).
   void Receive(uint32_t j, const double share[3], const glm::vec3& x);
-
   uint32_t index_ = 0;
   EnvGrid envGrid_;  // the partition (grid_ is the ray-casting grid)
   int cell_[3] = {0, 0, 0};
   Bounds box_;
-  uint32_t numNeighbours_ = 0;
+  uint32_t numNeighbours_ = 0, filterSteps_ = 0;
   EnvOptions options_;
   MaskShape shape_;
   Arena arena_ = Arena::Measure();
