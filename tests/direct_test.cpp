@@ -399,5 +399,46 @@ TEST(DirectTest, MaxSecondsPlansTheEmittedRays) {
   EXPECT_NE(given.find("\"emitted_rays\": 300000,"), std::string::npos);
 }
 
+TEST(DirectTest, MaxSecondsPlansThePatchSize) {
+  // A budget far too short for the automatic mesh's tail of small shots
+  // (some 7 500 patches; 10 ms is a few hundred patches' tail on any
+  // machine): init meshes again with larger patches, run.json says so, and
+  // the loader's warnings are said once. Given, the patch size is kept.
+  test::TempDir dir;
+  // The Cornell box with one face of a material no MTL defines (a warning).
+  std::string obj = test::ReadFile("scenes/cornell.obj");
+  const size_t at = obj.find("usemtl white");
+  ASSERT_NE(at, std::string::npos);
+  test::WriteFile(dir.File("box.obj"), obj.replace(at, 12, "usemtl nosuch"));
+  test::WriteFile(dir.File("cornell.mtl"), test::ReadFile("scenes/cornell.mtl"));
+  auto run = [&](const std::string& extra, std::string* err) {
+    std::vector<std::string> args = {
+        "render",  dir.File("box.obj"), "--out", dir.File("out"), "--width", "16", "--height", "16",
+        "--quiet", "--max-seconds",     "0.01"};
+    for (const std::string& w : test::Words(extra)) args.push_back(w);
+    test::RunResult r = test::RunMain(args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    *err = r.err;
+    return test::ReadFile(dir.File("out/run.json"));
+  };
+  std::string err, auto_json = run("", &err), plain;
+  auto patchSize = [](const std::string& json) {
+    size_t at = json.find("\"patch_size\": ");
+    return at == std::string::npos ? 0.0 : std::atof(json.c_str() + at + 14);
+  };
+  EXPECT_NE(auto_json.find("\"patch_size_planned\": true"), std::string::npos);
+  const std::string auto_given = run("--patch-size 19.9714298", &plain);
+  EXPECT_EQ(auto_given.find("patch_size_planned"), std::string::npos);
+  EXPECT_GT(patchSize(auto_json), 1.5 * patchSize(auto_given));
+  // The undefined material's warning: once, as without the plan.
+  auto count = [](const std::string& text, const std::string& what) {
+    size_t n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_GE(count(plain, "warning"), 1u) << plain;
+  EXPECT_EQ(count(err, "warning"), count(plain, "warning")) << err;
+}
+
 }  // namespace
 }  // namespace vismask

@@ -89,9 +89,10 @@ void Region(const PfmImage& img, int x0, int x1, int y0, int y1, double* mean, d
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) {
       sum += at(x, y), ++n;
-      if (x > x0 && x + 1 < x1) r += std::fabs(at(x - 4 < x0 ? x0 : x - 4, y) - 2.0 * at(x, y) +
-                                               at(x + 4 >= x1 ? x1 - 1 : x + 4, y)),
-                                 ++m;
+      if (x > x0 && x + 1 < x1)
+        r += std::fabs(at(x - 4 < x0 ? x0 : x - 4, y) - 2.0 * at(x, y) +
+                       at(x + 4 >= x1 ? x1 - 1 : x + 4, y)),
+            ++m;
     }
   *mean = sum / n;
   *rough = r / m / *mean;
@@ -130,18 +131,20 @@ TEST(IndirectFilterTest, EarlyImagesAreSmoothedAndConvergedOnesAreNot) {
   // Converged (large patches, many rays each): no steps, the image as
   // --indirect-filter 0 draws it.
   for (const char* k : {"conv", "conv0"}) {
-    std::vector<std::string> args = {"render",       "scenes/cornell.obj", "--width",
-                                     "32",           "--height",           "32",
-                                     "--patch-size", "60",                 "--emitted-rays",
-                                     "1000000",      "--quiet",            "--out",
+    std::vector<std::string> args = {"render",         "scenes/cornell.obj",
+                                     "--width",        "32",
+                                     "--height",       "32",
+                                     "--patch-size",   "60",
+                                     "--emitted-rays", "1000000",
+                                     "--quiet",        "--out",
                                      dir.File(k)};
     if (std::string(k) == "conv0") args = Join(args, {"--indirect-filter", "0"});
     auto r = RunMain(args);
     ASSERT_EQ(r.code, 0) << r.err;
   }
-  EXPECT_EQ(JsonNumber(test::ReadFile(dir.File("conv/run.json")), "indirect_filter_steps"),
-            0.0);
-  EXPECT_EQ(test::ReadFile(dir.File("conv/image.pfm")), test::ReadFile(dir.File("conv0/image.pfm")));
+  EXPECT_EQ(JsonNumber(test::ReadFile(dir.File("conv/run.json")), "indirect_filter_steps"), 0.0);
+  EXPECT_EQ(test::ReadFile(dir.File("conv/image.pfm")),
+            test::ReadFile(dir.File("conv0/image.pfm")));
 }
 
 }  // namespace

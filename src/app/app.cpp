@@ -1,5 +1,7 @@
 #include "vismask/app/app.h"
 
+#include <cmath>
+
 #include "run.h"
 #include "vismask/app/viewer.h"
 
@@ -38,6 +40,60 @@ constexpr double kTailShotsPerPatch = 2.0;
 // shot before the cut is shot with rays enough.
 constexpr double kCutShare = 0.25;
 
+// The patch size's plan: the share of the budget's rays the tail of small
+// shots may take (the rest goes to the emitters' rays and the margin); a
+// plan that would change the patch count by less than kReplan keeps the
+// mesh.
+constexpr double kTailShare = 0.2;
+constexpr double kReplan = 1.5;
+
+// The rays per second this machine traces through the scene's grids now,
+// the mean kd (at most 0.95) and the patches, over this rank's environments.
+struct PlanRate {
+  double rate = 0.0, rho = 0.0, patches = 0.0;
+};
+PlanRate MeasureRate(const RunState& r) {
+  double seconds = 0.0, area = 0.0, kdArea = 0.0;
+  uint64_t rays = 0;
+  PlanRate p;
+  for (Environment* env : r.envPtrs) {
+    seconds += env->TimeRays(kPlanRays);
+    rays += kPlanRays;
+    area += env->totalArea();
+    kdArea += env->kdArea();
+    p.patches += static_cast<double>(env->patches().size());
+  }
+  if (!(seconds > 0.0) || !(area > 0.0)) return PlanRate{};
+  p.rho = std::fmin(kdArea / area, 0.95);
+  p.rate = static_cast<double>(rays) / seconds;
+  return p;
+}
+
+bool Plans(const RunState& r) {
+  const Options& o = r.options;
+  return o.maxSeconds > 0.0 && !o.hasEmittedRays && o.rayAlloc == Options::RayAlloc::kPower &&
+         r.transport->size() == 1 && !r.envPtrs.empty();
+}
+
+// --max-seconds T without --patch-size (as PlanBudget, and no checkpoint):
+// a converging solve's tail is about kTailShotsPerPatch shots a patch at
+// --min-rays each, whatever the patch size, so a short budget spent on
+// many small patches ends in their tail with the light half shot. The plan
+// is the patches whose tail takes kTailShare of the budget's rays at the
+// rate timed on the automatic mesh, never more than it has: 0 (keep the
+// mesh), or the patch size that gives about that many.
+float PlanPatchSize(const RunState& r) {
+  const Options& o = r.options;
+  if (!Plans(r) || o.patchSize > 0.0f || !o.checkpointDir.empty() || !o.resumeDir.empty())
+    return 0.0f;
+  const PlanRate p = MeasureRate(r);
+  if (!(p.rate > 0.0) || !(p.patches > 0.0)) return 0.0f;
+  const double want = std::fmax(
+      kTailShare * p.rate * o.maxSeconds * (1.0 - p.rho) / (kTailShotsPerPatch * o.minRays), 1.0);
+  if (want * kReplan >= p.patches) return 0.0f;
+  return static_cast<float>(r.patchSize * std::sqrt(p.patches / want));
+}
+
 // --max-seconds T without --emitted-rays (one rank, power allocation):
 // the emitted rays a solve that converges within about T can afford, from
 // the rays per second this machine traces through the scene's grids now.
@@ -49,22 +105,11 @@ constexpr double kCutShare = 0.25;
 // a plan made for a longer one. Only ever fewer rays than the default.
 void PlanBudget(RunState* r) {
   Options& o = r->options;
-  if (!(o.maxSeconds > 0.0) || o.hasEmittedRays || o.rayAlloc != Options::RayAlloc::kPower ||
-      r->transport->size() != 1 || r->envPtrs.empty())
-    return;
-  double seconds = 0.0, area = 0.0, kdArea = 0.0, patches = 0.0;
-  uint64_t rays = 0;
-  for (Environment* env : r->envPtrs) {
-    seconds += env->TimeRays(kPlanRays);
-    rays += kPlanRays;
-    area += env->totalArea();
-    kdArea += env->kdArea();
-    patches += static_cast<double>(env->patches().size());
-  }
-  if (!(seconds > 0.0) || !(area > 0.0)) return;
-  const double rho = std::fmin(kdArea / area, 0.95);
-  const double rate = static_cast<double>(rays) / seconds;
-  const double tail = kTailShotsPerPatch * patches * o.minRays / (1.0 - rho);
+  if (!Plans(*r)) return;
+  const PlanRate p = MeasureRate(*r);
+  if (!(p.rate > 0.0)) return;
+  const double rho = p.rho, rate = p.rate;
+  const double tail = kTailShotsPerPatch * p.patches * o.minRays / (1.0 - rho);
   const double emitted =
       std::fmax(kPlanShare * rate * o.maxSeconds - tail, kCutShare * rate * o.maxSeconds) *
       (1.0 - rho);
@@ -306,6 +351,20 @@ int Main(int argc, const char* const* argv) {
   SetWorldSize(r->transport->size(), &r->options);
   int rc = InitAllRanks(r.get());
   if (rc != kExitOk) return r->transport->Finish(rc);
+  // --max-seconds without --patch-size: init again at the planned patch
+  // size (the first init's state and its output lock let go first).
+  if (const float size = PlanPatchSize(*r); size > 0.0f) {
+    auto again = std::make_unique<RunState>();
+    again->options = r->options;
+    again->options.patchSize = size;
+    again->options.patchSizePlanned = true;
+    again->options.initAgain = true;
+    again->transport = std::move(r->transport);
+    r.reset();
+    r = std::move(again);
+    rc = InitAllRanks(r.get());
+    if (rc != kExitOk) return r->transport->Finish(rc);
+  }
   // --checkpoint, --resume: the directory, and the state resumed from.
   const bool checkpointing = !r->options.checkpointDir.empty();
   if (checkpointing) {

@@ -117,7 +117,10 @@ Without --emitted-rays (one rank, power allocation)
 it plans them: the rays a solve that ends within
 about T can afford, from the rays per second timed
 through the scene's grid at init (run.json:
-emitted_rays, emitted_rays_planned))")
+emitted_rays, emitted_rays_planned); and without
+--patch-size, larger patches where the automatic
+ones' tail of small shots would not fit in T
+(run.json: patch_size, patch_size_planned))")
           .Usage()
           .Json("max_seconds"),
   };

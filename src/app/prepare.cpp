@@ -110,7 +110,8 @@ Status ReadScene(const Options& o, Prepared* p, bool root, bool chooseSide,
       EmitterCheck::HeapBytes(numEmitters, std::min<size_t>(kEmitterCheckChunk, info.numPolygons)) +
       numEmitters * 256;
   // Every rank prints the loader's warnings, as LoadScene did.
-  for (const std::string& w : info.warnings) os::PrintErr("%s\n", w.c_str());
+  if (!o.initAgain)
+    for (const std::string& w : info.warnings) os::PrintErr("%s\n", w.c_str());
   // The textures are decoded within what the budget leaves beside what
   // init holds already (at least a byte: a budget already spent refuses any).
   const uint64_t heldNow = p->held + kInitBaseBytes;

@@ -88,7 +88,7 @@ int LoadRank(RunState* r, const InitBudget& b, Prepared* p) {
   const Options& o = r->options;
   // Pass 0: the statements counted, so that the parser's arrays are
   // judged against the budget before they exist.
-  p->clock.report = r->isRoot() && !o.quiet;
+  p->clock.report = r->isRoot() && !o.quiet && !o.initAgain;
   Status s = CountScene(o, p);
   if (!s.ok()) return FailInit(r, s);
   const uint64_t held = b.referenceBytes;
@@ -118,9 +118,9 @@ int LoadRank(RunState* r, const InitBudget& b, Prepared* p) {
   if (o.roundWorkAuto) r->options.roundWork = p->roundWork;
   r->envGrid = p->grid;
   // Emitters that light nothing (a face wound the wrong way): one line each.
-  if (r->isRoot())
+  if (r->isRoot() && !o.initAgain)
     for (const std::string& w : p->emitterWarnings) os::PrintErr("%s\n", w.c_str());
-  if (r->isRoot()) PrintWarnings(p->textures);
+  if (r->isRoot() && !o.initAgain) PrintWarnings(p->textures);
   r->numPolygons = p->info.numPolygons;
   r->patchSize = p->patchSize;
   // Before meshing: the pieces and a bound on the meshes and staged

@@ -44,6 +44,8 @@ struct Context {
 // written only when set (so a run without them has no such key).
 void PatchSize(Fields& f, const Context& c) {
   f.Key("patch_size").Printf("%.9g", c.r.patchSize);
+  // Only when --max-seconds planned it (PlanPatchSize).
+  if (c.o.patchSizePlanned) f.Bool("patch_size_planned", true);
 }
 void Rays(Fields& f, const Context& c) {
   f.Key("rays").Printf("%u", RayCap(c.o));

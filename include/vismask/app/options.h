@@ -38,6 +38,8 @@ struct Options {
   bool hasRays = false;
   bool hasEmittedRays = false;      // --emitted-rays given (else --max-seconds may plan it)
   bool emittedRaysPlanned = false;  // --max-seconds chose emittedRays (app.cpp, PlanBudget)
+  bool patchSizePlanned = false;    // --max-seconds chose patchSize (app.cpp, PlanPatchSize)
+  bool initAgain = false;           // init made again (the planned patch size): warnings said once
   uint64_t emittedRays = 4000000;   // --emitted-rays: the rays the emitted power is worth (power)
   uint32_t minRays = 16;            // --min-rays: the fewest a shot traces (power)
   // --max-rays: the most a shot traces (power); a shot worth more shoots a
