@@ -53,7 +53,7 @@ SCALES = {
                                     ["--patch-size", "15", "--emitted-rays", "40000000"])],
                          points=40, budgets=[1, 10, 30], env_seconds=10, env_res=100,
                          # --max-seconds T at otherwise default options (issue 41).
-                         anytime=[0.3, 1, 3, 10],
+                         anytime=[0.1, 0.3, 1, 3, 10],
                          # rpkCpp's Galerkin (make renderpark): 30 Jacobi
                          # iterations at three link error thresholds.
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", t]
