@@ -202,7 +202,7 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   const uint32_t* start = cellStart_.data();
   const uint64_t* occupied = occupied_.data();
   WalkState st;
-  st.r = ray;  // tMax shrinks to just past the best hit so far
+  st.tMax = ray.tMax;  // shrinks to just past the best hit so far
   st.t1 = t1;
   st.limit = t1;          // no step into a cell beyond this: the ray's end or the best hit
   st.bestT = ray.tMax;    // every hit is nearer than the ray's end
@@ -223,14 +223,14 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
         // A copy goes out of line: the walk's own state never leaves this
         // function, so it stays in registers.
         WalkState sub = st;
-        const bool found = WalkSub<kAnyHit>(subs_.data()[header - kSubGrid], invD, tEnter, tLeave,
-                                            skip, hit, &sub, &subSteps);
+        const bool found = WalkSub<kAnyHit>(subs_.data()[header - kSubGrid], ray, invD, tEnter,
+                                            tLeave, skip, hit, &sub, &subSteps);
         st = sub;
         if (found) {
           done();
           return true;
         }
-      } else if (TestCell<kAnyHit>(b, start[index + 1], skip, hit, &st)) {
+      } else if (TestCell<kAnyHit>(b, start[index + 1], ray, skip, hit, &st)) {
         done();
         return true;
       }
@@ -247,8 +247,9 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
 }
 
 template <bool kAnyHit>
-inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e, Skip skip,
-                                                          Hit* hit, WalkState* st) const {
+inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e, const Ray& r,
+                                                          Skip skip, Hit* hit,
+                                                          WalkState* st) const {
   const uint32_t* refs = refs_.data();
   const PatchGeom* geom = geom_.data();
   const uint32_t header = refs[b];
@@ -262,7 +263,6 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
     // are IntersectPatch's, on the other sign of the normal for some
     // patches, which negates them exactly; no division is needed.
     const CellPlane& pl = planes_.data()[header];
-    const Ray& r = st->r;
     float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
     float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
     float numLo = pl.dLo - s, numHi = pl.dHi - s;
@@ -283,7 +283,9 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
     float t;
     bool front;
     ++st->tests;
-    if (p == skip.patch || !IntersectPatch(geom[p], st->r, &t, &front) || p == skip.twin) continue;
+    if (p == skip.patch || !IntersectPatch(geom[p], r.o, r.d, r.tMin, st->tMax, &t, &front) ||
+        p == skip.twin)
+      continue;
     if (kAnyHit) {
       if (hit) hit->patch = p;
       return true;
@@ -294,7 +296,7 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
       st->bestPatch = p;
       st->bestT = t;
       st->bestFront = front;
-      st->r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+      st->tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
       st->limit = std::min(st->t1, t);
     }
   }
@@ -308,12 +310,12 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
 // only, far inside the registration padding. Out of line, with its own copy
 // of the walk's state, so that the top walk keeps its own in registers.
 template <bool kAnyHit>
-__attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const float invD[3], float tEnter,
-                                             float tLeave, Skip skip, Hit* hit, WalkState* state,
-                                             uint64_t* steps) const {
+__attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const Ray& ray, const float invD[3],
+                                             float tEnter, float tLeave, Skip skip, Hit* hit,
+                                             WalkState* state, uint64_t* steps) const {
   WalkState st = *state;
-  const float o[3] = {st.r.o.x, st.r.o.y, st.r.o.z};
-  const float d[3] = {st.r.d.x, st.r.d.y, st.r.d.z};
+  const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
+  const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   float tEnd = tLeave;
   Dda dda;
   int32_t index = static_cast<int32_t>(sg.first) +
@@ -324,7 +326,7 @@ __attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const float invD
   for (;;) {
     const uint32_t u = static_cast<uint32_t>(index);
     if (((occupied[u >> 6] >> (u & 63)) & 1) != 0 &&
-        TestCell<kAnyHit>(start[u], start[u + 1], skip, hit, &st)) {
+        TestCell<kAnyHit>(start[u], start[u + 1], ray, skip, hit, &st)) {
       done = true;
       break;
     }
