@@ -441,6 +441,43 @@ TEST(GridTest, LongWalksMatchBruteForce) {
   EXPECT_GT(ck.hits, ck.rays / 4);
 }
 
+// The walk's clip, axis by axis: each component of the direction moving,
+// zero (the origin then inside or outside that slab) or so small that its
+// inverse overflows (every patch tested), each origin coordinate inside
+// the box or beyond either face: brute force's hit in every combination.
+TEST(GridTest, ClipAxesMatchBruteForce) {
+  TestScene s = CornellScene(4);
+  BuiltGrid b;
+  BuildGrid(s, 1.0f, &b);
+  Checker ck{s, b.grid};
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> u01(0.0f, 1.0f);
+  const float tiny = 1e-39f;  // subnormal: 1 / tiny overflows
+  int overflowHits = 0;
+  for (int dirs = 0; dirs < 27; ++dirs) {
+    for (int places = 0; places < 27; ++places) {
+      for (int rep = 0; rep < 4; ++rep) {
+        glm::vec3 o, d;
+        bool overflows = false;
+        for (int a = 0, dc = dirs, pc = places; a < 3; ++a, dc /= 3, pc /= 3) {
+          const float sign = rng() % 2 ? 1.0f : -1.0f;
+          d[a] = dc % 3 == 0 ? sign * (0.2f + u01(rng)) : (dc % 3 == 1 ? 0.0f : sign * tiny);
+          overflows |= dc % 3 == 2;
+          o[a] = pc % 3 == 0 ? 0.05f + 0.9f * u01(rng) : (pc % 3 == 1 ? -0.5f : 1.5f);
+        }
+        if (d == glm::vec3(0.0f)) continue;
+        const int before = ck.hits;
+        ck.CheckWithSkips(Ray{o, d, 0.0f, kInf}, "clip");
+        ck.CheckWithSkips(Ray{o, d, 0.0f, 0.5f + u01(rng)}, "clip-segment");
+        if (overflows) overflowHits += ck.hits - before;
+      }
+    }
+  }
+  EXPECT_EQ(ck.failures, 0) << ck.rays << " rays";
+  EXPECT_GT(ck.hits, ck.rays / 20);  // most origins lie outside the box
+  EXPECT_GT(overflowHits, 0);        // rays that only testing every patch can answer
+}
+
 TEST(GridTest, EdgeCases) {
   TestScene s = CornellScene(4);
   BuiltGrid b;

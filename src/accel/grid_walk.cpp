@@ -37,7 +37,9 @@ struct Dda {
 
   // From the point at t of the ray o + t d (invD: 1 / d, 0 where d is 0) on
   // a grid of res cells from lo: the entry cell's index, and *tEnd bounded
-  // by the plane where the ray leaves the grid.
+  // by the plane where the ray leaves the grid. The axes are spelled out,
+  // not looped over: a loop with a branch per axis stays a loop, and every
+  // glm::vec3 read in it is a switch on the axis.
   inline __attribute__((always_inline)) int Start(const float o[3], const float d[3],
                                                   const float invD[3], float t, const glm::vec3& lo,
                                                   const glm::vec3& cellSize,
@@ -45,29 +47,41 @@ struct Dda {
                                                   float* tEnd) {
     const int stride[3] = {1, res[0], res[0] * res[1]};
     float first[3], delta[3];
-    int index = 0;
-    for (int a = 0; a < 3; ++a) {
-      float p = d[a] == 0.0f ? o[a] : o[a] + t * d[a];
-      float f = (p - lo[a]) * invCellSize[a];
-      int c = f >= 0.0f ? (f < static_cast<float>(res[a]) ? static_cast<int>(f) : res[a] - 1) : 0;
-      index += c * stride[a];
-      if (d[a] == 0.0f) {
-        first[a] = std::numeric_limits<float>::infinity();
-        delta[a] = 0.0f;
-        move[a] = 0;
-        continue;
-      }
-      bool up = d[a] > 0.0f;
-      first[a] = (lo[a] + static_cast<float>(up ? c + 1 : c) * cellSize[a] - o[a]) * invD[a];
-      delta[a] = cellSize[a] * std::fabs(invD[a]);
-      move[a] = up ? stride[a] : -stride[a];
-      float exit = first[a] + static_cast<float>(up ? res[a] - 1 - c : c) * delta[a];
-      if (exit < *tEnd) *tEnd = exit;
-    }
+    int index = StartAxis(o[0], d[0], invD[0], t, lo.x, cellSize.x, invCellSize.x, res[0],
+                          stride[0], &first[0], &delta[0], &move[0], tEnd);
+    index += StartAxis(o[1], d[1], invD[1], t, lo.y, cellSize.y, invCellSize.y, res[1], stride[1],
+                       &first[1], &delta[1], &move[1], tEnd);
+    index += StartAxis(o[2], d[2], invD[2], t, lo.z, cellSize.z, invCellSize.z, res[2], stride[2],
+                       &first[2], &delta[2], &move[2], tEnd);
     fx = first[0], fy = first[1], fz = first[2];
     dx = delta[0], dy = delta[1], dz = delta[2];
     tx = fx, ty = fy, tz = fz;
     return index;
+  }
+
+  // One axis of Start: the entry cell's coordinate times its stride, the
+  // axis's first plane, spacing and index step, and its last plane's bound.
+  static inline __attribute__((always_inline)) int StartAxis(float o, float d, float invD, float t,
+                                                             float lo, float cellSize,
+                                                             float invCellSize, int res, int stride,
+                                                             float* first, float* delta, int* move,
+                                                             float* tEnd) {
+    float p = d == 0.0f ? o : o + t * d;
+    float f = (p - lo) * invCellSize;
+    int c = f >= 0.0f ? (f < static_cast<float>(res) ? static_cast<int>(f) : res - 1) : 0;
+    if (d == 0.0f) {
+      *first = std::numeric_limits<float>::infinity();
+      *delta = 0.0f;
+      *move = 0;
+      return c * stride;
+    }
+    bool up = d > 0.0f;
+    *first = (lo + static_cast<float>(up ? c + 1 : c) * cellSize - o) * invD;
+    *delta = cellSize * std::fabs(invD);
+    *move = up ? stride : -stride;
+    float exit = *first + static_cast<float>(up ? res - 1 - c : c) * *delta;
+    if (exit < *tEnd) *tEnd = exit;
+    return c * stride;
   }
 
   // Steps across the plane that comes first (ties: y before x, z before
@@ -104,6 +118,27 @@ struct Dda {
   float Leave() const { return std::min(std::min(tx, ty), tz); }
   uint64_t Crossed() const { return static_cast<uint64_t>(kx + ky + kz); }
 };
+
+// One axis of the walk's clip to the grid box [lo, hi]: its inverse
+// direction (0 when d is 0) and (t0, t1) narrowed to the slab. kOut: the ray
+// does not move along the axis and lies outside the slab; kTestAll: the
+// inverse overflows.
+enum Clip : int { kIn = 0, kOut = 1, kTestAll = 2 };
+inline __attribute__((always_inline)) Clip ClipAxis(float o, float d, float lo, float hi,
+                                                    float* invD, float* t0, float* t1) {
+  if (d == 0.0f) {
+    *invD = 0.0f;
+    return o < lo || o > hi ? kOut : kIn;
+  }
+  *invD = 1.0f / d;
+  if (!(std::fabs(*invD) <= std::numeric_limits<float>::max())) return kTestAll;
+  float tNear = (lo - o) * *invD;
+  float tFar = (hi - o) * *invD;
+  if (tNear > tFar) std::swap(tNear, tFar);
+  if (tNear > *t0) *t0 = tNear;
+  if (tFar < *t1) *t1 = tFar;
+  return kIn;
+}
 
 }  // namespace
 
@@ -149,20 +184,15 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   const glm::vec3& hi = plan_.bounds.hi;
   float invD[3];
   float t0 = ray.tMin, t1 = ray.tMax;
-  for (int a = 0; a < 3; ++a) {
-    if (d[a] == 0.0f) {
-      if (o[a] < lo[a] || o[a] > hi[a]) return false;
-      invD[a] = 0.0f;
-      continue;
+  const Clip cx = ClipAxis(o[0], d[0], lo.x, hi.x, &invD[0], &t0, &t1);
+  const Clip cy = ClipAxis(o[1], d[1], lo.y, hi.y, &invD[1], &t0, &t1);
+  const Clip cz = ClipAxis(o[2], d[2], lo.z, hi.z, &invD[2], &t0, &t1);
+  // The first axis (x, y, z) that is not kIn decides.
+  if (__builtin_expect((cx | cy | cz) != Clip::kIn, 0)) {
+    for (Clip c : {cx, cy, cz}) {
+      if (c == Clip::kOut) return false;
+      if (c == Clip::kTestAll) return TestAll<kAnyHit>(ray, skip, hit);
     }
-    invD[a] = 1.0f / d[a];
-    if (!(std::fabs(invD[a]) <= std::numeric_limits<float>::max()))
-      return TestAll<kAnyHit>(ray, skip, hit);
-    float tNear = (lo[a] - o[a]) * invD[a];
-    float tFar = (hi[a] - o[a]) * invD[a];
-    if (tNear > tFar) std::swap(tNear, tFar);
-    if (tNear > t0) t0 = tNear;
-    if (tFar < t1) t1 = tFar;
   }
   if (!(t0 <= t1)) return false;
 
@@ -172,7 +202,7 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   const uint32_t* start = cellStart_.data();
   const uint64_t* occupied = occupied_.data();
   WalkState st;
-  st.r = ray;  // tMax shrinks to just past the best hit so far
+  st.tMax = ray.tMax;  // shrinks to just past the best hit so far
   st.t1 = t1;
   st.limit = t1;          // no step into a cell beyond this: the ray's end or the best hit
   st.bestT = ray.tMax;    // every hit is nearer than the ray's end
@@ -193,14 +223,14 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
         // A copy goes out of line: the walk's own state never leaves this
         // function, so it stays in registers.
         WalkState sub = st;
-        const bool found = WalkSub<kAnyHit>(subs_.data()[header - kSubGrid], invD, tEnter, tLeave,
-                                            skip, hit, &sub, &subSteps);
+        const bool found = WalkSub<kAnyHit>(subs_.data()[header - kSubGrid], ray, invD, tEnter,
+                                            tLeave, skip, hit, &sub, &subSteps);
         st = sub;
         if (found) {
           done();
           return true;
         }
-      } else if (TestCell<kAnyHit>(b, start[index + 1], skip, hit, &st)) {
+      } else if (TestCell<kAnyHit>(b, start[index + 1], ray, skip, hit, &st)) {
         done();
         return true;
       }
@@ -217,8 +247,9 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
 }
 
 template <bool kAnyHit>
-inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e, Skip skip,
-                                                          Hit* hit, WalkState* st) const {
+inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e, const Ray& r,
+                                                          Skip skip, Hit* hit,
+                                                          WalkState* st) const {
   const uint32_t* refs = refs_.data();
   const PatchGeom* geom = geom_.data();
   const uint32_t header = refs[b];
@@ -232,7 +263,6 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
     // are IntersectPatch's, on the other sign of the normal for some
     // patches, which negates them exactly; no division is needed.
     const CellPlane& pl = planes_.data()[header];
-    const Ray& r = st->r;
     float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
     float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
     float numLo = pl.dLo - s, numHi = pl.dHi - s;
@@ -253,7 +283,9 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
     float t;
     bool front;
     ++st->tests;
-    if (p == skip.patch || !IntersectPatch(geom[p], st->r, &t, &front) || p == skip.twin) continue;
+    if (p == skip.patch || !IntersectPatch(geom[p], r.o, r.d, r.tMin, st->tMax, &t, &front) ||
+        p == skip.twin)
+      continue;
     if (kAnyHit) {
       if (hit) hit->patch = p;
       return true;
@@ -264,7 +296,7 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
       st->bestPatch = p;
       st->bestT = t;
       st->bestFront = front;
-      st->r.tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+      st->tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
       st->limit = std::min(st->t1, t);
     }
   }
@@ -278,12 +310,12 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
 // only, far inside the registration padding. Out of line, with its own copy
 // of the walk's state, so that the top walk keeps its own in registers.
 template <bool kAnyHit>
-__attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const float invD[3], float tEnter,
-                                             float tLeave, Skip skip, Hit* hit, WalkState* state,
-                                             uint64_t* steps) const {
+__attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const Ray& ray, const float invD[3],
+                                             float tEnter, float tLeave, Skip skip, Hit* hit,
+                                             WalkState* state, uint64_t* steps) const {
   WalkState st = *state;
-  const float o[3] = {st.r.o.x, st.r.o.y, st.r.o.z};
-  const float d[3] = {st.r.d.x, st.r.d.y, st.r.d.z};
+  const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
+  const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
   float tEnd = tLeave;
   Dda dda;
   int32_t index = static_cast<int32_t>(sg.first) +
@@ -294,7 +326,7 @@ __attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const float invD
   for (;;) {
     const uint32_t u = static_cast<uint32_t>(index);
     if (((occupied[u >> 6] >> (u & 63)) & 1) != 0 &&
-        TestCell<kAnyHit>(start[u], start[u + 1], skip, hit, &st)) {
+        TestCell<kAnyHit>(start[u], start[u + 1], ray, skip, hit, &st)) {
       done = true;
       break;
     }

@@ -169,11 +169,12 @@ class Grid {
     return start[i] == start[i + 1] ? kNoPlane : refs_[start[i]];
   }
 
-  // A walk's state between its levels: the ray (tMax just past the best hit
-  // so far), where the walk stops (the ray's end t1 or the best hit), the
+  // A walk's state between its levels: the ray's end (tMax: just past the
+  // best hit so far; the ray's other parts never change and are not
+  // copied), where the walk stops (the ray's end t1 or the best hit), the
   // best hit, and the patches tested.
   struct WalkState {
-    Ray r;
+    float tMax = 0.0f;
     float t1 = 0.0f;
     float limit = 0.0f;
     uint32_t bestPatch = kNoPatch;
@@ -185,14 +186,14 @@ class Grid {
   template <bool kAnyHit>
   bool Walk(const Ray& ray, Skip skip, Hit* hit) const;
   // The patches of one cell (refs[b] its header, refs[b + 1 .. e) its
-  // patches): true when an any-hit walk is done.
+  // patches) for ray r up to st->tMax: true when an any-hit walk is done.
   template <bool kAnyHit>
-  bool TestCell(uint32_t b, uint32_t e, Skip skip, Hit* hit, WalkState* st) const;
+  bool TestCell(uint32_t b, uint32_t e, const Ray& r, Skip skip, Hit* hit, WalkState* st) const;
   // A top cell's sub-grid between t = tEnter and tLeave; adds the cells it
   // entered to *steps.
   template <bool kAnyHit>
-  bool WalkSub(const SubGrid& sg, const float invD[3], float tEnter, float tLeave, Skip skip,
-               Hit* hit, WalkState* st, uint64_t* steps) const;
+  bool WalkSub(const SubGrid& sg, const Ray& ray, const float invD[3], float tEnter, float tLeave,
+               Skip skip, Hit* hit, WalkState* st, uint64_t* steps) const;
   // Every patch, for rays whose origin is too far away for the grid's padding.
   template <bool kAnyHit>
   bool TestAll(const Ray& ray, Skip skip, Hit* hit) const;

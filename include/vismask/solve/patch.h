@@ -154,21 +154,27 @@ inline bool OutsideEdges(const PatchGeom& g, float x, float y) {
 #endif
 }
 
-// Intersects `ray` with one patch. Returns true and sets *t and *front when the
-// ray meets the patch at ray.tMin < t < ray.tMax.
-inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* front) {
-  float denom = g.n.x * ray.d.x + g.n.y * ray.d.y + g.n.z * ray.d.z;
+// Intersects the ray o + t d with one patch. Returns true and sets *t and
+// *front when the ray meets the patch at tMin < t < tMax.
+inline bool IntersectPatch(const PatchGeom& g, const glm::vec3& o, const glm::vec3& d, float tMin,
+                           float tMax, float* t, bool* front) {
+  float denom = g.n.x * d.x + g.n.y * d.y + g.n.z * d.z;
   if (denom == 0.0f) return false;
-  float num = g.d - (g.n.x * ray.o.x + g.n.y * ray.o.y + g.n.z * ray.o.z);
+  float num = g.d - (g.n.x * o.x + g.n.y * o.y + g.n.z * o.z);
   float tt = num / denom;
-  if (!(tt > ray.tMin && tt < ray.tMax)) return false;
-  const float x[3] = {ray.o.x + tt * ray.d.x, ray.o.y + tt * ray.d.y, ray.o.z + tt * ray.d.z};
+  if (!(tt > tMin && tt < tMax)) return false;
+  const float x[3] = {o.x + tt * d.x, o.y + tt * d.y, o.z + tt * d.z};
   const int k = PlaneAxis(g.n);
   const float xi = k == 2 ? x[0] : x[k + 1], xj = k == 0 ? x[2] : x[k - 1];
   if (OutsideEdges(g, xi, xj)) return false;
   *t = tt;
   *front = denom < 0.0f;
   return true;
+}
+
+// The same for `ray`, in (ray.tMin, ray.tMax).
+inline bool IntersectPatch(const PatchGeom& g, const Ray& ray, float* t, bool* front) {
+  return IntersectPatch(g, ray.o, ray.d, ray.tMin, ray.tMax, t, front);
 }
 
 // Corner m of the region g's edge tests accept (corners[m] pushed out),
