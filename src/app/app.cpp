@@ -81,12 +81,13 @@ bool Plans(const RunState& r) {
 // many small patches ends in their tail with the light half shot. The plan
 // is the patches whose tail takes kTailShare of the budget's rays at the
 // rate timed on the automatic mesh, never more than it has: 0 (keep the
-// mesh), or the patch size that gives about that many.
-float PlanPatchSize(const RunState& r) {
+// mesh), or the patch size that gives about that many. *measured: the
+// rate it timed (none when it did not plan).
+float PlanPatchSize(const RunState& r, PlanRate* measured) {
   const Options& o = r.options;
   if (!Plans(r) || o.patchSize > 0.0f || !o.checkpointDir.empty() || !o.resumeDir.empty())
     return 0.0f;
-  const PlanRate p = MeasureRate(r);
+  const PlanRate p = *measured = MeasureRate(r);
   if (!(p.rate > 0.0) || !(p.patches > 0.0)) return 0.0f;
   const double want = std::fmax(
       kTailShare * p.rate * o.maxSeconds * (1.0 - p.rho) / (kTailShotsPerPatch * o.minRays), 1.0);
@@ -103,10 +104,11 @@ float PlanPatchSize(const RunState& r) {
 // (at least kCutShare of them).
 // The solve then ends converged, or nearly, rather than cut off early in
 // a plan made for a longer one. Only ever fewer rays than the default.
-void PlanBudget(RunState* r) {
+// `known`: the rate PlanPatchSize timed on this mesh, if it did.
+void PlanBudget(RunState* r, const PlanRate& known) {
   Options& o = r->options;
   if (!Plans(*r)) return;
-  const PlanRate p = MeasureRate(*r);
+  const PlanRate p = known.rate > 0.0 ? known : MeasureRate(*r);
   if (!(p.rate > 0.0)) return;
   const double rho = p.rho, rate = p.rate;
   const double tail = kTailShotsPerPatch * p.patches * o.minRays / (1.0 - rho);
@@ -353,7 +355,9 @@ int Main(int argc, const char* const* argv) {
   if (rc != kExitOk) return r->transport->Finish(rc);
   // --max-seconds without --patch-size: init again at the planned patch
   // size (the first init's state and its output lock let go first).
-  if (const float size = PlanPatchSize(*r); size > 0.0f) {
+  PlanRate rate;
+  if (const float size = PlanPatchSize(*r, &rate); size > 0.0f) {
+    rate = PlanRate{};  // timed on the mesh let go
     auto again = std::make_unique<RunState>();
     again->options = r->options;
     again->options.patchSize = size;
@@ -373,7 +377,7 @@ int Main(int argc, const char* const* argv) {
   }
   r->initSeconds = os::Seconds() - start;
 
-  PlanBudget(r.get());
+  PlanBudget(r.get(), rate);
 
   SetPhase(Phase::kSolve);
   SolveOptions so = SolveOptionsOf(r->options);
