@@ -117,6 +117,28 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
             << t.file << " row " << r << " col " << c << ": '" << rows[r][c] << "'";
       }
   }
+  // The --max-seconds rows: each the median of gt.reps repetitions, run by
+  // turns with RenderPark's (when built), so their places in the one run
+  // order interleave: the budgets' first repetitions all come before any
+  // second one.
+  {
+    auto sil = ReadCsv(dir.File("gt-silhouettes.csv"));
+    ASSERT_GE(sil[0].size(), 15u);
+    EXPECT_EQ(sil[0][12], "reps");
+    EXPECT_EQ(sil[0][14], "run_order");
+    std::vector<std::pair<int, int>> orders;
+    for (size_t r = 1; r < sil.size(); ++r) {
+      if (sil[r][2].empty()) continue;  // a fixed setting
+      EXPECT_TRUE(IsNumber(sil[r][11])) << sil[r][11];
+      EXPECT_EQ(sil[r][12], "2");
+      size_t semi = sil[r][14].find(';');
+      ASSERT_NE(semi, std::string::npos) << sil[r][14];
+      orders.push_back({std::stoi(sil[r][14]), std::stoi(sil[r][14].substr(semi + 1))});
+    }
+    ASSERT_EQ(orders.size(), 2u);
+    for (const auto& a : orders)
+      for (const auto& b : orders) EXPECT_LT(a.first, b.second);
+  }
   // --max-seconds beside the fixed settings, drawn (issue 41).
   std::string anytime = ReadFile(dir.File("gt-anytime.png"));
   ASSERT_GT(anytime.size(), 8u);

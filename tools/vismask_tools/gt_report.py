@@ -103,7 +103,11 @@ def report_section(ctx, w, link, table_md):
         w(f"`--max-seconds T` at otherwise default options (`anytime-T`), and the fixed "
           "settings of the error-against-time runs above (read, not rerun). "
           "`best_fixed_within`: the fixed setting with the lowest `vs_gt` among those whose "
-          "solve took at most T; issue 41's anytime goal is `anytime_over_best_fixed` <= 1.25.\n")
+          "solve took at most T; issue 41's anytime goal is `anytime_over_best_fixed` <= 1.25. "
+          "The `--max-seconds` runs were repeated `reps` times by turns with RenderPark's "
+          "(below); each row is the median repetition by `vs_gt`. `cpu_seconds`: the solve's "
+          "CPU seconds on the rank (run.json's `compute_cpu_seconds`), beside `solve_seconds`, "
+          "its wall clock, which `--max-seconds` limits.\n")
         w(table_md(ctx.result("gt-silhouettes.csv")) + "\n")
         w("The same runs and RenderPark's (below) drawn: each run's final error at its solve "
           "time (RenderPark's: its CPU seconds); `--max-seconds T` (orange) beside the fixed "
@@ -112,7 +116,9 @@ def report_section(ctx, w, link, table_md):
         w(f"![anytime against the fixed settings]({link(anytime_plot(ctx))})\n")
         w("RenderPark measured in this run: rpkCpp's hierarchical Galerkin "
           "(tools/renderpark-run: the scene in metres, a one-ray-per-pixel raycast of the "
-          "solution), by its own CPU seconds, after the vismask runs above (not interleaved):\n")
+          "solution), by its own CPU seconds, interleaved with the `--max-seconds` runs above "
+          "(`run_order`: each repetition's place in the one sequence of both; each row is its "
+          "median repetition by `vs_gt`, `vs_gt_range` over all of them):\n")
         skipped = ctx.result("gt-renderpark-skipped.txt")
         if os.path.exists(ctx.result("gt-renderpark-measured.csv")):
             w(table_md(ctx.result("gt-renderpark-measured.csv")) + "\n")

@@ -44,10 +44,9 @@ def silhouettes(ctx, ref, fixed, run, image, write_csv):
     """`fixed`: (name, options) of the error-against-time runs already made
     (run names gt-NAME, read, not rerun); `run`, `image`, `write_csv`:
     groundtruth.py's."""
-    g = ctx.s["gt"]
     keep, mask_rows = silhouette_keep(ctx, ref)
     write_csv(ctx.result("gt-silhouette-mask.csv"), ["left_out", "pixels", "fraction"], mask_rows)
-    rows, fixed_rows = [], []
+    fixed_rows, fixed_cpu = [], []
     for name, args in fixed:
         if "--max-seconds" in args:
             continue
@@ -56,41 +55,47 @@ def silhouettes(ctx, ref, fixed, run, image, write_csv):
         fixed_rows.append([name, " ".join(args) or "(defaults)", "", j["timings"]["solve_seconds"],
                            j["result"]["stop_reason"], j["result"]["shots"], ref.error(img),
                            ref.error(img, keep)])
-    for T in g["anytime"]:
-        args = g["default"] + ["--max-seconds", f"{T:g}"]
-        name = f"anytime-{T:g}s"
-        j = run(ctx, name, args, ref)
-        img = image(ctx, name)
-        rows.append([name, " ".join(args), T, j["timings"]["solve_seconds"],
-                     j["result"]["stop_reason"], j["result"]["shots"], ref.error(img),
-                     ref.error(img, keep)])
+        fixed_cpu.append(j["result"]["compute_cpu_seconds"])
+    rows, rpk_rows = interleaved(ctx, ref, keep, run, image)
     # The anytime goal: within 1.25x of the best fixed setting whose solve
     # finished within T (emitter mask).
     for r in rows:
         best = [f for f in fixed_rows if f[3] <= r[2]]
         b = min(best, key=lambda f: f[6]) if best else None
-        r += ["" if b is None else b[0], "" if b is None else b[6],
-              "" if b is None else r[6] / b[6]]
-    for f in fixed_rows:
-        f += ["", "", ""]
+        r[8:8] = ["" if b is None else b[0], "" if b is None else b[6],
+                  "" if b is None else r[6] / b[6]]
+    for f, cpu in zip(fixed_rows, fixed_cpu):
+        f += ["", "", "", cpu, 1, "", ""]
     write_csv(ctx.result("gt-silhouettes.csv"),
               ["run", "options", "max_seconds", "solve_seconds", "stop", "shots", "vs_gt",
                "vs_gt_no_silhouettes", "best_fixed_within", "best_fixed_vs_gt",
-               "anytime_over_best_fixed"], rows + fixed_rows)
-    renderpark(ctx, ref, keep, write_csv)
+               "anytime_over_best_fixed", "cpu_seconds", "reps", "vs_gt_range", "run_order"],
+              rows + fixed_rows)
+    if rpk_rows:
+        write_csv(ctx.result("gt-renderpark-measured.csv"), ["renderpark", "options", "cpu_seconds", "vs_gt", "vs_gt_no_silhouettes",
+                        "reps", "vs_gt_range", "run_order"], rpk_rows)
 
 
-def rpk_binary():
-    """$RPK_BIN, else make renderpark's build/renderpark/build/rpk, or None."""
-    b = os.environ.get("RPK_BIN") or os.path.join(ROOT, "build", "renderpark", "build", "rpk")
-    return b if os.access(b, os.X_OK) else None
+def median_rep(reps):
+    """The rep whose vs_gt is the median (the lower middle of an even count),
+    with how many there were, their vs_gt range and their places in the
+    run order, as the row's last three cells."""
+    by = sorted(reps, key=lambda r: r["vs_gt"])
+    m = by[(len(by) - 1) // 2]
+    return m, [len(by), f"{100 * by[0]['vs_gt']:.3f}-{100 * by[-1]['vs_gt']:.3f}%",
+               ";".join(str(r["order"]) for r in reps)]
 
 
-def renderpark(ctx, ref, keep, write_csv):
-    """rpkCpp at each of gt.rpk's option lists: its CPU seconds (its own last
-    "CPU time" line) and errors, or a note that it is not built."""
-    out = ctx.result("gt-renderpark-measured.csv")
-    note = ctx.result("gt-renderpark-skipped.txt")
+def interleaved(ctx, ref, keep, run, image):
+    """`--max-seconds T` at otherwise default options and RenderPark at each
+    of gt.rpk's option lists, run by turns (vismask's i-th budget, then
+    RenderPark's i-th setting, then the next of each), the whole sequence
+    gt.reps times, so that both see the machine's load alike. Each row is
+    its median repetition by vs_gt. Returns the anytime rows (their best-fixed
+    columns still to insert at 8) and RenderPark's (empty, with a note
+    written, when it is not built)."""
+    g = ctx.s["gt"]
+    out, note = ctx.result("gt-renderpark-measured.csv"), ctx.result("gt-renderpark-skipped.txt")
     for p in (out, note):
         if os.path.exists(p):
             os.remove(p)
@@ -100,16 +105,60 @@ def renderpark(ctx, ref, keep, write_csv):
             f.write("RenderPark not built (make renderpark RPK_SRC=DIR, a checkout of "
                     "github.com/OscarChavarro/rpkCpp 37e5ff4e; or RPK_BIN=BINARY)\n")
         log("experiments: RenderPark not built, its measured rows skipped")
-        return
+    budgets, settings = g["anytime"], (g["rpk"] if rpk else [])
+    vm = [[] for _ in budgets]
+    rp = [[] for _ in settings]
+    order = 0
+    for rep in range(g.get("reps", 1)):
+        for i in range(max(len(budgets), len(settings))):
+            if i < len(budgets):
+                order += 1
+                vm[i].append(dict(order=order, **anytime_run(ctx, ref, keep, run, image,
+                                                             budgets[i], rep)))
+            if i < len(settings):
+                order += 1
+                rp[i].append(dict(order=order, **renderpark_run(ctx, ref, keep, rpk, i,
+                                                                settings[i], rep)))
     rows = []
-    for k, opts in enumerate(ctx.s["gt"]["rpk"]):
-        pfm = os.path.join(ctx.runs, "gt", f"renderpark-{k}.pfm")
-        cmd = [os.path.join(ROOT, "tools", "renderpark-run"), "render", "--rpk", rpk, SCENE,
-               "--camera", ORIGINAL, "--size", str(ref.w), str(ref.h), "--out", pfm, "--"] + opts
-        log("  " + " ".join(os.path.relpath(c, ROOT) if c.startswith(ROOT) else c for c in cmd))
-        r = subprocess.run(cmd, check=True, capture_output=True, text=True)
-        cpu = float(r.stdout.split("CPU time ")[1].split()[0])
-        img = read_pfm(pfm)[2]
-        rows.append(["rpkCpp hierarchical Galerkin", " ".join(opts), cpu, ref.error(img),
-                     ref.error(img, keep)])
-    write_csv(out, ["renderpark", "options", "cpu_seconds", "vs_gt", "vs_gt_no_silhouettes"], rows)
+    for T, reps in zip(budgets, vm):
+        m, tail = median_rep(reps)
+        rows.append([m["name"], m["options"], T, m["solve_seconds"], m["stop"], m["shots"],
+                     m["vs_gt"], m["vs_gt_no_silhouettes"], m["cpu_seconds"]] + tail)
+    rpk_rows = []
+    for opts, reps in zip(settings, rp):
+        m, tail = median_rep(reps)
+        rpk_rows.append(["rpkCpp hierarchical Galerkin", " ".join(opts), m["cpu_seconds"],
+                         m["vs_gt"], m["vs_gt_no_silhouettes"]] + tail)
+    return rows, rpk_rows
+
+
+def anytime_run(ctx, ref, keep, run, image, T, rep):
+    """One `--max-seconds T` run (repetition rep: the first keeps the name
+    anytime-T, the others get -repN)."""
+    args = ctx.s["gt"]["default"] + ["--max-seconds", f"{T:g}"]
+    name = f"anytime-{T:g}s" + (f"-rep{rep + 1}" if rep else "")
+    j = run(ctx, name, args, ref)
+    img = image(ctx, name)
+    return dict(name=name, options=" ".join(args), solve_seconds=j["timings"]["solve_seconds"],
+                stop=j["result"]["stop_reason"], shots=j["result"]["shots"],
+                cpu_seconds=j["result"]["compute_cpu_seconds"], vs_gt=ref.error(img),
+                vs_gt_no_silhouettes=ref.error(img, keep))
+
+
+def renderpark_run(ctx, ref, keep, rpk, k, opts, rep):
+    """rpkCpp at one option list: its CPU seconds (its own last "CPU time"
+    line) and errors."""
+    pfm = os.path.join(ctx.runs, "gt", f"renderpark-{k}" + (f"-rep{rep + 1}" if rep else "") + ".pfm")
+    cmd = [os.path.join(ROOT, "tools", "renderpark-run"), "render", "--rpk", rpk, SCENE,
+           "--camera", ORIGINAL, "--size", str(ref.w), str(ref.h), "--out", pfm, "--"] + opts
+    log("  " + " ".join(os.path.relpath(c, ROOT) if c.startswith(ROOT) else c for c in cmd))
+    r = subprocess.run(cmd, check=True, capture_output=True, text=True)
+    img = read_pfm(pfm)[2]
+    return dict(cpu_seconds=float(r.stdout.split("CPU time ")[1].split()[0]), vs_gt=ref.error(img),
+                vs_gt_no_silhouettes=ref.error(img, keep))
+
+
+def rpk_binary():
+    """$RPK_BIN, else make renderpark's build/renderpark/build/rpk, or None."""
+    b = os.environ.get("RPK_BIN") or os.path.join(ROOT, "build", "renderpark", "build", "rpk")
+    return b if os.access(b, os.X_OK) else None

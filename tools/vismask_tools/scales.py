@@ -54,6 +54,9 @@ SCALES = {
                          points=40, budgets=[1, 10, 30], env_seconds=10, env_res=100,
                          # --max-seconds T at otherwise default options (issue 41).
                          anytime=[0.1, 0.3, 1, 3, 10],
+                         # The anytime runs and RenderPark's, by turns, this
+                         # many times (each row its median repetition).
+                         reps=3,
                          # rpkCpp's Galerkin (make renderpark): 30 Jacobi
                          # iterations at three link error thresholds.
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", t]
@@ -70,7 +73,7 @@ SCALES = {
                          settings=[("cap-0.02s", ["--emitted-rays", "20000", "--max-seconds", "0.02"]),
                                    ("emitted-2e4", ["--emitted-rays", "20000"])],
                          points=10, budgets=[0.05, 0.2, 0.5], env_seconds=0.2, env_res=8,
-                         anytime=[0.02, 0.05],
+                         anytime=[0.02, 0.05], reps=2,
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", "1e-5"]],
                          band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
                          common=["--patch-size", "140", "--stop-unshot", "5e-2"],
