@@ -122,6 +122,10 @@ TEST(ReferenceTest, ErrorEveryKShotsWithoutChangingTheSolve) {
   EXPECT_LT(last, first);
   std::string json = ReadFile(dir.File("measured/run.json"));
   EXPECT_NE(json.find("\"error_measurements\": 7"), std::string::npos) << json;
+  // The last measurement drew the final image, which the outputs then write
+  // (the same bytes as the plain run's, above) without drawing it again.
+  EXPECT_NE(json.find("\"images_drawn\": 7,"), std::string::npos) << json;
+  EXPECT_NE(ReadFile(dir.File("plain/run.json")).find("\"images_drawn\": 1,"), std::string::npos);
   EXPECT_NE(json.find("\"error_every\": 100"), std::string::npos) << json;
   EXPECT_NE(ReadFile(dir.File("plain/run.json")).find("\"relative_rmse\": null"),
             std::string::npos);
@@ -136,6 +140,7 @@ TEST(ReferenceTest, ReferenceAloneMeasuresTheFinalImage) {
   for (size_t i = 1; i + 1 < rows.size(); ++i) EXPECT_TRUE(rows[i][3].empty()) << i;
   double last = std::stod(rows.back()[3]);
   EXPECT_NEAR(last, FileError(dir.File("a/image.pfm"), dir.File("ref/image.pfm")), 1e-8 * last);
+  EXPECT_NE(ReadFile(dir.File("a/run.json")).find("\"images_drawn\": 1,"), std::string::npos);
 }
 
 TEST(ReferenceTest, BadReferenceExitsTwoAndWritesNothing) {

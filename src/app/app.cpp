@@ -16,6 +16,7 @@ class ReferenceProbe : public ErrorProbe {
   explicit ReferenceProbe(RunState* r) : r_(r) {}
   double Measure() override {
     RenderImage(r_);
+    current_ = true;
     if (!r_->isRoot()) return 0.0;
     static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "colour is packed RGB floats");
     Span<const float> image(reinterpret_cast<const float*>(r_->fb.color.data()),
@@ -23,8 +24,14 @@ class ReferenceProbe : public ErrorProbe {
     return CompareImages(image, r_->reference, r_->exclude).relativeRmse;
   }
 
+  void Moved() override { current_ = false; }
+  // The framebuffer holds the image of the solution as it is (the last
+  // Measure came after the last round): the outputs need not draw it again.
+  bool current() const { return current_; }
+
  private:
   RunState* r_;
+  bool current_ = false;
 };
 
 // --max-seconds's plan: the rays timed through the grid at init; the share
@@ -394,6 +401,7 @@ int Main(int argc, const char* const* argv) {
   const int early = EndedEarly(r.get(), res);
   if (early >= 0) return early;
   SetPhase(Phase::kOutput);
+  r->imageCurrent = probe.current();
   rc = WriteOutputs(r.get(), res);
   SetPhase(Phase::kDone);
   rc = r->transport->Finish(rc);

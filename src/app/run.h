@@ -124,6 +124,11 @@ struct RunState {
   Span<float> reference;  // rank 0 with --reference: the reference image, RGB floats
   Span<uint8_t> exclude;  // rank 0 with --exclude: nonzero where a pixel is left out of the error
   size_t excludedPixels = 0;
+  // Images drawn (RenderImage), for run.json; whether the framebuffer holds
+  // the final solution's image already (a --reference measurement after the
+  // last round), so that the outputs do not draw it again.
+  uint32_t imagesDrawn = 0;
+  bool imageCurrent = false;
   Span<uint8_t> rgb8;
   Span<uint8_t> pngScratch;
   Span<char> convBuffer;

@@ -202,6 +202,7 @@ void ShareDisplayValues(RunState* r, const double* ambient) {
 // from every environment (summed in environment order), each rank's patches
 // drawn by that rank, and rank 0 depth-compositing the others'. Collective.
 void RenderImage(RunState* r) {
+  ++r->imagesDrawn;
   for (uint32_t i = 0; i < r->rankEnvs.perRank; ++i) r->ambientMine[i] = AmbientReport{};
   for (size_t i = 0; i < r->envPtrs.size(); ++i) r->ambientMine[i] = AmbientOf(*r->envPtrs[i]);
   GatherByEnv(r, r->ambientMine, r->ambientAll, r->ambient);
@@ -244,7 +245,9 @@ void WarnIfEmpty(const Framebuffer& fb, bool hasCamera) {
 
 int WriteOutputs(RunState* r, const SolveResult& res) {
   double start = os::Seconds();
-  RenderImage(r);
+  // A final --reference measurement drew this very image (the same state,
+  // the same drawing): the same bytes, so it is not drawn again.
+  if (!r->imageCurrent) RenderImage(r);
   WritePatchesCsv(r);
   // The export is the view-independent solution: with per-pixel direct
   // light the image's vertex values were the indirect part alone, so the

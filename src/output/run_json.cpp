@@ -213,6 +213,9 @@ void WriteResultError(const RunState* r, const SolveResult& res, TextWriter* out
   w.Printf("    \"excluded_pixels\": %zu,\n", r->excludedPixels);  // by --exclude
   w.Printf("    \"error_measurements\": %llu,\n",
            static_cast<unsigned long long>(res.errorMeasurements));
+  // The images drawn: one a measurement, and the outputs' unless the last
+  // measurement drew the final solution.
+  w.Printf("    \"images_drawn\": %u,\n", r->imagesDrawn);
   // The stated error of patches.csv's b: the Monte Carlo standard error
   // relative to b (area-weighted RMS over patches and channels), and the
   // ambient term's share of the total radiosity (what the still-unshot power

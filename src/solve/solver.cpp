@@ -296,6 +296,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
     }
     double cpu0 = os::CpuSeconds();
     RunRoundShots(envs, rankEnvs, options, result, totals, buffers);
+    if (probe) probe->Moved();
     double roundCpu = os::CpuSeconds() - cpu0;
     result.computeSeconds += roundCpu;
     ++result.rounds;

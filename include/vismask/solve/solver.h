@@ -30,6 +30,9 @@ class ErrorProbe {
   // The relative RMSE of the current solution's image (rank 0's value is
   // the one reported). Must not change the solution and must not allocate.
   virtual double Measure() = 0;
+  // The solution moved on since the last Measure (a round ran), so the image
+  // Measure drew is no longer the solution's.
+  virtual void Moved() {}
 };
 
 struct SolveState;
