@@ -218,11 +218,15 @@ TEST(AllocTest, PerPixelSunAllocatesNothingAfterInit) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   for (const char* raster : {"on", "off"})
     for (const char* scene : {"scenes/skylight.obj", "scenes/cornell.obj"}) {
-      CountedRender run(scene, std::string("--sun 1,4,0.5,3,3,3 --direct-samples 32 --max-shots "
-                                           "300 --width 64 --height 48 --aa ") +
-                                   raster);
-      ASSERT_EQ(run.code, 0) << scene << ": " << run.err;
-      EXPECT_EQ(run.allocations, 0) << scene << ", --aa " << raster << ": heap after init";
+      for (const char* envs : {"", " --envs 2x1x2"}) {
+        // Several environments: each gathers its own emitters, the sun is the solve's.
+        CountedRender run(scene, std::string("--sun 1,4,0.5,3,3,3 --direct-samples 32 --max-shots "
+                                             "300 --width 64 --height 48 --aa ") +
+                                     raster + envs);
+        ASSERT_EQ(run.code, 0) << scene << envs << ": " << run.err;
+        EXPECT_EQ(run.allocations, 0)
+            << scene << ", --aa " << raster << envs << ": heap after init";
+      }
     }
 }
 
@@ -251,12 +255,14 @@ TEST(AllocTest, PerPixelGatherOverSeveralLampsAllocatesNothingAfterInit) {
 TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   // The defaults (power allocation with partial shots, Sobol' samples,
-  // elements, antialiasing) on two environments, so cut vertices are shared.
+  // elements, antialiasing, direct light per pixel from each environment's
+  // own emitters) on two environments, so cut vertices are shared.
   CountedRender run("scenes/cornell.obj",
                     "--envs 2 --mask-method R --emitted-rays 500000 --max-rays 2048 --width 96 "
                     "--height 96 --stop-unshot 1e-2");
   ASSERT_EQ(run.code, 0);
   EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
+  EXPECT_NE(run.Json().find("\"direct_samples\": 32"), std::string::npos);
   EXPECT_EQ(run.Json().find("\"splits\": 0,"), std::string::npos) << "no element split";
 }
 

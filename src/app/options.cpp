@@ -305,13 +305,9 @@ Status ResolveEnvironments(Options* o) {
   }
   const int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   ResolveRounds(numEnvs, o);
-  // Per-pixel direct light traces its shadow rays in one environment's grid.
-  if (o->directSamples > 0 && numEnvs > 1)
-    return Status::Error("vismask: --direct-samples: " + std::to_string(o->directSamples) +
-                         " with " + std::to_string(numEnvs) +
-                         " environments: per-pixel direct light needs one environment (give "
-                         "--direct-samples 0, or no --envs)");
-  if (o->directSamples < 0) o->directSamples = numEnvs == 1 ? kDefaultDirectSamples : 0;
+  // Per-pixel direct light, with one environment or several (each gathers
+  // its own emitters' light: docs/design/direct-light.md).
+  if (o->directSamples < 0) o->directSamples = kDefaultDirectSamples;
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
                          std::to_string(numEnvs) +
