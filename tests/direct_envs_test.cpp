@@ -40,12 +40,10 @@ void WriteOffsetShadowScene(const std::string& dir) {
 // floor across the image), into dir/NAME; returns the image.
 PfmImage RenderOffset(const test::TempDir& dir, const std::string& name, int size,
                       const std::string& flags) {
-  std::vector<std::string> args = {"render",  dir.File("s.obj"),
-                                   "--out",   dir.File(name),
-                                   "--camera", "-5,0.5,0,-5,0,0,0,0,1,90",
-                                   "--width", std::to_string(size),
-                                   "--height", std::to_string(size),
-                                   "--quiet"};
+  std::vector<std::string> args = {
+      "render",   dir.File("s.obj"),          "--out",   dir.File(name),
+      "--camera", "-5,0.5,0,-5,0,0,0,0,1,90", "--width", std::to_string(size),
+      "--height", std::to_string(size),       "--quiet"};
   for (const std::string& w : test::Words(flags)) args.push_back(w);
   test::RunResult r = test::RunMain(args);
   EXPECT_EQ(r.code, 0) << r.err;
@@ -83,9 +81,12 @@ TEST(DirectEnvsTest, SameBytesOnEveryTransportAndRankCount) {
   std::vector<std::string> images;
   for (const char* ranks : {"", "--ranks 2"}) {
     std::string out = dir.File(*ranks ? "pipes" : "loop");
-    std::vector<std::string> args = {"render",  "scenes/cornell.obj", "--out", out,
-                                     "--envs",  "2",                  "--width", "64",
-                                     "--height", "64",                "--emitted-rays", "200000",
+    std::vector<std::string> args = {"render",         "scenes/cornell.obj",
+                                     "--out",          out,
+                                     "--envs",         "2",
+                                     "--width",        "64",
+                                     "--height",       "64",
+                                     "--emitted-rays", "200000",
                                      "--quiet"};
     for (const std::string& w : test::Words(ranks)) args.push_back(w);
     test::RunResult r = test::RunMain(args);
