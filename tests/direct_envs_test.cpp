@@ -57,7 +57,7 @@ TEST(DirectEnvsTest, ShadowEdgeInTheLampsEnvironmentIsAsSharpAsWithOne) {
   WriteOffsetShadowScene(dir.path());
   const int n = 128;
   const double geometric = 0.08 * n;  // the penumbra's 10%-90% part, as in DirectTest
-  PfmImage direct = RenderOffset(dir, "direct", n, "--envs 2x1x1");
+  PfmImage direct = RenderOffset(dir, "direct", n, "--envs 2x1x1 --direct-samples 32");
   PfmImage solved = RenderOffset(dir, "solved", n, "--envs 2x1x1 --direct-samples 0");
   EXPECT_NE(test::ReadFile(dir.File("direct/run.json")).find("\"direct_samples\": 32"),
             std::string::npos);
@@ -71,6 +71,10 @@ TEST(DirectEnvsTest, ShadowEdgeInTheLampsEnvironmentIsAsSharpAsWithOne) {
   // The gather changes the image only: the solve is the same bytes.
   EXPECT_EQ(test::ReadFile(dir.File("direct/patches.csv")),
             test::ReadFile(dir.File("solved/patches.csv")));
+  // Not given, it is off with several environments.
+  RenderOffset(dir, "default", 16, "--envs 2x1x1 --max-shots 50");
+  EXPECT_NE(test::ReadFile(dir.File("default/run.json")).find("\"direct_samples\": 0"),
+            std::string::npos);
 }
 
 TEST(DirectEnvsTest, SameBytesOnEveryTransportAndRankCount) {
@@ -81,12 +85,20 @@ TEST(DirectEnvsTest, SameBytesOnEveryTransportAndRankCount) {
   std::vector<std::string> images;
   for (const char* ranks : {"", "--ranks 2"}) {
     std::string out = dir.File(*ranks ? "pipes" : "loop");
-    std::vector<std::string> args = {"render",         "scenes/cornell.obj",
-                                     "--out",          out,
-                                     "--envs",         "2",
-                                     "--width",        "64",
-                                     "--height",       "64",
-                                     "--emitted-rays", "200000",
+    std::vector<std::string> args = {"render",
+                                     "scenes/cornell.obj",
+                                     "--out",
+                                     out,
+                                     "--envs",
+                                     "2",
+                                     "--direct-samples",
+                                     "32",
+                                     "--width",
+                                     "64",
+                                     "--height",
+                                     "64",
+                                     "--emitted-rays",
+                                     "200000",
                                      "--quiet"};
     for (const std::string& w : test::Words(ranks)) args.push_back(w);
     test::RunResult r = test::RunMain(args);
