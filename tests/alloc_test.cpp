@@ -218,11 +218,15 @@ TEST(AllocTest, PerPixelSunAllocatesNothingAfterInit) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   for (const char* raster : {"on", "off"})
     for (const char* scene : {"scenes/skylight.obj", "scenes/cornell.obj"}) {
-      CountedRender run(scene, std::string("--sun 1,4,0.5,3,3,3 --direct-samples 32 --max-shots "
-                                           "300 --width 64 --height 48 --aa ") +
-                                   raster);
-      ASSERT_EQ(run.code, 0) << scene << ": " << run.err;
-      EXPECT_EQ(run.allocations, 0) << scene << ", --aa " << raster << ": heap after init";
+      for (const char* envs : {"", " --envs 2x1x2"}) {
+        // Several environments: each gathers its own emitters, the sun is the solve's.
+        CountedRender run(scene, std::string("--sun 1,4,0.5,3,3,3 --direct-samples 32 --max-shots "
+                                             "300 --width 64 --height 48 --aa ") +
+                                     raster + envs);
+        ASSERT_EQ(run.code, 0) << scene << envs << ": " << run.err;
+        EXPECT_EQ(run.allocations, 0)
+            << scene << ", --aa " << raster << envs << ": heap after init";
+      }
     }
 }
 

@@ -344,8 +344,7 @@ void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepar
   e.elements.threshold = o.elementSpread;
   e.elements.chi2 = o.elementChi2;
   e.indirectFilter = o.indirectFilter;
-  e.directSamples =
-      p->grid.count() == 1 && o.directSamples > 0 ? static_cast<uint32_t>(o.directSamples) : 0;
+  e.directSamples = o.directSamples > 0 ? static_cast<uint32_t>(o.directSamples) : 0;
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
 }

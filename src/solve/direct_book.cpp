@@ -16,10 +16,10 @@ void DirectBook::Layout(Arena& arena, uint32_t numPatches, bool on, bool smooth,
 }
 
 void DirectBook::Build(Span<const Patch> patches, const DisplayLattice& lattice,
-                       const OutsideLight& outside) {
+                       const OutsideLight& outside, bool sun) {
   if (on_) {
     light_.Build(patches);
-    light_.SetSun(outside);
+    if (sun) light_.SetSun(outside);
   }
   // Per-pixel direct light leaves smoothed polygons (a smooth vertex on a
   // patch of theirs) as they were: their patches show the solved whole.

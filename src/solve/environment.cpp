@@ -280,7 +280,9 @@ bool Environment::Build() {
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
   lattice_.Build(staged_->lattice, patches_);
   grid_.Build(patches_, geom_);
-  direct_.Build(patches_, lattice_, options_.outside);
+  // The sun's shadow rays must leave the scene, which only one
+  // environment's grid can tell; with neighbours the sun is the solve's.
+  direct_.Build(patches_, lattice_, options_.outside, numNeighbours_ == 0);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())

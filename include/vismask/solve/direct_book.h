@@ -25,9 +25,14 @@ class DirectBook {
   // (also from a measuring arena).
   void Layout(Arena& arena, uint32_t numPatches, bool on, bool smooth,
               const DirectLight::Counts& counts);
-  // The emitters from `patches` and the sun of `outside`, and which patches
-  // have a smooth vertex of `lattice` (init: uses the heap).
-  void Build(Span<const Patch> patches, const DisplayLattice& lattice, const OutsideLight& outside);
+  // The emitters from `patches` and (with `sun`) the sun of `outside`, and
+  // which patches have a smooth vertex of `lattice` (init: uses the heap).
+  // An environment gathers its own emitters only: a shadow ray between two
+  // points of its box never leaves it, and its grid holds every piece of
+  // geometry there; the light of another environment's emitters comes with
+  // the solve's foreign shots, which count as indirect.
+  void Build(Span<const Patch> patches, const DisplayLattice& lattice, const OutsideLight& outside,
+             bool sun);
   // Patch i's emission still unshot is all of `unshot` (a solve's start).
   void ResetPatch(uint32_t i, const double unshot[3]) {
     if (!emitLeft_.empty())
@@ -37,8 +42,8 @@ class DirectBook {
   // `fraction` of it: the shot's emission share, in proportion to the
   // emission in its unshot power, and the emission left.
   void BookLocalShot(uint32_t i, int c, double unshot, double power, double fraction);
-  // A foreign shot's light is indirect here (per-pixel direct light runs
-  // with one environment only: DESIGN, Direct light per pixel).
+  // A foreign shot's light is indirect here: its shooter's emitters are
+  // another environment's, which the pixels here do not gather.
   void BookForeignShot() {
     for (double& d : shotDirect_) d = 0.0;
   }
