@@ -24,8 +24,12 @@ CellGeometry SubGeometry(const CellGeometry& top, size_t c, const int res[3]) {
   return g;
 }
 
+// The top cells' reference counts and the sub-grids they decide; each
+// (top cell, patch) registration into *pairs (cell << 32 | patch), in patch
+// order, so that no later pass shapes a patch again for its top cells.
 void PlanNest(Span<const Patch> patches, Span<const PatchGeom> geom, const Scale& scale,
-              const CellGeometry& top, const Grid::Nest& nest, NestLayout* out) {
+              const CellGeometry& top, const Grid::Nest& nest, NestLayout* out,
+              std::vector<uint64_t>* pairs) {
   const size_t cells = static_cast<size_t>(top.res[0]) * top.res[1] * top.res[2];
   out->count.assign(cells, 0);
   out->sub.assign(cells, kNone);
@@ -46,6 +50,7 @@ void PlanNest(Span<const Patch> patches, Span<const PatchGeom> geom, const Scale
     MakeShape(patches[i], geom[i], scale, &shape);
     ForEachCell(top, shape, [&](size_t c) {
       ++out->count[c];
+      pairs->push_back(static_cast<uint64_t>(c) << 32 | i);
       if (nest.minRefs) {
         uint32_t& r = cellRun[c];
         r = r == kNone || r == runOf[i] ? runOf[i] : kMixed;
@@ -98,8 +103,17 @@ void MakeRefLayout(Span<const Patch> patches, Span<const PatchGeom> geom, const 
                    RefLayout* out) {
   out->scale = gridcells::ScaleOf(patches);
   out->topGeom = gridcells::CellGeometryOf(plan);
-  PlanNest(patches, geom, out->scale, out->topGeom, plan.nest, &out->nest);
+  out->pairs.clear();
+  PlanNest(patches, geom, out->scale, out->topGeom, plan.nest, &out->nest, &out->pairs);
   const NestLayout& nl = out->nest;
+  // The patches registered in a cell with a sub-grid, which ForEachRef
+  // shapes again for its cells.
+  out->nested.clear();
+  for (uint64_t pc : out->pairs) {
+    const uint32_t i = static_cast<uint32_t>(pc);
+    if (nl.sub[pc >> 32] != kNone && (out->nested.empty() || out->nested.back() != i))
+      out->nested.push_back(i);
+  }
   // The plane runs, and each patch's.
   std::vector<uint32_t> runOf(patches.size(), kNone);
   out->runs.clear();

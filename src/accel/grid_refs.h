@@ -101,7 +101,9 @@ struct RefLayout {
   std::vector<uint32_t> topCount, topRun;  // per top cell (0, kNone with a sub-grid)
   std::vector<uint32_t> subCount, subRun;  // per sub-grid cell
   Block top;
-  std::vector<Block> sub;  // per sub-grid
+  std::vector<Block> sub;        // per sub-grid
+  std::vector<uint64_t> pairs;   // every (top cell << 32 | patch) registration, in patch order
+  std::vector<uint32_t> nested;  // the patches registered in a top cell with a sub-grid
   uint64_t refs = 0, units = 0, occupied = 0, planes = 0;
 };
 void MakeRefLayout(Span<const Patch> patches, Span<const PatchGeom> geom, const Grid::Plan& plan,
@@ -109,20 +111,23 @@ void MakeRefLayout(Span<const Patch> patches, Span<const PatchGeom> geom, const 
 
 // Calls top(i, c) for every top cell c without a sub-grid that patch i is
 // registered in, and sub(i, g, s) for every cell s (numbered across all
-// sub-grids) of sub-grid g it is registered in; patches in ascending order.
+// sub-grids) of sub-grid g it is registered in; within either, patches in
+// ascending order. The top cells' come from rl.pairs; only the patches in
+// cells with a sub-grid are shaped again, for the sub-grids' cells.
 template <typename Top, typename Sub>
 void ForEachRef(Span<const Patch> patches, Span<const PatchGeom> geom, const RefLayout& rl, Top top,
                 Sub sub) {
-  gridcells::Shape shape;
   const NestLayout& nl = rl.nest;
-  for (size_t i = 0; i < patches.size(); ++i) {
+  for (uint64_t pc : rl.pairs) {
+    const size_t c = static_cast<size_t>(pc >> 32);
+    if (nl.sub[c] == kNone) top(static_cast<size_t>(static_cast<uint32_t>(pc)), c);
+  }
+  gridcells::Shape shape;
+  for (uint32_t i : rl.nested) {
     gridcells::MakeShape(patches[i], geom[i], rl.scale, &shape);
     gridcells::ForEachCell(rl.topGeom, shape, [&](size_t c) {
       const uint32_t g = nl.sub[c];
-      if (g == kNone) {
-        top(i, c);
-        return;
-      }
+      if (g == kNone) return;
       const uint64_t first = nl.first[g];
       gridcells::ForEachCell(nl.geom[g], shape, [&](size_t l) { sub(i, g, first + l); });
     });
