@@ -160,12 +160,6 @@ void Grid::Layout(Arena& arena, const Plan& plan) {
       plan.subGrids ? arena.Alloc<SubGrid>(static_cast<size_t>(plan.subGrids)) : Span<SubGrid>();
   subOccupied_ = subWords ? arena.Alloc<uint64_t>(subWords) : Span<uint64_t>();
   subRank_ = subWords ? arena.Alloc<uint32_t>(subWords) : Span<uint32_t>();
-#if defined(__x86_64__)
-  __builtin_cpu_init();
-  popcnt_ = __builtin_cpu_supports("popcnt");
-#else
-  popcnt_ = true;  // the builtin is an instruction (aarch64) or libgcc's, the same count
-#endif
   for (int a = 0; a < 3; ++a) {
     float extent = plan.bounds.hi[a] - plan.bounds.lo[a];
     cellSize_[a] = extent / static_cast<float>(plan.res[a]);

@@ -239,9 +239,8 @@ class Grid {
     uint64_t tests = 0;
   };
   // The DDA walk behind Intersect (kAnyHit false) and Occluded (true), the
-  // top cells' references 32-bit (kWide) or 16-bit, a cell's rank counted by
-  // the POPCNT instruction (kPopcnt) or by bit slices (the same integers).
-  template <bool kAnyHit, bool kWide, bool kPopcnt>
+  // top cells' references 32-bit (kWide) or 16-bit.
+  template <bool kAnyHit, bool kWide>
   bool Walk(const Ray& ray, Skip skip, Hit* hit) const;
   template <bool kAnyHit>
   bool WalkAny(const Ray& ray, Skip skip, Hit* hit) const;
@@ -253,10 +252,10 @@ class Grid {
                 WalkState* st) const;
   // A top cell's sub-grid between t = tEnter and tLeave; adds the cells it
   // entered to *steps.
-  template <bool kAnyHit, bool kWide, bool kPopcnt>
+  template <bool kAnyHit, bool kWide>
   bool WalkSub(const SubGrid& sg, const Ray& ray, const float invD[3], float tEnter, float tLeave,
                Skip skip, Hit* hit, WalkState* st, uint64_t* steps) const;
-  template <bool kAnyHit, bool kPopcnt>
+  template <bool kAnyHit>
   bool EnterSub(const SubGrid& sg, const Ray& ray, const float invD[3], float tEnter, float tLeave,
                 Skip skip, Hit* hit, WalkState* st, uint64_t* steps) const;
   // Every patch, for rays whose origin is too far away for the grid's padding.
@@ -287,7 +286,6 @@ class Grid {
   mutable uint64_t steps_ = 0;
   Span<const PatchGeom> geom_;
   float farLimit_ = 0.0f;  // origins with a coordinate beyond this skip the grid
-  bool popcnt_ = false;    // the CPU counts bits in one instruction (Layout asks)
 };
 
 }  // namespace vismask
