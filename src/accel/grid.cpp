@@ -58,7 +58,7 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
   glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo.x);
   Shape shape;
   for (size_t i = 0; i < n; ++i) {
-    MakeShape(patches[i], geom[i], scale, &shape);
+    MakeShape(patches[i], geom[i], scale, &shape, /*boxOnly=*/true);
     lo = glm::min(lo, shape.lo);
     hi = glm::max(hi, shape.hi);
   }
