@@ -63,43 +63,50 @@ TEST(GridTest, LayoutMeasuresWhatItUses) {
   Arena measure = Arena::Measure();
   Grid probe;
   probe.Layout(measure, plan);
-  EXPECT_EQ(probe.cellStart().data(), nullptr);
+  EXPECT_EQ(probe.records().data(), nullptr);
   Arena arena(measure.used());
   Grid grid;
   grid.Layout(arena, plan);
   EXPECT_EQ(arena.used(), measure.used());
   EXPECT_EQ(grid.bytes(), probe.bytes());
-  EXPECT_EQ(grid.bytes(), (grid.cellCount() + 1 + plan.refs + plan.occupied) * sizeof(uint32_t) +
-                              (grid.cellCount() + 63) / 64 * sizeof(uint64_t) +
+  // Records for the occupied cells only, the bitmap with a count a word,
+  // 16-bit references (700 patches span less than 65536).
+  EXPECT_FALSE(plan.topWide);
+  EXPECT_EQ(plan.units, plan.refs);
+  EXPECT_EQ(grid.bytes(), (plan.occupied + 1) * sizeof(CellRecord) + plan.units * sizeof(uint16_t) +
+                              (grid.cellCount() + 63) / 64 * (sizeof(uint64_t) + sizeof(uint32_t)) +
                               plan.planes * sizeof(CellPlane));
   grid.Build(Span<const Patch>(s.patches.data(), 700), Span<const PatchGeom>(s.geom.data(), 700));
   EXPECT_EQ(arena.used(), measure.used());
 
-  // The built arrays hold exactly plan.refs references and a header word
-  // per occupied cell, sorted within cells, and every patch is in the cell
-  // of its centroid.
-  Span<const uint32_t> start = grid.cellStart();
-  // The occupancy bitmap marks exactly the cells that hold a reference.
+  // The built arrays hold exactly plan.refs references and a record per
+  // occupied cell, in cell order, sorted within cells, and every patch is
+  // in the cell of its centroid.
+  Span<const CellRecord> records = grid.records();
+  ASSERT_EQ(records.size(), plan.occupied + 1);
+  EXPECT_EQ(records[0].start, 0u);
+  EXPECT_EQ(records[plan.occupied].start, plan.units);
+  // The occupancy bitmap marks exactly the cells that hold a reference, and
+  // the k-th occupied cell has the k-th record.
   size_t occupiedCells = 0, refCount = 0;
   for (size_t c = 0; c < grid.cellCount(); ++c) {
-    bool bit = (grid.occupied()[c / 64] >> (c % 64)) & 1;
-    ASSERT_EQ(bit, start[c + 1] > start[c]) << "cell " << c;
-    ASSERT_EQ(bit, !grid.CellRefs(c).empty()) << "cell " << c;
+    bool bit = grid.CellOccupied(c);
+    RefList refs = grid.CellRefs(c);
+    ASSERT_EQ(bit, !refs.empty()) << "cell " << c;
+    if (bit) {
+      ASSERT_EQ(records[occupiedCells + 1].start - records[occupiedCells].start, refs.size());
+      ASSERT_EQ(records[occupiedCells].header, grid.CellPlaneOf(c));
+    } else {
+      ASSERT_EQ(grid.CellPlaneOf(c), Grid::kNoPlane);
+    }
     occupiedCells += bit;
-    refCount += grid.CellRefs(c).size();
+    refCount += refs.size();
+    for (size_t k = 1; k < refs.size(); ++k) ASSERT_LT(refs[k - 1], refs[k]);
   }
   EXPECT_GT(occupiedCells, 0u);
   EXPECT_LT(occupiedCells, grid.cellCount());
   EXPECT_EQ(occupiedCells, plan.occupied);
   EXPECT_EQ(refCount, plan.refs);
-  ASSERT_EQ(start.size(), grid.cellCount() + 1);
-  EXPECT_EQ(start[0], 0u);
-  EXPECT_EQ(start[grid.cellCount()], plan.refs + plan.occupied);
-  for (size_t c = 0; c < grid.cellCount(); ++c) {
-    ASSERT_LE(start[c], start[c + 1]);
-    Span<const uint32_t> refs = grid.CellRefs(c);
-    for (size_t k = 1; k < refs.size(); ++k) ASSERT_LT(refs[k - 1], refs[k]);
-  }
   glm::vec3 cell =
       (plan.bounds.hi - plan.bounds.lo) / glm::vec3(plan.res[0], plan.res[1], plan.res[2]);
   for (uint32_t i = 0; i < 700; ++i) {

@@ -128,7 +128,7 @@ TEST(GridTest, SharedPlanesSkipCellsExactly) {
     EXPECT_TRUE(spread);  // the tilted wall's offsets round apart
     // Cells with a plane: every patch in a run with that record; one holds a patch and its twin.
     size_t withPlane = 0, occupied = 0, twinned = 0;
-    ForEachLeafCell(b.grid, [&](Span<const uint32_t> refs, uint32_t h) {
+    ForEachLeafCell(b.grid, [&](const RefList& refs, uint32_t h) {
       ++occupied;
       if (h == Grid::kNoPlane) return;
       ++withPlane;

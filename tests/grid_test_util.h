@@ -92,7 +92,7 @@ inline Grid::Nest DenseNest() {
 }
 
 // Calls visit(refs, header) for every cell that holds patches itself: the
-// top cells without a sub-grid and every sub-grid's cells.
+// top cells without a sub-grid and every sub-grid's cells (refs: a RefList).
 template <typename Visit>
 void ForEachLeafCell(const Grid& g, Visit visit) {
   for (size_t c = 0; c < g.cellCount(); ++c)

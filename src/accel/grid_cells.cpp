@@ -60,7 +60,7 @@ Scale ScaleOf(Span<const Patch> patches) {
   return s;
 }
 
-void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s) {
+void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s, bool boxOnly) {
   double pad = scale.pad;
   glm::dvec3 n(g.n);
   double nLen = glm::length(n);
@@ -148,6 +148,10 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s)
   s->hi += pad;
   if (!std::isfinite(s->lo.x + s->lo.y + s->lo.z + s->hi.x + s->hi.y + s->hi.z))
     return CornerShape(p, pad, s);
+  if (boxOnly) {
+    s->numAxes = 0;
+    return;
+  }
 
   // Separating axes beyond the box's own: the plane normal, the side faces and
   // the edge-edge crosses with the box's axes.

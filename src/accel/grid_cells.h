@@ -39,8 +39,11 @@ struct Shape {
 };
 
 // Builds the shape of patch `p` with ray-test data `g` (depends on nothing
-// else, so MakePlan and Build register the same cells).
-void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s);
+// else, so MakePlan and Build register the same cells). boxOnly: its box
+// alone, by the same arithmetic (the same bits), without the separating
+// axes that are most of the cost (MakePlan's bounds need only the box).
+void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s,
+               bool boxOnly = false);
 
 // Cell geometry of a plan, in double for registration.
 struct CellGeometry {

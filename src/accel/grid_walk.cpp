@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "vismask/accel/grid.h"
@@ -140,6 +141,34 @@ inline __attribute__((always_inline)) Clip ClipAxis(float o, float d, float lo, 
   return kIn;
 }
 
+// The set bits of w: the rank of an occupied cell among its bitmap word's.
+// x86-64's baseline has no instruction for it (the builtin would call
+// libgcc), so the count is formed by bit slices there; elsewhere (aarch64)
+// the builtin is an instruction. The same integers either way.
+inline __attribute__((always_inline)) uint32_t Popcount(uint64_t w) {
+#if defined(__x86_64__) && !defined(__POPCNT__)
+  w = w - ((w >> 1) & 0x5555555555555555ull);
+  w = (w & 0x3333333333333333ull) + ((w >> 2) & 0x3333333333333333ull);
+  w = (w + (w >> 4)) & 0x0f0f0f0f0f0f0f0full;
+  return static_cast<uint32_t>((w * 0x0101010101010101ull) >> 56);
+#else
+  return static_cast<uint32_t>(__builtin_popcountll(w));
+#endif
+}
+
+// Reference k of a cell's list: 32-bit (two 16-bit units, low first) or
+// 16-bit from the block's base.
+template <bool kWide>
+inline __attribute__((always_inline)) uint32_t RefAt(const uint16_t* refs, uint32_t k,
+                                                     uint32_t base) {
+  if (kWide) {
+    uint32_t v;
+    std::memcpy(&v, refs + 2 * k, sizeof v);
+    return v;
+  }
+  return base + refs[k];
+}
+
 }  // namespace
 
 template <bool kAnyHit>
@@ -166,9 +195,9 @@ bool Grid::TestAll(const Ray& ray, Skip skip, Hit* hit) const {
   return true;
 }
 
-template <bool kAnyHit>
+template <bool kAnyHit, bool kWide>
 bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
-  DCHECK(cellStart_.data() != nullptr);  // built
+  DCHECK(records_.data() != nullptr);  // built
   if (!(ray.tMin < ray.tMax)) return false;
   const float o[3] = {ray.o.x, ray.o.y, ray.o.z};
   const float d[3] = {ray.d.x, ray.d.y, ray.d.z};
@@ -199,8 +228,10 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   Dda dda;
   int index = dda.Start(o, d, invD, t0, lo, cellSize_, invCellSize_, plan_.res, &t1);
 
-  const uint32_t* start = cellStart_.data();
   const uint64_t* occupied = occupied_.data();
+  const uint32_t* rank = rank_.data();
+  const CellRecord* records = records_.data();
+  const uint32_t base = plan_.topBase;
   WalkState st;
   st.tMax = ray.tMax;  // shrinks to just past the best hit so far
   st.t1 = t1;
@@ -209,12 +240,15 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   uint64_t subSteps = 0;  // sub-grid cells entered
   auto done = [&] { steps_ += st.tests + subSteps + dda.Crossed() + 1; };
   for (;;) {
-    // Most cells a ray crosses are empty: one bit in a small bitmap says so,
-    // where their offsets (32 times larger, strided by rows and slices) cost
-    // a cache miss each in a large grid.
-    if (((occupied[static_cast<uint32_t>(index) >> 6] >> (index & 63)) & 1) != 0) {
-      const uint32_t b = start[index];
-      const uint32_t header = refs_.data()[b];
+    // Most cells a ray crosses are empty: one bit in a small bitmap says so;
+    // an occupied cell's record is the occupied cells before its word plus
+    // those before it in the word.
+    const uint32_t u = static_cast<uint32_t>(index);
+    const uint64_t word = occupied[u >> 6];
+    if (((word >> (u & 63)) & 1) != 0) {
+      const CellRecord* r =
+          records + rank[u >> 6] + Popcount(word & ((uint64_t{1} << (u & 63)) - 1));
+      const uint32_t header = r->header;
       // kSubGrid .. kNoPlane - 1: a sub-grid.
       if (__builtin_expect(header - kSubGrid < kNoPlane - kSubGrid, 0)) {
         // Where the ray entered the top cell, and where it leaves it.
@@ -223,14 +257,14 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
         // A copy goes out of line: the walk's own state never leaves this
         // function, so it stays in registers.
         WalkState sub = st;
-        const bool found = WalkSub<kAnyHit>(subs_.data()[header - kSubGrid], ray, invD, tEnter,
-                                            tLeave, skip, hit, &sub, &subSteps);
+        const bool found = EnterSub<kAnyHit>(subs_.data()[header - kSubGrid], ray, invD, tEnter,
+                                             tLeave, skip, hit, &sub, &subSteps);
         st = sub;
         if (found) {
           done();
           return true;
         }
-      } else if (TestCell<kAnyHit>(b, start[index + 1], ray, skip, hit, &st)) {
+      } else if (TestCell<kAnyHit, kWide>(r, base, ray, skip, hit, &st)) {
         done();
         return true;
       }
@@ -246,14 +280,16 @@ bool Grid::Walk(const Ray& ray, Skip skip, Hit* hit) const {
   return true;
 }
 
-template <bool kAnyHit>
-inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e, const Ray& r,
-                                                          Skip skip, Hit* hit,
+template <bool kAnyHit, bool kWide>
+inline __attribute__((always_inline)) bool Grid::TestCell(const CellRecord* rec, uint32_t base,
+                                                          const Ray& r, Skip skip, Hit* hit,
                                                           WalkState* st) const {
-  const uint32_t* refs = refs_.data();
-  const PatchGeom* geom = geom_.data();
-  const uint32_t header = refs[b];
-  uint32_t begin = b + 1, end = e;
+  const uint16_t* refs = refs_.data() + rec->start;
+  const uint32_t n = kWide ? (rec[1].start - rec->start) / 2 : rec[1].start - rec->start;
+  // Every patch of the cell counts as tested (an any-hit walk that stops
+  // early takes back the ones after its hit).
+  st->tests += n;
+  const uint32_t header = rec->header;
   if (header != kNoPlane) {
     // The cell's patches share a plane (CellPlane). Each patch test
     // divides num = d - n.o by denom = n.dir; if num is never of
@@ -266,27 +302,32 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
     float denom = pl.n.x * r.d.x + pl.n.y * r.d.y + pl.n.z * r.d.z;
     float s = pl.n.x * r.o.x + pl.n.y * r.o.y + pl.n.z * r.o.z;
     float numLo = pl.dLo - s, numHi = pl.dHi - s;
-    if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f))) {
-      st->tests += end - begin;
+    if (denom == 0.0f || (r.tMin >= 0.0f && (denom > 0.0f ? numHi <= 0.0f : numLo >= 0.0f)))
       return false;
-    }
   }
+  // Reference q is patch from + q (16-bit: from is the block's base;
+  // 32-bit: 0), and the skipped patches are compared as references (exact:
+  // p - from wraps alike for every p).
+  const uint32_t from = kWide ? 0 : base;
+  const PatchGeom* geom = geom_.data() + from;
+  const uint32_t skipQ = skip.patch - from, twinQ = skip.twin - from;
   // Ask for every patch of the cell at once: their cache misses overlap
   // instead of coming one test at a time.
-  for (uint32_t k = begin; k < end; ++k) {
-    const char* g = reinterpret_cast<const char*>(geom + refs[k]);
+  for (uint32_t k = 0; k < n; ++k) {
+    const char* g = reinterpret_cast<const char*>(geom + RefAt<kWide>(refs, k, 0));
     __builtin_prefetch(g);
     __builtin_prefetch(g + sizeof(PatchGeom) - 1);
   }
-  for (uint32_t k = begin; k < end; ++k) {
-    uint32_t p = refs[k];
+  for (uint32_t k = 0; k < n; ++k) {
+    const uint32_t q = RefAt<kWide>(refs, k, 0);
     float t;
     bool front;
-    ++st->tests;
-    if (p == skip.patch || !IntersectPatch(geom[p], r.o, r.d, r.tMin, st->tMax, &t, &front) ||
-        p == skip.twin)
+    if (q == skipQ || !IntersectPatch(geom[q], r.o, r.d, r.tMin, st->tMax, &t, &front) ||
+        q == twinQ)
       continue;
+    const uint32_t p = q + from;
     if (kAnyHit) {
+      st->tests -= n - 1 - k;
       if (hit) hit->patch = p;
       return true;
     }
@@ -303,13 +344,21 @@ inline __attribute__((always_inline)) bool Grid::TestCell(uint32_t b, uint32_t e
   return false;
 }
 
+// A sub-grid at its own reference width.
+template <bool kAnyHit>
+bool Grid::EnterSub(const SubGrid& sg, const Ray& ray, const float invD[3], float tEnter,
+                    float tLeave, Skip skip, Hit* hit, WalkState* st, uint64_t* steps) const {
+  return sg.wide ? WalkSub<kAnyHit, true>(sg, ray, invD, tEnter, tLeave, skip, hit, st, steps)
+                 : WalkSub<kAnyHit, false>(sg, ray, invD, tEnter, tLeave, skip, hit, st, steps);
+}
+
 // A top cell's sub-grid, from where the ray entered the top cell to where it
 // leaves it (or to the best hit): the same DDA on the sub-grid's cells, its
 // end bounded by the sub-grid's last planes (the same formula, so no step
 // leaves it). The sub-grid's planes and the top cell's differ by rounding
 // only, far inside the registration padding. Out of line, with its own copy
 // of the walk's state, so that the top walk keeps its own in registers.
-template <bool kAnyHit>
+template <bool kAnyHit, bool kWide>
 __attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const Ray& ray, const float invD[3],
                                              float tEnter, float tLeave, Skip skip, Hit* hit,
                                              WalkState* state, uint64_t* steps) const {
@@ -320,13 +369,18 @@ __attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const Ray& ray, 
   Dda dda;
   int32_t index = static_cast<int32_t>(sg.first) +
                   dda.Start(o, d, invD, tEnter, sg.lo, sg.cellSize, sg.invCellSize, sg.res, &tEnd);
-  const uint32_t* start = subStart_.data();
   const uint64_t* occupied = subOccupied_.data();
+  const uint32_t* rank = subRank_.data();
+  const CellRecord* records = records_.data();
+  const uint32_t base = sg.base;
   bool done = false;
   for (;;) {
     const uint32_t u = static_cast<uint32_t>(index);
-    if (((occupied[u >> 6] >> (u & 63)) & 1) != 0 &&
-        TestCell<kAnyHit>(start[u], start[u + 1], ray, skip, hit, &st)) {
+    const uint64_t word = occupied[u >> 6];
+    if (((word >> (u & 63)) & 1) != 0 &&
+        TestCell<kAnyHit, kWide>(
+            records + rank[u >> 6] + Popcount(word & ((uint64_t{1} << (u & 63)) - 1)), base, ray,
+            skip, hit, &st)) {
       done = true;
       break;
     }
@@ -337,12 +391,18 @@ __attribute__((noinline)) bool Grid::WalkSub(const SubGrid& sg, const Ray& ray, 
   return done;
 }
 
+// The walk for the top cells' reference width.
+template <bool kAnyHit>
+inline bool Grid::WalkAny(const Ray& ray, Skip skip, Hit* hit) const {
+  return plan_.topWide ? Walk<kAnyHit, true>(ray, skip, hit) : Walk<kAnyHit, false>(ray, skip, hit);
+}
+
 bool Grid::Intersect(const Ray& ray, Skip skip, Hit* hit) const {
-  return Walk<false>(ray, skip, hit);
+  return WalkAny<false>(ray, skip, hit);
 }
 
 bool Grid::Occluded(const Ray& ray, Skip skip) const {
-  return Walk<true>(ray, skip, nullptr);
+  return WalkAny<true>(ray, skip, nullptr);
 }
 
 bool Grid::Occluded(const Ray& ray, Skip skip, uint32_t* hint) const {
@@ -353,7 +413,7 @@ bool Grid::Occluded(const Ray& ray, Skip skip, uint32_t* hint) const {
       IntersectPatch(geom_[h], ray, &t, &front))
     return true;
   Hit hit;
-  if (!Walk<true>(ray, skip, &hit)) return false;
+  if (!WalkAny<true>(ray, skip, &hit)) return false;
   *hint = hit.patch;
   return true;
 }

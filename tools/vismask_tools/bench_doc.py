@@ -79,7 +79,8 @@ directions uniform on the sphere; *cosine*, rays as the solver shoots them
 `CosineDirection`), lifted 0.01 mm off the shooter so that Embree, which
 cannot skip it, does not hit it; tMin = 0.001 mm for both.
 
-Bytes: vismask's grid is `cellStart` + `refs` + its bitmaps, plane records
+Bytes: vismask's grid is its bitmaps (with a record count a word), the
+occupied cells' records, the references (16 or 32 bits), plane records
 and sub-grids (what `Grid::bytes()` reports); its ray-test data (`PatchGeom`: the plane and the corners
 projected on it, its size in the table's header) is counted with it,
 as Embree's BVH holds its own copy of the triangles. Embree's bytes are what
