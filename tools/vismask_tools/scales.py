@@ -59,7 +59,11 @@ SCALES = {
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", t]
                               for t in ("1e-5", "1e-6", "1e-7")],
                          band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
-                         common=[], default=[], today_rays=4096)),
+                         common=[], default=[], today_rays=4096),
+                 # The sun room (sun_step.py, issue 41's sun-shadow goal): Cycles at
+                 # spp (two halves), vismask at its defaults and with more shadow rays.
+                 sun=dict(width=256, height=192, spp=1024,
+                          runs=[("default", []), ("direct-128", ["--direct-samples", "128"])])),
     "quick": dict(common=CAMERA + ["--patch-size", "140", "--rays", "256", "--stop-unshot", "5e-2",
                          "--width", "48", "--height", "48"],
                  ref_b=["--rays", "1024", "--stop-unshot", "1e-2"],
@@ -74,7 +78,9 @@ SCALES = {
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", "1e-5"]],
                          band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
                          common=["--patch-size", "140", "--stop-unshot", "5e-2"],
-                         default=["--emitted-rays", "50000"], today_rays=256)),
+                         default=["--emitted-rays", "50000"], today_rays=256),
+                 sun=dict(width=64, height=48, spp=16,
+                          runs=[("default", ["--emitted-rays", "100000"])])),
 }
 
 
