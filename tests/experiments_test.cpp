@@ -87,6 +87,7 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   // The ground truth (issue 15): with blender, its section, tables and images
   // and the ground-truth columns of the paper's tables; without, a clear line.
   EXPECT_NE(doc.find("## Against a path-traced ground truth"), std::string::npos);
+  EXPECT_NE(doc.find("## Sun shadows against Cycles (issue 41)"), std::string::npos);
   if (std::system("command -v blender > /dev/null 2>&1") != 0) {
     EXPECT_NE(doc.find("**Skipped**: blender not found"), std::string::npos);
     return;
@@ -117,6 +118,21 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
             << t.file << " row " << r << " col " << c << ": '" << rows[r][c] << "'";
       }
   }
+  // The sun room against Cycles (issue 41's sun-shadow goal): four edges
+  // measured in each renderer, the whole image's error and the times.
+  auto edges = ReadCsv(dir.File("sun-edges.csv"));
+  ASSERT_EQ(edges.size(), 1u + 4);
+  for (size_t r = 1; r < edges.size(); ++r)
+    for (int c : {2, 3, 4, 5})
+      EXPECT_TRUE(IsNumber(edges[r][c]))
+          << "sun-edges.csv row " << r << ": '" << edges[r][c] << "'";
+  auto sunImage = ReadCsv(dir.File("sun-image.csv"));
+  ASSERT_EQ(sunImage.size(), 1u + 2);  // vismask's run, then Cycles'
+  for (int c : {1, 2, 3, 4, 5, 6})
+    EXPECT_TRUE(IsNumber(sunImage[1][c]))
+        << "sun-image.csv col " << c << ": '" << sunImage[1][c] << "'";
+  EXPECT_TRUE(IsNumber(sunImage[2][6])) << sunImage[2][6];
+  EXPECT_NE(doc.find("| sill |"), std::string::npos);
   // --max-seconds beside the fixed settings, drawn (issue 41).
   std::string anytime = ReadFile(dir.File("gt-anytime.png"));
   ASSERT_GT(anytime.size(), 8u);

@@ -41,10 +41,10 @@ TEST(SunEdgeTest, TheSunlitPatchIsWhereTheGeometrySays) {
   ASSERT_EQ(RunShell("tools/gen-sunroom --out " + dir.File("room.obj")).code, 0);
   const std::string camera = RunShell("tools/gen-sunroom --camera").out;
   const std::string sun = RunShell("tools/gen-sunroom --sun").out;
-  Shell r = RunShell(VismaskBin() + " render " + dir.File("room.obj") + " --camera " +
-                     camera.substr(0, camera.find('\n')) + " --sun " + sun.substr(0, sun.find('\n')) +
-                     " --width 128 --height 96 --emitted-rays 100000 --quiet --out " +
-                     dir.File("out"));
+  Shell r =
+      RunShell(VismaskBin() + " render " + dir.File("room.obj") + " --camera " +
+               camera.substr(0, camera.find('\n')) + " --sun " + sun.substr(0, sun.find('\n')) +
+               " --width 128 --height 96 --emitted-rays 100000 --quiet --out " + dir.File("out"));
   ASSERT_EQ(r.code, 0) << r.out;
   r = RunShell("tools/sun-edge " + dir.File("out/image.pfm"));
   ASSERT_EQ(r.code, 0) << r.out;

@@ -163,7 +163,8 @@ def _ramp_image(w, h, a, b, ramp, lit_level, dark_level):
 def selftest():
     """Synthetic edges: a ramp of width R has a 10%-90% width of 0.8 R
     (widened a little by the pixel's box); a step about 0.8 px; a slanted
-    and a steep edge; dark and lit swapped; returns the failures."""
+    and a steep edge; a segment given the other way round; returns the
+    failures."""
     w, h = 48, 40
     cases = [((8.0, 30.0), (40.0, 14.0), 5.0, 4.0, 0.25),   # slanted ramp: 0.8 x 5
              ((30.0, 5.0), (22.0, 36.0), 8.0, 6.4, 0.25),   # steep ramp, lit left of a->b

@@ -25,7 +25,7 @@ BLOCK = ((3.6, 0.0, 0.5), (4.4, 0.8, 1.3))  # a low block, out of the sun
 SUN_TOWARD = (-1.0, 0.8, 0.35)
 SUN_IRRADIANCE = (3.0, 2.9, 2.7)  # W/m^2 facing the sun (Cycles' Strength)
 SUN_DEGREES = 0.53                # the real sun's angular diameter
-CAMERA = "4.6,1.7,4.4,2.0,0.0,1.9,0,1,0,55"
+CAMERA = "3.6,1.4,3.4,1.8,0.1,1.7,0,1,0,50"
 
 MATERIALS = """\
 # tools/gen-sunroom materials: Kd diffuse reflectance; nothing emits (the sun lights it).
