@@ -61,9 +61,12 @@ SCALES = {
                          band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
                          common=[], default=[], today_rays=4096),
                  # The sun room (sun_step.py, issue 41's sun-shadow goal): Cycles at
-                 # spp (two halves), vismask at its defaults and with more shadow rays.
+                 # spp (two halves); vismask's runs (name, options, k): its defaults,
+                 # more shadow rays, and the defaults at k = 2 times the size
+                 # box-averaged down (the pixel's footprint in the gather).
                  sun=dict(width=256, height=192, spp=1024,
-                          runs=[("default", []), ("direct-128", ["--direct-samples", "128"])])),
+                          runs=[("default", [], 1), ("direct-128", ["--direct-samples", "128"], 1),
+                                ("default-2x", [], 2)])),
     "quick": dict(common=CAMERA + ["--patch-size", "140", "--rays", "256", "--stop-unshot", "5e-2",
                          "--width", "48", "--height", "48"],
                  ref_b=["--rays", "1024", "--stop-unshot", "1e-2"],
@@ -80,7 +83,8 @@ SCALES = {
                          common=["--patch-size", "140", "--stop-unshot", "5e-2"],
                          default=["--emitted-rays", "50000"], today_rays=256),
                  sun=dict(width=64, height=48, spp=16,
-                          runs=[("default", ["--emitted-rays", "100000"])])),
+                          runs=[("default", ["--emitted-rays", "100000"], 1),
+                                ("default-2x", ["--emitted-rays", "100000"], 2)])),
 }
 
 
