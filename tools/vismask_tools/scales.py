@@ -62,11 +62,12 @@ SCALES = {
                          common=[], default=[], today_rays=4096),
                  # The sun room (sun_step.py, issue 41's sun-shadow goal): Cycles at
                  # spp (two halves); vismask's runs (name, options, k): its defaults,
-                 # more shadow rays, and the defaults at k = 2 times the size
-                 # box-averaged down (the pixel's footprint in the gather).
+                 # more shadow rays, no elements (no pieces split along the edges),
+                 # and the defaults at k = 2 times the size box-averaged down (where
+                 # in a pixel the gather's rays leave from).
                  sun=dict(width=256, height=192, spp=1024,
                           runs=[("default", [], 1), ("direct-128", ["--direct-samples", "128"], 1),
-                                ("default-2x", [], 2)])),
+                                ("elements-0", ["--elements", "0"], 1), ("default-2x", [], 2)])),
     "quick": dict(common=CAMERA + ["--patch-size", "140", "--rays", "256", "--stop-unshot", "5e-2",
                          "--width", "48", "--height", "48"],
                  ref_b=["--rays", "1024", "--stop-unshot", "1e-2"],
