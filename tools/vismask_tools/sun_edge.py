@@ -113,20 +113,38 @@ def width(prof, reach):
     return at(i90, 0.9) - at(i10, 0.1)
 
 
+def offset(prof):
+    """Where the merged profile crosses half-way between its outermost
+    values on each side, pixels from the geometric line (lit side
+    positive): near 0 when the renderer put the edge where the geometry, the
+    camera and the sun's direction say; nan without a crossing."""
+    ks = sorted(prof)
+    if len(ks) < 2:
+        return float("nan")
+    mid = 0.5 * (prof[ks[0]] + prof[ks[-1]])
+    for k0, k1 in zip(ks, ks[1:]):
+        a, b = prof[k0], prof[k1]
+        if a < mid <= b:
+            return ((k0 + 0.5) + (mid - a) / (b - a) * (k1 - k0)) * BIN
+    return float("nan")
+
+
 def luminance(px):
     return [px[3 * k] + px[3 * k + 1] + px[3 * k + 2] for k in range(len(px) // 3)]
 
 
 def edge_widths(pfm, camera, edges, centre, reach):
-    """{name: 10%-90% width in pixels} of each edge (name, A, B, ...) of a
-    patch whose centre (3D) is `centre`, in the image PFM seen by `camera`."""
+    """{name: (10%-90% width, offset), in pixels} of each edge (name, A, B,
+    ...) of a patch whose centre (3D) is `centre`, in the image PFM seen by
+    `camera`."""
     w, h, px = read_pfm(pfm)
     lum = luminance(px)
     lit = project(camera, w, h, centre)
     out = {}
     for e in edges:
         a, b = project(camera, w, h, e[1]), project(camera, w, h, e[2])
-        out[e[0]] = width(profile(lum, w, h, a, b, lit, reach), reach)
+        prof = profile(lum, w, h, a, b, lit, reach)
+        out[e[0]] = (width(prof, reach), offset(prof))
     return out
 
 
@@ -174,10 +192,12 @@ def selftest():
     for a, b, ramp, want, tol in cases:
         img, lit = _ramp_image(w, h, a, b, ramp, 5.0, 0.5)
         got = width(profile(img, w, h, a, b, lit, 8.0), 8.0)
-        ok = abs(got - want) <= tol
+        off = offset(profile(img, w, h, a, b, lit, 8.0))
+        ok = abs(got - want) <= tol and abs(off) <= 0.1
         failed += not ok
-        print("sun-edge selftest: ramp %.1f px from %s to %s: %.3f px (want %.2f +- %.2f) %s"
-              % (ramp, a, b, got, want, tol, "ok" if ok else "FAILED"))
+        print("sun-edge selftest: ramp %.1f px from %s to %s: %.3f px (want %.2f +- %.2f), "
+              "centred %.3f px off the line %s"
+              % (ramp, a, b, got, want, tol, off, "ok" if ok else "FAILED"))
     # A flat image has no edge: nan, not a number that looks like one.
     flat = width(profile([1.0] * (w * h), w, h, (8.0, 30.0), (40.0, 14.0), (24.0, 10.0), 8.0), 8.0)
     failed += not math.isnan(flat)

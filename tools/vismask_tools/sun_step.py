@@ -99,16 +99,18 @@ def sun(ctx):
         img, err, t = vismask_run(ctx, scene, s, name, extra, k, ref, mask, keep, b)
         ours = sun_edge.edge_widths(img, sunroom.CAMERA, sunroom.edges(), centre, reach)
         for e in sunroom.edges():
-            v, c = ours[e[0]], cycles[e[0]]
+            (v, vo), (c, co) = ours[e[0]], cycles[e[0]]
             ratio = v / c
             edge_rows.append([name, e[0], v, c, ratio, sunroom.throw(e[0]),
-                              "met" if ratio > 0 and max(ratio, 1 / ratio) <= GOAL_EDGE else "NOT met"])
+                              "met" if ratio > 0 and max(ratio, 1 / ratio) <= GOAL_EDGE else "NOT met",
+                              vo, co])
         image_rows.append([name, err, mean_ratio(read_pfm(img)[2], b, keep),
                            meta["noise_relative_rmse"], t["solve_seconds"], t["output_seconds"],
                            t["init_seconds"] + t["solve_seconds"] + t["output_seconds"],
                            "met" if err <= GOAL_IMAGE else "NOT met", options(extra, k)])
     write_csv(ctx.result("sun-edges.csv"), ["run", "edge", "vismask_px", "cycles_px",
-                                            "vismask_over_cycles", "throw_m", "goal_1_5x"], edge_rows)
+                                            "vismask_over_cycles", "throw_m", "goal_1_5x",
+                                            "vismask_offset_px", "cycles_offset_px"], edge_rows)
     write_csv(ctx.result("sun-image.csv"),
               ["run", "vs_cycles", "mean_over_cycles", "noise_cycles", "solve_seconds",
                "output_seconds", "render_seconds", "goal_3_percent", "options"],
@@ -166,7 +168,9 @@ def report_section(ctx, w, table_md):
       "the width is its 10%–90% rise, in pixels across the edge. Both renderers average each "
       "pixel over its square, so a perfectly sharp edge measures about 0.8 px: the floor of "
       "the measure. `throw_m` is the distance the light runs from the window's edge to the "
-      "floor, along which the penumbra widens.\n")
+      "floor, along which the penumbra widens. The `offset` columns are where each profile "
+      "crosses half-way, in pixels from the edge's line as the geometry puts it: near 0 in "
+      "both when the camera and the sun's direction mean the same to both renderers.\n")
     w(table_md(ctx.result("sun-edges.csv")) + "\n")
     edges = csv_dicts(ctx.result("sun-edges.csv"))
     for name in dict.fromkeys(r["run"] for r in edges):
