@@ -173,6 +173,8 @@ def report_section(ctx, w, table_md):
       "both when the camera and the sun's direction mean the same to both renderers.\n")
     w(table_md(ctx.result("sun-edges.csv")) + "\n")
     edges = csv_dicts(ctx.result("sun-edges.csv"))
+    w(f"The goal is judged on `{s['runs'][0][0]}` (vismask's defaults); the other runs are "
+      "there to say where a difference comes from.\n")
     for name in dict.fromkeys(r["run"] for r in edges):
         rs = [float(r["vismask_over_cycles"]) for r in edges if r["run"] == name]
         met = all(r["goal_1_5x"] == "met" for r in edges if r["run"] == name)
