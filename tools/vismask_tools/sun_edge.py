@@ -129,6 +129,20 @@ def offset(prof):
     return float("nan")
 
 
+def floor_edges(opening, toward, names):
+    """The edges of the sunlit patch an opening (its corners in order, 3D)
+    casts on the floor y = 0 along the sun's central direction (`toward`
+    points at the sun): [(name, A, B)], edge k from corner k to k + 1."""
+    tx, ty, tz = toward
+    hit = [(x - tx * y / ty, 0.0, z - tz * y / ty) for x, y, z in opening]
+    return [(names[k], hit[k], hit[(k + 1) % len(hit)]) for k in range(len(hit))]
+
+
+def patch_centre(edges):
+    """The mean of the edges' first ends (a convex patch's inside point)."""
+    return tuple(sum(e[1][i] for e in edges) / len(edges) for i in range(3))
+
+
 def luminance(px):
     return [px[3 * k] + px[3 * k + 1] + px[3 * k + 2] for k in range(len(px) // 3)]
 

@@ -5,7 +5,7 @@ parallelogram with straight edges lands on the floor; the camera stands
 inside, in the far corner, looking at it. Written as OBJ + MTL by
 tools/gen-sunroom (and by the experiments' sun step) with gen-building's
 writer: metres, +y up, every face one-sided looking into the air. The
-floor's sunlit parallelogram (`sun_patch`) and its four edges (`edges`)
+floor's sunlit parallelogram's four edges (`edges`)
 follow from the geometry, so the edge measure (sun_edge.py) knows where to
 look without finding the edges in an image."""
 
@@ -15,6 +15,8 @@ import math
 import os
 
 from . import ROOT
+from .sun_edge import floor_edges
+from .sun_edge import patch_centre as centre_of
 
 ROOM = (5.0, 3.0, 5.0)            # inside, x, y, z
 WINDOW_Z = (1.9, 3.1)             # the opening in the wall x = 0
@@ -94,30 +96,14 @@ def write(path):
         os.replace(p + ".tmp", p)
 
 
-def _floor_hit(y, z):
-    """Where the sun's central ray through the window point (0, y, z) meets the floor."""
-    tx, ty, tz = SUN_TOWARD
-    t = y / ty
-    return (-tx * t, 0.0, z - tz * t)
-
-
-def sun_patch():
+def edges():
     """The floor's sunlit parallelogram (the window seen along the sun's
-    central direction), its corners in order: sill's two ends, then the
-    lintel's."""
+    central direction) as its four edges (name, A, B), each cast by one side
+    of the window; the lit side is the patch's centre's side."""
     z0, z1 = WINDOW_Z
     y0, y1 = WINDOW_Y
-    return [_floor_hit(y0, z0), _floor_hit(y0, z1), _floor_hit(y1, z1), _floor_hit(y1, z0)]
-
-
-def edges():
-    """The patch's four edges as (name, A, B, what casts it), each A-B a
-    segment on the floor; the lit side is the patch's centre's side."""
-    p = sun_patch()
-    return [("sill", p[0], p[1], "the window's sill"),
-            ("north jamb", p[1], p[2], "the jamb at z = %g" % WINDOW_Z[1]),
-            ("lintel", p[2], p[3], "the window's lintel (the longest throw)"),
-            ("south jamb", p[3], p[0], "the jamb at z = %g" % WINDOW_Z[0])]
+    window = [(0.0, y0, z0), (0.0, y0, z1), (0.0, y1, z1), (0.0, y1, z0)]
+    return floor_edges(window, SUN_TOWARD, ["sill", "north jamb", "lintel", "south jamb"])
 
 
 def throw(edge_name):
@@ -131,5 +117,4 @@ def throw(edge_name):
 
 
 def patch_centre():
-    p = sun_patch()
-    return tuple(sum(c[i] for c in p) / 4 for i in range(3))
+    return centre_of(edges())
