@@ -87,6 +87,7 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   // The ground truth (issue 15): with blender, its section, tables and images
   // and the ground-truth columns of the paper's tables; without, a clear line.
   EXPECT_NE(doc.find("## Against a path-traced ground truth"), std::string::npos);
+  EXPECT_NE(doc.find("## Sun shadows against Cycles (issue 41)"), std::string::npos);
   if (std::system("command -v blender > /dev/null 2>&1") != 0) {
     EXPECT_NE(doc.find("**Skipped**: blender not found"), std::string::npos);
     return;
@@ -139,6 +140,23 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
     for (const auto& a : orders)
       for (const auto& b : orders) EXPECT_LT(a.first, b.second);
   }
+  // The sun room against Cycles (issue 41's sun-shadow goal): four edges
+  // measured in each renderer, the whole image's error and the times.
+  auto edges = ReadCsv(dir.File("sun-edges.csv"));
+  auto sunImage = ReadCsv(dir.File("sun-image.csv"));
+  ASSERT_GE(sunImage.size(), 1u + 2);                      // vismask's runs, then Cycles'
+  ASSERT_EQ(edges.size(), 1 + 4 * (sunImage.size() - 2));  // four edges a run
+  for (size_t r = 1; r < edges.size(); ++r)
+    for (int c : {2, 3, 4, 5})
+      EXPECT_TRUE(IsNumber(edges[r][c]))
+          << "sun-edges.csv row " << r << ": '" << edges[r][c] << "'";
+  for (size_t r = 1; r + 1 < sunImage.size(); ++r)
+    for (int c : {1, 2, 3, 4, 5, 6})
+      EXPECT_TRUE(IsNumber(sunImage[r][c]))
+          << "sun-image.csv row " << r << ": '" << sunImage[r][c] << "'";
+  EXPECT_EQ(sunImage.back()[0], "cycles");
+  EXPECT_TRUE(IsNumber(sunImage.back()[6])) << sunImage.back()[6];
+  EXPECT_NE(doc.find("| sill |"), std::string::npos);
   // --max-seconds beside the fixed settings, drawn (issue 41).
   std::string anytime = ReadFile(dir.File("gt-anytime.png"));
   ASSERT_GT(anytime.size(), 8u);

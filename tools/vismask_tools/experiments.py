@@ -12,7 +12,7 @@ import subprocess
 import sys
 import time
 
-from . import ROOT, groundtruth
+from . import ROOT, groundtruth, sun_step
 from .cli import parse
 from .cornell import ShadowRegion, region_patch_mean
 from .files import load_json, read_csv, read_pfm, write_csv, write_png
@@ -369,10 +369,11 @@ def meta_info(ctx, start, load_start, commit):
 
 STEPS = {"references": references, "quality": quality, "timing": timing, "leak": leak,
          "error-time": error_time, "closed-box": closed_box,
-         "ground-truth": groundtruth.ground_truth, "report": report}
+         "ground-truth": groundtruth.ground_truth, "sun": sun_step.sun, "report": report}
 
 
-ORDER = ["references", "quality", "leak", "error-time", "timing", "closed-box", "ground-truth"]
+ORDER = ["references", "quality", "leak", "error-time", "timing", "closed-box", "ground-truth",
+         "sun"]
 
 
 def main(argv, doc):

@@ -6,7 +6,7 @@ import json
 import math
 import os
 
-from . import gt_report
+from . import gt_report, sun_step
 from .files import csv_dicts, load_json, read_csv
 from .groundtruth import PERCENT, POINTS
 from .runner import log
@@ -206,6 +206,7 @@ def report(ctx, meta=None):
         w(table_md(ctx.result("closed-box.csv")) + "\n")
 
     gt_report.report_section(ctx, w, link, table_md)
+    sun_step.report_section(ctx, w, table_md)
 
     w("## Reading\n")
     res = [str(r) for r in s["table_res"]]

@@ -62,7 +62,15 @@ SCALES = {
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", t]
                               for t in ("1e-5", "1e-6", "1e-7")],
                          band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
-                         common=[], default=[], today_rays=4096)),
+                         common=[], default=[], today_rays=4096),
+                 # The sun room (sun_step.py, issue 41's sun-shadow goal): Cycles at
+                 # spp (two halves); vismask's runs (name, options, k): its defaults,
+                 # more shadow rays, no elements (no pieces split along the edges),
+                 # and the defaults at k = 2 times the size box-averaged down (where
+                 # in a pixel the gather's rays leave from).
+                 sun=dict(width=256, height=192, spp=1024,
+                          runs=[("default", [], 1), ("direct-128", ["--direct-samples", "128"], 1),
+                                ("elements-0", ["--elements", "0"], 1), ("default-2x", [], 2)])),
     "quick": dict(common=CAMERA + ["--patch-size", "140", "--rays", "256", "--stop-unshot", "5e-2",
                          "--width", "48", "--height", "48"],
                  ref_b=["--rays", "1024", "--stop-unshot", "1e-2"],
@@ -77,7 +85,10 @@ SCALES = {
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", "1e-5"]],
                          band=[0.3, 0.7], diff_scale=0.2, seam_scale=0.1,
                          common=["--patch-size", "140", "--stop-unshot", "5e-2"],
-                         default=["--emitted-rays", "50000"], today_rays=256)),
+                         default=["--emitted-rays", "50000"], today_rays=256),
+                 sun=dict(width=64, height=48, spp=16,
+                          runs=[("default", ["--emitted-rays", "100000"], 1),
+                                ("default-2x", ["--emitted-rays", "100000"], 2)])),
 }
 
 
