@@ -39,8 +39,8 @@ TEST(FMinMaxTest, FollowTheRuleAndGlibcOnX86) {
   // through: once it has proven neither operand a NaN (the isnan tests
   // below), GCC may fold std::fmax into a bare maxss whose order, and so
   // whose sign of two zeros, it picks itself (the SAN build did).
-  float (*volatile libmMax)(float, float) = ::fmaxf;
-  float (*volatile libmMin)(float, float) = ::fminf;
+  [[maybe_unused]] float (*volatile libmMax)(float, float) = ::fmaxf;
+  [[maybe_unused]] float (*volatile libmMin)(float, float) = ::fminf;
   int checked = 0;
   for (float x : v)
     for (float y : v) {
