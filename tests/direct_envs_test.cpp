@@ -40,16 +40,7 @@ void WriteOffsetShadowScene(const std::string& dir) {
 // floor across the image), into dir/NAME; returns the image.
 PfmImage RenderOffset(const test::TempDir& dir, const std::string& name, int size,
                       const std::string& flags) {
-  std::vector<std::string> args = {
-      "render",   dir.File("s.obj"),          "--out",   dir.File(name),
-      "--camera", "-5,0.5,0,-5,0,0,0,0,1,90", "--width", std::to_string(size),
-      "--height", std::to_string(size),       "--quiet"};
-  for (const std::string& w : test::Words(flags)) args.push_back(w);
-  test::RunResult r = test::RunMain(args);
-  EXPECT_EQ(r.code, 0) << r.err;
-  PfmImage img;
-  EXPECT_TRUE(ReadPfm(dir.File(name + "/image.pfm"), &img).ok());
-  return img;
+  return RenderDown(dir, size, flags, -5.0, name);
 }
 
 TEST(DirectEnvsTest, ShadowEdgeInTheLampsEnvironmentIsAsSharpAsWithOne) {

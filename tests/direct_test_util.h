@@ -33,18 +33,22 @@ struct LitTestScene {
   DirectLight light;
 };
 
-// Renders dir/s.obj looking straight down at the origin from height 0.5
-// (fov 90: the image spans [-0.5, 0.5] of the floor), size x size.
-inline PfmImage RenderDown(const test::TempDir& dir, int size, const std::string& flags) {
-  std::vector<std::string> args = {
-      "render",   dir.File("s.obj"),        "--out",   dir.File("out"),
-      "--camera", "0,0.5,0,0,0,0,0,0,1,90", "--width", std::to_string(size),
-      "--height", std::to_string(size),     "--quiet"};
+// Renders dir/s.obj looking straight down from height 0.5 above (x, 0, 0)
+// (fov 90: the image spans 1.0 of the floor), size x size, into dir/NAME.
+inline PfmImage RenderDown(const test::TempDir& dir, int size, const std::string& flags,
+                           double x = 0.0, const std::string& name = "out") {
+  const std::string cx = std::to_string(x);
+  std::vector<std::string> args = {"render",   dir.File("s.obj"),
+                                   "--out",    dir.File(name),
+                                   "--camera", cx + ",0.5,0," + cx + ",0,0,0,0,1,90",
+                                   "--width",  std::to_string(size),
+                                   "--height", std::to_string(size),
+                                   "--quiet"};
   for (const std::string& w : test::Words(flags)) args.push_back(w);
   test::RunResult r = test::RunMain(args);
   EXPECT_EQ(r.code, 0) << r.err;
   PfmImage img;
-  EXPECT_TRUE(ReadPfm(dir.File("out/image.pfm"), &img).ok());
+  EXPECT_TRUE(ReadPfm(dir.File(name + "/image.pfm"), &img).ok());
   return img;
 }
 
