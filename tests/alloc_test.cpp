@@ -219,7 +219,8 @@ TEST(AllocTest, PerPixelSunAllocatesNothingAfterInit) {
   for (const char* raster : {"on", "off"})
     for (const char* scene : {"scenes/skylight.obj", "scenes/cornell.obj"}) {
       for (const char* envs : {"", " --envs 2x1x2"}) {
-        // Several environments: each gathers its own emitters, the sun is the solve's.
+        // Several environments: each gathers its own emitters (their cut
+        // vertices share the solve's whole), the sun is the solve's.
         CountedRender run(scene, std::string("--sun 1,4,0.5,3,3,3 --direct-samples 32 --max-shots "
                                              "300 --width 64 --height 48 --aa ") +
                                      raster + envs);

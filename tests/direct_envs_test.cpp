@@ -62,10 +62,57 @@ TEST(DirectEnvsTest, ShadowEdgeInTheLampsEnvironmentIsAsSharpAsWithOne) {
   // The gather changes the image only: the solve is the same bytes.
   EXPECT_EQ(test::ReadFile(dir.File("direct/patches.csv")),
             test::ReadFile(dir.File("solved/patches.csv")));
-  // Not given, it is off with several environments.
+  // Not given, it is 32 with several environments too.
   RenderOffset(dir, "default", 16, "--envs 2x1x1 --max-shots 50");
-  EXPECT_NE(test::ReadFile(dir.File("default/run.json")).find("\"direct_samples\": 0"),
+  EXPECT_NE(test::ReadFile(dir.File("default/run.json")).find("\"direct_samples\": 32"),
             std::string::npos);
+}
+
+// The floor [-10, 10]^2 at y = 0 (Kd 0.5, facing up) and a 0.2 square
+// lamp (Ke 10, Kd 0) at height 1 above (-0.5, 0, 0) facing down: cut at
+// x = 0 into two environments, the first (the lamp's) gathers its light per
+// pixel, the second shows it solved. Nothing reflects onto the floor.
+void WriteLampBesideCutScene(const std::string& dir) {
+  test::WriteFile(dir + "/s.obj",
+                  "mtllib s.mtl\n"
+                  "v -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\n"
+                  "v -0.6 1 -0.1\nv -0.4 1 -0.1\nv -0.4 1 0.1\nv -0.6 1 0.1\n"
+                  "usemtl floor\nf 1 4 3 2\nusemtl light\nf 5 6 7 8\n");
+  test::WriteFile(dir + "/s.mtl",
+                  "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl light\nKd 0 0 0\nKe 10 10 10\n");
+}
+
+// Column x's mean of the red channel.
+double ColumnMean(const PfmImage& img, int x) {
+  double sum = 0.0;
+  for (int y = 0; y < img.height; ++y) sum += Pixel(img, x, y);
+  return sum / img.height;
+}
+
+TEST(DirectEnvsTest, CutVerticesShareTheSolvedWholeBesideAGatheringEnvironment) {
+  // The display's vertices on the cut take both sides' values: the lamp's
+  // environment shows only the indirect part there (its pixels add the
+  // direct), the other side the whole. Shared as they are, the lamp's side
+  // would get half the other's direct light on top of its own gather and
+  // the other side half of it only: a bright and a dark band along the cut.
+  test::TempDir dir;
+  WriteLampBesideCutScene(dir.path());
+  const int n = 64;
+  // Looking down at (0, 0, 0): the cut between columns n/2 - 1 (x > 0, the
+  // solve's side) and n/2 (x < 0, the lamp's).
+  PfmImage one = RenderDown(dir, n, "--direct-samples 32", 0.0, "one");
+  PfmImage split = RenderDown(dir, n, "--envs 2x1x1 --direct-samples 32", 0.0, "split");
+  const double oneSolved = ColumnMean(one, n / 2 - 1), oneLamp = ColumnMean(one, n / 2);
+  ASSERT_GT(oneLamp, oneSolved) << "the lamp's side is nearer the lamp";
+  // The gathering side beside the cut: its gather, and no indirect light
+  // (there is none), as with one environment.
+  EXPECT_NEAR(ColumnMean(split, n / 2) / oneLamp, 1.0, 0.02);
+  // The solve's side: the lamp's light at patch scale, not half of it.
+  EXPECT_NEAR(ColumnMean(split, n / 2 - 1) / oneSolved, 1.0, 0.15);
+  // Shared the same way on two ranks over pipes.
+  RenderDown(dir, n, "--envs 2x1x1 --direct-samples 32 --ranks 2", 0.0, "ranks");
+  EXPECT_EQ(test::ReadFile(dir.File("split/image.pfm")),
+            test::ReadFile(dir.File("ranks/image.pfm")));
 }
 
 TEST(DirectEnvsTest, SameBytesOnEveryTransportAndRankCount) {

@@ -305,12 +305,10 @@ Status ResolveEnvironments(Options* o) {
   }
   const int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   ResolveRounds(numEnvs, o);
-  // Per-pixel direct light: the default with one environment; with several
-  // only when asked for (each gathers its own emitters' light, the others'
-  // are the solve's: docs/design/direct-light.md, which says why not yet
-  // the default there).
-  o->directSamplesGiven = o->directSamples >= 0;
-  if (o->directSamples < 0) o->directSamples = numEnvs == 1 ? kDefaultDirectSamples : 0;
+  // Per-pixel direct light: the default whatever the environments (with
+  // several each gathers its own emitters' light, the others' are the
+  // solve's: docs/design/direct-light.md).
+  if (o->directSamples < 0) o->directSamples = kDefaultDirectSamples;
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
                          std::to_string(numEnvs) +

@@ -20,7 +20,9 @@ VertexRecord MakeRecord(const Environment& env, uint32_t v, const glm::vec3& nor
   VertexRecord r{};
   const DisplayLattice& lattice = env.lattice();
   float w = lattice.weights()[v];
-  glm::vec3 x = lattice.vertices()[v], b = lattice.radiosity()[v];
+  // The solve's whole (the environments across a cut may gather different
+  // emitters per pixel: what one leaves to its pixels the other shows solved).
+  glm::vec3 x = lattice.vertices()[v], b = lattice.radiosity()[v] + lattice.SolvedDirect(v);
   for (int a = 0; a < 3; ++a) {
     r.pos[a] = x[a];
     r.normal[a] = normal[a];
@@ -221,12 +223,21 @@ bool ShareVertex(const SharedRecords& rec, Environment* env, uint32_t v, bool is
   DisplayLattice& lattice = env->lattice();
   glm::vec3 x = lattice.vertices()[v];
   float w = lattice.weights()[v];
+  // Shared as the solve's whole (MakeRecord); this environment's pixels
+  // add the direct light they gather to the rest.
+  const glm::vec3 gathered = lattice.SolvedDirect(v), whole = lattice.radiosity()[v] + gathered;
   SharedSum sh;
-  sh.sum = lattice.radiosity()[v] * w;
+  sh.sum = whole * w;
   sh.weight = w;
-  if (isCut) AddCutSide(rec, *env, x, n, &sh);
+  // Where this side's pixels gather a part of the light (more than 1e-4 of
+  // the whole, above rounding), it keeps its own indirect part on the cut:
+  // the other side's whole holds the same emitters' light as solved, which
+  // no record separates, and the indirect part varies slowly across the
+  // cut. Its record still gives the other side the whole.
+  const bool gathers = gathered.x + gathered.y + gathered.z > 1e-4f * (whole.x + whole.y + whole.z);
+  if (isCut && !gathers) AddCutSide(rec, *env, x, n, &sh);
   if (s) AddSmoothGroup(rec, *env, v, x, s, &sh);
-  if (sh.shared && sh.weight > 0.0f) lattice.SetRadiosity(v, sh.sum / sh.weight);
+  if (sh.shared && sh.weight > 0.0f) lattice.SetRadiosity(v, sh.sum / sh.weight - gathered);
   return sh.matched;
 }
 

@@ -22,6 +22,7 @@ void DisplayLattice::Layout(Arena& arena, const Staged& staged, bool smoothing) 
   interior_ = arena.Alloc<uint8_t>(smoothing ? n : 0);
   raw_ = arena.Alloc<glm::vec3>(smoothing ? 2 * n : 0);
   cutNormal_ = arena.Alloc<glm::vec3>(staged.cut.size());
+  solvedDirect_ = arena.Alloc<glm::vec3>(smoothing && !staged.cut.empty() ? n : 0);
   smooth_ = arena.Alloc<SmoothVertex>(staged.smooth.size());
   smoothMatched_ = arena.Alloc<uint8_t>(staged.smooth.size());
   smoothEdges_ = arena.Alloc<uint8_t>(staged.smoothEdges.size());
@@ -106,12 +107,15 @@ void DisplayLattice::Clear() {
     frac_[v] = 0.0f;
     inward_[v] = glm::vec3(0.0f);
   }
+  for (glm::vec3& d : solvedDirect_) d = glm::vec3(0.0f);
 }
 
 void DisplayLattice::Finish(Span<const Patch> patches, int smoothSteps) {
   const size_t n = radiosity_.size();
   for (size_t v = 0; v < n; ++v)
     if (weight_[v] > 0.0f) radiosity_[v] /= weight_[v];
+  for (size_t v = 0; v < solvedDirect_.size(); ++v)
+    if (weight_[v] > 0.0f) solvedDirect_[v] /= weight_[v];
   smoothed_ = smoothSteps > 0 && !interior_.empty();
   if (!smoothed_) {
     Extrapolate(patches);

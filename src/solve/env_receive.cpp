@@ -89,6 +89,20 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
   return b;
 }
 
+// What LeafRadiosity leaves out when it shows the indirect part: the
+// leaf's received radiosity that came straight from this environment's
+// emitters (the pixels gather it), scaled as LeafRadiosity scales.
+glm::vec3 Environment::LeafSolvedDirect(uint32_t patch, uint32_t e) const {
+  if (direct_.light().empty()) return glm::vec3(0.0f);  // all it received is indirect
+  const Element& el = elements_[e];
+  const glm::dvec3 ind = elements_.Indirect(e);
+  const PatchTexture* t = patchTexture(patch);
+  glm::vec3 d;
+  for (int c = 0; c < 3; ++c)
+    d[c] = static_cast<float>((el.received[c] / el.area - ind[c]) * (t ? t->scale[c] : 1.0f));
+  return d;
+}
+
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {
   lattice_.Clear();
   for (uint32_t i = 0; i < patches_.size(); ++i) {
@@ -103,6 +117,8 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
       uint32_t leaf = LeafAt(i, corners[k] + 1e-4f * (centre - corners[k]));
       float w = elements_[leaf].area;
       lattice_.Add(p.vertex[k], w, LeafRadiosity(i, leaf, ambient), std::sqrt(w / p.area));
+      if (direct_.ShowsIndirect(i))
+        lattice_.AddSolvedDirect(p.vertex[k], w, LeafSolvedDirect(i, leaf));
     }
   }
   filterSteps_ = direct_.showIndirect() ? IndirectFilterSteps() : 0;

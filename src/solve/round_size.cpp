@@ -49,8 +49,6 @@ bool SetWorldSize(int ranks, Options* o) {
   if (!AutoEnvsForRanks(ranks, o)) return false;
   if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs)) return false;
   ResolveRounds(o->envsAutoCount, o);
-  // Per-pixel direct light is the default with one environment only.
-  if (o->envsAutoCount > 1 && !o->directSamplesGiven) o->directSamples = 0;
   return true;
 }
 

@@ -129,11 +129,10 @@ struct Options {
   bool twoSidedEmitters = false;
   // --direct-samples N: shadow rays per shaded point toward the emitters
   // (direct light gathered per pixel, direct.h); 0: the image shows the
-  // solved radiosity alone. -1 (not given): kDefaultDirectSamples with one
-  // environment, 0 with several (ResolveEnvironments, SetWorldSize); given,
-  // each of several environments gathers its own emitters.
+  // solved radiosity alone. -1 (not given): kDefaultDirectSamples
+  // (ResolveEnvironments); each of several environments gathers its own
+  // emitters.
   int directSamples = -1;
-  bool directSamplesGiven = false;  // set by ResolveEnvironments
   // --indirect-filter K: smoothing steps of the indirect part on the
   // display lattice (with per-pixel direct light); -1 (not given): from the
   // hits a patch received (Environment::IndirectFilterSteps).

@@ -28,8 +28,9 @@ class DisplayLattice {
     uint32_t numShared = 0;            // cut or smooth, each once
   };
 
-  // Room for the staged lattice, with `smoothing` its scratch (also from a
-  // measuring arena).
+  // Room for the staged lattice, with `smoothing` (per-pixel direct light)
+  // its scratch and, with cut vertices, SolvedDirect (also from a measuring
+  // arena).
   void Layout(Arena& arena, const Staged& staged, bool smoothing);
   // Copies the staged lattice in and marks the outline vertices to
   // extrapolate (from `patches`, in local vertex ids).
@@ -49,6 +50,14 @@ class DisplayLattice {
     weight_[v] += weight;
     frac_[v] += edgeShare;
   }
+  // With per-pixel direct light (laid out with smoothing) on a lattice with
+  // cut vertices: the part of leaf value b that the pixels gather instead
+  // (the solve's direct light), added at vertex v with the same weight, so
+  // that a cut vertex can share the whole with a neighbour that shows it
+  // (SolvedDirect); elsewhere a no-op.
+  void AddSolvedDirect(uint32_t v, float weight, const glm::vec3& d) {
+    if (!solvedDirect_.empty()) solvedDirect_[v] += weight * d;
+  }
   void Finish(Span<const Patch> patches, int smoothSteps = 0);
   // Whether the last Finish smoothed, and vertex v's value without it.
   bool smoothed() const { return smoothed_; }
@@ -59,6 +68,14 @@ class DisplayLattice {
   Span<const float> weights() const { return weight_; }
   // The display's shared value of vertex v (ShareVertices).
   void SetRadiosity(uint32_t v, const glm::vec3& b) { radiosity_[v] = b; }
+  // The solve's direct light at vertex v that radiosity() leaves to the
+  // pixels (the weighted mean of AddSolvedDirect's; 0 where none is kept).
+  // radiosity() + SolvedDirect(v) is the solve's whole: what a cut vertex
+  // shares, since the environment across the cut may gather other emitters
+  // or none and show their light as solved.
+  glm::vec3 SolvedDirect(uint32_t v) const {
+    return solvedDirect_.empty() ? glm::vec3(0.0f) : solvedDirect_[v];
+  }
 
   // Cut vertices and their surface's normal (known from Layout on).
   Span<const uint32_t> cutVertices() const { return cut_; }
@@ -104,6 +121,7 @@ class DisplayLattice {
   Span<uint8_t> interior_;
   Span<glm::vec3> raw_;
   Span<glm::vec3> cutNormal_;
+  Span<glm::vec3> solvedDirect_;  // per vertex, with smoothing and cut vertices; else empty
   uint32_t numCut_ = 0;
   Span<SmoothVertex> smooth_;
   Span<uint8_t> smoothMatched_;

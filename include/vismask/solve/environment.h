@@ -68,6 +68,7 @@ class Environment {
   uint32_t IndirectFilterSteps() const;  // the indirect part's smoothing for the next image
   uint32_t filterSteps() const { return filterSteps_; }  // ... and the last image's
   glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;
+  glm::vec3 LeafSolvedDirect(uint32_t patch, uint32_t e) const;
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
   Span<const Element> elements() const { return elements_.all(); }
   uint32_t elementsUsed() const { return elements_.used(); }
