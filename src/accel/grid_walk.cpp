@@ -123,7 +123,9 @@ struct Dda {
     return t;
   }
   float Leave() const { return std::min(std::min(tx, ty), tz); }
-  uint64_t Crossed() const { return static_cast<uint64_t>(kx + ky + kz); }
+  // Through int64_t: the same count (a small whole number), without the
+  // float-to-unsigned conversion x86-64 spells as a branch and two converts.
+  uint64_t Crossed() const { return static_cast<uint64_t>(static_cast<int64_t>(kx + ky + kz)); }
 };
 
 // One axis of the walk's clip to the grid box [lo, hi]: its inverse
