@@ -68,8 +68,8 @@ struct Dda {
                                                              float* first, float* delta, int* move,
                                                              float* tEnd) {
     // t is finite (the clip bounds it on an axis the ray moves along), so
-    // where d is 0 the point is o itself, up to the sign of a zero, which f
-    // does not keep: no branch.
+    // where d is 0 the point is o itself, up to the sign of a zero, which
+    // the cell index does not keep: no branch.
     float p = o + t * d;
     float f = (p - lo) * invCellSize;
     // The entry cell, clamped to [0, res - 1] (a NaN to 0): the cell that
