@@ -67,9 +67,15 @@ struct Dda {
                                                              float invCellSize, int res, int stride,
                                                              float* first, float* delta, int* move,
                                                              float* tEnd) {
-    float p = d == 0.0f ? o : o + t * d;
+    // t is finite (the clip bounds it on an axis the ray moves along), so
+    // where d is 0 the point is o itself, up to the sign of a zero, which
+    // the cell index does not keep: no branch.
+    float p = o + t * d;
     float f = (p - lo) * invCellSize;
-    int c = f >= 0.0f ? (f < static_cast<float>(res) ? static_cast<int>(f) : res - 1) : 0;
+    // The entry cell, clamped to [0, res - 1] (a NaN to 0): the cell that
+    // comparing f with 0 and res would give, by a max and a min (float(res -
+    // 1) is exact) instead of two branches.
+    int c = static_cast<int>(std::min(0.0f < f ? f : 0.0f, static_cast<float>(res - 1)));
     if (d == 0.0f) {
       *first = std::numeric_limits<float>::infinity();
       *delta = 0.0f;
@@ -117,7 +123,9 @@ struct Dda {
     return t;
   }
   float Leave() const { return std::min(std::min(tx, ty), tz); }
-  uint64_t Crossed() const { return static_cast<uint64_t>(kx + ky + kz); }
+  // Through int64_t: the same count (a small whole number), without the
+  // float-to-unsigned conversion x86-64 spells as a branch and two converts.
+  uint64_t Crossed() const { return static_cast<uint64_t>(static_cast<int64_t>(kx + ky + kz)); }
 };
 
 // One axis of the walk's clip to the grid box [lo, hi]: its inverse
