@@ -117,7 +117,7 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
       uint32_t leaf = LeafAt(i, corners[k] + 1e-4f * (centre - corners[k]));
       float w = elements_[leaf].area;
       lattice_.Add(p.vertex[k], w, LeafRadiosity(i, leaf, ambient), std::sqrt(w / p.area));
-      if (direct_.ShowsIndirect(i))
+      if (lattice_.keepsSolvedDirect() && direct_.ShowsIndirect(i))
         lattice_.AddSolvedDirect(p.vertex[k], w, LeafSolvedDirect(i, leaf));
     }
   }

@@ -50,13 +50,15 @@ class DisplayLattice {
     weight_[v] += weight;
     frac_[v] += edgeShare;
   }
-  // With per-pixel direct light (laid out with smoothing) on a lattice with
-  // cut vertices: the part of leaf value b that the pixels gather instead
-  // (the solve's direct light), added at vertex v with the same weight, so
-  // that a cut vertex can share the whole with a neighbour that shows it
-  // (SolvedDirect); elsewhere a no-op.
+  // Whether SolvedDirect is kept: per-pixel direct light (laid out with
+  // smoothing) on a lattice with cut vertices.
+  bool keepsSolvedDirect() const { return !solvedDirect_.empty(); }
+  // Where keepsSolvedDirect: the part of leaf value b that the pixels gather
+  // instead (the solve's direct light), added at vertex v with the same
+  // weight, so that a cut vertex can share the whole with a neighbour that
+  // shows it (SolvedDirect).
   void AddSolvedDirect(uint32_t v, float weight, const glm::vec3& d) {
-    if (!solvedDirect_.empty()) solvedDirect_[v] += weight * d;
+    solvedDirect_[v] += weight * d;
   }
   void Finish(Span<const Patch> patches, int smoothSteps = 0);
   // Whether the last Finish smoothed, and vertex v's value without it.
