@@ -13,13 +13,8 @@ Needs numpy (tools/install-deps --reference)."""
 import math
 import os
 
-from .files import load_json, read_pfm, read_pgm
-
-
-def _image(path):
-    import numpy as np
-    w, h, px = read_pfm(path)
-    return np.array(px, dtype=np.float64).reshape(h, w, 3)
+from .files import load_json, read_pgm
+from .scale import ReadPfm as _image
 
 
 def blocks(img, k):
