@@ -153,6 +153,70 @@ TEST(RasterTest, BackFacesHideNothingBehindTheirObject) {
   }
 }
 
+TEST(RasterTest, BackFacesHideNothingBehindAGrazingFrontFace) {
+  // As above, but the front face recedes toward the silhouette edge (x =
+  // 20.7 px, depth 200) from depth 100, so its plane at pixel 20's centre,
+  // beyond the edge, lies deeper (201.7) than any point of the back face in
+  // that pixel (at most 200.3). The back face still hides nothing: pixel 20
+  // is the wall's 0.7 and the front face's 0.3. Likewise with a back face
+  // at the edge's depth throughout (its covered part ends as deep as the
+  // front face's: only the front face's start is nearer).
+  glm::vec3 wall[4] = {AtPixel(-10, 80, 300), AtPixel(80, 80, 300), AtPixel(80, -10, 300),
+                       AtPixel(-10, -10, 300)};
+  const float xEdge = (20.7f - 32.0f) * 2.0f;
+  glm::vec3 f0(xEdge, -44, 200), f1(12, -44, 100), f2(12, 44, 100), f3(xEdge, 44, 200);
+  for (float backDepth : {210.0f, 200.0f}) {
+    const float xBack = (30.0f - 32.0f) * backDepth / kFocal;
+    glm::vec3 b0(xBack, -44, backDepth), b1(xBack, 44, backDepth);
+    std::vector<DisplayPiece> scene = {
+        Piece({wall[0], wall[1], wall[2], wall[3]}, {1, 1, 1, 1}, 1),
+        Piece({f0, f1, f2, f3}, {0, 0, 0, 0}, 2),
+        Piece({f3, b1, b0, f0}, {0, 0, 0, 0}, 3),
+    };
+    Fb fb(true);
+    DrawAll(scene, &fb.fb);
+    for (int y = 12; y < 52; ++y) {
+      EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 20].x, 0.7f, 1e-3f) << backDepth << " row " << y;
+      EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 19].x, 1.0f, 1e-4f) << backDepth << " row " << y;
+      EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 25].x, 0.0f, 1e-4f) << backDepth << " row " << y;
+    }
+  }
+}
+
+TEST(RasterTest, TheInsideOfABoxStaysHiddenBehindItsBack) {
+  // A box's near wall seen from behind (a back face receding from depth 100
+  // at x = 40.3 px to 150 at the left) and, meeting it at that edge, the
+  // box's side wall seen from inside (a front face receding to depth 200,
+  // on screen within the near wall). In the edge's pixel the side wall
+  // starts where the near wall ends (at the edge) and reaches deeper: it
+  // lies behind, and the pixel is the near wall's black.
+  const float xEdge = 40.3f - 32.0f, xLeft = (-10.0f - 32.0f) * 1.5f;
+  glm::vec3 n0(xLeft, 44, 150), n1(xEdge, 44, 100), n2(xEdge, -44, 100), n3(xLeft, -44, 150);
+  glm::vec3 s1(xEdge - 30, 44, 200), s2(xEdge - 30, -44, 200);
+  for (bool flip : {false, true}) {
+    // Either winding of the pair: the one whose near wall is a back face.
+    std::vector<DisplayPiece> scene = {
+        flip ? Piece({n3, n2, n1, n0}, {0, 0, 0, 0}, 1) : Piece({n0, n1, n2, n3}, {0, 0, 0, 0}, 1),
+        flip ? Piece({s2, s1, n1, n2}, {1, 1, 1, 1}, 2) : Piece({n2, n1, s1, s2}, {1, 1, 1, 1}, 2),
+    };
+    Fb fb(true);
+    DrawAll(scene, &fb.fb);
+    const Fragment* f = &fb.fb.frags[(size_t(30) * kW + 40) * kFragments];
+    bool nearBack = false, sideFront = false;
+    for (int k = 0; k < kFragments; ++k) {
+      nearBack |= f[k].id == 1 && f[k].coverage < 0.0f;
+      sideFront |= f[k].id == 2 && f[k].coverage > 0.0f;
+    }
+    if (!(nearBack && sideFront)) continue;
+    for (int y = 12; y < 52; ++y) {
+      EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 40].x, 0.0f, 1e-4f) << "row " << y;
+      EXPECT_NEAR(fb.fb.color[size_t(y) * kW + 30].x, 0.0f, 1e-4f) << "row " << y;
+    }
+    return;
+  }
+  ADD_FAILURE() << "no winding gives a back-facing near wall and a front-facing side wall";
+}
+
 // The image of a white quad, whole or cut into pieces.
 TEST(RasterTest, PiecesSharingEdgesCoverExactlyOnce) {
   // Two coplanar quads of different patches sharing a slanted edge, covering

@@ -33,7 +33,7 @@ void Framebuffer::Layout(Arena& arena, int w, int h, bool antialiased) {
 
 namespace {
 
-constexpr Fragment kEmptyFragment = {kInf, kNoPatch, 0.0f, {0.0f, 0.0f, 0.0f}};
+constexpr Fragment kEmptyFragment = {kInf, kNoPatch, 0.0f, {0.0f, 0.0f, 0.0f}, kInf, 0.0f};
 
 }  // namespace
 
@@ -118,6 +118,16 @@ void Composite(const Framebuffer& other, Framebuffer* fb) {
 
 namespace {
 
+// Whether fragment a's covered part starts and ends no deeper than b's, one
+// of them nearer (by a relative 1e-5, far above rounding).
+bool InFrontOf(const Fragment& a, const Fragment& b) {
+  constexpr float kLess = 1.0f - 1e-5f, kMore = 1.0f + 1e-5f;
+  bool nearer = a.nearest < b.nearest * kLess, notDeeper = a.nearest <= b.nearest * kMore;
+  bool endsNearer = a.farthest < b.farthest * kLess,
+       endsNotDeeper = a.farthest <= b.farthest * kMore;
+  return notDeeper && endsNotDeeper && (nearer || endsNearer);
+}
+
 // One antialiased pixel's fragments composed: its colour, the id with the
 // largest visible share, and the share front faces took.
 void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* id,
@@ -131,10 +141,22 @@ void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* i
     // behind its object's front faces, within their silhouette: it shows
     // only where it covers more than the front faces before it took (and
     // is disjoint from other back faces, like the pieces of a wall seen
-    // from behind).
+    // from behind). The sort goes by a front face's plane's depth at the
+    // pixel centre, which lies beyond the face where it covers the pixel in
+    // part: a grazing face's plane, extended beyond a silhouette edge, is
+    // deeper there than the back face sharing that edge, and the inside
+    // wall of a box seen through its back, extended beyond the edge where
+    // they meet, nearer. So a back face also leaves what front faces sorted
+    // after it cover in front of it, and a front face leaves what back faces
+    // sorted after it cover in front of it: their covered parts start and
+    // end no deeper, and one of them nearer.
     float cover = std::fabs(f[k].coverage);
     bool isFront = f[k].coverage >= 0.0f;
-    float w = std::fmin(isFront ? cover : cover - front, open);
+    float hidden = isFront ? 0.0f : front;
+    for (int j = k + 1; j < kFragments && f[j].id != kNoPatch; ++j)
+      if ((f[j].coverage >= 0.0f) != isFront && InFrontOf(f[j], f[k]))
+        hidden += std::fabs(f[j].coverage);
+    float w = std::fmin(cover - hidden, open);
     if (!(w > 0.0f)) continue;
     if (isFront) front += w;
     float scale = w / cover;

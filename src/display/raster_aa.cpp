@@ -113,6 +113,36 @@ inline float Cross(Vec2 a, Vec2 b) {
   return std::fmin(area, 1.0f);
 }
 
+struct SortKey {
+  float depth, nearest, farthest;
+};
+
+// A fragment's sort depth and its covered part's nearest and farthest
+// depths, from 1/depth at the pixel centre and the covered part's greatest
+// and least 1/depth. A front
+// face sorts by its plane's depth at the pixel centre (the same for every
+// piece of a plane, and it keeps a light just below a ceiling in front of
+// it however grazing the view), or the sample's where the centre's ray
+// grazes the plane. A back face: the farthest depth of its covered part, so
+// that at a silhouette a closed object's back face sorts behind the front
+// face sharing its edge. Resolve also reads the covered part's depths.
+inline SortKey FragmentKey(bool back, float izCentre, float izLo, float izHi, float zMin,
+                           float zMax, float zSample) {
+  SortKey k;
+  auto clamped = [&](float z) { return std::fmin(std::fmax(z, zMin), zMax); };
+  k.farthest = 1.0f / izLo;
+  if (!(k.farthest >= zMin && k.farthest <= zMax)) k.farthest = clamped(k.farthest);
+  k.nearest = 1.0f / izHi;
+  if (!(k.nearest >= zMin && k.nearest <= zMax)) k.nearest = clamped(k.nearest);
+  if (back) {
+    k.depth = k.farthest;
+    return k;
+  }
+  k.depth = 1.0f / izCentre;
+  if (!(k.depth >= 0.5f * zMin && k.depth <= 2.0f * zMax)) k.depth = zSample;
+  return k;
+}
+
 // What a piece needs per pixel, set up once.
 struct PieceSetup {
   glm::vec3 n;       // plane normal, camera space (not unit)
@@ -319,7 +349,7 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       float sx = fx + 0.5f, sy = fy + 0.5f;  // where the radiance is taken
       float izCorner = ia * fx + ib * fy + ic;
       float izLo = izCorner + std::fmin(ia, 0.0f) + std::fmin(ib, 0.0f);
-      float izHi = 0.0f;  // the covered part's nearest: not needed
+      float izHi = izCorner + std::fmax(ia, 0.0f) + std::fmax(ib, 0.0f);
       if (!inside) {
         Vec2 local[kMaxPoly], c{0.5f, 0.5f};
         for (int k = 0; k < m; ++k) local[k] = Vec2{sp[k].x - fx, sp[k].y - fy};
@@ -329,20 +359,8 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       }
       float zSample = 1.0f / (ia * sx + ib * sy + ic);
       if (!(zSample > 0.0f)) zSample = zMin;
-      // The sort key. A front face: its plane's depth at the pixel centre
-      // (the same for every piece of a plane, and it keeps a light just
-      // below a ceiling in front of it however grazing the view), or the
-      // sample's where the centre's ray grazes the plane. A back face: the
-      // farthest depth of its covered part, so that at a silhouette a closed
-      // object's back face sorts behind the front face sharing its edge.
-      float key;
-      if (back) {
-        key = 1.0f / izLo;
-        if (!(key >= zMin && key <= zMax)) key = std::fmin(std::fmax(key, zMin), zMax);
-      } else {
-        key = 1.0f / (izCorner + 0.5f * ia + 0.5f * ib);
-        if (!(key >= 0.5f * zMin && key <= 2.0f * zMax)) key = zSample;
-      }
+      const SortKey key =
+          FragmentKey(back, izCorner + 0.5f * ia + 0.5f * ib, izLo, izHi, zMin, zMax, zSample);
       glm::vec3 pCam = zSample * glm::vec3((sx - halfW) * invF, (halfH - sy) * invF, 1.0f);
       glm::vec3 r = pCam - s.origin;
       glm::vec3 extra(0.0f);
@@ -369,8 +387,12 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       }
       glm::vec3 rad =
           RadianceAt<kTextured>(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)}, extra);
-      Fragment in{
-          key, piece.id, back ? -cover : cover, {cover * rad.x, cover * rad.y, cover * rad.z}};
+      Fragment in{key.depth,
+                  piece.id,
+                  back ? -cover : cover,
+                  {cover * rad.x, cover * rad.y, cover * rad.z},
+                  key.nearest,
+                  key.farthest};
       size_t idx =
           static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
       AddFragment(&fb->frags[idx * kFragments], &fb->dropped[idx], in);

@@ -35,6 +35,8 @@ inline void AddFragment(Fragment* f, uint8_t* dropped, const Fragment& in) {
     if (f[k].id != in.id) continue;
     f[k].coverage += in.coverage;
     for (int c = 0; c < 3; ++c) f[k].rgb[c] += in.rgb[c];
+    f[k].nearest = in.nearest < f[k].nearest ? in.nearest : f[k].nearest;
+    f[k].farthest = in.farthest > f[k].farthest ? in.farthest : f[k].farthest;
     if (in.depth < f[k].depth) {
       Fragment moved = f[k];
       moved.depth = in.depth;

@@ -14,7 +14,10 @@
 //   behind the front face it shares a silhouette edge with); Resolve
 //   composes them front to back, a front face taking at most the coverage
 //   still free, a back face only what it covers beyond what front faces
-//   took.
+//   took and what the front faces after it cover whose covered part lies
+//   nearer than its own (a grazing front face's plane at the centre of a pixel it covers
+//   only in part lies beyond the silhouette edge, deeper than the back face
+//   sharing that edge).
 // - point sampled (--aa off): the pixel centre only, quads split into two
 //   Gouraud-shaded triangles; one (depth, id) sample per pixel.
 //
@@ -47,8 +50,10 @@ struct Fragment {
   float coverage;  // summed exact area fraction of the id's pieces in the pixel,
                    // negative for a back face (its corners clockwise on screen)
   float rgb[3];    // summed coverage * radiance
+  float nearest;   // the covered part's depths: the nearest, min over pieces,
+  float farthest;  // and the farthest, max over pieces
 };
-static_assert(sizeof(Fragment) == 24, "Fragment is packed");
+static_assert(sizeof(Fragment) == 32, "Fragment is packed");
 
 struct Framebuffer {
   int width = 0;
@@ -65,7 +70,7 @@ struct Framebuffer {
   int dirtyLo = 0, dirtyHi = -1;
 
   // Carves w x h pixels from `arena`: point sampled 20 bytes a pixel,
-  // antialiased 16 + kFragments * 24 + 1.
+  // antialiased 16 + kFragments * 32 + 1.
   void Layout(Arena& arena, int w, int h, bool antialiased);
   void Clear();
   // Clears the dirty rows only (antialiased; point sampled: Clear).
