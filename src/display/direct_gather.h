@@ -7,10 +7,22 @@
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
+#include "vismask/accel/grid.h"
 #include "vismask/display/direct.h"
 #include "vismask/display/raster.h"
 
 namespace vismask {
+
+// Whether point x of the receiver (patch, twin) is hidden from `eye`: a
+// patch lies between them (the ray stops `epsilon` short of both ends).
+inline bool HiddenFrom(const Grid& grid, glm::vec3 x, glm::vec3 eye, uint32_t patch, uint32_t twin,
+                       float epsilon) {
+  const glm::vec3 d = eye - x;
+  const float r = glm::length(d);
+  if (!(r > 2.0f * epsilon)) return false;
+  const float t = epsilon / r;
+  return grid.Occluded(Ray{x, d, t, 1.0f - t}, Skip(patch, twin));
+}
 
 // The radiance hook `h` adds for pixel index `pixel` at the shaded point
 // `centre`; pointOf(k) gives the point sample k's shadow ray leaves from
@@ -20,10 +32,16 @@ namespace vismask {
 // the first kFirstDirectSamples, and the rest of h.samples only where
 // those disagree (some reach the emitters, some do not). The samples go to
 // the emitting polygons in proportion to their parts of E0 and, with a
-// sun, to its disc in proportion to its part. The groups' tallies are the
-// light's scratch (one gather at a time). Allocates nothing.
+// sun, to its disc in proportion to its part. With `eye` (samples spread
+// over the pixel), a sample whose shadow ray is blocked and whose point is
+// hidden from the eye is left out: the piece's part behind a nearer face
+// in the pixel (a floor running on under a block, at the block's foot)
+// does not darken the part that shows; none left, the piece is dark. The
+// groups' tallies are the light's scratch (one gather at a time).
+// Allocates nothing.
 template <class PointOf>
-glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, PointOf pointOf) {
+glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, PointOf pointOf,
+                       const glm::vec3* eye = nullptr) {
   auto onPlane = [&](glm::vec3 x) { return x - h.normal * glm::dot(h.normal, x - h.planePoint); };
   const glm::vec3 x0 = onPlane(centre);
   const Span<DirectLight::Tally> tally = h.light->tallies();
@@ -57,16 +75,20 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     cornersTell = usable;
   }
   glm::vec3 all(0.0f), seen(0.0f), sunAll(0.0f), sunSeen(0.0f);
-  uint32_t counted = 0, visible = 0, k = 0;  // k: the samples drawn
+  uint32_t counted = 0, visible = 0, hidden = 0, k = 0;  // k: the samples drawn
   for (; k < h.samples; ++k) {
     if (k == kFirstDirectSamples && cornersTell && counted > 0 &&
         ((visible == 0 && cornersSeen == 0) || (visible == counted && cornersSeen == corners)))
       break;
     glm::vec3 w;
     uint32_t source;
-    bool vis = h.light->Sample(*h.grid, h.patch, h.twin, onPlane(pointOf(k)), h.normal,
-                               DirectLightSample(pixel, k), tally, h.epsilon, h.hint, &w, sunShare,
-                               &source);
+    const glm::vec3 x = onPlane(pointOf(k));
+    bool vis = h.light->Sample(*h.grid, h.patch, h.twin, x, h.normal, DirectLightSample(pixel, k),
+                               tally, h.epsilon, h.hint, &w, sunShare, &source);
+    if (!vis && eye && HiddenFrom(*h.grid, x, *eye, h.patch, h.twin, h.epsilon)) {
+      ++hidden;
+      continue;
+    }
     if (!(w.x > 0.0f || w.y > 0.0f || w.z > 0.0f)) continue;
     ++counted;
     all += w;
@@ -79,6 +101,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
       sourceSeen += w;
     }
   }
+  if (counted == 0 && hidden > 0) return glm::vec3(0.0f);
   glm::vec3 share(1.0f);  // no sample saw the emitters in front: unoccluded
   for (int c = 0; c < 3; ++c)
     if (all[c] > 0.0f) share[c] = seen[c] / all[c];
@@ -91,7 +114,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
   // (drawn x its share >= 1) gives its part times its own samples' visible
   // share, so its count of samples does not matter; the others, which may
   // draw none, what their samples brought over all drawn.
-  const float n = static_cast<float>(k);
+  const float n = static_cast<float>(k - hidden);
   auto part = [&](const glm::vec3& e, float p, const glm::vec3& sSeen, const glm::vec3& sAll) {
     glm::vec3 v = sSeen / n;
     if (n * p >= 1.0f)

@@ -52,7 +52,7 @@ glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const do
     for (int k = 0; k < count; ++k) dup |= seen[k] == leaf;
     if (dup) continue;
     seen[count++] = leaf;
-    float w = env.elements()[leaf].area;
+    float w = env.ExposedArea(leaf);
     sum += w * env.LeafRadiosity(i, leaf, ambient);
     weight += w;
   }

@@ -378,10 +378,13 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
             static_cast<uint32_t>(y) * static_cast<uint32_t>(view.width) + static_cast<uint32_t>(x);
         const glm::vec3 centre = worldAt(sx, sy);
         if (inside)
-          extra = GatherDirect(dh, centre, pixel, [&](uint32_t k) {
-            glm::vec2 off = DirectPixelOffset(pixel, k);
-            return worldAt(fx + off.x, fy + off.y);
-          });
+          extra = GatherDirect(
+              dh, centre, pixel,
+              [&](uint32_t k) {
+                glm::vec2 off = DirectPixelOffset(pixel, k);
+                return worldAt(fx + off.x, fy + off.y);
+              },
+              &view.eye);
         else
           extra = GatherDirect(dh, centre, pixel, [&](uint32_t) { return centre; });
       }

@@ -12,6 +12,7 @@ void ElementTree::Layout(Arena& arena, uint32_t numPatches, const ElementOptions
   options_ = options;
   elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options.perPatch));
   indirect_ = arena.Alloc<double>(indirect ? 3 * size_t(numPatches) * (1 + options.perPatch) : 0);
+  exposed_ = arena.Alloc<float>(elements_.size());
 }
 
 void ElementTree::Reset(Span<const Patch> patches) {
@@ -22,6 +23,7 @@ void ElementTree::Reset(Span<const Patch> patches) {
     root = Element{};
     root.area = patches[i].area;
     root.child = kNoElement;
+    exposed_[i] = kUnmeasured;
   }
   used_ = static_cast<uint32_t>(patches.size());
 }
@@ -73,6 +75,7 @@ ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uin
     ch.area = static_cast<float>(quarterArea[q] * (el.area / areaSum));
     ch.child = kNoElement;
     ch.depth = el.depth + 1;
+    exposed_[first + q] = kUnmeasured;
     for (int c = 0; c < 3; ++c) {
       double older = el.received[c] -
                      (el.quarter[0][c] + el.quarter[1][c] + el.quarter[2][c] + el.quarter[3][c]);

@@ -66,10 +66,14 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
   const Element& el = elements_[e];
   glm::vec3 b;
   const PatchTexture* t = patchTexture(patch);
+  // What was received spread over the exposed part (a leaf wholly buried
+  // weighs nothing in its vertices: any value will do).
+  const double exposed = elements_.exposed(e);
+  const double over = exposed > 0.0 ? 1.0 / exposed : 1.0;
   // Per-pixel direct light: the patch's indirect radiosity, every leaf alike
   // (the direct part, which has the detail, is gathered per pixel).
   if (direct_.ShowsIndirect(patch)) {
-    glm::dvec3 ind = elements_.Indirect(e);
+    glm::dvec3 ind = elements_.Indirect(e) * over;
     for (int c = 0; c < 3; ++c)
       b[c] = static_cast<float>(static_cast<double>(p.ke[c]) +
                                 (ind[c] + p.kd[c] * ambient[c]) * (t ? t->scale[c] : 1.0f));
@@ -80,11 +84,12 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
     // (scale = kd_mat / kd): the display multiplies the texture back in.
     for (int c = 0; c < 3; ++c)
       b[c] = static_cast<float>(static_cast<double>(p.ke[c]) +
-                                (el.received[c] / el.area + p.kd[c] * ambient[c]) * t->scale[c]);
+                                (el.received[c] / el.area * over + p.kd[c] * ambient[c]) *
+                                    t->scale[c]);
     return b;
   }
   for (int c = 0; c < 3; ++c)
-    b[c] = static_cast<float>(static_cast<double>(p.ke[c]) + el.received[c] / el.area +
+    b[c] = static_cast<float>(static_cast<double>(p.ke[c]) + el.received[c] / el.area * over +
                               p.kd[c] * ambient[c]);
   return b;
 }
@@ -97,13 +102,17 @@ glm::vec3 Environment::LeafSolvedDirect(uint32_t patch, uint32_t e) const {
   const Element& el = elements_[e];
   const glm::dvec3 ind = elements_.Indirect(e);
   const PatchTexture* t = patchTexture(patch);
+  const double exposed = elements_.exposed(e);
+  const double over = exposed > 0.0 ? 1.0 / exposed : 1.0;
   glm::vec3 d;
   for (int c = 0; c < 3; ++c)
-    d[c] = static_cast<float>((el.received[c] / el.area - ind[c]) * (t ? t->scale[c] : 1.0f));
+    d[c] =
+        static_cast<float>((el.received[c] / el.area - ind[c]) * over * (t ? t->scale[c] : 1.0f));
   return d;
 }
 
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {
+  MeasureExposure();
   lattice_.Clear();
   for (uint32_t i = 0; i < patches_.size(); ++i) {
     const Patch& p = patches_[i];
@@ -115,8 +124,9 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
       // A point just inside the corner, so the leaf is the corner's own.
       glm::vec2 centre = p.numCorners == 3 ? glm::vec2(1.0f / 3.0f) : glm::vec2(0.5f);
       uint32_t leaf = LeafAt(i, corners[k] + 1e-4f * (centre - corners[k]));
-      float w = elements_[leaf].area;
-      lattice_.Add(p.vertex[k], w, LeafRadiosity(i, leaf, ambient), std::sqrt(w / p.area));
+      float w = ExposedArea(leaf);
+      lattice_.Add(p.vertex[k], w, LeafRadiosity(i, leaf, ambient),
+                   std::sqrt(elements_[leaf].area / p.area));
       if (lattice_.keepsSolvedDirect() && direct_.ShowsIndirect(i))
         lattice_.AddSolvedDirect(p.vertex[k], w, LeafSolvedDirect(i, leaf));
     }

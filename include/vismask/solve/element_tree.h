@@ -18,8 +18,8 @@ namespace vismask {
 class ElementTree {
  public:
   // Room for `numPatches` roots and options.perPatch pool elements a patch,
-  // and with `indirect` three channels of indirect power each (also from a
-  // measuring arena).
+  // each with its exposed share, and with `indirect` three channels of
+  // indirect power each (also from a measuring arena).
   void Layout(Arena& arena, uint32_t numPatches, const ElementOptions& options, bool indirect);
   // Every patch a single leaf of its area, the pool unused, no indirect power.
   void Reset(Span<const Patch> patches);
@@ -49,6 +49,13 @@ class ElementTree {
   // the pool is used up.
   Split MaybeSplit(const Patch& p, uint32_t e, const uint8_t* path, uint32_t depth);
 
+  // The share of leaf e's area that is not buried inside a closed solid
+  // (the part of a floor under a block), as Environment::MeasureExposure
+  // measured it; kUnmeasured for a leaf made since.
+  static constexpr float kUnmeasured = -1.0f;
+  float exposed(uint32_t e) const { return exposed_[e]; }
+  void SetExposed(uint32_t e, float share) { exposed_[e] = share; }
+
   // Per-pixel direct light: leaf e's indirect power (W, channel c), added
   // to; and its indirect radiosity (0 without).
   bool hasIndirect() const { return !indirect_.empty(); }
@@ -64,6 +71,7 @@ class ElementTree {
   ElementOptions options_;
   Span<Element> elements_;
   Span<double> indirect_;
+  Span<float> exposed_;
   uint32_t used_ = 0;
 };
 

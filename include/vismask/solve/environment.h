@@ -64,7 +64,21 @@ class Environment {
   void FlightPower(double power[3]) const;
 
   // Display values (env_receive.cpp): vertices', a leaf's, a patch's leaf at `st`.
+  // ComputeVertexRadiosity first measures the leaves' exposed shares
+  // (MeasureExposure): a leaf shows what it received over its exposed
+  // area, and weighs that much in its vertices' means.
   void ComputeVertexRadiosity(const double ambient[3]);
+  // Measures ElementTree::exposed for every leaf not yet measured
+  // (exposure.cpp): of kExposureSide^2 points spread over the leaf, the
+  // share from which some probe ray reaches a front face or leaves the
+  // scene. A point from which every probe meets a back face first lies
+  // inside a closed solid, where no light arrives and no eye looks.
+  void MeasureExposure();
+  // Leaf e's exposed area (its area until measured).
+  float ExposedArea(uint32_t e) const {
+    const float share = elements_.exposed(e);
+    return elements_[e].area * (share < 0.0f ? 1.0f : share);
+  }
   uint32_t IndirectFilterSteps() const;  // the indirect part's smoothing for the next image
   uint32_t filterSteps() const { return filterSteps_; }  // ... and the last image's
   glm::vec3 LeafRadiosity(uint32_t patch, uint32_t e, const double ambient[3]) const;

@@ -1,0 +1,88 @@
+// Environment::MeasureExposure (environment.h): the share of each leaf that
+// is not buried inside a closed solid. A floor runs on under a block that
+// stands on it; the part beneath receives nothing, so a patch or leaf that
+// straddles the block's foot shows its received power spread over an area
+// half dark, and its vertices' means carry the dark part out beside the
+// block (a shadow leak). With the buried share known, a leaf shows its
+// power over its exposed area and weighs that much in its vertices.
+#include <glm/geometric.hpp>
+#include <limits>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "vismask/accel/grid.h"
+#include "vismask/solve/element.h"
+#include "vismask/solve/environment.h"
+
+namespace vismask {
+
+namespace {
+
+constexpr int kExposureSide = 4;  // points a leaf: kExposureSide^2, stratified
+constexpr int kProbes = 5;        // rays a point: the normal and four at 60 degrees to it
+
+}  // namespace
+
+void Environment::MeasureExposure() {
+  const float eps = options_.rayEpsilon;
+  for (uint32_t i = 0; i < patches_.size(); ++i) {
+    const Patch& p = patches_[i];
+    const bool triangle = p.numCorners == 3;
+    // The probes' directions in the patch's frame (fixed: the same bytes
+    // whatever the run).
+    const glm::vec3 t1 = glm::normalize(p.corner[1] - p.corner[0]);
+    const glm::vec3 t2 = glm::cross(p.normal, t1);
+    const float c60 = 0.5f, s60 = 0.866025404f;
+    const glm::vec3 dirs[kProbes] = {p.normal, c60 * p.normal + s60 * t1,
+                                     c60 * p.normal - s60 * t1, c60 * p.normal + s60 * t2,
+                                     c60 * p.normal - s60 * t2};
+    const Skip skip(i, twinOf(i));
+    struct Node {
+      uint32_t e;
+      glm::vec2 c[4];
+    };
+    Node stack[4 * 32 + 1];
+    int top = 0;
+    stack[top].e = i;
+    const int n = RootCorners(triangle, stack[top].c);
+    ++top;
+    while (top > 0) {
+      const Node node = stack[--top];
+      const Element& el = elements_[node.e];
+      if (el.child != kNoElement) {
+        for (uint32_t k = 0; k < 4; ++k) {
+          Node& ch = stack[top++];
+          ch.e = el.child + k;
+          ChildCorners(triangle, node.c, k, ch.c);
+        }
+        continue;
+      }
+      if (elements_.exposed(node.e) != ElementTree::kUnmeasured) continue;
+      int open = 0, points = 0;
+      for (int a = 0; a < kExposureSide; ++a)
+        for (int b = 0; b < kExposureSide; ++b) {
+          float u = (a + 0.5f) / kExposureSide, v = (b + 0.5f) / kExposureSide;
+          glm::vec2 st;
+          if (n == 3) {
+            // Folded into the triangle: (u, v) beyond the diagonal mirrored.
+            if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+            st = node.c[0] + u * (node.c[1] - node.c[0]) + v * (node.c[2] - node.c[0]);
+          } else {
+            st = (1.0f - u) * (1.0f - v) * node.c[0] + u * (1.0f - v) * node.c[1] +
+                 u * v * node.c[2] + (1.0f - u) * v * node.c[3];
+          }
+          const glm::vec3 x = PatchPoint(p, st);
+          bool reaches = false;
+          for (int r = 0; r < kProbes && !reaches; ++r) {
+            Hit hit;
+            reaches = !grid_.Intersect(Ray{x, dirs[r], eps, std::numeric_limits<float>::infinity()}, skip, &hit) || hit.front;
+          }
+          open += reaches ? 1 : 0;
+          ++points;
+        }
+      elements_.SetExposed(node.e, static_cast<float>(open) / static_cast<float>(points));
+    }
+  }
+}
+
+}  // namespace vismask

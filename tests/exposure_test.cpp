@@ -1,0 +1,112 @@
+// The exposed share of a leaf (Environment::MeasureExposure): a floor that
+// runs on under a block standing on it is dark beneath, and its patches
+// straddling the block's foot show their power over the exposed part only,
+// so the floor beside the block is as bright as where the floor stops at
+// the block.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "env_test_util.h"
+#include "test_util.h"
+#include "vismask/output/image_io.h"
+
+namespace vismask {
+namespace {
+
+// The floor [0, 4]^2 at y = 0, facing up, whole or (holed) cut around the
+// block's footprint [1, 2.5] x [1, 2]; the block (height 1, five faces, no
+// bottom) and a lamp [0, 4]^2 facing down at y = 6.
+void WriteBlockScene(const std::string& dir, bool holed) {
+  std::string obj = "mtllib s.mtl\nusemtl white\n";
+  int v = 1;
+  auto quad = [&](std::vector<std::vector<double>> c) {
+    for (const auto& p : c)
+      obj += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " +
+             std::to_string(p[2]) + "\n";
+    obj += "f " + std::to_string(v) + " " + std::to_string(v + 1) + " " + std::to_string(v + 2) +
+           " " + std::to_string(v + 3) + "\n";
+    v += 4;
+  };
+  // Counter-clockwise seen from above: facing up.
+  auto floor = [&](double x0, double z0, double x1, double z1) {
+    quad({{x0, 0, z0}, {x0, 0, z1}, {x1, 0, z1}, {x1, 0, z0}});
+  };
+  if (holed) {
+    floor(0, 0, 4, 1);
+    floor(0, 2, 4, 4);
+    floor(0, 1, 1, 2);
+    floor(2.5, 1, 4, 2);
+  } else {
+    floor(0, 0, 4, 4);
+  }
+  const double x0 = 1, x1 = 2.5, z0 = 1, z1 = 2, h = 1;
+  quad({{x0, h, z0}, {x0, h, z1}, {x1, h, z1}, {x1, h, z0}});  // top, up
+  quad({{x0, h, z0}, {x1, h, z0}, {x1, 0, z0}, {x0, 0, z0}});  // -z
+  quad({{x1, h, z1}, {x0, h, z1}, {x0, 0, z1}, {x1, 0, z1}});  // +z
+  quad({{x0, h, z1}, {x0, h, z0}, {x0, 0, z0}, {x0, 0, z1}});  // -x
+  quad({{x1, h, z0}, {x1, h, z1}, {x1, 0, z1}, {x1, 0, z0}});  // +x
+  obj += "usemtl lamp\n";
+  quad({{0, 6, 0}, {4, 6, 0}, {4, 6, 4}, {0, 6, 4}});  // facing down
+  test::WriteFile(dir + "/s.obj", obj);
+  test::WriteFile(dir + "/s.mtl", "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n");
+}
+
+TEST(ExposureTest, PatchesUnderABlockAreBuriedInProportion) {
+  test::TempDir dir;
+  WriteBlockScene(dir.path(), false);
+  EnvGrid shape;
+  EnvOptions eo;
+  eo.rayEpsilon = 1e-4f;
+  test::TestEnvs envs;
+  test::MakeTestEnvs(dir.File("s.obj").c_str(), shape, 1.0f, eo, &envs);
+  if (HasFatalFailure()) return;
+  Environment& env = *envs.ptrs[0];
+  env.MeasureExposure();
+  int seen = 0;
+  for (uint32_t i = 0; i < env.patches().size(); ++i) {
+    const Patch& p = env.patches()[i];
+    glm::vec3 c(0.0f);
+    for (uint32_t k = 0; k < p.numCorners; ++k) c += p.corner[k];
+    c /= static_cast<float>(p.numCorners);
+    const float share = env.ExposedArea(i) / p.area;
+    const bool floor = p.normal.y > 0.5f && std::fabs(c.y) < 1e-4f;
+    if (floor && std::fabs(c.z - 1.5f) < 1e-3f && std::fabs(c.x - 1.5f) < 1e-3f) {
+      EXPECT_EQ(share, 0.0f) << "under the block";
+      ++seen;
+    } else if (floor && std::fabs(c.z - 1.5f) < 1e-3f && std::fabs(c.x - 2.5f) < 1e-3f) {
+      EXPECT_EQ(share, 0.5f) << "half under the block";
+      ++seen;
+    } else {
+      EXPECT_EQ(share, 1.0f) << "patch " << i << " at " << c.x << "," << c.y << "," << c.z;
+    }
+  }
+  EXPECT_EQ(seen, 2);
+}
+
+// The floor just beside the block's +x face, seen from above with the
+// solve's radiosity (no per-pixel direct light): the same brightness whether
+// the floor runs on under the block or stops at it.
+TEST(ExposureTest, TheFloorBesideABlockIsNotDarkenedByThePartBeneath) {
+  double mean[2] = {0.0, 0.0};
+  for (int holed = 0; holed < 2; ++holed) {
+    test::TempDir dir;
+    WriteBlockScene(dir.path(), holed == 1);
+    test::RunResult r = test::RunMain(
+        {"render", dir.File("s.obj"), "--out", dir.File("out"), "--camera",
+         "2.75,2,1.5,2.75,0,1.5,0,0,1,11", "--width", "16", "--height", "16", "--patch-size", "1",
+         "--direct-samples", "0", "--emitted-rays", "400000", "--indirect-filter", "0", "--quiet"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    PfmImage img;
+    ASSERT_TRUE(ReadPfm(dir.File("out/image.pfm"), &img).ok());
+    for (size_t k = 0; k < img.pixels.size(); k += 3) mean[holed] += img.pixels[k];
+    mean[holed] /= static_cast<double>(img.pixels.size() / 3);
+  }
+  ASSERT_GT(mean[1], 0.0);
+  EXPECT_NEAR(mean[0] / mean[1], 1.0, 0.05) << mean[0] << " whole, " << mean[1] << " holed";
+}
+
+}  // namespace
+}  // namespace vismask
