@@ -150,14 +150,16 @@ TEST(DirectTest, SamplesGoToEachGroupByItsShareOfTheIrradianceThere) {
 // A floor [-10, 10]^2 at y = 0 (Kd 0.5, facing up), a square emitter of side
 // `side` centred above the origin at height `height` facing down (Kd 0,
 // Ke 10), and optionally a black occluder over x < 0 at height `occluder`
-// facing up (so the floor sees its back, which absorbs).
-void WriteFloorScene(const std::string& dir, double side, double height, double occluder) {
+// facing up (so the floor sees its back, which absorbs). The emitter may be
+// moved to x = `emitterX`.
+void WriteFloorScene(const std::string& dir, double side, double height, double occluder,
+                     double emitterX = 0.0) {
   std::ostringstream obj;
-  double h = side / 2;
+  double h = side / 2, x0 = emitterX - h, x1 = emitterX + h;
   obj << "mtllib s.mtl\n"
       << "v -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\n"
-      << "v " << -h << " " << height << " " << -h << "\nv " << h << " " << height << " " << -h
-      << "\nv " << h << " " << height << " " << h << "\nv " << -h << " " << height << " " << h
+      << "v " << x0 << " " << height << " " << -h << "\nv " << x1 << " " << height << " " << -h
+      << "\nv " << x1 << " " << height << " " << h << "\nv " << x0 << " " << height << " " << h
       << "\n"
       << "v -10 " << occluder << " -10\nv 0 " << occluder << " -10\nv 0 " << occluder
       << " 10\nv -10 " << occluder << " 10\n"
@@ -278,6 +280,32 @@ TEST(DirectTest, HardShadowEdgeIsAsSharpAsItsGeometry) {
   EXPECT_LT(wDirect, 1.5) << "the 10-90% width, off its geometric " << geometric << " px";
   // The solved radiosity alone cannot draw it (the test tells them apart).
   EXPECT_GT(wSolved, 2.0);
+}
+
+TEST(DirectTest, AShadowEdgeIsBoxFilteredWherePiecesSplitThePixel) {
+  test::TempDir dir;
+  // A 0.002 emitter at height 3 above x = -0.05, the occluder's edge
+  // (x = 0) at 1.5: a step on the floor at x = 0.05 (clear of the patches'
+  // and elements' edges, at multiples of 20/53/16 from x = 0), an eighth of
+  // a pixel wide, placed 0.45 of the way into pixel column 32 (the floor
+  // beyond it, left of it, lit; not 0.5, where a piece's centroid would sit
+  // on the step, nor under 0.4, where the adaptive gather's first four
+  // samples may all miss the lit part). The patches and elements cut the
+  // floor along rows that cross some pixels: there the pixel is covered by
+  // two pieces, each over part of it. Box-filtered, every row's pixel 32 is
+  // 0.45 of the way from dark to lit, to the samples' noise.
+  WriteFloorScene(dir.path(), 0.002, 3.0, 1.5, -0.05);
+  const int n = 64;
+  PfmImage img = RenderDown(dir, n, "--patch-size 0.377358 --emitted-rays 200000", 0.05 + 0.45 / n);
+  double worst = 0.0;
+  int worstRow = -1;
+  for (int y = 2; y < n - 2; ++y) {
+    const double lit = Pixel(img, 28, y), dark = Pixel(img, 36, y);
+    ASSERT_GT(lit - dark, 0.0) << "row " << y;
+    const double v = (Pixel(img, 32, y) - dark) / (lit - dark);
+    if (std::fabs(v - 0.45) > worst) worst = std::fabs(v - 0.45), worstRow = y;
+  }
+  EXPECT_LT(worst, 0.15) << "row " << worstRow;
 }
 
 TEST(DirectTest, IndirectPartHasNoStepAtPatchEdges) {

@@ -24,8 +24,8 @@ void WriteBlockScene(const std::string& dir, bool holed) {
   int v = 1;
   auto quad = [&](std::vector<std::vector<double>> c) {
     for (const auto& p : c)
-      obj += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " +
-             std::to_string(p[2]) + "\n";
+      obj += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) +
+             "\n";
     obj += "f " + std::to_string(v) + " " + std::to_string(v + 1) + " " + std::to_string(v + 2) +
            " " + std::to_string(v + 3) + "\n";
     v += 4;
@@ -51,7 +51,8 @@ void WriteBlockScene(const std::string& dir, bool holed) {
   obj += "usemtl lamp\n";
   quad({{0, 6, 0}, {4, 6, 0}, {4, 6, 4}, {0, 6, 4}});  // facing down
   test::WriteFile(dir + "/s.obj", obj);
-  test::WriteFile(dir + "/s.mtl", "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n");
+  test::WriteFile(dir + "/s.mtl",
+                  "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n");
 }
 
 TEST(ExposureTest, PatchesUnderABlockAreBuriedInProportion) {

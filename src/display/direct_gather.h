@@ -26,7 +26,8 @@ inline bool HiddenFrom(const Grid& grid, glm::vec3 x, glm::vec3 eye, uint32_t pa
 
 // The radiance hook `h` adds for pixel index `pixel` at the shaded point
 // `centre`; pointOf(k) gives the point sample k's shadow ray leaves from
-// (points are projected onto the receiver's plane). Each source's E0 at
+// (points are projected onto the receiver's plane), called once a sample,
+// for k = 0, 1, 2, ... in order. Each source's E0 at
 // the centre times the visible share of its samples, weighted by what each
 // would bring (direct.h): a ray from the centre to each outline corner and
 // the first kFirstDirectSamples, and the rest of h.samples only where

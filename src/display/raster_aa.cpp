@@ -60,14 +60,15 @@ inline float Cross(Vec2 a, Vec2 b) {
 }
 
 // Area and centroid of the part of convex polygon `poly` (n corners, pixel
-// coordinates relative to the pixel's corner) inside the unit square, and
-// the range [*lo, *hi] over that part of the affine function
+// coordinates relative to the pixel's corner) inside the unit square, that
+// part's corners (*partCorners of them, at most kMaxPoly + 4, in `part`),
+// and the range [*lo, *hi] over it of the affine function
 // base + grad.x * x + grad.y * y. Returns the area (0 if none). Inlined into
 // both instances of DrawPieceAa, as it was into the one before textures
 // (called from two places, GCC no longer inlines it: +4% raster cost).
 [[gnu::always_inline]] inline float CoverInUnitSquare(const Vec2* poly, int n, Vec2 grad,
                                                       float base, Vec2* centroid, float* lo,
-                                                      float* hi) {
+                                                      float* hi, Vec2* part, int* partCorners) {
   Vec2 a[kMaxPoly + 4], b[kMaxPoly + 4];
   // Four axis-aligned clips: x >= 0, x <= 1, y >= 0, y <= 1.
   auto clip = [](const Vec2* in, int m, Vec2* out, int axis, float bound, float sign) {
@@ -108,6 +109,8 @@ inline float Cross(Vec2 a, Vec2 b) {
   }
   float area = 0.5f * std::fabs(twiceArea);
   if (!(area > 0.0f)) return 0.0f;
+  for (int k = 0; k < m; ++k) part[k] = b[k];
+  *partCorners = m;
   centroid->x = cx / (3.0f * twiceArea);
   centroid->y = cy / (3.0f * twiceArea);
   return std::fmin(area, 1.0f);
@@ -141,6 +144,60 @@ inline SortKey FragmentKey(bool back, float izCentre, float izLo, float izHi, fl
   k.depth = 1.0f / izCentre;
   if (!(k.depth >= 0.5f * zMin && k.depth <= 2.0f * zMax)) k.depth = zSample;
   return k;
+}
+
+// Whether point q lies in convex polygon `p` (m corners, either winding).
+inline bool InPolygon(const Vec2* p, int m, Vec2 q) {
+  bool neg = false, pos = false;
+  for (int k = 0; k < m; ++k) {
+    const Vec2 a = p[k], b = p[(k + 1) % m];
+    const float c = Cross(Vec2{b.x - a.x, b.y - a.y}, Vec2{q.x - a.x, q.y - a.y});
+    neg |= c < 0.0f;
+    pos |= c > 0.0f;
+  }
+  return !(neg && pos);
+}
+
+// A piece's plane as pixels see it: 1/depth = ia x + ib y + ic at (x, y).
+struct PixelPlane {
+  float ia, ib, ic, halfW, halfH, invF;
+  float zFallback;  // the depth where the ray grazes the plane
+  glm::vec3 WorldAt(const View& view, float px, float py) const {
+    float z = 1.0f / (ia * px + ib * py + ic);
+    if (!(z > 0.0f)) z = zFallback;
+    glm::vec3 pc = z * glm::vec3((px - halfW) * invF, (halfH - py) * invF, 1.0f);
+    return view.eye + pc.x * view.right + pc.y * view.up + pc.z * view.forward;
+  }
+};
+
+// Per-pixel direct light of a piece at pixel (x, y), E0 at the covered
+// centroid (sx, sy): samples over the pixel square, or over the covered part
+// `part` (relative to the pixel's corner) where it covers part: the offsets
+// that fall in it, in order (a subset of a low-discrepancy sequence stays
+// well spread), at most kOffsetTries tried a sample, then the centroid.
+inline glm::vec3 PieceDirect(const View& view, const DirectHook& dh, const PixelPlane& plane, int x,
+                             int y, float sx, float sy, const Vec2* part, int partCorners) {
+  constexpr uint32_t kOffsetTries = 16;
+  const float fx = static_cast<float>(x), fy = static_cast<float>(y);
+  const uint32_t pixel =
+      static_cast<uint32_t>(y) * static_cast<uint32_t>(view.width) + static_cast<uint32_t>(x);
+  const glm::vec3 centre = plane.WorldAt(view, sx, sy);
+  uint32_t tried = 0;
+  return GatherDirect(
+      dh, centre, pixel,
+      [&](uint32_t k) {
+        if (!part) {
+          const glm::vec2 off = DirectPixelOffset(pixel, k);
+          return plane.WorldAt(view, fx + off.x, fy + off.y);
+        }
+        while (tried < kOffsetTries * dh.samples) {
+          const glm::vec2 off = DirectPixelOffset(pixel, tried++);
+          if (InPolygon(part, partCorners, Vec2{off.x, off.y}))
+            return plane.WorldAt(view, fx + off.x, fy + off.y);
+        }
+        return centre;
+      },
+      &view.eye);
 }
 
 // What a piece needs per pixel, set up once.
@@ -350,10 +407,13 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       float izCorner = ia * fx + ib * fy + ic;
       float izLo = izCorner + std::fmin(ia, 0.0f) + std::fmin(ib, 0.0f);
       float izHi = izCorner + std::fmax(ia, 0.0f) + std::fmax(ib, 0.0f);
+      Vec2 part[kMaxPoly + 4];  // the covered part, where the piece covers the pixel in part
+      int partCorners = 0;
       if (!inside) {
         Vec2 local[kMaxPoly], c{0.5f, 0.5f};
         for (int k = 0; k < m; ++k) local[k] = Vec2{sp[k].x - fx, sp[k].y - fy};
-        cover = CoverInUnitSquare(local, m, Vec2{ia, ib}, izCorner, &c, &izLo, &izHi);
+        cover = CoverInUnitSquare(local, m, Vec2{ia, ib}, izCorner, &c, &izLo, &izHi, part,
+                                  &partCorners);
         if (!(cover > 1e-6f)) continue;
         sx = fx + c.x, sy = fy + c.y;
       }
@@ -365,28 +425,9 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
       glm::vec3 r = pCam - s.origin;
       glm::vec3 extra(0.0f);
       if (piece.direct) {
-        // Per-pixel direct light: the samples spread over the pixel square
-        // where the piece covers all of it, else all at the centroid.
-        const DirectHook& dh = *piece.direct;
-        auto worldAt = [&](float px, float py) {
-          float z = 1.0f / (ia * px + ib * py + ic);
-          if (!(z > 0.0f)) z = zSample;
-          glm::vec3 pc = z * glm::vec3((px - halfW) * invF, (halfH - py) * invF, 1.0f);
-          return view.eye + pc.x * view.right + pc.y * view.up + pc.z * view.forward;
-        };
-        const uint32_t pixel =
-            static_cast<uint32_t>(y) * static_cast<uint32_t>(view.width) + static_cast<uint32_t>(x);
-        const glm::vec3 centre = worldAt(sx, sy);
-        if (inside)
-          extra = GatherDirect(
-              dh, centre, pixel,
-              [&](uint32_t k) {
-                glm::vec2 off = DirectPixelOffset(pixel, k);
-                return worldAt(fx + off.x, fy + off.y);
-              },
-              &view.eye);
-        else
-          extra = GatherDirect(dh, centre, pixel, [&](uint32_t) { return centre; });
+        const PixelPlane plane{ia, ib, ic, halfW, halfH, invF, zSample};
+        extra = PieceDirect(view, *piece.direct, plane, x, y, sx, sy, inside ? nullptr : part,
+                            partCorners);
       }
       glm::vec3 rad =
           RadianceAt<kTextured>(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)}, extra);

@@ -6,9 +6,9 @@
 // block (a shadow leak). With the buried share known, a leaf shows its
 // power over its exposed area and weighs that much in its vertices.
 #include <glm/geometric.hpp>
-#include <limits>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
+#include <limits>
 
 #include "vismask/accel/grid.h"
 #include "vismask/solve/element.h"
@@ -33,9 +33,8 @@ void Environment::MeasureExposure() {
     const glm::vec3 t1 = glm::normalize(p.corner[1] - p.corner[0]);
     const glm::vec3 t2 = glm::cross(p.normal, t1);
     const float c60 = 0.5f, s60 = 0.866025404f;
-    const glm::vec3 dirs[kProbes] = {p.normal, c60 * p.normal + s60 * t1,
-                                     c60 * p.normal - s60 * t1, c60 * p.normal + s60 * t2,
-                                     c60 * p.normal - s60 * t2};
+    const glm::vec3 dirs[kProbes] = {p.normal, c60 * p.normal + s60 * t1, c60 * p.normal - s60 * t1,
+                                     c60 * p.normal + s60 * t2, c60 * p.normal - s60 * t2};
     const Skip skip(i, twinOf(i));
     struct Node {
       uint32_t e;
@@ -75,7 +74,9 @@ void Environment::MeasureExposure() {
           bool reaches = false;
           for (int r = 0; r < kProbes && !reaches; ++r) {
             Hit hit;
-            reaches = !grid_.Intersect(Ray{x, dirs[r], eps, std::numeric_limits<float>::infinity()}, skip, &hit) || hit.front;
+            reaches = !grid_.Intersect(Ray{x, dirs[r], eps, std::numeric_limits<float>::infinity()},
+                                       skip, &hit) ||
+                      hit.front;
           }
           open += reaches ? 1 : 0;
           ++points;
