@@ -188,9 +188,8 @@ def report_section(ctx, w, table_md):
     if k1 and kn and max(by[kn[0]]) < min(max(by[n]) for n in k1):
         w(f"- At {kn[0].split('-')[-1]} the size, box-averaged, the edges come closer to Cycles' "
           "than any run at the reference's size, more shadow rays included: what makes vismask's "
-          "edges narrower is where in each pixel the gather's shadow rays leave from (a piece "
-          "that covers only part of a pixel gathers at its centroid: docs/design/"
-          "direct-light.md), not the number of its samples or the sun's disc.")
+          "edges narrower is how the gather places its shadow rays' origins in each pixel "
+          "(docs/design/direct-light.md), not the number of its samples or the sun's disc.")
     w("")
     w("**The whole image**: `vs_cycles` is the relative RMSE against Cycles (run.json's, "
       "`--reference` with the reference's mask, which leaves out nothing here: no emitter is "
