@@ -106,27 +106,7 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       hook.epsilon = env.rayEpsilon();
       hook.hint = &hint;
     }
-    // Depth-first over the tree, with a fixed stack (4 entries per level).
-    struct Node {
-      uint32_t e;
-      glm::vec2 c[4];
-    };
-    Node stack[4 * 32 + 1];
-    int top = 0;
-    stack[top].e = i;
-    int n = RootCorners(triangle, stack[top].c);
-    ++top;
-    while (top > 0) {
-      Node node = stack[--top];
-      const Element& el = elements[node.e];
-      if (el.child != kNoElement) {
-        for (uint32_t k = 0; k < 4; ++k) {
-          Node& ch = stack[top++];
-          ch.e = el.child + k;
-          ChildCorners(triangle, node.c, k, ch.c);
-        }
-        continue;
-      }
+    ForEachLeaf(elements, triangle, i, [&](uint32_t, const glm::vec2* c, int n) {
       DisplayPiece piece;
       piece.numCorners = static_cast<uint32_t>(n);
       // The polygon's id, not the patch's: the pieces of one polygon tile its
@@ -136,9 +116,8 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       // five or more fragments and lost the wall: dark dots along the edges).
       piece.id = p.surface;
       for (int k = 0; k < n; ++k) {
-        piece.p[k] = PatchPoint(p, node.c[k]);
-        piece.c[k] =
-            facing ? DisplayRadiance(CornerValue(env, i, node.c[k], ambient)) : glm::vec3(0.0f);
+        piece.p[k] = PatchPoint(p, c[k]);
+        piece.c[k] = facing ? DisplayRadiance(CornerValue(env, i, c[k], ambient)) : glm::vec3(0.0f);
       }
       if (n == 3) {
         piece.p[3] = piece.p[2];
@@ -147,12 +126,12 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       if (tex) {
         piece.texture = &textures[tex->texture];
         piece.ke = DisplayRadiance(p.ke);
-        for (int k = 0; k < n; ++k) piece.uv[k] = PatchUv(*tex, triangle, node.c[k]);
+        for (int k = 0; k < n; ++k) piece.uv[k] = PatchUv(*tex, triangle, c[k]);
         piece.uv[3] = piece.uv[n - 1];
       }
       if (direct) piece.direct = &hook;
       DrawPiece(view, piece, fb);
-    }
+    });
   }
 }
 

@@ -66,10 +66,8 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
   const Element& el = elements_[e];
   glm::vec3 b;
   const PatchTexture* t = patchTexture(patch);
-  // What was received spread over the exposed part (a leaf wholly buried
-  // weighs nothing in its vertices: any value will do).
-  const double exposed = elements_.exposed(e);
-  const double over = exposed > 0.0 ? 1.0 / exposed : 1.0;
+  // What was received, spread over the exposed part.
+  const double over = elements_.OverExposed(e);
   // Per-pixel direct light: the patch's indirect radiosity, every leaf alike
   // (the direct part, which has the detail, is gathered per pixel).
   if (direct_.ShowsIndirect(patch)) {
@@ -102,8 +100,7 @@ glm::vec3 Environment::LeafSolvedDirect(uint32_t patch, uint32_t e) const {
   const Element& el = elements_[e];
   const glm::dvec3 ind = elements_.Indirect(e);
   const PatchTexture* t = patchTexture(patch);
-  const double exposed = elements_.exposed(e);
-  const double over = exposed > 0.0 ? 1.0 / exposed : 1.0;
+  const double over = elements_.OverExposed(e);
   glm::vec3 d;
   for (int c = 0; c < 3; ++c)
     d[c] =

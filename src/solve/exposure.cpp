@@ -36,27 +36,8 @@ void Environment::MeasureExposure() {
     const glm::vec3 dirs[kProbes] = {p.normal, c60 * p.normal + s60 * t1, c60 * p.normal - s60 * t1,
                                      c60 * p.normal + s60 * t2, c60 * p.normal - s60 * t2};
     const Skip skip(i, twinOf(i));
-    struct Node {
-      uint32_t e;
-      glm::vec2 c[4];
-    };
-    Node stack[4 * 32 + 1];
-    int top = 0;
-    stack[top].e = i;
-    const int n = RootCorners(triangle, stack[top].c);
-    ++top;
-    while (top > 0) {
-      const Node node = stack[--top];
-      const Element& el = elements_[node.e];
-      if (el.child != kNoElement) {
-        for (uint32_t k = 0; k < 4; ++k) {
-          Node& ch = stack[top++];
-          ch.e = el.child + k;
-          ChildCorners(triangle, node.c, k, ch.c);
-        }
-        continue;
-      }
-      if (elements_.exposed(node.e) != ElementTree::kUnmeasured) continue;
+    ForEachLeaf(elements_.all(), triangle, i, [&](uint32_t e, const glm::vec2* c, int n) {
+      if (elements_.exposed(e) != ElementTree::kUnmeasured) return;
       int open = 0, points = 0;
       for (int a = 0; a < kExposureSide; ++a)
         for (int b = 0; b < kExposureSide; ++b) {
@@ -65,10 +46,10 @@ void Environment::MeasureExposure() {
           if (n == 3) {
             // Folded into the triangle: (u, v) beyond the diagonal mirrored.
             if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
-            st = node.c[0] + u * (node.c[1] - node.c[0]) + v * (node.c[2] - node.c[0]);
+            st = c[0] + u * (c[1] - c[0]) + v * (c[2] - c[0]);
           } else {
-            st = (1.0f - u) * (1.0f - v) * node.c[0] + u * (1.0f - v) * node.c[1] +
-                 u * v * node.c[2] + (1.0f - u) * v * node.c[3];
+            st = (1.0f - u) * (1.0f - v) * c[0] + u * (1.0f - v) * c[1] + u * v * c[2] +
+                 (1.0f - u) * v * c[3];
           }
           const glm::vec3 x = PatchPoint(p, st);
           bool reaches = false;
@@ -81,8 +62,8 @@ void Environment::MeasureExposure() {
           open += reaches ? 1 : 0;
           ++points;
         }
-      elements_.SetExposed(node.e, static_cast<float>(open) / static_cast<float>(points));
-    }
+      elements_.SetExposed(e, static_cast<float>(open) / static_cast<float>(points));
+    });
   }
 }
 

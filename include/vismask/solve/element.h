@@ -21,6 +21,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "vismask/core/span.h"
 #include "vismask/solve/patch.h"
 
 namespace vismask {
@@ -58,5 +59,34 @@ uint32_t ChildOf(bool triangle, glm::vec2* st);
 void ChildCorners(bool triangle, const glm::vec2* in, uint32_t child, glm::vec2* out);
 // The parameter-space corners of a patch's root.
 int RootCorners(bool triangle, glm::vec2* out);
+
+// Calls visit(e, corners, n) for every leaf e of patch `patch`'s tree (a
+// triangle or not) in `elements`, depth-first, with its n corners in the
+// patch's parameters. A fixed stack (four entries a level): no allocation.
+template <typename Visit>
+void ForEachLeaf(Span<const Element> elements, bool triangle, uint32_t patch, Visit visit) {
+  struct Node {
+    uint32_t e;
+    glm::vec2 c[4];
+  };
+  Node stack[4 * 32 + 1];
+  int top = 0;
+  stack[top].e = patch;
+  const int n = RootCorners(triangle, stack[top].c);
+  ++top;
+  while (top > 0) {
+    const Node node = stack[--top];
+    const Element& el = elements[node.e];
+    if (el.child == kNoElement) {
+      visit(node.e, static_cast<const glm::vec2*>(node.c), n);
+      continue;
+    }
+    for (uint32_t k = 0; k < 4; ++k) {
+      Node& ch = stack[top++];
+      ch.e = el.child + k;
+      ChildCorners(triangle, node.c, k, ch.c);
+    }
+  }
+}
 
 }  // namespace vismask

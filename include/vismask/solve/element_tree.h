@@ -55,6 +55,13 @@ class ElementTree {
   static constexpr float kUnmeasured = -1.0f;
   float exposed(uint32_t e) const { return exposed_[e]; }
   void SetExposed(uint32_t e, float share) { exposed_[e] = share; }
+  // What spreads leaf e's received power over its exposed part: 1 / its
+  // exposed share, 1 until measured or where wholly buried (the leaf then
+  // weighs nothing in its vertices, and any value will do).
+  double OverExposed(uint32_t e) const {
+    const double share = exposed_[e];
+    return share > 0.0 ? 1.0 / share : 1.0;
+  }
 
   // Per-pixel direct light: leaf e's indirect power (W, channel c), added
   // to; and its indirect radiosity (0 without).
