@@ -218,6 +218,36 @@ TEST(RasterTest, TheInsideOfABoxStaysHiddenBehindItsBack) {
 }
 
 // The image of a white quad, whole or cut into pieces.
+TEST(RasterTest, TwoObjectsEdgesKeepWhatLiesPastBoth) {
+  // Two slabs, each a front face and its back face (the same screen
+  // rectangle deeper, wound the other way), over a lit far wall: slab A left
+  // of x = 20.5 px, slab B right of it and below y = 30.5. Pixel (20, 30)
+  // holds five ids, and the wall, the deepest, shows in its upper right
+  // quarter (with four kept, the wall fell off and the pixel was black).
+  auto slab = [](float x0, float y0, float x1, float y1, float z, uint32_t id) {
+    glm::vec3 a = AtPixel(x0, y1, z), b = AtPixel(x1, y1, z), c = AtPixel(x1, y0, z),
+              d = AtPixel(x0, y0, z);
+    glm::vec3 ab = AtPixel(x0, y1, z + 50), bb = AtPixel(x1, y1, z + 50),
+              cb = AtPixel(x1, y0, z + 50), db = AtPixel(x0, y0, z + 50);
+    return std::vector<DisplayPiece>{Piece({a, b, c, d}, {0, 0, 0, 0}, id),
+                                     Piece({db, cb, bb, ab}, {0, 0, 0, 0}, id + 1)};
+  };
+  std::vector<DisplayPiece> scene = {Piece(
+      {AtPixel(-10, 80, 300), AtPixel(80, 80, 300), AtPixel(80, -10, 300), AtPixel(-10, -10, 300)},
+      {1, 1, 1, 1}, 1)};
+  for (const DisplayPiece& p : slab(-10, -10, 20.5f, 80, 100, 2)) scene.push_back(p);
+  for (const DisplayPiece& p : slab(20.5f, 30.5f, 80, 80, 120, 4)) scene.push_back(p);
+  for (bool reversed : {false, true}) {
+    if (reversed) std::reverse(scene.begin(), scene.end());
+    Fb fb(true);
+    DrawAll(scene, &fb.fb);
+    EXPECT_NEAR(fb.fb.color[size_t(30) * kW + 20].x, 0.25f, 1e-4f) << reversed;
+    EXPECT_NEAR(fb.fb.color[size_t(10) * kW + 20].x, 0.5f, 1e-4f) << reversed;
+    EXPECT_NEAR(fb.fb.color[size_t(30) * kW + 40].x, 0.5f, 1e-4f) << reversed;
+    EXPECT_NEAR(fb.fb.color[size_t(20) * kW + 40].x, 1.0f, 1e-4f) << reversed;
+  }
+}
+
 TEST(RasterTest, PiecesSharingEdgesCoverExactlyOnce) {
   // Two coplanar quads of different patches sharing a slanted edge, covering
   // the whole image: every pixel is fully and once covered.

@@ -39,7 +39,10 @@
 
 namespace vismask {
 
-constexpr int kFragments = 4;  // fragments per pixel (antialiased)
+// Fragments per pixel (antialiased): five, so that where two closed
+// objects' edges cross a pixel (each a front face and its back face) the
+// surface seen past both is still kept (RasterTest.TwoObjectsEdgesKeepWhatLiesPastBoth).
+constexpr int kFragments = 5;
 
 // One patch id's share of a pixel (antialiased). Empty: id == kNoPatch,
 // depth = +inf, the rest 0.
