@@ -248,6 +248,36 @@ TEST(RasterTest, TwoObjectsEdgesKeepWhatLiesPastBoth) {
   }
 }
 
+// MarkShown: the fragments Resolve gives a share, the ones whose direct
+// light the second pass gathers. A near quad over the left of a wall (its
+// edge at x = 20.5 px) and, behind the wall, a quad it hides entirely.
+TEST(RasterTest, MarkShownMarksWhatResolveShows) {
+  std::vector<DisplayPiece> scene = {Piece({AtPixel(-10, 80, 300), AtPixel(80, 80, 300),
+                                            AtPixel(80, -10, 300), AtPixel(-10, -10, 300)},
+                                           {1, 1, 1, 1}, 1),
+                                     Piece({AtPixel(-10, 80, 100), AtPixel(20.5, 80, 100),
+                                            AtPixel(20.5, -10, 100), AtPixel(-10, -10, 100)},
+                                           {0, 0, 0, 0}, 2),
+                                     Piece({AtPixel(-10, 80, 400), AtPixel(80, 80, 400),
+                                            AtPixel(80, -10, 400), AtPixel(-10, -10, 400)},
+                                           {1, 1, 1, 1}, 3)};
+  Fb fb(true);
+  View view = TestView();
+  for (const DisplayPiece& p : scene) DrawPiece(view, p, &fb.fb);
+  MarkShown(&fb.fb);
+  auto shown = [&](int x, int y, uint32_t id) {
+    const size_t i = size_t(y) * kW + x;
+    for (int k = 0; k < kFragments; ++k)
+      if (fb.fb.frags[i * kFragments + k].id == id) return ((fb.fb.shown[i] >> k) & 1u) != 0;
+    return false;
+  };
+  for (int y : {5, 30, 60}) {
+    EXPECT_TRUE(shown(10, y, 2) && !shown(10, y, 1) && !shown(10, y, 3)) << y;
+    EXPECT_TRUE(shown(20, y, 2) && shown(20, y, 1) && !shown(20, y, 3)) << y;
+    EXPECT_TRUE(!shown(40, y, 2) && shown(40, y, 1) && !shown(40, y, 3)) << y;
+  }
+}
+
 TEST(RasterTest, PiecesSharingEdgesCoverExactlyOnce) {
   // Two coplanar quads of different patches sharing a slanted edge, covering
   // the whole image: every pixel is fully and once covered.

@@ -71,10 +71,10 @@ glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const do
   return b;
 }
 
-}  // namespace
-
-void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
-                     Framebuffer* fb, Span<const Texture> textures) {
+// The environment's pieces into `fb` as fb->pass says; with `directOnly`
+// only the patches that gather direct light per pixel.
+void DrawPieces(const View& view, const Environment& env, const double ambient[3], Framebuffer* fb,
+                Span<const Texture> textures, bool directOnly) {
   Span<const Element> elements = env.elements();
   uint32_t hint = kNoPatch;  // the last occluder of a shadow ray
   for (uint32_t i = 0; i < env.patches().size(); ++i) {
@@ -93,6 +93,7 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
     // gathered at each shaded point.
     DirectHook hook;
     const bool direct = facing && env.direct().ShowsIndirect(i) && !env.direct().light().empty();
+    if (directOnly && !direct) continue;
     if (direct) {
       constexpr float kInvPi = 0.318309886183790672f;
       hook.light = &env.direct().light();
@@ -133,6 +134,28 @@ void DrawEnvironment(const View& view, const Environment& env, const double ambi
       DrawPiece(view, piece, fb);
     });
   }
+}
+
+}  // namespace
+
+// Antialiased with direct light per pixel, two passes: every piece's
+// coverage and interpolated radiance, then (MarkShown) each piece's direct
+// light gathered only in the pixels where its fragment shows. A piece
+// hidden behind nearer ones in this environment's own image casts no shadow
+// rays (on the Cornell box at 512², 1.6 gathers a pixel became ~1.1), and
+// what other environments composite in later only hides more.
+void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
+                     Framebuffer* fb, Span<const Texture> textures) {
+  if (!fb->aa || env.direct().light().empty()) {
+    DrawPieces(view, env, ambient, fb, textures, false);
+    return;
+  }
+  fb->pass = DrawPass::kCoverage;
+  DrawPieces(view, env, ambient, fb, textures, false);
+  MarkShown(fb);
+  fb->pass = DrawPass::kDirect;
+  DrawPieces(view, env, ambient, fb, textures, true);
+  fb->pass = DrawPass::kWhole;
 }
 
 }  // namespace vismask

@@ -3,6 +3,7 @@
 // the other ranks' framebuffers a band of rows at a time); resolving the
 // antialiased pixels' fragments into colour and id; and inspecting what an
 // image shows.
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -26,6 +27,7 @@ void Framebuffer::Layout(Arena& arena, int w, int h, bool antialiased) {
   if (aa) {
     frags = arena.Alloc<Fragment>(n * kFragments);
     dropped = arena.Alloc<uint8_t>(n);
+    shown = arena.Alloc<uint8_t>(n);
   } else {
     depth = arena.Alloc<float>(n);
   }
@@ -131,7 +133,7 @@ bool InFrontOf(const Fragment& a, const Fragment& b) {
 // One antialiased pixel's fragments composed: its colour, the id with the
 // largest visible share, and the share front faces took.
 void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* id,
-                  float* frontShare) {
+                  float* frontShare, uint8_t* shown = nullptr) {
   float open = 1.0f, front = 0.0f, best = 0.0f;
   uint32_t bestId = kNoPatch;
   glm::vec3 c(0.0f);
@@ -158,6 +160,7 @@ void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* i
         hidden += std::fabs(f[j].coverage);
     float w = std::fmin(cover - hidden, open);
     if (!(w > 0.0f)) continue;
+    if (shown) *shown = static_cast<uint8_t>(*shown | (1u << k));
     if (isFront) front += w;
     float scale = w / cover;
     c += scale * glm::vec3(f[k].rgb[0], f[k].rgb[1], f[k].rgb[2]);
@@ -177,6 +180,20 @@ void ResolvePixel(const Fragment* f, bool dropped, glm::vec3* color, uint32_t* i
 }
 
 }  // namespace
+
+void MarkShown(Framebuffer* fb) {
+  if (!fb->aa) return;
+  const size_t w = static_cast<size_t>(fb->width);
+  glm::vec3 color;
+  uint32_t id;
+  float front;
+  for (size_t i = static_cast<size_t>(std::max(fb->dirtyLo, 0)) * w;
+       i < static_cast<size_t>(fb->dirtyHi + 1) * w; ++i) {
+    fb->shown[i] = 0;
+    ResolvePixel(&fb->frags[i * kFragments], fb->dropped[i] != 0, &color, &id, &front,
+                 &fb->shown[i]);
+  }
+}
 
 void Resolve(Framebuffer* fb) {
   if (!fb->aa) return;

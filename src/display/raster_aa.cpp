@@ -23,42 +23,6 @@
 namespace vismask {
 namespace {
 
-// A convex polygon in 2D or 3D with a fixed capacity: a quad clipped by the
-// near plane and the four sides of the view (5 planes) has at most 9 corners.
-constexpr int kMaxPoly = 12;
-
-// Clips `in` (n corners) by the half-space dot(plane.xyz, p) + plane.w >= 0.
-// The crossing point of an edge is computed from its endpoints in a fixed
-// order (the lexicographically smaller first), so two pieces sharing an edge
-// get bit-identical clipped corners.
-int ClipPoly(const glm::vec3* in, int n, const glm::vec3& pn, float pw, glm::vec3* out) {
-  int m = 0;
-  for (int k = 0; k < n; ++k) {
-    const glm::vec3& a = in[k];
-    const glm::vec3& b = in[(k + 1) % n];
-    float fa = glm::dot(pn, a) + pw, fb = glm::dot(pn, b) + pw;
-    bool aIn = fa >= 0.0f, bIn = fb >= 0.0f;
-    if (aIn) out[m++] = a;
-    if (aIn != bIn) {
-      bool swap = b.x < a.x || (b.x == a.x && (b.y < a.y || (b.y == a.y && b.z < a.z)));
-      const glm::vec3& s = swap ? b : a;
-      const glm::vec3& e = swap ? a : b;
-      float fs = swap ? fb : fa, fe = swap ? fa : fb;
-      float t = fs / (fs - fe);
-      out[m++] = s + t * (e - s);
-    }
-  }
-  return m;
-}
-
-struct Vec2 {
-  float x, y;
-};
-
-inline float Cross(Vec2 a, Vec2 b) {
-  return a.x * b.y - a.y * b.x;
-}
-
 // Area and centroid of the part of convex polygon `poly` (n corners, pixel
 // coordinates relative to the pixel's corner) inside the unit square, that
 // part's corners (*partCorners of them, at most kMaxPoly + 4, in `part`),
@@ -301,44 +265,29 @@ bool PlaneSetup(const glm::vec3* q, uint32_t nc, PieceSetup* out) {
   return true;
 }
 
-// A piece clipped to the view and projected: its corners in pixel
-// coordinates, their extent and their depths' range.
-struct ScreenPoly {
-  Vec2 sp[kMaxPoly];
-  int m = 0;
-  float minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf, zMin = kInf, zMax = 0.0f;
+// A pixel (x, y) and the point (sx, sy) a piece shades there.
+struct PixelPoint {
+  int x, y;
+  float sx, sy;
 };
 
-// Clip to the near plane and the sides of the view (one pixel outside it,
-// so the clip's own edges never cross a pixel that is drawn), and project;
-// false when less than a polygon is left.
-bool ClipProject(const View& view, const glm::vec3* q, uint32_t nc, ScreenPoly* out) {
-  const float halfW = 0.5f * static_cast<float>(view.width),
-              halfH = 0.5f * static_cast<float>(view.height);
-  const float f = view.focal;
-  glm::vec3 bufA[kMaxPoly], bufB[kMaxPoly];
-  int m = static_cast<int>(nc);
-  for (int k = 0; k < m; ++k) bufA[k] = q[k];
-  m = ClipPoly(bufA, m, glm::vec3(0, 0, 1), -view.nearZ, bufB);
-  m = ClipPoly(bufB, m, glm::vec3(f, 0, halfW + 1.0f), 0.0f, bufA);
-  m = ClipPoly(bufA, m, glm::vec3(-f, 0, halfW + 1.0f), 0.0f, bufB);
-  m = ClipPoly(bufB, m, glm::vec3(0, f, halfH + 1.0f), 0.0f, bufA);
-  m = ClipPoly(bufA, m, glm::vec3(0, -f, halfH + 1.0f), 0.0f, bufB);
-  if (m < 3) return false;
-
-  // Project.
-  Vec2* sp = out->sp;
-  float &minX = out->minX, &maxX = out->maxX, &minY = out->minY, &maxY = out->maxY;
-  float &zMin = out->zMin, &zMax = out->zMax;
-  for (int k = 0; k < m; ++k) {
-    float invZ = 1.0f / bufB[k].z;
-    sp[k] = Vec2{halfW + f * bufB[k].x * invZ, halfH - f * bufB[k].y * invZ};
-    minX = std::fmin(minX, sp[k].x), maxX = std::fmax(maxX, sp[k].x);
-    minY = std::fmin(minY, sp[k].y), maxY = std::fmax(maxY, sp[k].y);
-    zMin = std::fmin(zMin, bufB[k].z), zMax = std::fmax(zMax, bufB[k].z);
-  }
-  out->m = m;
-  return true;
+// DrawPass::kDirect: the piece's direct light at pixel `idx` (covering
+// `cover` of it), gathered only where its id's fragment shows, and added to
+// that fragment as the whole pass would have (the radiance with it less
+// the radiance without it: a texture modulates it too).
+template <bool kTextured>
+void AddShownDirect(const View& view, const PieceSetup& s, const DisplayPiece& piece,
+                    const PixelPlane& plane, PixelPoint at, const Vec2* part, int partCorners,
+                    float cover, Vec2 h, size_t idx, Framebuffer* fb) {
+  Fragment* f = &fb->frags[idx * kFragments];
+  int k = 0;
+  while (k < kFragments && f[k].id != piece.id) ++k;
+  if (k == kFragments || !((fb->shown[idx] >> k) & 1u)) return;
+  const glm::vec3 extra =
+      PieceDirect(view, *piece.direct, plane, at.x, at.y, at.sx, at.sy, part, partCorners);
+  const glm::vec3 d = RadianceAt<kTextured>(s, piece, h, extra) -
+                      RadianceAt<kTextured>(s, piece, h, glm::vec3(0.0f));
+  for (int c = 0; c < 3; ++c) f[k].rgb[c] += cover * d[c];
 }
 
 }  // namespace
@@ -423,22 +372,27 @@ void DrawPieceAa(const View& view, const DisplayPiece& piece, Framebuffer* fb) {
           FragmentKey(back, izCorner + 0.5f * ia + 0.5f * ib, izLo, izHi, zMin, zMax, zSample);
       glm::vec3 pCam = zSample * glm::vec3((sx - halfW) * invF, (halfH - sy) * invF, 1.0f);
       glm::vec3 r = pCam - s.origin;
-      glm::vec3 extra(0.0f);
-      if (piece.direct) {
-        const PixelPlane plane{ia, ib, ic, halfW, halfH, invF, zSample};
-        extra = PieceDirect(view, *piece.direct, plane, x, y, sx, sy, inside ? nullptr : part,
-                            partCorners);
+      const Vec2 h{glm::dot(r, s.e1), glm::dot(r, s.e2)};
+      size_t idx =
+          static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
+      const PixelPlane plane{ia, ib, ic, halfW, halfH, invF, zSample};
+      const Vec2* covered = inside ? nullptr : part;
+      if (fb->pass == DrawPass::kDirect) {
+        if (piece.direct)
+          AddShownDirect<kTextured>(view, s, piece, plane, PixelPoint{x, y, sx, sy}, covered,
+                                    partCorners, cover, h, idx, fb);
+        continue;
       }
-      glm::vec3 rad =
-          RadianceAt<kTextured>(s, piece, Vec2{glm::dot(r, s.e1), glm::dot(r, s.e2)}, extra);
+      glm::vec3 extra(0.0f);
+      if (piece.direct && fb->pass == DrawPass::kWhole)
+        extra = PieceDirect(view, *piece.direct, plane, x, y, sx, sy, covered, partCorners);
+      glm::vec3 rad = RadianceAt<kTextured>(s, piece, h, extra);
       Fragment in{key.depth,
                   piece.id,
                   back ? -cover : cover,
                   {cover * rad.x, cover * rad.y, cover * rad.z},
                   key.nearest,
                   key.farthest};
-      size_t idx =
-          static_cast<size_t>(y) * static_cast<size_t>(view.width) + static_cast<size_t>(x);
       AddFragment(&fb->frags[idx * kFragments], &fb->dropped[idx], in);
     }
   }

@@ -1,8 +1,9 @@
 // What the raster's files share (internal to src/display/raster.cpp,
-// raster_point.cpp, raster_aa.cpp and framebuffer.cpp): the (depth, id)
-// order of samples, the camera-space transform, the antialiased pixel's
-// fragment list (drawing and compositing add to it alike), and the two
-// rasters DrawPiece chooses between.
+// raster_point.cpp, raster_aa.cpp, raster_clip.cpp and framebuffer.cpp):
+// the (depth, id) order of samples, the camera-space transform, the
+// antialiased pixel's fragment list (drawing and compositing add to it
+// alike), the clip to the view, and the two rasters DrawPiece chooses
+// between.
 #pragma once
 #include <cstdint>
 #include <glm/geometric.hpp>
@@ -60,6 +61,32 @@ inline void AddFragment(Fragment* f, uint8_t* dropped, const Fragment& in) {
   for (; k > at; --k) f[k] = f[k - 1];
   f[at] = in;
 }
+
+// A convex polygon in 2D or 3D with a fixed capacity: a quad clipped by the
+// near plane and the four sides of the view (5 planes) has at most 9 corners.
+constexpr int kMaxPoly = 12;
+
+struct Vec2 {
+  float x, y;
+};
+
+inline float Cross(Vec2 a, Vec2 b) {
+  return a.x * b.y - a.y * b.x;
+}
+
+// A piece clipped to the view and projected: its corners in pixel
+// coordinates, their extent and their depths' range.
+struct ScreenPoly {
+  Vec2 sp[kMaxPoly];
+  int m = 0;
+  float minX = kInf, maxX = -kInf, minY = kInf, maxY = -kInf, zMin = kInf, zMax = 0.0f;
+};
+
+// Clips camera-space corners q[0 .. nc) to the near plane and the sides of
+// the view (one pixel outside it, so the clip's own edges never cross a
+// pixel that is drawn) and projects them; false when less than a polygon
+// is left (raster_clip.cpp).
+bool ClipProject(const View& view, const glm::vec3* q, uint32_t nc, ScreenPoly* out);
 
 // DrawPiece's two rasters (raster.h), each with an instance for untextured
 // and one for textured pieces: point sampled (raster_point.cpp) and

@@ -43,6 +43,7 @@ namespace vismask {
 // objects' edges cross a pixel (each a front face and its back face) the
 // surface seen past both is still kept (RasterTest.TwoObjectsEdgesKeepWhatLiesPastBoth).
 constexpr int kFragments = 5;
+static_assert(kFragments <= 8, "a pixel's shown fragments are bits of a byte");
 
 // One patch id's share of a pixel (antialiased). Empty: id == kNoPatch,
 // depth = +inf, the rest 0.
@@ -58,6 +59,13 @@ struct Fragment {
 };
 static_assert(sizeof(Fragment) == 32, "Fragment is packed");
 
+// How the antialiased raster draws a piece (DrawEnvironment's two passes
+// with per-pixel direct light): whole (coverage and radiance, its direct
+// light gathered wherever it covers); its coverage and interpolated
+// radiance alone; or only its direct light, gathered where its fragment
+// shows (MarkShown) and added to that fragment.
+enum class DrawPass : uint8_t { kWhole, kCoverage, kDirect };
+
 struct Framebuffer {
   int width = 0;
   int height = 0;
@@ -68,12 +76,14 @@ struct Framebuffer {
   Span<float> depth;      // point sampled: distance along the view direction; +inf = empty
   Span<Fragment> frags;   // antialiased: kFragments per pixel, nearest first
   Span<uint8_t> dropped;  // antialiased: 1 where a fragment fell off the list
+  Span<uint8_t> shown;    // antialiased: bit k set where fragment k shows (MarkShown)
+  DrawPass pass = DrawPass::kWhole;  // antialiased: how DrawPiece draws
   // Antialiased: the rows [dirtyLo, dirtyHi] hold every fragment drawn since
   // the last Clear (empty: dirtyLo > dirtyHi).
   int dirtyLo = 0, dirtyHi = -1;
 
   // Carves w x h pixels from `arena`: point sampled 20 bytes a pixel,
-  // antialiased 16 + kFragments * 32 + 1.
+  // antialiased 16 + kFragments * 32 + 2.
   void Layout(Arena& arena, int w, int h, bool antialiased);
   void Clear();
   // Clears the dirty rows only (antialiased; point sampled: Clear).
@@ -152,6 +162,12 @@ void CompositeRows(const Framebuffer& band, int firstRow, int rows, Framebuffer*
 void Composite(const Framebuffer& other, Framebuffer* fb);
 // Antialiased: the dirty rows of `other` (same size) into the same rows of `fb`.
 void CompositeDirty(const Framebuffer& other, Framebuffer* fb);
+
+// Antialiased: for each pixel of the dirty rows, which of its fragments
+// Resolve would give a share (`shown`); the others are hidden behind them,
+// and stay hidden whatever is composited in later (what comes in only
+// takes coverage). Point sampled: nothing to do.
+void MarkShown(Framebuffer* fb);
 
 // Antialiased: composes each pixel's fragments into color and id (empty
 // coverage is black; where fragments were dropped, the kept ones are scaled
