@@ -11,6 +11,7 @@
 
 #include "direct_test_util.h"
 #include "test_util.h"
+#include "vismask/app/options.h"
 #include "vismask/core/phase.h"
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -197,7 +198,8 @@ TEST(AllocTest, DirectLightPerPixelAllocatesNothingAfterInit) {
                         std::string("--max-shots 300 --width 64 --height 48 --aa ") + raster);
       ASSERT_EQ(ref.code, 0);
       EXPECT_EQ(ref.allocations, 0) << raster;
-      EXPECT_NE(ref.Json().find("\"direct_samples\": 32"), std::string::npos);
+      EXPECT_NE(ref.Json().find("\"direct_samples\": " + std::to_string(kDefaultDirectSamples)),
+                std::string::npos);
       test::WriteFile(refDir.File("ref.pfm"), test::ReadFile(ref.dir.File("image.pfm")));
     }
     CountedRender run("scenes/cornell.obj",

@@ -14,6 +14,7 @@
 
 #include "direct_test_util.h"
 #include "test_util.h"
+#include "vismask/app/options.h"
 
 namespace vismask {
 namespace {
@@ -62,9 +63,10 @@ TEST(DirectEnvsTest, ShadowEdgeInTheLampsEnvironmentIsAsSharpAsWithOne) {
   // The gather changes the image only: the solve is the same bytes.
   EXPECT_EQ(test::ReadFile(dir.File("direct/patches.csv")),
             test::ReadFile(dir.File("solved/patches.csv")));
-  // Not given, it is 32 with several environments too.
+  // Not given, it is the default with several environments too.
   RenderOffset(dir, "default", 16, "--envs 2x1x1 --max-shots 50");
-  EXPECT_NE(test::ReadFile(dir.File("default/run.json")).find("\"direct_samples\": 32"),
+  EXPECT_NE(test::ReadFile(dir.File("default/run.json"))
+                .find("\"direct_samples\": " + std::to_string(kDefaultDirectSamples)),
             std::string::npos);
 }
 

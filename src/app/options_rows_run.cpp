@@ -184,7 +184,7 @@ each brings there (rays to the emitters' corners and
 supplies the rest; 0: the solved radiosity alone
 (the images before it). With several environments
 each gathers its own emitters (the others' light
-and the sun's are the solve's). Default 32)")
+and the sun's are the solve's). Default 64)")
           .Json("direct_samples"),
       Count("--indirect-filter", &O::indirectFilter, 0, 64, "an integer in [0, 64]").Help("K", R"(
 with direct light per pixel, the indirect part is
