@@ -142,8 +142,9 @@ void DrawPieces(const View& view, const Environment& env, const double ambient[3
 // coverage and interpolated radiance, then (MarkShown) each piece's direct
 // light gathered only in the pixels where its fragment shows. A piece
 // hidden behind nearer ones in this environment's own image casts no shadow
-// rays (on the Cornell box at 512², 1.6 gathers a pixel became ~1.1), and
-// what other environments composite in later only hides more.
+// rays (one pass gathered 1.6 times a pixel on the Cornell box at 512²; the
+// two took its output time from 2.87 to 2.24 s), and what other
+// environments composite in later only hides more.
 void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
                      Framebuffer* fb, Span<const Texture> textures) {
   if (!fb->aa || env.direct().light().empty()) {
