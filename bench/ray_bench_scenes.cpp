@@ -79,14 +79,16 @@ void BuildEmbree(EmbreeDevice* dev, const std::vector<Patch>& patches, bool quad
 namespace {
 
 // A grid laid out in its own arena (measured first, as an environment does).
-void LayOut(const VisScene& v, const Grid::Plan& plan, std::unique_ptr<Arena>* arena, Grid* grid) {
+// `work`: what MakePlan kept for Build, as an environment passes it.
+void LayOut(const VisScene& v, const Grid::Plan& plan, Grid::Work* work,
+            std::unique_ptr<Arena>* arena, Grid* grid) {
   Arena measure = Arena::Measure();
   Grid probe;
   probe.Layout(measure, plan);
   *arena = std::make_unique<Arena>(ArenaRoundUp(measure.used()));
   grid->Layout(**arena, plan);
   grid->Build(Span<const Patch>(v.patches.data(), v.patches.size()),
-              Span<const PatchGeom>(v.geom.data(), v.geom.size()));
+              Span<const PatchGeom>(v.geom.data(), v.geom.size()), work);
 }
 
 }  // namespace
@@ -108,16 +110,17 @@ void BuildVis(const Scene& scene, float patchSize, float density, const Grid::Ne
   v->geom.resize(v->patches.size());
   for (size_t i = 0; i < v->patches.size(); ++i) v->geom[i] = MakePatchGeom(v->patches[i]);
   Span<const Patch> ps(v->patches.data(), v->patches.size());
-  v->plan =
-      Grid::MakePlan(ps, Span<const PatchGeom>(v->geom.data(), v->geom.size()), density, nest);
-  LayOut(*v, v->plan, &v->arena, &v->grid);
+  Grid::Work work;
+  v->plan = Grid::MakePlan(ps, Span<const PatchGeom>(v->geom.data(), v->geom.size()), density, nest,
+                           &work);
+  LayOut(*v, v->plan, &work, &v->arena, &v->grid);
   v->buildSeconds = Now() - t0;
   if (uniform) {
     Grid::Nest none;
     none.minRefs = 0;
-    v->uniformPlan =
-        Grid::MakePlan(ps, Span<const PatchGeom>(v->geom.data(), v->geom.size()), density, none);
-    LayOut(*v, v->uniformPlan, &v->uniformArena, &v->uniform);
+    v->uniformPlan = Grid::MakePlan(ps, Span<const PatchGeom>(v->geom.data(), v->geom.size()),
+                                    density, none, &work);
+    LayOut(*v, v->uniformPlan, &work, &v->uniformArena, &v->uniform);
   }
   v->bounds = scene.bounds;
 }

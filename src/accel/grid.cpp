@@ -29,7 +29,42 @@ constexpr double kWallCos = 0.9;     // and faces along the axis (within ~25 deg
 constexpr size_t kWallShare = 64;    // a face is a wall's when 1/64 of the patches are on it
 constexpr double kWallPast = 8.0;    // pads between a wall and the next cell plane
 
+// What Grid::Work's layout depends on: the patches' corners and ray-test
+// data, 32-bit word by word (a multiply-xorshift chain over the float bits,
+// so identical copies agree).
+uint64_t Fingerprint(Span<const Patch> patches, Span<const PatchGeom> geom) {
+  uint64_t h = 0x9e3779b97f4a7c15ull ^ patches.size();
+  auto mix = [&h](const void* data, size_t bytes) {
+    for (size_t k = 0; k + 4 <= bytes; k += 4) {
+      uint32_t w;
+      std::memcpy(&w, static_cast<const char*>(data) + k, 4);
+      h = (h ^ w) * 0xff51afd7ed558ccdull;
+      h ^= h >> 29;
+    }
+  };
+  for (size_t i = 0; i < patches.size(); ++i) {
+    mix(&patches[i].corner[0], 4 * sizeof(glm::vec3));
+    mix(&patches[i].numCorners, sizeof patches[i].numCorners);
+    mix(&geom[i], sizeof(PatchGeom));
+  }
+  return h;
+}
+
+// Whether two plans' top cells are the same, bit for bit.
+bool SameCells(const CellGeometry& a, const CellGeometry& b) {
+  for (int k = 0; k < 3; ++k)
+    if (a.res[k] != b.res[k] || std::memcmp(&a.lo[k], &b.lo[k], sizeof(double)) != 0 ||
+        std::memcmp(&a.size[k], &b.size[k], sizeof(double)) != 0)
+      return false;
+  return true;
+}
+
 }  // namespace
+
+Grid::Work::Work() = default;
+Grid::Work::~Work() = default;
+Grid::Work::Work(Work&&) noexcept = default;
+Grid::Work& Grid::Work::operator=(Work&&) noexcept = default;
 
 Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density, Nest nest) {
   std::vector<PatchGeom> geom(patches.size());
@@ -38,7 +73,7 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, float density, Nest nest) {
 }
 
 Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom, float density,
-                          Nest nest) {
+                          Nest nest, Work* work) {
   CHECK(patches.size() == geom.size());
   CHECK_MSG(density > 0.0f && std::isfinite(density), "grid density must be positive");
   CHECK_MSG(nest.minRefs == 0 || (nest.density > 0.0f && std::isfinite(nest.density) &&
@@ -129,7 +164,8 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
   // Exact counts, by the same code Build lays the references out with: the
   // top cells' references, the sub-grids they decide, the references in
   // those, each block's width, and the plane records the cells name.
-  gridrefs::RefLayout rl;
+  auto kept = std::make_unique<gridrefs::RefLayout>();
+  gridrefs::RefLayout& rl = *kept;
   gridrefs::MakeRefLayout(patches, geom, plan, &rl);
   plan.subGrids = rl.nest.top.size();
   plan.subCells = rl.nest.subCells;
@@ -139,6 +175,10 @@ Grid::Plan Grid::MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom,
   plan.planes = rl.planes;
   plan.topBase = rl.top.base();
   plan.topWide = rl.top.wide();
+  if (work) {
+    work->layout_ = std::move(kept);
+    work->fingerprint_ = Fingerprint(patches, geom);
+  }
   return plan;
 }
 
@@ -187,14 +227,24 @@ void Occupancy(const std::vector<uint32_t>& count, const std::vector<uint32_t>* 
 
 }  // namespace
 
-void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom) {
+void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom, Work* work) {
   CHECK(patches.size() == geom.size());
   CHECK_MSG(records_.data() != nullptr, "Grid::Build needs a real arena");
   geom_ = geom;
   farLimit_ = gridcells::ScaleOf(patches).farLimit;
   constexpr const char* kMismatch = "grid plan does not match the patches it is built from";
-  gridrefs::RefLayout rl;
-  gridrefs::MakeRefLayout(patches, geom, plan_, &rl);
+  // MakePlan's layout when it came from these patches (its counts are then
+  // the plan's unless the plan came from elsewhere: checked below).
+  std::unique_ptr<gridrefs::RefLayout> taken;
+  if (work && !work->empty() && work->fingerprint_ == Fingerprint(patches, geom) &&
+      SameCells(work->layout_->topGeom, gridcells::CellGeometryOf(plan_)))
+    taken = std::move(work->layout_);
+  if (work) *work = Work();
+  if (!taken) {
+    taken = std::make_unique<gridrefs::RefLayout>();
+    gridrefs::MakeRefLayout(patches, geom, plan_, taken.get());
+  }
+  const gridrefs::RefLayout& rl = *taken;
   const gridrefs::NestLayout& nl = rl.nest;
   CHECK_MSG(nl.top.size() == plan_.subGrids && nl.subCells == plan_.subCells &&
                 rl.refs == plan_.refs && rl.units == plan_.units && rl.occupied == plan_.occupied &&

@@ -37,6 +37,43 @@ void AddAxis(Shape* s, glm::dvec3 a) {
   s->axis[s->numAxes++] = a / len;
 }
 
+// Separating axes beyond the box's own, with the prism's (verts: 2 * count,
+// the polygon's corners shifted by -+pad along nn) projection on each: the
+// plane normal, the side faces and the edge-edge crosses with the box's
+// axes. A patch whose normal lies along a box axis (two components exactly
+// 0, so nn, u and v are exactly +-1 and 0 and every edge has an exact 0
+// along the normal) gets from an edge crossed with a box axis either 0, or
+// exactly +-nn, or exactly +-cross(nn, edge): axes already there, which
+// separate exactly the same cells (a negated axis negates every
+// projection), so unless allAxes they are not added again.
+void SeparatingAxes(const glm::dvec3& nn, const glm::dvec3* verts, int count, double pad,
+                    bool allAxes, Shape* s) {
+  const glm::dvec3 boxAxis[3] = {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
+  const bool aligned = !allAxes && (nn.x == 0.0) + (nn.y == 0.0) + (nn.z == 0.0) == 2;
+  s->numAxes = 0;
+  AddAxis(s, nn);
+  for (int k = 0; k < count; ++k) {
+    glm::dvec3 edge = verts[2 * (k + 1 == count ? 0 : k + 1)] - verts[2 * k];
+    double len = glm::length(edge);
+    if (!(len > 0.0)) continue;
+    edge /= len;
+    AddAxis(s, glm::cross(nn, edge));
+    if (aligned) continue;
+    for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(edge, b));
+  }
+  for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(nn, b));
+  for (int i = 0; i < s->numAxes; ++i) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int k = 0; k < 2 * count; ++k) {
+      double x = glm::dot(s->axis[i], verts[k]);
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+    s->pMin[i] = lo - pad;
+    s->pMax[i] = hi + pad;
+  }
+}
+
 }  // namespace
 
 Scale ScaleOf(Span<const Patch> patches) {
@@ -60,7 +97,8 @@ Scale ScaleOf(Span<const Patch> patches) {
   return s;
 }
 
-void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s, bool boxOnly) {
+void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s, bool boxOnly,
+               bool allAxes) {
   double pad = scale.pad;
   glm::dvec3 n(g.n);
   double nLen = glm::length(n);
@@ -104,7 +142,7 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s,
     int outCount = 0;
     for (int k = 0; k < count; ++k) {
       const double* a = in[k];
-      const double* b = in[(k + 1) % count];
+      const double* b = in[k + 1 == count ? 0 : k + 1];
       double fa = ea * a[0] + eb * a[1] - c;
       double fb = ea * b[0] + eb * b[1] - c;
       if (fa >= 0.0 && outCount < kMaxPolyVerts) {
@@ -153,30 +191,7 @@ void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s,
     return;
   }
 
-  // Separating axes beyond the box's own: the plane normal, the side faces and
-  // the edge-edge crosses with the box's axes.
-  const glm::dvec3 boxAxis[3] = {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
-  s->numAxes = 0;
-  AddAxis(s, nn);
-  for (int k = 0; k < count; ++k) {
-    glm::dvec3 edge = verts[2 * ((k + 1) % count)] - verts[2 * k];
-    double len = glm::length(edge);
-    if (!(len > 0.0)) continue;
-    edge /= len;
-    AddAxis(s, glm::cross(nn, edge));
-    for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(edge, b));
-  }
-  for (const glm::dvec3& b : boxAxis) AddAxis(s, glm::cross(nn, b));
-  for (int i = 0; i < s->numAxes; ++i) {
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (int k = 0; k < numVerts; ++k) {
-      double x = glm::dot(s->axis[i], verts[k]);
-      lo = std::min(lo, x);
-      hi = std::max(hi, x);
-    }
-    s->pMin[i] = lo - pad;
-    s->pMax[i] = hi + pad;
-  }
+  SeparatingAxes(nn, verts, count, pad, allAxes, s);
 }
 
 CellGeometry CellGeometryOf(const Grid::Plan& plan) {

@@ -42,8 +42,10 @@ struct Shape {
 // else, so MakePlan and Build register the same cells). boxOnly: its box
 // alone, by the same arithmetic (the same bits), without the separating
 // axes that are most of the cost (MakePlan's bounds need only the box).
+// allAxes: also the axes that repeat others exactly (tests: the cells must
+// be the same).
 void MakeShape(const Patch& p, const PatchGeom& g, const Scale& scale, Shape* s,
-               bool boxOnly = false);
+               bool boxOnly = false, bool allAxes = false);
 
 // Cell geometry of a plan, in double for registration.
 struct CellGeometry {

@@ -26,6 +26,7 @@ struct Environment::Staged {
   std::vector<PatchTexture> tex;  // empty when no patch is textured
   std::vector<OutsideShooter> outside;
   DisplayLattice::Staged lattice;
+  Grid::Work gridWork;  // what MakePlan worked out, for grid_.Build
 };
 
 Environment::Environment() = default;
@@ -245,7 +246,8 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   StageSmooth(mesh, vertexMap, staged_->patches, &staged_->lattice);
   uint32_t n = static_cast<uint32_t>(staged_->patches.size());
   plan_ = Grid::MakePlan(Span<const Patch>(staged_->patches.data(), n),
-                         Span<const PatchGeom>(staged_->geom.data(), n), options.gridDensity);
+                         Span<const PatchGeom>(staged_->geom.data(), n), options.gridDensity,
+                         Grid::Nest(), &staged_->gridWork);
   Arena measure = Arena::Measure();
   Layout(measure, n, plan_);
   // What --export will write of this environment (src/output/export.cpp).
@@ -279,7 +281,7 @@ bool Environment::Build() {
   outside_.Fill(staged_->outside);
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
   lattice_.Build(staged_->lattice, patches_);
-  grid_.Build(patches_, geom_);
+  grid_.Build(patches_, geom_, &staged_->gridWork);
   // The sun's shadow rays must leave the scene, which only one
   // environment's grid can tell; with neighbours the sun is the solve's.
   direct_.Build(patches_, lattice_, options_.outside, numNeighbours_ == 0);

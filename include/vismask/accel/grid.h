@@ -24,6 +24,7 @@
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
+#include <memory>
 
 #include "vismask/core/arena.h"
 #include "vismask/core/span.h"
@@ -31,6 +32,10 @@
 #include "vismask/solve/patch.h"
 
 namespace vismask {
+
+namespace gridrefs {
+struct RefLayout;
+}
 
 // The patches a ray ignores: the one it was shot from and, in a two-sided
 // mesh, that patch's twin (coplanar, behind the origin: mesh.h). Either may
@@ -156,18 +161,39 @@ class Grid {
     Nest nest;              // the rule that chose them
     Bounds bounds;          // padded box the top cells cover
   };
+  // What MakePlan works out on the way to its counts: every patch's cells
+  // (init-time heap, about 40 bytes a patch). Build takes it instead of
+  // shaping every patch again, when it is given the same patches: a
+  // fingerprint of their corners and ray-test data says so.
+  class Work {
+   public:
+    Work();
+    ~Work();
+    Work(Work&&) noexcept;
+    Work& operator=(Work&&) noexcept;
+    bool empty() const { return layout_ == nullptr; }
+
+   private:
+    friend class Grid;
+    std::unique_ptr<gridrefs::RefLayout> layout_;
+    uint64_t fingerprint_ = 0;
+  };
   // Plans the grid for `patches` with about `density` cells per patch.
   static Plan MakePlan(Span<const Patch> patches, float density, Nest nest = Nest());
   // The same, for patches whose ray-test data is `geom` (what Build will
-  // be given), rather than MakePatchGeom of each (twins: TwinGeom).
+  // be given), rather than MakePatchGeom of each (twins: TwinGeom). With
+  // `work`, keeps there what Build can take.
   static Plan MakePlan(Span<const Patch> patches, Span<const PatchGeom> geom, float density,
-                       Nest nest = Nest());
+                       Nest nest = Nest(), Work* work = nullptr);
 
   // Carves the arrays from `arena` (also from a measuring arena).
   void Layout(Arena& arena, const Plan& plan);
   // Fills the arrays. `geom` must outlive the grid; indices are into it.
-  // Fails (CHECK) unless the patches give exactly the plan's counts.
-  void Build(Span<const Patch> patches, Span<const PatchGeom> geom);
+  // Fails (CHECK) unless the patches give exactly the plan's counts. With
+  // `work` (MakePlan's) from the same patches, takes it (and leaves it
+  // empty) rather than working it out again; from other patches it is
+  // ignored.
+  void Build(Span<const Patch> patches, Span<const PatchGeom> geom, Work* work = nullptr);
 
   // Closest hit in (ray.tMin, ray.tMax), ignoring the patches in `skip`.
   // Front and back sides both count. Of hits at the same t, a front side
