@@ -30,24 +30,25 @@ constexpr size_t kWallShare = 64;    // a face is a wall's when 1/64 of the patc
 constexpr double kWallPast = 8.0;    // pads between a wall and the next cell plane
 
 // What Grid::Work's layout depends on: the patches' corners and ray-test
-// data, 32-bit word by word (a multiply-xorshift chain over the float bits,
-// so identical copies agree).
+// data, as 64-bit words of their float bits (so identical copies agree),
+// mixed in four independent lanes (a multiply-xorshift chain each) so the
+// multiplies overlap.
 uint64_t Fingerprint(Span<const Patch> patches, Span<const PatchGeom> geom) {
-  uint64_t h = 0x9e3779b97f4a7c15ull ^ patches.size();
-  auto mix = [&h](const void* data, size_t bytes) {
-    for (size_t k = 0; k + 4 <= bytes; k += 4) {
-      uint32_t w;
-      std::memcpy(&w, static_cast<const char*>(data) + k, 4);
-      h = (h ^ w) * 0xff51afd7ed558ccdull;
+  constexpr size_t kWords = (4 * sizeof(glm::vec3) + sizeof(PatchGeom)) / 8;
+  static_assert((4 * sizeof(glm::vec3)) % 8 == 0 && sizeof(PatchGeom) % 8 == 0, "whole words");
+  uint64_t lane[4] = {0x9e3779b97f4a7c15ull ^ patches.size(), 1, 2, 3};
+  for (size_t i = 0; i < patches.size(); ++i) {
+    uint64_t w[kWords + 1];
+    std::memcpy(w, &patches[i].corner[0], 4 * sizeof(glm::vec3));
+    std::memcpy(w + 4 * sizeof(glm::vec3) / 8, &geom[i], sizeof(PatchGeom));
+    w[kWords] = patches[i].numCorners;
+    for (size_t k = 0; k <= kWords; ++k) {
+      uint64_t& h = lane[k & 3];
+      h = (h ^ w[k]) * 0xff51afd7ed558ccdull;
       h ^= h >> 29;
     }
-  };
-  for (size_t i = 0; i < patches.size(); ++i) {
-    mix(&patches[i].corner[0], 4 * sizeof(glm::vec3));
-    mix(&patches[i].numCorners, sizeof patches[i].numCorners);
-    mix(&geom[i], sizeof(PatchGeom));
   }
-  return h;
+  return (lane[0] * 3 + lane[1]) * 5 + (lane[2] * 7 + lane[3]);
 }
 
 // Whether two plans' top cells are the same, bit for bit.
@@ -231,7 +232,6 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom, Work* wo
   CHECK(patches.size() == geom.size());
   CHECK_MSG(records_.data() != nullptr, "Grid::Build needs a real arena");
   geom_ = geom;
-  farLimit_ = gridcells::ScaleOf(patches).farLimit;
   constexpr const char* kMismatch = "grid plan does not match the patches it is built from";
   // MakePlan's layout when it came from these patches (its counts are then
   // the plan's unless the plan came from elsewhere: checked below).
@@ -245,6 +245,7 @@ void Grid::Build(Span<const Patch> patches, Span<const PatchGeom> geom, Work* wo
     gridrefs::MakeRefLayout(patches, geom, plan_, taken.get());
   }
   const gridrefs::RefLayout& rl = *taken;
+  farLimit_ = rl.scale.farLimit;  // ScaleOf(patches), as MakeRefLayout worked it out
   const gridrefs::NestLayout& nl = rl.nest;
   CHECK_MSG(nl.top.size() == plan_.subGrids && nl.subCells == plan_.subCells &&
                 rl.refs == plan_.refs && rl.units == plan_.units && rl.occupied == plan_.occupied &&
