@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -466,6 +467,21 @@ TEST(DirectTest, MaxSecondsPlansThePatchSize) {
   };
   EXPECT_GE(count(plain, "warning"), 1u) << plain;
   EXPECT_EQ(count(err, "warning"), count(plain, "warning")) << err;
+}
+
+// The per-pixel sequences read from tables give DirectLightSample's and
+// DirectPixelOffset's floats, bit for bit, in the tables and past them.
+TEST(DirectTest, PixelSequencesAreThePerSampleOnes) {
+  for (uint32_t pixel : {0u, 1u, 511u, 262143u, 4000000000u}) {
+    const DirectLightSamples light(pixel);
+    const DirectPixelOffsets offset(pixel);
+    for (uint32_t k = 0; k < DirectPixelOffsets::kTabled + 200; ++k) {
+      const glm::vec2 a = light(k), b = DirectLightSample(pixel, k);
+      const glm::vec2 c = offset(k), d = DirectPixelOffset(pixel, k);
+      ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << pixel << " " << k;
+      ASSERT_EQ(std::memcmp(&c, &d, sizeof c), 0) << pixel << " " << k;
+    }
+  }
 }
 
 }  // namespace

@@ -25,24 +25,6 @@ float TriangleArea(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
   return 0.5f * glm::length(glm::cross(b - a, c - a));
 }
 
-// Radical inverse in base b of k.
-float RadicalInverse(uint32_t k, uint32_t b) {
-  float inv = 1.0f / static_cast<float>(b), f = inv, r = 0.0f;
-  while (k > 0) {
-    r += f * static_cast<float>(k % b);
-    k /= b;
-    f *= inv;
-  }
-  return r;
-}
-
-float Rotate(float x, uint64_t bits) {
-  float s = static_cast<float>(bits >> 40) * (1.0f / 16777216.0f);
-  float y = x + s;
-  y = y >= 1.0f ? y - 1.0f : y;
-  return y < 1.0f ? y : 0.99999994f;
-}
-
 // The emitting patches grouped by polygon (surface, normal, Ke), each
 // group's patches in index order, and the edges of each that no other
 // patch of the group has the other way round.
@@ -417,16 +399,6 @@ bool DirectLight::CornerVisible(const Grid& grid, uint32_t receiver, uint32_t tw
   float t = epsilon / std::sqrt(r2);
   if (!(t < 0.5f)) return true;
   return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint);
-}
-
-glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k) {
-  uint64_t h = Mix64(0x9e3779b97f4a7c15ull ^ (uint64_t(pixel) * 0x2545f4914f6cdd1dull));
-  return glm::vec2(Rotate(RadicalInverse(k, 2), h), Rotate(RadicalInverse(k, 3), Mix64(h)));
-}
-
-glm::vec2 DirectPixelOffset(uint32_t pixel, uint32_t k) {
-  uint64_t h = Mix64(0xd1b54a32d192ed03ull ^ (uint64_t(pixel) * 0x9e3779b97f4a7c15ull));
-  return glm::vec2(Rotate(RadicalInverse(k, 5), h), Rotate(RadicalInverse(k, 7), Mix64(h)));
 }
 
 }  // namespace vismask

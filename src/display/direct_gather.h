@@ -76,6 +76,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     cornersTell = usable;
   }
   glm::vec3 all(0.0f), seen(0.0f), sunAll(0.0f), sunSeen(0.0f);
+  const DirectLightSamples lightSample(pixel);
   uint32_t counted = 0, visible = 0, hidden = 0, k = 0;  // k: the samples drawn
   for (; k < h.samples; ++k) {
     if (k == kFirstDirectSamples && cornersTell && counted > 0 &&
@@ -84,8 +85,8 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     glm::vec3 w;
     uint32_t source;
     const glm::vec3 x = onPlane(pointOf(k));
-    bool vis = h.light->Sample(*h.grid, h.patch, h.twin, x, h.normal, DirectLightSample(pixel, k),
-                               tally, h.epsilon, h.hint, &w, sunShare, &source);
+    bool vis = h.light->Sample(*h.grid, h.patch, h.twin, x, h.normal, lightSample(k), tally,
+                               h.epsilon, h.hint, &w, sunShare, &source);
     if (!vis && eye && HiddenFrom(*h.grid, x, *eye, h.patch, h.twin, h.epsilon)) {
       ++hidden;
       continue;

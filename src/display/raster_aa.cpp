@@ -146,16 +146,17 @@ inline glm::vec3 PieceDirect(const View& view, const DirectHook& dh, const Pixel
   const uint32_t pixel =
       static_cast<uint32_t>(y) * static_cast<uint32_t>(view.width) + static_cast<uint32_t>(x);
   const glm::vec3 centre = plane.WorldAt(view, sx, sy);
+  const DirectPixelOffsets offsets(pixel);
   uint32_t tried = 0;
   return GatherDirect(
       dh, centre, pixel,
       [&](uint32_t k) {
         if (!part) {
-          const glm::vec2 off = DirectPixelOffset(pixel, k);
+          const glm::vec2 off = offsets(k);
           return plane.WorldAt(view, fx + off.x, fy + off.y);
         }
         while (tried < kOffsetTries * dh.samples) {
-          const glm::vec2 off = DirectPixelOffset(pixel, tried++);
+          const glm::vec2 off = offsets(tried++);
           if (InPolygon(part, partCorners, Vec2{off.x, off.y}))
             return plane.WorldAt(view, fx + off.x, fy + off.y);
         }

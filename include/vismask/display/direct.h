@@ -190,4 +190,27 @@ class DirectLight {
 glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k);
 glm::vec2 DirectPixelOffset(uint32_t pixel, uint32_t k);
 
+// DirectLightSample(pixel, k) and DirectPixelOffset(pixel, k) for one pixel
+// and many k, the same floats: the pixel's rotations hashed once, and the
+// radical inverses of the first kTabled k read from tables (filled once, by
+// the same function).
+class DirectLightSamples {
+ public:
+  static constexpr uint32_t kTabled = 1024;
+  explicit DirectLightSamples(uint32_t pixel);
+  glm::vec2 operator()(uint32_t k) const;
+
+ private:
+  uint64_t h_, h2_;
+};
+class DirectPixelOffsets {
+ public:
+  static constexpr uint32_t kTabled = 1024;
+  explicit DirectPixelOffsets(uint32_t pixel);
+  glm::vec2 operator()(uint32_t k) const;
+
+ private:
+  uint64_t h_, h2_;
+};
+
 }  // namespace vismask
