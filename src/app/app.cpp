@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "run.h"
+#include "vismask/app/plan.h"
 #include "vismask/app/viewer.h"
 
 namespace vismask {
@@ -34,25 +35,9 @@ class ReferenceProbe : public ErrorProbe {
   bool current_ = false;
 };
 
-// --max-seconds's plan: the rays timed through the grid at init; the share
-// of the budget's rays at that rate the plan fills (the rest is the margin
-// for what a solve's ray does beside its walk: it lands, books and splits
-// elements); and the shots a patch makes at --min-rays in a converging
-// solve's tail, per bounce (docs/design/direct-light.md, Anytime).
+// --max-seconds's plan: the rays timed through the grid at init (the rest
+// of the plan is plan.h's arithmetic).
 constexpr uint32_t kPlanRays = 20000;
-constexpr double kPlanShare = 0.7;
-constexpr double kTailShotsPerPatch = 2.0;
-// A budget the tail alone would overrun ends cut, whatever the plan: then
-// the emitters' own shots get this share of its rays, so that what is
-// shot before the cut is shot with rays enough.
-constexpr double kCutShare = 0.25;
-
-// The patch size's plan: the share of the budget's rays the tail of small
-// shots may take (the rest goes to the emitters' rays and the margin); a
-// plan that would change the patch count by less than kReplan keeps the
-// mesh.
-constexpr double kTailShare = 0.2;
-constexpr double kReplan = 1.5;
 
 // The rays per second this machine traces through the scene's grids now,
 // the mean kd (at most 0.95) and the patches, over this rank's environments.
@@ -76,6 +61,17 @@ PlanRate MeasureRate(const RunState& r) {
   return p;
 }
 
+PlanInput PlanInputOf(const Options& o, const PlanRate& p) {
+  PlanInput in;
+  in.rate = p.rate;
+  in.rho = p.rho;
+  in.patches = p.patches;
+  in.seconds = o.maxSeconds;
+  in.minRays = o.minRays;
+  in.emittedRays = o.emittedRays;
+  return in;
+}
+
 bool Plans(const RunState& r) {
   const Options& o = r.options;
   return o.maxSeconds > 0.0 && !o.hasEmittedRays && o.rayAlloc == Options::RayAlloc::kPower &&
@@ -83,22 +79,22 @@ bool Plans(const RunState& r) {
 }
 
 // --max-seconds T without --patch-size (as PlanBudget, and no checkpoint):
-// a converging solve's tail is about kTailShotsPerPatch shots a patch at
-// --min-rays each, whatever the patch size, so a short budget spent on
-// many small patches ends in their tail with the light half shot. The plan
-// is the patches whose tail takes kTailShare of the budget's rays at the
-// rate timed on the automatic mesh, never more than it has: 0 (keep the
-// mesh), or the patch size that gives about that many. *measured: the
-// rate it timed (none when it did not plan).
+// a converging solve's tail is about two shots a patch at --min-rays each,
+// whatever the patch size, so a short budget spent on many small patches
+// ends in their tail with the light half shot; and the fewer rays a patch
+// receives, the noisier its indirect part. The plan (PlannedPatches) is
+// the patches that keep the tail to a share of the budget's rays and
+// balance the noise against the discretisation, at the rate timed on the
+// automatic mesh, never more than it has: 0 (keep the mesh), or the patch
+// size that gives about that many. *measured: the rate it timed (none when
+// it did not plan).
 float PlanPatchSize(const RunState& r, PlanRate* measured) {
   const Options& o = r.options;
   if (!Plans(r) || o.patchSize > 0.0f || !o.checkpointDir.empty() || !o.resumeDir.empty())
     return 0.0f;
   const PlanRate p = *measured = MeasureRate(r);
-  if (!(p.rate > 0.0) || !(p.patches > 0.0)) return 0.0f;
-  const double want = std::fmax(
-      kTailShare * p.rate * o.maxSeconds * (1.0 - p.rho) / (kTailShotsPerPatch * o.minRays), 1.0);
-  if (want * kReplan >= p.patches) return 0.0f;
+  const double want = PlannedPatches(PlanInputOf(o, p));
+  if (!(want > 0.0)) return 0.0f;
   return static_cast<float>(r.patchSize * std::sqrt(p.patches / want));
 }
 
@@ -108,7 +104,7 @@ float PlanPatchSize(const RunState& r, PlanRate* measured) {
 // The solve traces about 1 / (1 - mean kd) rays for each emitted one, and
 // its tail of small shots at least --min-rays each whatever the emitted
 // rays: the plan is what the budget's rays leave once the tail is paid
-// (at least kCutShare of them).
+// (at least a quarter of them; PlannedEmittedRays).
 // The solve then ends converged, or nearly, rather than cut off early in
 // a plan made for a longer one. Only ever fewer rays than the default.
 // `known`: the rate PlanPatchSize timed on this mesh, if it did.
@@ -117,12 +113,7 @@ void PlanBudget(RunState* r, const PlanRate& known) {
   if (!Plans(*r)) return;
   const PlanRate p = known.rate > 0.0 ? known : MeasureRate(*r);
   if (!(p.rate > 0.0)) return;
-  const double rho = p.rho, rate = p.rate;
-  const double tail = kTailShotsPerPatch * p.patches * o.minRays / (1.0 - rho);
-  const double emitted =
-      std::fmax(kPlanShare * rate * o.maxSeconds - tail, kCutShare * rate * o.maxSeconds) *
-      (1.0 - rho);
-  const uint64_t planned = static_cast<uint64_t>(std::fmax(emitted, 10000.0));
+  const uint64_t planned = PlannedEmittedRays(PlanInputOf(o, p));
   if (planned >= o.emittedRays) return;
   for (Environment* env : r->envPtrs)
     env->SetRayQuantum(env->rayQuantum() * static_cast<double>(o.emittedRays) /

@@ -1,0 +1,60 @@
+// --max-seconds's plan (plan.h).
+#include "vismask/app/plan.h"
+
+#include <cmath>
+
+namespace vismask {
+
+namespace {
+
+// The share of the budget's rays at the timed rate the plan fills (the rest
+// is the margin for what a solve's ray does beside its walk: it lands, books
+// and splits elements), and the shots a patch makes at --min-rays in a
+// converging solve's tail, per bounce.
+constexpr double kPlanShare = 0.7;
+constexpr double kTailShotsPerPatch = 2.0;
+// A budget the tail alone would overrun ends cut, whatever the plan: then
+// the emitters' own shots get this share of its rays, so that what is shot
+// before the cut is shot with rays enough.
+constexpr double kCutShare = 0.25;
+// The patch size's plan: the share of the budget's rays the tail of small
+// shots may take; a plan that would change the patch count by less than
+// kReplan keeps the mesh.
+constexpr double kTailShare = 0.2;
+constexpr double kReplan = 1.5;
+// The rays a solve traces per patch of the automatic mesh at which that
+// mesh is the one whose indirect noise (which falls as the rays a patch
+// receives grow) and discretisation (which falls as patches shrink)
+// balance: fitted on the Cornell box against its path-traced reference
+// (docs/RESULTS.md), where fewer rays are best spent on fewer patches, the
+// patches going as the square root of the rays.
+constexpr double kRaysPerPatch = 3000.0;
+
+// The rays the solve traces: the budget's, or a converged default solve's
+// if fewer (the plan never emits more than the default).
+double TracedRays(const PlanInput& in) {
+  const double tail = kTailShotsPerPatch * in.patches * in.minRays / (1.0 - in.rho);
+  const double converged = static_cast<double>(in.emittedRays) / (1.0 - in.rho) + tail;
+  return std::fmin(kPlanShare * in.rate * in.seconds, converged);
+}
+
+}  // namespace
+
+double PlannedPatches(const PlanInput& in) {
+  if (!(in.rate > 0.0) || !(in.patches > 0.0) || !(in.seconds > 0.0)) return 0.0;
+  const double tail = std::fmax(
+      kTailShare * in.rate * in.seconds * (1.0 - in.rho) / (kTailShotsPerPatch * in.minRays), 1.0);
+  const double balance = std::fmax(std::sqrt(in.patches * TracedRays(in) / kRaysPerPatch), 1.0);
+  const double want = std::fmin(tail, balance);
+  return want * kReplan >= in.patches ? 0.0 : want;
+}
+
+uint64_t PlannedEmittedRays(const PlanInput& in) {
+  const double tail = kTailShotsPerPatch * in.patches * in.minRays / (1.0 - in.rho);
+  const double emitted =
+      std::fmax(kPlanShare * in.rate * in.seconds - tail, kCutShare * in.rate * in.seconds) *
+      (1.0 - in.rho);
+  return static_cast<uint64_t>(std::fmax(emitted, 10000.0));
+}
+
+}  // namespace vismask

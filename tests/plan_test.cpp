@@ -1,0 +1,61 @@
+// --max-seconds's plan (plan.h): the patches and emitted rays a budget
+// affords, from the timed rate.
+#include "vismask/app/plan.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace vismask {
+namespace {
+
+// About the Cornell box's automatic mesh on a 2-core x86-64.
+PlanInput Cornell(double seconds) {
+  PlanInput in;
+  in.rate = 3.5e6;
+  in.rho = 0.5;
+  in.patches = 7504;
+  in.seconds = seconds;
+  in.minRays = 16;
+  in.emittedRays = 4000000;
+  return in;
+}
+
+// Where the tail of small shots would keep the automatic mesh, the balance
+// of the indirect part's noise against its discretisation asks for fewer
+// patches, as the square root of the rays the budget traces.
+TEST(PlanTest, FewerRaysFewerPatchesAsTheSquareRoot) {
+  const double p1 = PlannedPatches(Cornell(1.0)), p4 = PlannedPatches(Cornell(0.25));
+  ASSERT_GT(p1, 0.0);  // re-meshed, although the tail takes only ~2% of the budget
+  EXPECT_LT(p1, 7504 / 1.5);
+  EXPECT_NEAR(p4 / p1, 0.5, 1e-9);
+}
+
+// The rays the budget traces stop at a converged default solve's: a long
+// budget plans the same mesh as any longer one, and a scene with rays
+// enough for its automatic mesh keeps it.
+TEST(PlanTest, ALongBudgetPlansWhatTheDefaultTraces) {
+  EXPECT_EQ(PlannedPatches(Cornell(100.0)), PlannedPatches(Cornell(1000.0)));
+  PlanInput many = Cornell(1000.0);
+  many.emittedRays = 100000000;
+  EXPECT_EQ(PlannedPatches(many), 0.0);
+}
+
+// A budget too short for the mesh's tail: the tail's rule, which is the
+// smaller there, makes the plan.
+TEST(PlanTest, ATinyBudgetIsPlannedByItsTail) {
+  const PlanInput in = Cornell(0.001);
+  const double tail = 0.2 * in.rate * in.seconds * (1.0 - in.rho) / (2.0 * in.minRays);
+  EXPECT_NEAR(PlannedPatches(in), tail, 1e-9);
+}
+
+TEST(PlanTest, EmittedRaysLeaveTheTailItsRays) {
+  const PlanInput in = Cornell(1.0);
+  const double tail = 2.0 * in.patches * in.minRays / (1.0 - in.rho);
+  EXPECT_EQ(PlannedEmittedRays(in),
+            static_cast<uint64_t>((0.7 * in.rate * in.seconds - tail) * (1.0 - in.rho)));
+  EXPECT_EQ(PlannedEmittedRays(Cornell(1e-6)), 10000u);
+}
+
+}  // namespace
+}  // namespace vismask
