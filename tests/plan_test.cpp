@@ -31,6 +31,15 @@ TEST(PlanTest, FewerRaysFewerPatchesAsTheSquareRoot) {
   EXPECT_NEAR(p4 / p1, 0.5, 1e-9);
 }
 
+// Several environments: the tail's rule alone (their cuts' slivers).
+TEST(PlanTest, SeveralEnvironmentsKeepTheTailsRuleAlone) {
+  PlanInput in = Cornell(1.0);
+  in.balance = false;
+  EXPECT_EQ(PlannedPatches(in), 0.0);
+  in.seconds = 0.001;
+  EXPECT_NEAR(PlannedPatches(in), PlannedPatches(Cornell(0.001)), 1e-9);
+}
+
 // The rays the budget traces stop at a converged default solve's: a long
 // budget plans the same mesh as any longer one, and a scene with rays
 // enough for its automatic mesh keeps it.

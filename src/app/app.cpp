@@ -61,8 +61,9 @@ PlanRate MeasureRate(const RunState& r) {
   return p;
 }
 
-PlanInput PlanInputOf(const Options& o, const PlanRate& p) {
+PlanInput PlanInputOf(const Options& o, const PlanRate& p, size_t environments) {
   PlanInput in;
+  in.balance = environments == 1;
   in.rate = p.rate;
   in.rho = p.rho;
   in.patches = p.patches;
@@ -93,7 +94,7 @@ float PlanPatchSize(const RunState& r, PlanRate* measured) {
   if (!Plans(r) || o.patchSize > 0.0f || !o.checkpointDir.empty() || !o.resumeDir.empty())
     return 0.0f;
   const PlanRate p = *measured = MeasureRate(r);
-  const double want = PlannedPatches(PlanInputOf(o, p));
+  const double want = PlannedPatches(PlanInputOf(o, p, r.envPtrs.size()));
   if (!(want > 0.0)) return 0.0f;
   return static_cast<float>(r.patchSize * std::sqrt(p.patches / want));
 }
@@ -113,7 +114,7 @@ void PlanBudget(RunState* r, const PlanRate& known) {
   if (!Plans(*r)) return;
   const PlanRate p = known.rate > 0.0 ? known : MeasureRate(*r);
   if (!(p.rate > 0.0)) return;
-  const uint64_t planned = PlannedEmittedRays(PlanInputOf(o, p));
+  const uint64_t planned = PlannedEmittedRays(PlanInputOf(o, p, r->envPtrs.size()));
   if (planned >= o.emittedRays) return;
   for (Environment* env : r->envPtrs)
     env->SetRayQuantum(env->rayQuantum() * static_cast<double>(o.emittedRays) /

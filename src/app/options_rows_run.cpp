@@ -118,9 +118,8 @@ it plans them: the rays a solve that ends within
 about T can afford, from the rays per second timed
 through the scene's grid at init (run.json:
 emitted_rays, emitted_rays_planned); and without
---patch-size, larger patches where the automatic
-ones' tail of small shots would not fit in T, or
-T's rays are too few for their indirect light's
+--patch-size, larger patches where T is too short
+for the automatic ones' tail or their indirect
 noise (run.json: patch_size, patch_size_planned))")
           .Usage()
           .Json("max_seconds"),

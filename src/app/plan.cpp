@@ -45,7 +45,7 @@ double PlannedPatches(const PlanInput& in) {
   const double tail = std::fmax(
       kTailShare * in.rate * in.seconds * (1.0 - in.rho) / (kTailShotsPerPatch * in.minRays), 1.0);
   const double balance = std::fmax(std::sqrt(in.patches * TracedRays(in) / kRaysPerPatch), 1.0);
-  const double want = std::fmin(tail, balance);
+  const double want = in.balance ? std::fmin(tail, balance) : tail;
   return want * kReplan >= in.patches ? 0.0 : want;
 }
 

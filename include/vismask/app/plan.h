@@ -15,11 +15,16 @@ struct PlanInput {
   double seconds = 0.0;      // T
   uint32_t minRays = 16;     // --min-rays
   uint64_t emittedRays = 0;  // the default --emitted-rays (the plan never exceeds it)
+  // Whether the noise's balance applies: one environment. Cut into several,
+  // the patches the cuts clip are slivers that receive few rays whatever
+  // the patch size, and the coarser mesh measured worse there (the Cornell
+  // box in two environments at a 10 s budget, docs/RESULTS.md at d1281fe).
+  bool balance = true;
 };
 
 // The patches the budget's mesh should have, or 0 to keep the automatic
 // mesh: the fewer of (a) the patches whose tail of small shots takes
-// kTailShare of the budget's rays, and (b) the patches at which the
+// kTailShare of the budget's rays, and (b) with `balance`, those at which the
 // indirect part's noise and its discretisation balance,
 // sqrt(patches * R / kRaysPerPatch) for the R rays the solve traces;
 // kept when that is within kReplan of the automatic mesh.
