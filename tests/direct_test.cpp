@@ -473,9 +473,9 @@ TEST(DirectTest, MaxSecondsPlansThePatchSize) {
 // DirectPixelOffset's floats, bit for bit, in the tables and past them.
 TEST(DirectTest, PixelSequencesAreThePerSampleOnes) {
   for (uint32_t pixel : {0u, 1u, 511u, 262143u, 4000000000u}) {
-    const DirectLightSamples light(pixel);
-    const DirectPixelOffsets offset(pixel);
-    for (uint32_t k = 0; k < DirectPixelOffsets::kTabled + 200; ++k) {
+    const DirectPixelSequence light(pixel, DirectPixelSequence::Kind::kLight);
+    const DirectPixelSequence offset(pixel, DirectPixelSequence::Kind::kOffset);
+    for (uint32_t k = 0; k < DirectPixelSequence::kTabled + 200; ++k) {
       const glm::vec2 a = light(k), b = DirectLightSample(pixel, k);
       const glm::vec2 c = offset(k), d = DirectPixelOffset(pixel, k);
       ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << pixel << " " << k;

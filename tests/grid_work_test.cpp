@@ -41,6 +41,12 @@ void BuildFrom(const TestScene& s, const Grid::Plan& plan, Grid::Work* work, Bui
                 Span<const PatchGeom>(s.geom.data(), s.geom.size()), work);
 }
 
+std::vector<uint32_t> Refs(const RefList& list) {
+  std::vector<uint32_t> v;
+  for (uint32_t r : list) v.push_back(r);
+  return v;
+}
+
 // Every array the walk reads, compared.
 void ExpectSameGrid(const Grid& a, const Grid& b) {
   ASSERT_EQ(a.cellCount(), b.cellCount());
@@ -48,10 +54,7 @@ void ExpectSameGrid(const Grid& a, const Grid& b) {
   for (size_t c = 0; c < a.cellCount(); ++c) {
     ASSERT_EQ(a.CellOccupied(c), b.CellOccupied(c)) << c;
     ASSERT_EQ(a.CellPlaneOf(c), b.CellPlaneOf(c)) << c;
-    std::vector<uint32_t> ra, rb;
-    for (uint32_t r : a.CellRefs(c)) ra.push_back(r);
-    for (uint32_t r : b.CellRefs(c)) rb.push_back(r);
-    ASSERT_EQ(ra, rb) << c;
+    ASSERT_EQ(Refs(a.CellRefs(c)), Refs(b.CellRefs(c))) << c;
   }
   ASSERT_EQ(a.subGrids().size(), b.subGrids().size());
   size_t subCells = 0;
@@ -60,10 +63,7 @@ void ExpectSameGrid(const Grid& a, const Grid& b) {
   for (size_t s = 0; s < subCells; ++s) {
     ASSERT_EQ(a.SubCellOccupied(s), b.SubCellOccupied(s)) << s;
     ASSERT_EQ(a.SubCellPlaneOf(s), b.SubCellPlaneOf(s)) << s;
-    std::vector<uint32_t> ra, rb;
-    for (uint32_t r : a.SubCellRefs(s)) ra.push_back(r);
-    for (uint32_t r : b.SubCellRefs(s)) rb.push_back(r);
-    ASSERT_EQ(ra, rb) << s;
+    ASSERT_EQ(Refs(a.SubCellRefs(s)), Refs(b.SubCellRefs(s))) << s;
   }
   ASSERT_EQ(a.records().size(), b.records().size());
   for (size_t r = 0; r < a.records().size(); ++r) {

@@ -30,11 +30,15 @@ constexpr double kReplan = 1.5;
 // patches going as the square root of the rays.
 constexpr double kRaysPerPatch = 3000.0;
 
+// The rays a converging solve's tail of small shots traces on the mesh.
+double TailRays(const PlanInput& in) {
+  return kTailShotsPerPatch * in.patches * in.minRays / (1.0 - in.rho);
+}
+
 // The rays the solve traces: the budget's, or a converged default solve's
 // if fewer (the plan never emits more than the default).
 double TracedRays(const PlanInput& in) {
-  const double tail = kTailShotsPerPatch * in.patches * in.minRays / (1.0 - in.rho);
-  const double converged = static_cast<double>(in.emittedRays) / (1.0 - in.rho) + tail;
+  const double converged = static_cast<double>(in.emittedRays) / (1.0 - in.rho) + TailRays(in);
   return std::fmin(kPlanShare * in.rate * in.seconds, converged);
 }
 
@@ -50,7 +54,7 @@ double PlannedPatches(const PlanInput& in) {
 }
 
 uint64_t PlannedEmittedRays(const PlanInput& in) {
-  const double tail = kTailShotsPerPatch * in.patches * in.minRays / (1.0 - in.rho);
+  const double tail = TailRays(in);
   const double emitted =
       std::fmax(kPlanShare * in.rate * in.seconds - tail, kCutShare * in.rate * in.seconds) *
       (1.0 - in.rho);

@@ -76,7 +76,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     cornersTell = usable;
   }
   glm::vec3 all(0.0f), seen(0.0f), sunAll(0.0f), sunSeen(0.0f);
-  const DirectLightSamples lightSample(pixel);
+  const DirectPixelSequence lightSample(pixel, DirectPixelSequence::Kind::kLight);
   uint32_t counted = 0, visible = 0, hidden = 0, k = 0;  // k: the samples drawn
   for (; k < h.samples; ++k) {
     if (k == kFirstDirectSamples && cornersTell && counted > 0 &&

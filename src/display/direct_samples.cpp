@@ -28,24 +28,30 @@ float Rotate(float x, uint64_t bits) {
   return y < 1.0f ? y : 0.99999994f;
 }
 
-// The rotations' hashes of a pixel's light points and sub-pixel offsets.
-uint64_t LightHash(uint32_t pixel) {
-  return Mix64(0x9e3779b97f4a7c15ull ^ (uint64_t(pixel) * 0x2545f4914f6cdd1dull));
-}
-uint64_t OffsetHash(uint32_t pixel) {
-  return Mix64(0xd1b54a32d192ed03ull ^ (uint64_t(pixel) * 0x9e3779b97f4a7c15ull));
+// The bases of the light points (2, 3) and of the sub-pixel offsets (5, 7).
+constexpr uint32_t kBases[4] = {2, 3, 5, 7};
+
+// The rotations' hash of a pixel's light points, or of its sub-pixel offsets.
+uint64_t PixelHash(uint32_t pixel, DirectPixelSequence::Kind kind) {
+  return kind == DirectPixelSequence::Kind::kLight
+             ? Mix64(0x9e3779b97f4a7c15ull ^ (uint64_t(pixel) * 0x2545f4914f6cdd1dull))
+             : Mix64(0xd1b54a32d192ed03ull ^ (uint64_t(pixel) * 0x9e3779b97f4a7c15ull));
 }
 
-// RadicalInverse in bases 2, 3 (light points) and 5, 7 (offsets) for k <
-// kTabled (static storage, filled on first use).
-constexpr uint32_t kTabled = DirectPixelOffsets::kTabled;
-static_assert(DirectLightSamples::kTabled == kTabled, "one table size");
+// Point k of the bases from kBases[row] on, rotated by h and h2.
+glm::vec2 Point(int row, uint32_t k, uint64_t h, uint64_t h2) {
+  return glm::vec2(Rotate(RadicalInverse(k, kBases[row]), h),
+                   Rotate(RadicalInverse(k, kBases[row + 1]), h2));
+}
+
+// RadicalInverse in each of kBases for k < kTabled (static storage, filled
+// on first use).
+constexpr uint32_t kTabled = DirectPixelSequence::kTabled;
 struct Tables {
   float base[4][kTabled];
   Tables() {
-    const uint32_t b[4] = {2, 3, 5, 7};
     for (int i = 0; i < 4; ++i)
-      for (uint32_t k = 0; k < kTabled; ++k) base[i][k] = RadicalInverse(k, b[i]);
+      for (uint32_t k = 0; k < kTabled; ++k) base[i][k] = RadicalInverse(k, kBases[i]);
   }
 };
 const Tables& GetTables() {
@@ -53,37 +59,25 @@ const Tables& GetTables() {
   return tables;
 }
 
-// The pair of bases b0 (table row i) and b1 (row i + 1) at k, rotated.
-glm::vec2 Pair(int i, uint32_t b0, uint32_t b1, uint32_t k, uint64_t h, uint64_t h2) {
-  if (k < kTabled) {
-    const Tables& t = GetTables();
-    return glm::vec2(Rotate(t.base[i][k], h), Rotate(t.base[i + 1][k], h2));
-  }
-  return glm::vec2(Rotate(RadicalInverse(k, b0), h), Rotate(RadicalInverse(k, b1), h2));
-}
-
 }  // namespace
 
 glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k) {
-  uint64_t h = LightHash(pixel);
-  return glm::vec2(Rotate(RadicalInverse(k, 2), h), Rotate(RadicalInverse(k, 3), Mix64(h)));
+  const uint64_t h = PixelHash(pixel, DirectPixelSequence::Kind::kLight);
+  return Point(0, k, h, Mix64(h));
 }
 
 glm::vec2 DirectPixelOffset(uint32_t pixel, uint32_t k) {
-  uint64_t h = OffsetHash(pixel);
-  return glm::vec2(Rotate(RadicalInverse(k, 5), h), Rotate(RadicalInverse(k, 7), Mix64(h)));
+  const uint64_t h = PixelHash(pixel, DirectPixelSequence::Kind::kOffset);
+  return Point(2, k, h, Mix64(h));
 }
 
-DirectLightSamples::DirectLightSamples(uint32_t pixel) : h_(LightHash(pixel)), h2_(Mix64(h_)) {}
+DirectPixelSequence::DirectPixelSequence(uint32_t pixel, Kind kind)
+    : row_(kind == Kind::kLight ? 0 : 2), h_(PixelHash(pixel, kind)), h2_(Mix64(h_)) {}
 
-glm::vec2 DirectLightSamples::operator()(uint32_t k) const {
-  return Pair(0, 2, 3, k, h_, h2_);
-}
-
-DirectPixelOffsets::DirectPixelOffsets(uint32_t pixel) : h_(OffsetHash(pixel)), h2_(Mix64(h_)) {}
-
-glm::vec2 DirectPixelOffsets::operator()(uint32_t k) const {
-  return Pair(2, 5, 7, k, h_, h2_);
+glm::vec2 DirectPixelSequence::operator()(uint32_t k) const {
+  if (k >= kTabled) return Point(row_, k, h_, h2_);
+  const Tables& t = GetTables();
+  return glm::vec2(Rotate(t.base[row_][k], h_), Rotate(t.base[row_ + 1][k], h2_));
 }
 
 }  // namespace vismask

@@ -146,7 +146,7 @@ inline glm::vec3 PieceDirect(const View& view, const DirectHook& dh, const Pixel
   const uint32_t pixel =
       static_cast<uint32_t>(y) * static_cast<uint32_t>(view.width) + static_cast<uint32_t>(x);
   const glm::vec3 centre = plane.WorldAt(view, sx, sy);
-  const DirectPixelOffsets offsets(pixel);
+  const DirectPixelSequence offsets(pixel, DirectPixelSequence::Kind::kOffset);
   uint32_t tried = 0;
   return GatherDirect(
       dh, centre, pixel,

@@ -190,26 +190,19 @@ class DirectLight {
 glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k);
 glm::vec2 DirectPixelOffset(uint32_t pixel, uint32_t k);
 
-// DirectLightSample(pixel, k) and DirectPixelOffset(pixel, k) for one pixel
-// and many k, the same floats: the pixel's rotations hashed once, and the
-// radical inverses of the first kTabled k read from tables (filled once, by
-// the same function).
-class DirectLightSamples {
+// DirectLightSample(pixel, k) (kLight) or DirectPixelOffset(pixel, k)
+// (kOffset) for one pixel and many k, the same floats: the pixel's
+// rotations hashed once, and the radical inverses of the first kTabled k
+// read from tables (filled once, by the same function).
+class DirectPixelSequence {
  public:
+  enum class Kind { kLight, kOffset };
   static constexpr uint32_t kTabled = 1024;
-  explicit DirectLightSamples(uint32_t pixel);
+  DirectPixelSequence(uint32_t pixel, Kind kind);
   glm::vec2 operator()(uint32_t k) const;
 
  private:
-  uint64_t h_, h2_;
-};
-class DirectPixelOffsets {
- public:
-  static constexpr uint32_t kTabled = 1024;
-  explicit DirectPixelOffsets(uint32_t pixel);
-  glm::vec2 operator()(uint32_t k) const;
-
- private:
+  int row_;  // the first of its two bases among 2, 3, 5, 7
   uint64_t h_, h2_;
 };
 
