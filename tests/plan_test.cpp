@@ -31,23 +31,34 @@ TEST(PlanTest, FewerRaysFewerPatchesAsTheSquareRoot) {
   EXPECT_NEAR(p4 / p1, 0.5, 1e-9);
 }
 
-// Several environments: the tail's rule alone (their cuts' slivers).
+// Several environments: the tail's rule alone (their cuts' slivers), and
+// never more emitted rays than the default (a ray there costs more than
+// the timed walk).
 TEST(PlanTest, SeveralEnvironmentsKeepTheTailsRuleAlone) {
   PlanInput in = Cornell(1.0);
-  in.balance = false;
+  in.oneEnvironment = false;
   EXPECT_EQ(PlannedPatches(in), 0.0);
   in.seconds = 0.001;
   EXPECT_NEAR(PlannedPatches(in), PlannedPatches(Cornell(0.001)), 1e-9);
+  EXPECT_EQ(PlannedEmittedRays(in), PlannedEmittedRays(Cornell(0.001)));
+  in.seconds = 10.0;
+  EXPECT_EQ(PlannedEmittedRays(in), 4000000u);
+  in.seconds = 1.0;
+  const double tail = 2.0 * in.patches * in.minRays / (1.0 - in.rho);
+  EXPECT_EQ(PlannedEmittedRays(in),
+            static_cast<uint64_t>((0.7 * in.rate * in.seconds - tail) * (1.0 - in.rho)));
 }
 
-// The rays the budget traces stop at a converged default solve's: a long
-// budget plans the same mesh as any longer one, and a scene with rays
-// enough for its automatic mesh keeps it.
-TEST(PlanTest, ALongBudgetPlansWhatTheDefaultTraces) {
-  EXPECT_EQ(PlannedPatches(Cornell(100.0)), PlannedPatches(Cornell(1000.0)));
-  PlanInput many = Cornell(1000.0);
-  many.emittedRays = 100000000;
-  EXPECT_EQ(PlannedPatches(many), 0.0);
+// A long budget keeps the automatic mesh (never more patches than it), and
+// its emitted rays grow with T past the default 4e6: the budget is spent.
+TEST(PlanTest, ALongBudgetKeepsTheMeshAndSpendsItsTime) {
+  EXPECT_EQ(PlannedPatches(Cornell(10.0)), 0.0);
+  EXPECT_EQ(PlannedPatches(Cornell(1000.0)), 0.0);
+  const uint64_t e10 = PlannedEmittedRays(Cornell(10.0)), e20 = PlannedEmittedRays(Cornell(20.0));
+  EXPECT_GT(e10, 4000000u);
+  const double tail = 2.0 * 7504 * 16 / 0.5;
+  EXPECT_NEAR(static_cast<double>(e20) / 0.5 + tail, 2.0 * (static_cast<double>(e10) / 0.5 + tail),
+              4.0);
 }
 
 // A budget too short for the mesh's tail: the tail's rule, which is the
@@ -62,7 +73,7 @@ TEST(PlanTest, EmittedRaysLeaveTheTailItsRays) {
   const PlanInput in = Cornell(1.0);
   const double tail = 2.0 * in.patches * in.minRays / (1.0 - in.rho);
   EXPECT_EQ(PlannedEmittedRays(in),
-            static_cast<uint64_t>((0.7 * in.rate * in.seconds - tail) * (1.0 - in.rho)));
+            static_cast<uint64_t>((0.9 * in.rate * in.seconds - tail) * (1.0 - in.rho)));
   EXPECT_EQ(PlannedEmittedRays(Cornell(1e-6)), 10000u);
 }
 

@@ -63,7 +63,7 @@ PlanRate MeasureRate(const RunState& r) {
 
 PlanInput PlanInputOf(const Options& o, const PlanRate& p, size_t environments) {
   PlanInput in;
-  in.balance = environments == 1;
+  in.oneEnvironment = environments == 1;
   in.rate = p.rate;
   in.rho = p.rho;
   in.patches = p.patches;
@@ -107,7 +107,9 @@ float PlanPatchSize(const RunState& r, PlanRate* measured) {
 // rays: the plan is what the budget's rays leave once the tail is paid
 // (at least a quarter of them; PlannedEmittedRays).
 // The solve then ends converged, or nearly, rather than cut off early in
-// a plan made for a longer one. Only ever fewer rays than the default.
+// a plan made for a longer one. In one environment, a budget longer than a
+// default solve's plans more rays than the default: the time asked for is
+// spent (several environments: never more than the default; plan.h).
 // `known`: the rate PlanPatchSize timed on this mesh, if it did.
 void PlanBudget(RunState* r, const PlanRate& known) {
   Options& o = r->options;
@@ -115,7 +117,7 @@ void PlanBudget(RunState* r, const PlanRate& known) {
   const PlanRate p = known.rate > 0.0 ? known : MeasureRate(*r);
   if (!(p.rate > 0.0)) return;
   const uint64_t planned = PlannedEmittedRays(PlanInputOf(o, p, r->envPtrs.size()));
-  if (planned >= o.emittedRays) return;
+  if (planned == o.emittedRays) return;
   for (Environment* env : r->envPtrs)
     env->SetRayQuantum(env->rayQuantum() * static_cast<double>(o.emittedRays) /
                        static_cast<double>(planned));

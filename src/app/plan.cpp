@@ -7,11 +7,17 @@ namespace vismask {
 
 namespace {
 
-// The share of the budget's rays at the timed rate the plan fills (the rest
-// is the margin for what a solve's ray does beside its walk: it lands, books
-// and splits elements), and the shots a patch makes at --min-rays in a
-// converging solve's tail, per bounce.
+// The share of the budget's rays at the timed rate that the patch size's
+// plan counts as traced (the rest is the margin for what a solve's ray does
+// beside its walk: it lands, books and splits elements; kRaysPerPatch below
+// was fitted with it), the share the emitted rays' plan fills, and the
+// shots a patch makes at --min-rays in a converging solve's tail, per
+// bounce. With kPlanShare for both, the Cornell box's planned solves ended
+// at 63-68% of T (0.3-10 s, docs/RESULTS.md at 2765efe); with kFillShare
+// they end at 80-87%. Several environments keep kPlanShare and the default
+// as the most (plan.h).
 constexpr double kPlanShare = 0.7;
+constexpr double kFillShare = 0.9;
 constexpr double kTailShotsPerPatch = 2.0;
 // A budget the tail alone would overrun ends cut, whatever the plan: then
 // the emitters' own shots get this share of its rays, so that what is shot
@@ -35,11 +41,9 @@ double TailRays(const PlanInput& in) {
   return kTailShotsPerPatch * in.patches * in.minRays / (1.0 - in.rho);
 }
 
-// The rays the solve traces: the budget's, or a converged default solve's
-// if fewer (the plan never emits more than the default).
+// The rays the solve traces, as the patch size's plan counts them.
 double TracedRays(const PlanInput& in) {
-  const double converged = static_cast<double>(in.emittedRays) / (1.0 - in.rho) + TailRays(in);
-  return std::fmin(kPlanShare * in.rate * in.seconds, converged);
+  return kPlanShare * in.rate * in.seconds;
 }
 
 }  // namespace
@@ -49,16 +53,18 @@ double PlannedPatches(const PlanInput& in) {
   const double tail = std::fmax(
       kTailShare * in.rate * in.seconds * (1.0 - in.rho) / (kTailShotsPerPatch * in.minRays), 1.0);
   const double balance = std::fmax(std::sqrt(in.patches * TracedRays(in) / kRaysPerPatch), 1.0);
-  const double want = in.balance ? std::fmin(tail, balance) : tail;
+  const double want = in.oneEnvironment ? std::fmin(tail, balance) : tail;
   return want * kReplan >= in.patches ? 0.0 : want;
 }
 
 uint64_t PlannedEmittedRays(const PlanInput& in) {
   const double tail = TailRays(in);
+  const double share = in.oneEnvironment ? kFillShare : kPlanShare;
   const double emitted =
-      std::fmax(kPlanShare * in.rate * in.seconds - tail, kCutShare * in.rate * in.seconds) *
+      std::fmax(share * in.rate * in.seconds - tail, kCutShare * in.rate * in.seconds) *
       (1.0 - in.rho);
-  return static_cast<uint64_t>(std::fmax(emitted, 10000.0));
+  const double most = in.oneEnvironment ? emitted : static_cast<double>(in.emittedRays);
+  return static_cast<uint64_t>(std::fmax(std::fmin(emitted, most), 10000.0));
 }
 
 }  // namespace vismask

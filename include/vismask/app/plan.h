@@ -14,25 +14,31 @@ struct PlanInput {
   double patches = 0.0;      // the automatic mesh's patches
   double seconds = 0.0;      // T
   uint32_t minRays = 16;     // --min-rays
-  uint64_t emittedRays = 0;  // the default --emitted-rays (the plan never exceeds it)
-  // Whether the noise's balance applies: one environment. Cut into several,
-  // the patches the cuts clip are slivers that receive few rays whatever
-  // the patch size, and the coarser mesh measured worse there (the Cornell
-  // box in two environments at a 10 s budget, docs/RESULTS.md at d1281fe).
-  bool balance = true;
+  uint64_t emittedRays = 0;  // the default --emitted-rays (several environments' cap)
+  // One environment: the noise's balance applies, and the emitted rays may
+  // exceed the default. Cut into several, (a) the patches the cuts clip are
+  // slivers that receive few rays whatever the patch size, and the coarser
+  // mesh measured worse (the Cornell box in two environments at a 10 s
+  // budget, docs/RESULTS.md at d1281fe); (b) a ray costs more than the
+  // timed walk (crossings, foreign shots, Method B's masks), so that a plan
+  // past the default overran 10 s and was cut (12.3% from Cycles with
+  // Method B, 4.3% with R, against 1.8% converged at the default).
+  bool oneEnvironment = true;
 };
 
 // The patches the budget's mesh should have, or 0 to keep the automatic
 // mesh: the fewer of (a) the patches whose tail of small shots takes
-// kTailShare of the budget's rays, and (b) with `balance`, those at which the
+// kTailShare of the budget's rays, and (b) with oneEnvironment, those at which the
 // indirect part's noise and its discretisation balance,
 // sqrt(patches * R / kRaysPerPatch) for the R rays the solve traces;
 // kept when that is within kReplan of the automatic mesh.
 double PlannedPatches(const PlanInput& in);
 
 // The emitted rays a solve that converges within about T affords on a
-// mesh of `patches` timed at `rate` (at least 10 000; never more than the
-// default).
+// mesh of `patches` timed at `rate` (at least 10 000). One environment:
+// more than the default --emitted-rays where T affords more (a budget is
+// spent, not capped at what a default solve traces); several: a smaller
+// share of the budget, never more than the default.
 uint64_t PlannedEmittedRays(const PlanInput& in);
 
 }  // namespace vismask
