@@ -5,7 +5,8 @@
 #
 # Job (JSON): vertices [[x,y,z]...], faces [[i,j,k,...]...] (0-based, counter-
 # clockwise seen from the front), face_materials [m...], materials
-# [{"kd":[r,g,b],"ke":[r,g,b],"two_sided":bool}...], camera {eye,target,up,fovy}, width,
+# [{"kd":[r,g,b],"ke":[r,g,b],"two_sided":bool,"camera_only_emission":bool}...],
+# area_lamps [{corner, edge1, edge2, ke}...] (AreaLamp), camera {eye,target,up,fovy}, width,
 # height, spp, seed, threads (0: all), work (a scratch directory), pfm, pgm
 # (the paths to write), mask_dilate (pixels), sky (null, [r,g,b]: a world of
 # that radiance, or {file, sha256}: an equirectangular map; unseen by camera
@@ -40,7 +41,7 @@ def ClearScene():
             coll.remove(d)
 
 
-def MakeMaterial(name, kd, ke, two_sided=False):
+def MakeMaterial(name, kd, ke, two_sided=False, camera_only_emission=False):
     """Front side: Lambertian diffuse with reflectance kd, plus, when ke > 0, an
     Emission of colour ke/pi and strength 1 (Cycles' emission closure gives
     radiance colour x strength, which the unit-emitter self-test checks: an
@@ -48,7 +49,9 @@ def MakeMaterial(name, kd, ke, two_sided=False):
     black diffuse, so a back face absorbs every ray and emits nothing, like a
     vismask patch seen from behind. Two-sided (glTF doubleSided): both sides
     are the front, as a vismask patch and its twin (Cycles' diffuse and
-    emission act on whichever side a ray meets)."""
+    emission act on whichever side a ray meets). camera_only_emission: the
+    emission is seen by camera rays alone and is no light source (an Area
+    lamp lights the scene in its place: AreaLamp)."""
     m = bpy.data.materials.new(name)
     m.use_nodes = True
     nt = m.node_tree
@@ -64,6 +67,10 @@ def MakeMaterial(name, kd, ke, two_sided=False):
         emission = nt.nodes.new("ShaderNodeEmission")
         emission.inputs["Color"].default_value = (ke[0] / math.pi, ke[1] / math.pi, ke[2] / math.pi, 1.0)
         emission.inputs["Strength"].default_value = 1.0
+        if camera_only_emission:
+            path = nt.nodes.new("ShaderNodeLightPath")
+            nt.links.new(path.outputs["Is Camera Ray"], emission.inputs["Strength"])
+            m.cycles.sample_as_light = False
         add = nt.nodes.new("ShaderNodeAddShader")
         nt.links.new(diffuse.outputs["BSDF"], add.inputs[0])
         nt.links.new(emission.outputs["Emission"], add.inputs[1])
@@ -80,6 +87,35 @@ def MakeMaterial(name, kd, ke, two_sided=False):
     nt.links.new(black.outputs["BSDF"], mix.inputs[2])
     nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
     return m
+
+
+def AreaLamp(lamp, scene_diag):
+    """A rectangular Area lamp on an emitting rectangle (corner, edge1,
+    edge2; counter-clockwise from its front), shining from its front with
+    the exitance ke: Cycles gives an Area lamp of power P and area A the
+    radiance P / (A pi) * pi / 4 (measured: 0.7852-0.7853 of the exact
+    polygon integral everywhere on the Cornell box), so P = max(ke) A 4/pi
+    and the colour ke / max(ke). It sits 1e-5 of the scene's diagonal in
+    front of the face, so that a shadow ray ending on it does not meet the
+    face; it is not seen by camera rays (the face is)."""
+    c, e1, e2 = Vector(lamp["corner"]), Vector(lamp["edge1"]), Vector(lamp["edge2"])
+    n = e1.cross(e2).normalized()
+    k = max(lamp["ke"])
+    data = bpy.data.lights.new("area", "AREA")
+    data.shape = "RECTANGLE"
+    data.size, data.size_y = e1.length, e2.length
+    data.energy = k * e1.length * e2.length * 4.0 / math.pi
+    data.color = tuple(v / k for v in lamp["ke"])
+    data.cycles.cast_shadow = True
+    obj = bpy.data.objects.new("area", data)
+    x, y, z = e1.normalized(), e2.normalized(), -n  # an Area lamp shines along its local -z
+    centre = c + 0.5 * e1 + 0.5 * e2 + n * (1e-5 * scene_diag)
+    m = Matrix.Identity(4)
+    for i in range(3):
+        m[i][0], m[i][1], m[i][2], m[i][3] = x[i], y[i], z[i], centre[i]
+    obj.matrix_world = m
+    obj.visible_camera = False
+    bpy.context.scene.collection.objects.link(obj)
 
 
 def MakeCamera(cam, scene_diag):
@@ -119,7 +155,10 @@ def Settings(job):
     c.glossy_bounces = 0
     c.transmission_bounces = 0
     c.volume_bounces = 0
-    c.transparent_max_bounces = 0
+    # A path passes through an Area lamp (AreaLamp) as a transparent bounce:
+    # with none allowed it would end there, and what lies behind the lamp
+    # (its face, which reflects) would be lost.
+    c.transparent_max_bounces = 1024
     c.sample_clamp_direct = 0.0
     c.sample_clamp_indirect = 0.0
     c.light_sampling_threshold = 0.0  # never skip a light
@@ -264,7 +303,9 @@ def Main():
         job = json.load(f)
     ClearScene()
     Settings(job)
-    mats = [MakeMaterial("m%d" % i, m["kd"], m["ke"], m.get("two_sided", False)) for i, m in enumerate(job["materials"])]
+    mats = [MakeMaterial("m%d" % i, m["kd"], m["ke"], m.get("two_sided", False),
+                         m.get("camera_only_emission", False))
+            for i, m in enumerate(job["materials"])]
     mesh = bpy.data.meshes.new("scene")
     mesh.from_pydata([tuple(v) for v in job["vertices"]], [], [tuple(f) for f in job["faces"]])
     for m in mats:
@@ -280,6 +321,8 @@ def Main():
     lo = [min(v[i] for v in vs) for i in range(3)]
     hi = [max(v[i] for v in vs) for i in range(3)]
     MakeCamera(job["camera"], math.dist(lo, hi))
+    for lamp in job.get("area_lamps", []):
+        AreaLamp(lamp, math.dist(lo, hi))
     t0 = time.time()
     bpy.ops.render.render(write_still=False)
     seconds = time.time() - t0
