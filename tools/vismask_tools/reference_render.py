@@ -229,37 +229,56 @@ def Cached(a, argvForRecord):
 
 
 def RenderHalves(a, argv):
-    """--halves: two cached renders of spp/2 (seeds S, S+1), averaged, with the
-    noise estimate (see the usage text)."""
+    """--halves (--parts 2) and --parts N: N cached renders of spp/N (seeds S
+    to S+N-1), averaged, with the noise estimate (see the usage text)."""
     w, h = a["size"]
-    halves = [Image(dict(a, spp=a["spp"] // 2, seed=a["seed"] + k), argv) for k in range(2)]
+    n = a.get("parts", 2)
+    partArgv = list(argv)
+    if "--parts" in partArgv:  # each part's record names its own spp and seed
+        i = partArgv.index("--parts")
+        partArgv = partArgv[:i] + partArgv[i + 2:]
+    halves = [Image(dict(a, spp=a["spp"] // n, seed=a["seed"] + k), partArgv) for k in range(n)]
     px = [x[0] for x in halves]
     meta = [x[2] for x in halves]
-    mask = bytes(255 if (m0 or m1) else 0 for m0, m1 in zip(halves[0][1], halves[1][1]))
-    avg = array.array("f", [0.5 * (x + y) for x, y in zip(*px)])
+    mask = bytes(255 if any(ms) else 0 for ms in zip(*(x[1] for x in halves)))
+    if n == 2:  # the same floats as before --parts existed
+        avg = array.array("f", [0.5 * (x + y) for x, y in zip(*px)])
+    else:
+        avg = array.array("f", [sum(v) / n for v in zip(*px)])
     num = den = 0.0
     for i in range(w * h):
         y, x = divmod(i, w)
         if mask[(h - 1 - y) * w + x]:  # PFM rows bottom to top, PGM top to bottom
             continue
         for c in range(3 * i, 3 * i + 3):
-            d = px[0][c] - px[1][c]
-            num += d * d
+            if n == 2:
+                d = px[0][c] - px[1][c]
+                num += d * d
+            else:
+                num += sum((p[c] - avg[c]) ** 2 for p in px)
             den += avg[c] * avg[c]
-    noise = math.sqrt(num / den) / 2 if den > 0 else 0.0
+    # The mean's variance is a part's over n, a part's estimated by sum over
+    # parts of (p - mean)^2 / (n - 1): sqrt(num / (n (n - 1)) / den). At n = 2
+    # sum (p - mean)^2 = d^2 / 2, which gives sqrt(sum d^2 / den) / 2.
+    if den > 0:
+        noise = math.sqrt(num / den) / 2 if n == 2 else math.sqrt(num / (n * (n - 1)) / den)
+    else:
+        noise = 0.0
     m = dict(meta[0])
     m.update({"command": "tools/reference " + " ".join(argv), "spp": a["spp"], "seed": a["seed"],
-              "halves": [{"spp": x["spp"], "seed": x["seed"], "cache_key": x["cache_key"],
-                          "wall_seconds": x["wall_seconds"], "threads": x["threads"]}
-                         for x in meta],
+              ("halves" if n == 2 else "parts"): [
+                  {"spp": x["spp"], "seed": x["seed"], "cache_key": x["cache_key"],
+                   "wall_seconds": x["wall_seconds"], "threads": x["threads"]} for x in meta],
               "wall_seconds": round(sum(x["wall_seconds"] for x in meta), 1),
               "render_seconds": round(sum(x["render_seconds"] for x in meta), 1),
               "masked_pixels": sum(1 for v in mask if v),
-              "mask": meta[0]["mask"] + "; the union of the two halves' masks",
+              "mask": meta[0]["mask"] + ("; the union of the two halves' masks" if n == 2 else
+                                         "; the union of the %d parts' masks" % n),
               "noise_relative_rmse": round(noise, 6),
-              "noise_method": "sqrt(sum (h1-h2)^2 / sum ((h1+h2)/2)^2) / 2 over the RGB values "
-                              "of unmasked pixels: the estimated relative RMSE of this average "
-                              "against the noise-free image"})
+              "noise_method": ("sqrt(sum (h1-h2)^2 / sum ((h1+h2)/2)^2) / 2" if n == 2 else
+                               "sqrt(sum over parts of (p-mean)^2 / (N (N-1)) / sum mean^2)") +
+                              " over the RGB values of unmasked pixels: the estimated relative "
+                              "RMSE of this average against the noise-free image"})
     del m["cache_key"]
     WriteResult(avg, mask, m, a["size"], Paths(a["out"]))
     return json.load(open(Paths(a["out"])["json"]))
