@@ -210,7 +210,8 @@ def Cached(a, argvForRecord):
             "seed": a["seed"], "version": kVersion, "blender": version}
     # Area lamps: in the key only when the scene has them, so the cache of
     # scenes without stays.
-    if AreaLamps(vertices, faces, faceMats, mats)[0]:
+    lamps = AreaLamps(vertices, faces, faceMats, mats)
+    if lamps[0]:
         what["area_lamps"] = kAreaLampsVersion
     # --sky, --sun: in the key only when given, so the cache of unlit keys stays.
     for k in ("sky", "sun"):
@@ -222,7 +223,7 @@ def Cached(a, argvForRecord):
     key = key.hexdigest()[:24]
     cache = os.path.join(ROOT, "build", "reference-cache", key)
     if not (a["cache"] and os.path.exists(os.path.join(cache, "ref.json"))):
-        Blend(a, vertices, faces, faceMats, mats, cam, key, version, cache, argvForRecord)
+        Blend(a, vertices, faces, faceMats, mats, lamps, cam, key, version, cache, argvForRecord)
     elif not a["quiet"]:
         print("reference: cached (%s)" % cache, file=sys.stderr)
     return cache
@@ -241,10 +242,7 @@ def RenderHalves(a, argv):
     px = [x[0] for x in halves]
     meta = [x[2] for x in halves]
     mask = bytes(255 if any(ms) else 0 for ms in zip(*(x[1] for x in halves)))
-    if n == 2:  # the same floats as before --parts existed
-        avg = array.array("f", [0.5 * (x + y) for x, y in zip(*px)])
-    else:
-        avg = array.array("f", [sum(v) / n for v in zip(*px)])
+    avg = array.array("f", [sum(v) / n for v in zip(*px)])
     num = den = 0.0
     for i in range(w * h):
         y, x = divmod(i, w)
@@ -291,7 +289,8 @@ def ReplaceArg(argv, flag, *values):
     return argv + [flag] + list(values)
 
 
-def Blend(a, vertices, faces, faceMats, mats, cam, key, version, cache, argvForRecord):
+def Blend(a, vertices, faces, faceMats, mats, lamps, cam, key, version, cache, argvForRecord):
+    """Renders the job into `cache`; lamps: AreaLamps' (lamps, materials)."""
     (w, h) = a["size"]
     os.makedirs(os.path.dirname(cache), exist_ok=True)
     work = tempfile.mkdtemp(prefix=key + ".", dir=os.path.dirname(cache))
@@ -303,8 +302,7 @@ def Blend(a, vertices, faces, faceMats, mats, cam, key, version, cache, argvForR
                "threads": a["threads"], "work": work, "pfm": os.path.join(work, "ref.pfm"),
                "pgm": os.path.join(work, "ref.mask.pgm"), "mask_dilate": kMaskDilate,
                "sky": a.get("sky"), "sun": a.get("sun")}
-        lamps, done = AreaLamps(vertices, faces, faceMats, mats)
-        job["area_lamps"] = lamps
+        job["area_lamps"], done = lamps
         job["materials"] = [dict(m, camera_only_emission=i in done) for i, m in enumerate(mats)]
         with open(os.path.join(work, "job.json"), "w") as f:
             json.dump(job, f)
