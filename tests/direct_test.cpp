@@ -484,5 +484,24 @@ TEST(DirectTest, PixelSequencesAreThePerSampleOnes) {
   }
 }
 
+// A piece covering part of a pixel gathers N x its coverage, rounded up,
+// at least kMinPartSamples (N itself when N is fewer); a whole pixel N.
+TEST(DirectTest, APieceCoveringPartOfAPixelGathersItsShare) {
+  EXPECT_EQ(PartSamples(128, 1.0f), 128u);
+  EXPECT_EQ(PartSamples(128, 0.5f), 64u);
+  EXPECT_EQ(PartSamples(128, 0.26f), 34u);  // 33.28 up
+  EXPECT_EQ(PartSamples(128, 0.01f), kMinPartSamples);
+  EXPECT_EQ(PartSamples(4, 0.01f), 4u);
+  EXPECT_EQ(PartSamples(128, 0.0f), kMinPartSamples);
+  EXPECT_EQ(PartSamples(128, 1.5f), 128u);  // never more than N
+  uint32_t last = 0;
+  for (int i = 1; i <= 100; ++i) {
+    const uint32_t s = PartSamples(200, 0.01f * static_cast<float>(i));
+    EXPECT_GE(s, last);
+    EXPECT_GE(static_cast<float>(s), 200.0f * 0.01f * static_cast<float>(i) - 1e-3f);
+    last = s;
+  }
+}
+
 }  // namespace
 }  // namespace vismask

@@ -180,11 +180,12 @@ direct part is each emitter's exact unoccluded
 irradiance times the share of its shadow rays that
 reach it, N rays spread over the emitters by what
 each brings there (rays to the emitters' corners and
-4 first; all N only where those disagree); the solve
+4 first; all N only where those disagree; a piece
+covering part of a pixel its share of N); the solve
 supplies the rest; 0: the solved radiosity alone
 (the images before it). With several environments
 each gathers its own emitters (the others' light
-and the sun's are the solve's). Default 64)")
+and the sun's are the solve's). Default 128)")
           .Json("direct_samples"),
       Count("--indirect-filter", &O::indirectFilter, 0, 64, "an integer in [0, 64]").Help("K", R"(
 with direct light per pixel, the indirect part is

@@ -1,6 +1,8 @@
 // The per-pixel gather's sample sequences (direct.h): light points and
 // sub-pixel offsets, rotated per pixel (Cranley-Patterson), from the pixel
 // index alone.
+#include <algorithm>
+#include <cmath>
 #include <glm/vec2.hpp>
 
 #include "vismask/display/direct.h"
@@ -60,6 +62,12 @@ const Tables& GetTables() {
 }
 
 }  // namespace
+
+uint32_t PartSamples(uint32_t samples, float cover) {
+  const float share =
+      std::ceil(static_cast<float>(samples) * std::fmin(std::fmax(cover, 0.0f), 1.0f));
+  return std::max(std::min(kMinPartSamples, samples), static_cast<uint32_t>(share));
+}
 
 glm::vec2 DirectLightSample(uint32_t pixel, uint32_t k) {
   const uint64_t h = PixelHash(pixel, DirectPixelSequence::Kind::kLight);

@@ -140,7 +140,8 @@ struct PixelPlane {
 // that fall in it, in order (a subset of a low-discrepancy sequence stays
 // well spread), at most kOffsetTries tried a sample, then the centroid.
 inline glm::vec3 PieceDirect(const View& view, const DirectHook& dh, const PixelPlane& plane, int x,
-                             int y, float sx, float sy, const Vec2* part, int partCorners) {
+                             int y, float sx, float sy, const Vec2* part, int partCorners,
+                             bool mayBeHidden = true) {
   constexpr uint32_t kOffsetTries = 16;
   const float fx = static_cast<float>(x), fy = static_cast<float>(y);
   const uint32_t pixel =
@@ -162,7 +163,7 @@ inline glm::vec3 PieceDirect(const View& view, const DirectHook& dh, const Pixel
         }
         return centre;
       },
-      &view.eye);
+      mayBeHidden ? &view.eye : nullptr);
 }
 
 // What a piece needs per pixel, set up once.
@@ -284,8 +285,15 @@ void AddShownDirect(const View& view, const PieceSetup& s, const DisplayPiece& p
   int k = 0;
   while (k < kFragments && f[k].id != piece.id) ++k;
   if (k == kFragments || !((fb->shown[idx] >> k) & 1u)) return;
+  // Split by other pieces, it gathers its share of the samples
+  // (PartSamples). The nearest fragment and the only one shown, with none
+  // dropped: nothing nearer covers any of the pixel, so no sample point is
+  // hidden from the eye and none is tested.
+  DirectHook dh = *piece.direct;
+  if (part) dh.samples = PartSamples(dh.samples, cover);
+  const bool alone = k == 0 && fb->shown[idx] == 1u && fb->dropped[idx] == 0;
   const glm::vec3 extra =
-      PieceDirect(view, *piece.direct, plane, at.x, at.y, at.sx, at.sy, part, partCorners);
+      PieceDirect(view, dh, plane, at.x, at.y, at.sx, at.sy, part, partCorners, !alone);
   const glm::vec3 d = RadianceAt<kTextured>(s, piece, h, extra) -
                       RadianceAt<kTextured>(s, piece, h, glm::vec3(0.0f));
   for (int c = 0; c < 3; ++c) f[k].rgb[c] += cover * d[c];

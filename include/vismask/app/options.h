@@ -174,7 +174,7 @@ inline uint32_t RayCap(const Options& o) {
 std::string EnvSpec(const Options& o);
 
 // The default --direct-samples with one environment.
-constexpr int kDefaultDirectSamples = 64;
+constexpr int kDefaultDirectSamples = 128;
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.

@@ -61,6 +61,14 @@ constexpr uint32_t kMaxCornerRays = 16;
 // The rays GatherDirect sends to the sun's rim (its disc's corners): a
 // straight shadow edge across the disc leaves rim points on both sides.
 constexpr uint32_t kSunRimRays = 8;
+// The samples a piece covering `cover` of a pixel gathers there, of the N
+// (`samples`) a whole pixel gets: N x cover rounded up, at least
+// kMinPartSamples (or N, if fewer). The piece's estimate is weighted by
+// `cover` in the pixel, so its share of the samples keeps the pixel's
+// error where the pieces splitting it (element edges across a penumbra)
+// each gathering N would spend N per piece (docs/design/direct-light.md).
+constexpr uint32_t kMinPartSamples = 8;
+uint32_t PartSamples(uint32_t samples, float cover);
 
 class DirectLight {
  public:
