@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -149,10 +150,12 @@ TEST(DirectSunTest, ImageMeanIsTheSolveAlonesAndPatchesKeepTheirBytes) {
   // bounce is gathered per pixel and kept out of the solve's indirect part,
   // the later bounces stay the solve's. Counted twice or lost, the mean
   // would move by the first bounce's share, most of the image's light.
+  // With --emission-rays 1 the solves trace the same rays: the same bytes.
   test::TempDir dir;
-  PfmImage img[2];
-  std::string csv[2];
-  for (int k = 0; k < 2; ++k) {
+  PfmImage img[3];
+  std::string csv[3];
+  double rays[3];
+  for (int k = 0; k < 3; ++k) {
     const std::string out = dir.File("out" + std::to_string(k));
     std::vector<std::string> args = {"render",
                                      "scenes/skylight.obj",
@@ -167,14 +170,24 @@ TEST(DirectSunTest, ImageMeanIsTheSolveAlonesAndPatchesKeepTheirBytes) {
                                      "--sun",
                                      "1,4,0.5,3,3,3",
                                      "--quiet",
+                                     "--emission-rays",
+                                     k == 2 ? "0.25" : "1",
                                      "--direct-samples",
                                      k == 0 ? "0" : "32"};
     test::RunResult r = test::RunMain(args);
     ASSERT_EQ(r.code, 0) << r.err;
     ASSERT_TRUE(ReadPfm(out + "/image.pfm", &img[k]).ok());
     csv[k] = test::ReadFile(out + "/patches.csv");
+    const std::string json = test::ReadFile(out + "/run.json");
+    const size_t at = json.find("\"rays\": ", json.find("\"result\""));
+    ASSERT_NE(at, std::string::npos);
+    rays[k] = std::atof(json.c_str() + at + 8);
   }
   EXPECT_NEAR(Mean(img[1]) / Mean(img[0]), 1.0, 0.03);
+  // --emission-rays 0.25: the sun's shots, gathered per pixel, trace a
+  // quarter of their worth; the image's light stays.
+  EXPECT_LT(rays[2], 0.8 * rays[1]);
+  EXPECT_NEAR(Mean(img[2]) / Mean(img[0]), 1.0, 0.03);
   EXPECT_FALSE(csv[0].empty());
   EXPECT_EQ(csv[0], csv[1]) << "the solve is the same whatever the display";
 }

@@ -340,7 +340,8 @@ TEST(DirectTest, IndirectPartHasNoStepAtPatchEdges) {
 
 TEST(DirectTest, ExportIsTheSolvedWhole) {
   // The export keeps the view-independent solution: the same bytes with
-  // per-pixel direct light as without, while the images differ.
+  // per-pixel direct light as without, while the images differ (with
+  // --emission-rays 1, the same rays; below 1 the light traces fewer).
   test::TempDir dir;
   std::string glb[2], image[2];
   for (int k = 0; k < 2; ++k) {
@@ -357,6 +358,8 @@ TEST(DirectTest, ExportIsTheSolvedWhole) {
                                      "200000",
                                      "--export",
                                      dir.File("c" + std::to_string(k) + ".glb"),
+                                     "--emission-rays",
+                                     "1",
                                      "--direct-samples",
                                      k == 0 ? "0" : "32"};
     test::RunResult r = test::RunMain(args);
@@ -401,6 +404,40 @@ TEST(DirectTest, AQuarterOfTheRaysGivesTheConvergedMean) {
   ASSERT_GT(rays, 100000);
   render("--ray-budget " + std::to_string(rays / 4), &quarter, &json);
   EXPECT_NEAR(Mean(quarter) / Mean(done), 1.0, 0.05);
+}
+
+TEST(DirectTest, EmissionTracesItsShareOfTheRays) {
+  // --emission-rays F: the light's own emission traces F of the rays its
+  // power is worth, the reflected power all of them; without per-pixel
+  // direct light (whose image would show that noise) all of them, the
+  // same solve as F = 1. Defaults: 0.25 with direct light in one
+  // environment, 1 in several or without it.
+  test::TempDir dir;
+  auto run = [&](const std::string& extra, std::string* json) {
+    std::vector<std::string> args = {
+        "render",  "scenes/cornell.obj", "--out", dir.path(), "--width", "16", "--height", "16",
+        "--quiet", "--emitted-rays",     "200000"};
+    for (const std::string& w : test::Words(extra)) args.push_back(w);
+    test::RunResult r = test::RunMain(args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    *json = test::ReadFile(dir.File("run.json"));
+    const size_t at = json->find("\"rays\": ", json->find("\"result\""));
+    EXPECT_NE(at, std::string::npos);
+    return at == std::string::npos ? 0.0 : std::atof(json->c_str() + at + 8);
+  };
+  std::string json;
+  const double all = run("--emission-rays 1", &json);
+  const double quarter = run("--emission-rays 0.25", &json);
+  EXPECT_NE(json.find("\"emission_rays\": 0.25"), std::string::npos);
+  EXPECT_NEAR((all - quarter) / (0.75 * 200000.0), 1.0, 0.05) << all << " " << quarter;
+  EXPECT_EQ(run("--emission-rays 0.25 --direct-samples 0", &json),
+            run("--direct-samples 0", &json));
+  EXPECT_EQ(run("--direct-samples 0", &json), all);
+  EXPECT_NE(json.find("\"emission_rays\": 1,"), std::string::npos);
+  EXPECT_EQ(run("", &json), quarter);
+  EXPECT_NE(json.find("\"emission_rays\": 0.25"), std::string::npos);
+  run("--envs 2", &json);
+  EXPECT_NE(json.find("\"emission_rays\": 1,"), std::string::npos);
 }
 
 TEST(DirectTest, MaxSecondsPlansTheEmittedRays) {

@@ -77,5 +77,22 @@ TEST(PlanTest, EmittedRaysLeaveTheTailItsRays) {
   EXPECT_EQ(PlannedEmittedRays(Cornell(1e-6)), 10000u);
 }
 
+// --emission-rays F: an emitted ray's worth traces F of it in the emitters'
+// own shots and rho / (1 - rho) in the reflected power's, so the plan buys
+// more emitted rays for the same rays traced: e(F) (F + rho / (1 - rho))
+// is the same for every F.
+TEST(PlanTest, EmissionRaysBuyMoreEmittedRaysForTheSameRaysTraced) {
+  PlanInput in = Cornell(1.0);
+  const double tail = 2.0 * in.patches * in.minRays / (1.0 - in.rho);
+  const double traced = 0.9 * in.rate * in.seconds - tail;
+  for (double f : {1.0, 0.5, 0.25, 0.1}) {
+    in.emissionRays = f;
+    const double e = static_cast<double>(PlannedEmittedRays(in));
+    EXPECT_NEAR(e * (f + in.rho / (1.0 - in.rho)), traced, 2.0) << f;
+  }
+  in.emissionRays = 0.25;
+  EXPECT_GT(PlannedEmittedRays(in), PlannedEmittedRays(Cornell(1.0)) * 3 / 2);
+}
+
 }  // namespace
 }  // namespace vismask

@@ -98,6 +98,15 @@ TEST(RanksTest, PowerAllocationAndElementsGiveTheSameBytesEverywhere) {
   EXPECT_LT(field("centre_read_shots"), field("local_shots"));
 }
 
+// --emission-rays given with several environments: the light's shots trace
+// a quarter of their worth, and their foreign shots what the header says:
+// still the same bytes everywhere.
+TEST(RanksTest, EmissionRaysGiveTheSameBytesEverywhere) {
+  std::vector<std::string> base = kPowerBase;
+  base.insert(base.end(), {"--emission-rays", "0.25"});
+  ExpectSameBytesEverywhere("R", {"2"}, {"2"}, base);
+}
+
 // Two-sided: twins in every environment, both sides of the light emitting.
 TEST(RanksTest, TwoSidedGivesTheSameBytesEverywhere) {
   std::vector<std::string> base = kPowerBase;

@@ -309,6 +309,7 @@ Status ResolveEnvironments(Options* o) {
   // several each gathers its own emitters' light, the others' are the
   // solve's: docs/design/direct-light.md).
   if (o->directSamples < 0) o->directSamples = kDefaultDirectSamples;
+  ResolveEmissionRays(numEnvs, o);
   if (o->ranks > numEnvs)
     return Status::Error("vismask: --ranks: " + std::to_string(o->ranks) + " ranks for " +
                          std::to_string(numEnvs) +

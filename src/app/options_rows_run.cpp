@@ -187,6 +187,17 @@ supplies the rest; 0: the solved radiosity alone
 each gathers its own emitters (the others' light
 and the sun's are the solve's). Default 128)")
           .Json("direct_samples"),
+      Number("--emission-rays", &O::emissionRays, 0.0, 1.0, "a number in (0, 1]")
+          .Open(true, false)
+          .Given(&O::hasEmissionRays)
+          .Help("F", R"(
+power allocation: an emission the pixels gather
+(an emitter's own, the sun's, with --direct-samples)
+traces F times the rays its power is worth; the
+solve's direct part then only feeds later shots.
+Default 0.25 in one environment with --direct-samples,
+else 1)")
+          .Json("emission_rays"),
       Count("--indirect-filter", &O::indirectFilter, 0, 64, "an integer in [0, 64]").Help("K", R"(
 with direct light per pixel, the indirect part is
 smoothed over each polygon's display lattice, K steps

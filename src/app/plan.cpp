@@ -60,9 +60,12 @@ double PlannedPatches(const PlanInput& in) {
 uint64_t PlannedEmittedRays(const PlanInput& in) {
   const double tail = TailRays(in);
   const double share = in.oneEnvironment ? kFillShare : kPlanShare;
+  // An emitted ray's worth leads to F + rho / (1 - rho) rays traced (F:
+  // --emission-rays, its own shots; then the reflected power's, which
+  // trace all their worth).
+  const double traced = in.emissionRays + in.rho / (1.0 - in.rho);
   const double emitted =
-      std::fmax(share * in.rate * in.seconds - tail, kCutShare * in.rate * in.seconds) *
-      (1.0 - in.rho);
+      std::fmax(share * in.rate * in.seconds - tail, kCutShare * in.rate * in.seconds) / traced;
   const double most = in.oneEnvironment ? emitted : static_cast<double>(in.emittedRays);
   return static_cast<uint64_t>(std::fmax(std::fmin(emitted, most), 10000.0));
 }

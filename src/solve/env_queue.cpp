@@ -81,7 +81,7 @@ void Environment::ShootLocal(uint32_t i) {
   uint32_t shotIndex = shotCount_[i]++;
   uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
   double fraction = 1.0;
-  uint32_t rays = ShotRays(src.unshot, key, &fraction);
+  uint32_t rays = ShotRays(src.unshot, direct_.EmissionIn(i, src.unshot), key, &fraction);
   // A partial shot keeps the rest of the power unshot, at the top of the tree.
   double power[3];
   for (int c = 0; c < 3; ++c) {
@@ -151,7 +151,9 @@ void Environment::ShootOutside(uint32_t k) {
   const uint32_t shotIndex = o.shots++;
   const uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
   double fraction = 1.0;
-  const uint32_t rays = ShotRays(o.unshot, key, &fraction);
+  const double emission =
+      direct_.Gathers(OutsideKindOf(p.globalId)) ? o.unshot[0] + o.unshot[1] + o.unshot[2] : 0.0;
+  const uint32_t rays = ShotRays(o.unshot, emission, key, &fraction);
   // Per-pixel direct light: a sun shot's first bounce is the gather's
   // (direct), a sky shot's the solve's (indirect).
   direct_.BookOutsideShot(OutsideKindOf(p.globalId));

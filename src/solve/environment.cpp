@@ -34,10 +34,12 @@ Environment::~Environment() = default;
 
 // How many rays a local shot of `power` traces and what share of the
 // power it carries (1 unless the shot is partial).
-uint32_t Environment::ShotRays(const double power[3], uint64_t shotKey, double* fraction) const {
+uint32_t Environment::ShotRays(const double power[3], double emission, uint64_t shotKey,
+                               double* fraction) const {
   *fraction = 1.0;
   if (options_.rayQuantum <= 0.0) return options_.rays;
-  double x = (power[0] + power[1] + power[2]) / options_.rayQuantum;
+  const double worth = power[0] + power[1] + power[2] - (1.0 - options_.emissionRays) * emission;
+  double x = std::fmax(worth, 0.0) / options_.rayQuantum;
   if (x > options_.rays) {
     *fraction = options_.rays / x;
     return options_.rays;

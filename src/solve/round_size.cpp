@@ -1,7 +1,8 @@
 // The defaults that follow from the run's shape (options.h): how big a
 // round is (ResolveRounds, AutoRoundWork), the foreign-shooter queue
 // (AutoQueue), and --envs auto for a run of several ranks without --envs
-// (AutoEnvsForRanks: ParseArgs for --ranks, SetWorldSize for the MPI world). ParseArgs calls
+// (AutoEnvsForRanks: ParseArgs for --ranks, SetWorldSize for the MPI world) and
+// --emission-rays (ResolveEmissionRays). ParseArgs calls
 // ResolveRounds once the environment count is known; init sets the automatic round work from the
 // scene.
 #include <algorithm>
@@ -45,10 +46,16 @@ bool AutoEnvsForRanks(int ranks, Options* o) {
   return true;
 }
 
+void ResolveEmissionRays(int numEnvs, Options* o) {
+  if (!o->hasEmissionRays)
+    o->emissionRays = o->directSamples > 0 && numEnvs == 1 ? kDefaultEmissionRays : 1.0;
+}
+
 bool SetWorldSize(int ranks, Options* o) {
   if (!AutoEnvsForRanks(ranks, o)) return false;
   if (!ChooseEnvShape(o->envsAutoCount, glm::vec3(1.0f), o->envs)) return false;
   ResolveRounds(o->envsAutoCount, o);
+  ResolveEmissionRays(o->envsAutoCount, o);
   return true;
 }
 

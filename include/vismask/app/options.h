@@ -37,6 +37,7 @@ struct Options {
   uint32_t rays = 4096;                  // --rays: per shot (fixed)
   bool hasRays = false;
   bool hasEmittedRays = false;      // --emitted-rays given (else --max-seconds may plan it)
+  bool hasEmissionRays = false;     // --emission-rays given (else ResolveEmissionRays)
   bool emittedRaysPlanned = false;  // --max-seconds chose emittedRays (app.cpp, PlanBudget)
   bool patchSizePlanned = false;    // --max-seconds chose patchSize (app.cpp, PlanPatchSize)
   bool initAgain = false;           // init made again (the planned patch size): warnings said once
@@ -133,6 +134,10 @@ struct Options {
   // (ResolveEnvironments); each of several environments gathers its own
   // emitters.
   int directSamples = -1;
+  // --emission-rays F: the share of the rays its power is worth that an
+  // emission the pixels gather traces (power allocation). Not given:
+  // ResolveEmissionRays.
+  double emissionRays = 1.0;
   // --indirect-filter K: smoothing steps of the indirect part on the
   // display lattice (with per-pixel direct light); -1 (not given): from the
   // hits a patch received (Environment::IndirectFilterSteps).
@@ -175,6 +180,8 @@ std::string EnvSpec(const Options& o);
 
 // The default --direct-samples with one environment.
 constexpr int kDefaultDirectSamples = 128;
+// The default --emission-rays with per-pixel direct light in one environment.
+constexpr double kDefaultEmissionRays = 0.25;
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.
@@ -184,6 +191,13 @@ Status ParseArgs(int argc, const char* const* argv, Options* options);
 // roundShots and roundWork (or roundWorkAuto) when they were not given
 // (see Options). Called once the environment count is known.
 void ResolveRounds(int numEnvs, Options* options);
+
+// --emission-rays not given: kDefaultEmissionRays with per-pixel direct
+// light in one environment; else 1 (with several, the others' pixels show
+// an emitter's light from the solve, whose foreign shots trace the rays its
+// shots did). Called once the environment count is known, after
+// --direct-samples' default.
+void ResolveEmissionRays(int numEnvs, Options* options);
 
 // The default --queue: numEnvs x roundShots slots (admission shares the
 // free slots among the environments, so that is what lets each make a

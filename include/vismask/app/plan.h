@@ -15,6 +15,9 @@ struct PlanInput {
   double seconds = 0.0;      // T
   uint32_t minRays = 16;     // --min-rays
   uint64_t emittedRays = 0;  // the default --emitted-rays (several environments' cap)
+  // --emission-rays (1 without per-pixel direct light): the emitted power
+  // traces this share of its worth, the reflected power all of it.
+  double emissionRays = 1.0;
   // One environment: the noise's balance applies, and the emitted rays may
   // exceed the default. Cut into several, (a) the patches the cuts clip are
   // slivers that receive few rays whatever the patch size, and the coarser

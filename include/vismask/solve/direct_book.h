@@ -7,6 +7,7 @@
 // Carved from the environment's arena (Layout); it holds nothing without
 // per-pixel direct light.
 #pragma once
+#include <cmath>
 #include <cstdint>
 
 #include "vismask/core/arena.h"
@@ -59,6 +60,14 @@ class DirectBook {
     return on_ && kind == OutsideKind::kSun && light_.hasSun();
   }
   double shotDirect(int c) const { return shotDirect_[c]; }
+  // The emission in patch i's `unshot` power, channels summed (0 without
+  // per-pixel direct light).
+  double EmissionIn(uint32_t i, const double unshot[3]) const {
+    double e = 0.0;
+    if (!emitLeft_.empty())
+      for (int c = 0; c < 3; ++c) e += std::fmin(emitLeft_[3 * size_t(i) + c], unshot[c]);
+    return e;
+  }
   void EmissionUnshot(double out[3]) const;
 
   void SetShowIndirect(bool on) { showIndirect_ = on; }

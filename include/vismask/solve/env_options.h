@@ -42,6 +42,12 @@ struct EnvOptions {
   uint32_t rays = 4096;
   double rayQuantum = 0.0;
   uint32_t minRays = 1;
+  // Power allocation: the share of the rays its power is worth that a
+  // shot's emission traces where the pixels gather that emission's first
+  // bounce (an emitter patch's own Ke, the sun with --direct-samples):
+  // there the solve's direct part only feeds the later shots, whose noise
+  // the image shows (--emission-rays; docs/design/direct-light.md).
+  double emissionRays = 1.0;
   bool sobol = true;  // scrambled Sobol' points; false: independent PCG32 draws
   // A local patch's rays leave from where its light landed (its leaves, in
   // proportion to their power), with one environment; false: uniform.

@@ -145,7 +145,10 @@ class Environment {
   void ShootOwn(const Patch& p, Skip skip, const double power[3], uint64_t key, uint32_t shotIndex,
                 uint32_t rays, uint32_t cached);
   void ShootForeign(uint32_t slot);
-  uint32_t ShotRays(const double power[3], uint64_t shotKey, double* fraction) const;
+  // `emission`: the part of `power` (channels summed) that is emission the
+  // pixels gather, which counts options_.emissionRays of its worth in rays.
+  uint32_t ShotRays(const double power[3], double emission, uint64_t shotKey,
+                    double* fraction) const;
   Ray MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
                   glm::vec3* local) const;
   void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
