@@ -10,8 +10,10 @@
 #include <vector>
 
 #include "env_test_util.h"
+#include "grid_test_util.h"
 #include "test_util.h"
 #include "vismask/output/image_io.h"
+#include "vismask/solve/element_tree.h"
 
 namespace vismask {
 namespace {
@@ -107,6 +109,68 @@ TEST(ExposureTest, TheFloorBesideABlockIsNotDarkenedByThePartBeneath) {
   }
   ASSERT_GT(mean[1], 0.0);
   EXPECT_NEAR(mean[0] / mean[1], 1.0, 0.05) << mean[0] << " whole, " << mean[1] << " holed";
+}
+
+// A quad leaf measured part buried draws its rays' origins from its open
+// cells only (and alike over them), a whole or unmeasured one anywhere:
+// a ray from under a block would only meet the block's inside.
+TEST(ExposureTest, OriginsLeaveFromTheOpenCellsOnly) {
+  gridtest::TestScene s;
+  gridtest::AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1, 1, &s);
+  ASSERT_EQ(s.patches.size(), 1u);
+  Span<const Patch> patches(s.patches.data(), s.patches.size());
+  Arena arena(1 << 16);
+  ElementTree tree;
+  tree.Layout(arena, 1, ElementOptions{}, false);
+  tree.Reset(patches);
+  glm::vec2 st;
+  const float mid[3] = {0.5f, 0.5f, 0.5f};
+  EXPECT_FALSE(tree.SampleByPower(false, 0, mid, &st)) << "unmeasured: the caller's uniform point";
+  tree.SetExposed(0, 1.0f, 0xffff);
+  EXPECT_FALSE(tree.SampleByPower(false, 0, mid, &st)) << "all open: the same";
+  // Open: the cells with b (the last edge's index) 2 or 3, and cell (0, 1).
+  const uint16_t open = 0xcccc | (1u << 1);
+  tree.SetExposed(0, 9.0f / 16.0f, open);
+  int perCell[16] = {0};
+  const int n = 36, m = 32;  // n a multiple of the 9 open cells
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const float u[3] = {0.5f, (i + 0.5f) / n, (j + 0.5f) / m};
+      ASSERT_TRUE(tree.SampleByPower(false, 0, u, &st));
+      const int a = static_cast<int>(st.x * 4.0f), b = static_cast<int>(st.y * 4.0f);
+      ASSERT_TRUE(a >= 0 && a < 4 && b >= 0 && b < 4) << st.x << "," << st.y;
+      ASSERT_TRUE((open >> (a * 4 + b)) & 1u) << "a buried cell: " << a << "," << b;
+      ++perCell[a * 4 + b];
+    }
+  for (int c = 0; c < 16; ++c) {
+    if ((open >> c) & 1u) {
+      EXPECT_EQ(perCell[c], n * m / 9) << c;
+    }
+  }
+}
+
+// The roots are measured when the solve is reset, before any shot, and a
+// split's children when it splits: the origins know the buried parts from
+// the first shot on.
+TEST(ExposureTest, RootsAreMeasuredBeforeTheFirstShot) {
+  test::TempDir dir;
+  WriteBlockScene(dir.path(), false);
+  EnvGrid shape;
+  EnvOptions eo;
+  eo.rayEpsilon = 1e-4f;
+  test::TestEnvs envs;
+  test::MakeTestEnvs(dir.File("s.obj").c_str(), shape, 1.0f, eo, &envs);
+  if (HasFatalFailure()) return;
+  const Environment& env = *envs.ptrs[0];
+  int partBuried = 0;
+  for (uint32_t i = 0; i < env.patches().size(); ++i) {
+    const float share = env.elementTree().exposed(i);
+    ASSERT_NE(share, ElementTree::kUnmeasured) << i;
+    const int cells = __builtin_popcount(env.elementTree().open(i));
+    EXPECT_EQ(share, static_cast<float>(cells) / 16.0f) << i;
+    partBuried += share > 0.0f && share < 1.0f;
+  }
+  EXPECT_EQ(partBuried, 1) << "the floor patch half under the block";
 }
 
 }  // namespace

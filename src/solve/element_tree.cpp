@@ -13,6 +13,7 @@ void ElementTree::Layout(Arena& arena, uint32_t numPatches, const ElementOptions
   elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options.perPatch));
   indirect_ = arena.Alloc<double>(indirect ? 3 * size_t(numPatches) * (1 + options.perPatch) : 0);
   exposed_ = arena.Alloc<float>(elements_.size());
+  open_ = arena.Alloc<uint16_t>(elements_.size());
 }
 
 void ElementTree::Reset(Span<const Patch> patches) {
@@ -24,6 +25,7 @@ void ElementTree::Reset(Span<const Patch> patches) {
     root.area = patches[i].area;
     root.child = kNoElement;
     exposed_[i] = kUnmeasured;
+    open_[i] = 0;
   }
   used_ = static_cast<uint32_t>(patches.size());
 }
@@ -76,6 +78,7 @@ ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uin
     ch.child = kNoElement;
     ch.depth = el.depth + 1;
     exposed_[first + q] = kUnmeasured;
+    open_[first + q] = 0;
     for (int c = 0; c < 3; ++c) {
       double older = el.received[c] -
                      (el.quarter[0][c] + el.quarter[1][c] + el.quarter[2][c] + el.quarter[3][c]);
@@ -115,7 +118,7 @@ double ElementTree::SubtreePower(uint32_t e) const {
 bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
                                 glm::vec2* st) const {
   uint32_t e = patch;
-  if (elements_[e].child == kNoElement) return false;
+  if (elements_[e].child == kNoElement && !PartBuried(triangle, e)) return false;
   glm::vec2 corners[4];
   int n = RootCorners(triangle, corners);
   // Down the tree: a child in proportion to the power under it, u[0]
@@ -135,10 +138,23 @@ bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
     for (int c = 0; c < n; ++c) corners[c] = child[c];
     e = elements_[e].child + k;
   }
-  // Uniform in the leaf, a hair inside it (PatchSampler::Point's margin).
+  // Uniform in the leaf, a hair inside it (PatchSampler::Point's margin);
+  // part buried, in its open cells (u[1] picks one and is stretched back).
   constexpr float kMargin = 1e-5f;
-  float a = std::min(std::max(u[1], kMargin), 1.0f - kMargin);
-  float b = std::min(std::max(u[2], kMargin), 1.0f - kMargin);
+  float ua = u[1], ub = u[2];
+  if (PartBuried(triangle, e)) {
+    const uint16_t open = open_[e];
+    const int count = __builtin_popcount(open);
+    const float x = ua * static_cast<float>(count);
+    int pick = std::min(static_cast<int>(x), count - 1), cell = 0;
+    for (int seen = -1; cell < kOpenSide * kOpenSide; ++cell)
+      if (((open >> cell) & 1u) && ++seen == pick) break;
+    const float within = std::min(std::max(x - static_cast<float>(pick), 0.0f), 1.0f);
+    ua = (static_cast<float>(cell / kOpenSide) + within) / kOpenSide;
+    ub = (static_cast<float>(cell % kOpenSide) + ub) / kOpenSide;
+  }
+  float a = std::min(std::max(ua, kMargin), 1.0f - kMargin);
+  float b = std::min(std::max(ub, kMargin), 1.0f - kMargin);
   if (triangle) {
     float su = std::sqrt(a);
     *st = corners[0] + su * (1.0f - b) * (corners[1] - corners[0]) +

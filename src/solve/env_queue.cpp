@@ -226,8 +226,9 @@ void Environment::Deliver(const uint8_t* packet) {
 // out).
 uint64_t Environment::workSteps() const {
   const WorkCosts& w = WorkCostsOf(options_.maskMethod);
-  return grid_.steps() - centreSteps_ + centreWork_ + w.ray * (stats_.rays + stats_.readRays) +
-         w.hit * stats_.hits + w.shot * (stats_.shots + stats_.foreignShots);
+  return grid_.steps() - resetSteps_ - centreSteps_ + centreWork_ +
+         w.ray * (stats_.rays + stats_.readRays) + w.hit * stats_.hits +
+         w.shot * (stats_.shots + stats_.foreignShots);
 }
 
 // One round: up to `shotBudget` shots, each the larger of the local patch
@@ -268,7 +269,7 @@ void Environment::RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t r
       break;
     }
   }
-  stats_.gridSteps = grid_.steps();
+  stats_.gridSteps = grid_.steps() - resetSteps_;
 }
 
 }  // namespace vismask

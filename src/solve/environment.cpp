@@ -317,6 +317,11 @@ void Environment::Reset() {
     tree_.Set(i, UnshotKey(e));
   }
   elements_.Reset(patches_);
+  // The leaves' buried parts, before any shot: rays leave from the open
+  // part of a patch that runs on under a solid (ElementTree::SampleByPower).
+  const uint64_t steps0 = grid_.steps();
+  MeasureExposure();
+  resetSteps_ += grid_.steps() - steps0;
   // The outside shooters emit as patches do; their power counts in the
   // radiosity power R as an emitter's b * area does (the power shot so far
   // is R - unshot).

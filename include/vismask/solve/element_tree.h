@@ -39,8 +39,11 @@ class ElementTree {
                    uint32_t* depth) const;
   // A point of patch `patch` (a triangle or not) drawn in proportion to the
   // power its leaves received (channels summed), uniform in the chosen
-  // leaf's parameters, from three uniforms: its parameters (s, t). False,
-  // and nothing drawn, when the patch is a single leaf or received nothing.
+  // leaf's parameters, from three uniforms: its parameters (s, t). In a
+  // quad leaf measured part buried (exposed share in (0, 1)), uniform in
+  // its open cells instead: a ray from under a block would only meet the
+  // block's inside. False, and nothing drawn, when the patch is a single
+  // leaf not part buried, or received nothing.
   bool SampleByPower(bool triangle, uint32_t patch, const float u[3], glm::vec2* st) const;
   // What MaybeSplit did.
   enum class Split { kNone, kSplit, kRefused };
@@ -54,7 +57,16 @@ class ElementTree {
   // measured it; kUnmeasured for a leaf made since.
   static constexpr float kUnmeasured = -1.0f;
   float exposed(uint32_t e) const { return exposed_[e]; }
-  void SetExposed(uint32_t e, float share) { exposed_[e] = share; }
+  // With the share, which of the kOpenSide x kOpenSide cells of the leaf's
+  // parameter square are open (bit a * kOpenSide + b for the cell at
+  // (a, b) along its first and last edges; a triangle's folded as the
+  // measure folds them): SampleByPower's origins avoid the buried ones.
+  static constexpr int kOpenSide = 4;
+  void SetExposed(uint32_t e, float share, uint16_t open) {
+    exposed_[e] = share;
+    open_[e] = open;
+  }
+  uint16_t open(uint32_t e) const { return open_[e]; }
   // What spreads leaf e's received power over its exposed part: 1 / its
   // exposed share, 1 until measured or where wholly buried (the leaf then
   // weighs nothing in its vertices, and any value will do).
@@ -75,10 +87,15 @@ class ElementTree {
 
  private:
   double SubtreePower(uint32_t e) const;
+  // A quad leaf measured part buried: some of its cells open, not all.
+  bool PartBuried(bool triangle, uint32_t e) const {
+    return !triangle && exposed_[e] > 0.0f && exposed_[e] < 1.0f && open_[e] != 0;
+  }
   ElementOptions options_;
   Span<Element> elements_;
   Span<double> indirect_;
   Span<float> exposed_;
+  Span<uint16_t> open_;
   uint32_t used_ = 0;
 };
 

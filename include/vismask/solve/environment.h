@@ -74,6 +74,9 @@ class Environment {
   // scene. A point from which every probe meets a back face first lies
   // inside a closed solid, where no light arrives and no eye looks.
   void MeasureExposure();
+  // The same for patch i's leaves (Reset measures the roots, Receive a
+  // split's children: SampleByPower's origins avoid their buried cells).
+  void MeasurePatchExposure(uint32_t i);
   // Leaf e's exposed area (its area until measured).
   float ExposedArea(uint32_t e) const {
     const float share = elements_.exposed(e);
@@ -85,6 +88,7 @@ class Environment {
   glm::vec3 LeafSolvedDirect(uint32_t patch, uint32_t e) const;
   uint32_t LeafAt(uint32_t patch, glm::vec2 st) const;
   Span<const Element> elements() const { return elements_.all(); }
+  const ElementTree& elementTree() const { return elements_; }
   uint32_t elementsUsed() const { return elements_.used(); }
   const DisplayLattice& lattice() const { return lattice_; }
   DisplayLattice& lattice() { return lattice_; }
@@ -207,7 +211,10 @@ class Environment {
   EnergyLedger ledger_;
   EnvStats stats_;
   uint64_t centreSteps_ = 0;  // grid steps of the centre rays really cast
-  uint64_t centreWork_ = 0;   // the work of the casts every cache size makes (workSteps)
+  // Grid steps of Reset's exposure probes, which are init's, not the
+  // solve's: left out of its work and steps.
+  uint64_t resetSteps_ = 0;
+  uint64_t centreWork_ = 0;  // the work of the casts every cache size makes (workSteps)
   uint64_t centreStepsPerRay_ = 1;
   double totalArea_ = 0.0, kdArea_ = 0.0;
   EnvFootprint footprint_;
