@@ -57,14 +57,19 @@ void WriteBlockScene(const std::string& dir, bool holed) {
                   "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n");
 }
 
-TEST(ExposureTest, PatchesUnderABlockAreBuriedInProportion) {
-  test::TempDir dir;
+// The block scene with the whole floor, in one environment (built, so
+// its roots measured).
+void MakeBlockEnv(const test::TempDir& dir, test::TestEnvs* envs) {
   WriteBlockScene(dir.path(), false);
-  EnvGrid shape;
   EnvOptions eo;
   eo.rayEpsilon = 1e-4f;
+  test::MakeTestEnvs(dir.File("s.obj").c_str(), EnvGrid{}, 1.0f, eo, envs);
+}
+
+TEST(ExposureTest, PatchesUnderABlockAreBuriedInProportion) {
+  test::TempDir dir;
   test::TestEnvs envs;
-  test::MakeTestEnvs(dir.File("s.obj").c_str(), shape, 1.0f, eo, &envs);
+  MakeBlockEnv(dir, &envs);
   if (HasFatalFailure()) return;
   Environment& env = *envs.ptrs[0];
   env.MeasureExposure();
@@ -154,12 +159,8 @@ TEST(ExposureTest, OriginsLeaveFromTheOpenCellsOnly) {
 // the first shot on.
 TEST(ExposureTest, RootsAreMeasuredBeforeTheFirstShot) {
   test::TempDir dir;
-  WriteBlockScene(dir.path(), false);
-  EnvGrid shape;
-  EnvOptions eo;
-  eo.rayEpsilon = 1e-4f;
   test::TestEnvs envs;
-  test::MakeTestEnvs(dir.File("s.obj").c_str(), shape, 1.0f, eo, &envs);
+  MakeBlockEnv(dir, &envs);
   if (HasFatalFailure()) return;
   const Environment& env = *envs.ptrs[0];
   int partBuried = 0;
