@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -178,10 +177,7 @@ TEST(DirectSunTest, ImageMeanIsTheSolveAlonesAndPatchesKeepTheirBytes) {
     ASSERT_EQ(r.code, 0) << r.err;
     ASSERT_TRUE(ReadPfm(out + "/image.pfm", &img[k]).ok());
     csv[k] = test::ReadFile(out + "/patches.csv");
-    const std::string json = test::ReadFile(out + "/run.json");
-    const size_t at = json.find("\"rays\": ", json.find("\"result\""));
-    ASSERT_NE(at, std::string::npos);
-    rays[k] = std::atof(json.c_str() + at + 8);
+    rays[k] = test::JsonNumber(test::ReadFile(out + "/run.json"), "rays");
   }
   EXPECT_NEAR(Mean(img[1]) / Mean(img[0]), 1.0, 0.03);
   // --emission-rays 0.25: the sun's shots, gathered per pixel, trace a

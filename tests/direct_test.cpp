@@ -398,9 +398,7 @@ TEST(DirectTest, AQuarterOfTheRaysGivesTheConvergedMean) {
   PfmImage done, quarter;
   std::string json;
   render("", &done, &json);
-  size_t at = json.find("\"rays\": ", json.find("\"result\""));
-  ASSERT_NE(at, std::string::npos);
-  long rays = std::atol(json.c_str() + at + 8);
+  const long rays = static_cast<long>(test::JsonNumber(json, "rays"));
   ASSERT_GT(rays, 100000);
   render("--ray-budget " + std::to_string(rays / 4), &quarter, &json);
   EXPECT_NEAR(Mean(quarter) / Mean(done), 1.0, 0.05);
@@ -421,9 +419,7 @@ TEST(DirectTest, EmissionTracesItsShareOfTheRays) {
     test::RunResult r = test::RunMain(args);
     EXPECT_EQ(r.code, 0) << r.err;
     *json = test::ReadFile(dir.File("run.json"));
-    const size_t at = json->find("\"rays\": ", json->find("\"result\""));
-    EXPECT_NE(at, std::string::npos);
-    return at == std::string::npos ? 0.0 : std::atof(json->c_str() + at + 8);
+    return test::JsonNumber(*json, "rays");
   };
   std::string json;
   const double all = run("--emission-rays 1", &json);

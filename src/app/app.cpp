@@ -70,7 +70,7 @@ PlanInput PlanInputOf(const Options& o, const PlanRate& p, size_t environments) 
   in.seconds = o.maxSeconds;
   in.minRays = o.minRays;
   in.emittedRays = o.emittedRays;
-  in.emissionRays = o.directSamples > 0 ? o.emissionRays : 1.0;
+  in.emissionRays = SolveEmissionRays(o);
   return in;
 }
 

@@ -345,7 +345,7 @@ void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepar
   e.elements.chi2 = o.elementChi2;
   e.indirectFilter = o.indirectFilter;
   e.directSamples = o.directSamples > 0 ? static_cast<uint32_t>(o.directSamples) : 0;
-  e.emissionRays = e.directSamples > 0 ? o.emissionRays : 1.0;
+  e.emissionRays = SolveEmissionRays(o);
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
 }

@@ -151,12 +151,12 @@ void Environment::ShootOutside(uint32_t k) {
   const uint32_t shotIndex = o.shots++;
   const uint64_t key = ShotKey(options_.seed, p.globalId, shotIndex);
   double fraction = 1.0;
-  const double emission =
-      direct_.Gathers(OutsideKindOf(p.globalId)) ? o.unshot[0] + o.unshot[1] + o.unshot[2] : 0.0;
+  const OutsideKind kind = OutsideKindOf(p.globalId);
+  const double emission = direct_.Gathers(kind) ? o.unshot[0] + o.unshot[1] + o.unshot[2] : 0.0;
   const uint32_t rays = ShotRays(o.unshot, emission, key, &fraction);
   // Per-pixel direct light: a sun shot's first bounce is the gather's
   // (direct), a sky shot's the solve's (indirect).
-  direct_.BookOutsideShot(OutsideKindOf(p.globalId));
+  direct_.BookOutsideShot(kind);
   double power[3];
   for (int c = 0; c < 3; ++c) {
     power[c] = fraction < 1.0 ? o.unshot[c] * fraction : o.unshot[c];

@@ -199,6 +199,12 @@ void ResolveRounds(int numEnvs, Options* options);
 // --direct-samples' default.
 void ResolveEmissionRays(int numEnvs, Options* options);
 
+// The --emission-rays a solve uses: 1 without per-pixel direct light,
+// whatever was given (the solve is then the image).
+inline double SolveEmissionRays(const Options& o) {
+  return o.directSamples > 0 ? o.emissionRays : 1.0;
+}
+
 // The default --queue: numEnvs x roundShots slots (admission shares the
 // free slots among the environments, so that is what lets each make a
 // whole round), but at most kAutoQueueShots an environment and
