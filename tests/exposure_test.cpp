@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -151,6 +152,44 @@ TEST(ExposureTest, OriginsLeaveFromTheOpenCellsOnly) {
     if ((open >> c) & 1u) {
       EXPECT_EQ(perCell[c], n * m / 9) << c;
     }
+  }
+}
+
+// A lamp hung 0.0015 below a unit ceiling patch (the Cornell lamp's 0.8 mm
+// in its 556 mm room) from x = edge on: the ceiling above it is buried,
+// measured on 8 x 8 points, and so is the slit within a 60-degree probe's
+// reach of the lamp's edge (one probe gets out there, the normal does not).
+TEST(ExposureTest, TheCeilingAboveALampHungJustBelowItIsBuried) {
+  for (const float edge : {0.9f, 0.9365f}) {
+    test::TempDir dir;
+    char obj[512];
+    const float h = 1.0f, gap = 0.0015f;
+    std::snprintf(obj, sizeof obj,
+                  "mtllib s.mtl\nusemtl white\n"
+                  "v 0 %g 0\nv 1 %g 0\nv 1 %g 1\nv 0 %g 1\nf 1 2 3 4\n"
+                  "usemtl lamp\n"
+                  "v %g %g -0.5\nv 1.5 %g -0.5\nv 1.5 %g 1.5\nv %g %g 1.5\nf 5 6 7 8\n",
+                  h, h, h, h, edge, h - gap, h - gap, h - gap, edge, h - gap);
+    test::WriteFile(dir.File("s.obj"), obj);
+    test::WriteFile(dir.File("s.mtl"),
+                    "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n");
+    EnvOptions eo;
+    eo.rayEpsilon = 1e-5f;
+    test::TestEnvs envs;
+    test::MakeTestEnvs(dir.File("s.obj").c_str(), EnvGrid{}, 1.0f, eo, &envs);
+    if (HasFatalFailure()) return;
+    const Environment& env = *envs.ptrs[0];
+    int ceilings = 0;
+    for (uint32_t i = 0; i < env.patches().size(); ++i) {
+      const Patch& p = env.patches()[i];
+      if (p.normal.y > -0.5f || std::fabs(p.corner[0].y - h) > 1e-6f) continue;
+      ++ceilings;
+      // Of the points at x = (a + 1/2) / 8, only a = 7 (x = 0.9375) lies over the lamp.
+      EXPECT_EQ(env.elementTree().exposed(i), 7.0f / 8.0f) << "lamp edge at x = " << edge;
+      // The cells along x hold two points each: the last is half buried, so closed.
+      EXPECT_EQ(__builtin_popcount(env.elementTree().open(i)), 12) << "lamp edge at x = " << edge;
+    }
+    EXPECT_EQ(ceilings, 1);
   }
 }
 

@@ -70,9 +70,11 @@ class Environment {
   void ComputeVertexRadiosity(const double ambient[3]);
   // Measures ElementTree::exposed for every leaf not yet measured
   // (exposure.cpp): of kExposureSide^2 points spread over the leaf, the
-  // share from which some probe ray reaches a front face or leaves the
-  // scene. A point from which every probe meets a back face first lies
-  // inside a closed solid, where no light arrives and no eye looks.
+  // share from which the normal probe ray, or two of the others, reach a
+  // front face or leave the scene. A point from which every probe meets a back face first lies
+  // inside a closed solid, where no light arrives and no eye looks; one
+  // from which a single probe gets out lies in a slit (a ceiling above a
+  // lamp hung just below it), lit next to nothing and seen by no eye.
   void MeasureExposure();
   // The same for patch i's leaves (Reset measures the roots, Receive a
   // split's children: SampleByPower's origins avoid their buried cells).
