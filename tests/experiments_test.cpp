@@ -88,6 +88,7 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   // and the ground-truth columns of the paper's tables; without, a clear line.
   EXPECT_NE(doc.find("## Against a path-traced ground truth"), std::string::npos);
   EXPECT_NE(doc.find("## Sun shadows against Cycles (issue 41)"), std::string::npos);
+  EXPECT_NE(doc.find("## An occluded room against Cycles (issue 41)"), std::string::npos);
   if (std::system("command -v blender > /dev/null 2>&1") != 0) {
     EXPECT_NE(doc.find("**Skipped**: blender not found"), std::string::npos);
     return;
@@ -157,6 +158,17 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
   EXPECT_EQ(sunImage.back()[0], "cycles");
   EXPECT_TRUE(IsNumber(sunImage.back()[6])) << sunImage.back()[6];
   EXPECT_NE(doc.find("| sill |"), std::string::npos);
+  // The occluded room against Cycles (issue 41): an error, the reference's
+  // noise and the estimate without it at each block size, then the times.
+  auto room = ReadCsv(dir.File("room.csv"));
+  ASSERT_EQ(room.size(), 1u + 2);  // blocks 1x1 and 4x4
+  for (size_t r = 1; r < room.size(); ++r)
+    for (int c : {2, 3, 4})
+      EXPECT_TRUE(IsNumber(room[r][c])) << "room.csv row " << r << ": '" << room[r][c] << "'";
+  EXPECT_EQ(room[1][0], "1x1");
+  auto roomTimes = ReadCsv(dir.File("room-times.csv"));
+  ASSERT_EQ(roomTimes.size(), 2u);
+  EXPECT_TRUE(IsNumber(roomTimes[1][0])) << roomTimes[1][0];
   // --max-seconds beside the fixed settings, drawn (issue 41).
   std::string anytime = ReadFile(dir.File("gt-anytime.png"));
   ASSERT_GT(anytime.size(), 8u);

@@ -14,7 +14,9 @@
   experiments, groundtruth   the steps of make experiments (docs/RESULTS.md);
              results_report writes it, gt_references and gt_report the ground truth's part,
              gt_silhouettes its errors without the 1-px silhouettes; sun_step the sun room
-             against Cycles (sunroom its geometry, sun_edge the shadow-edge width)
+             against Cycles (sunroom its geometry, sun_edge the shadow-edge width); room_step
+             make parallel's pillared room against Cycles, over pixel blocks (coarse, run
+             with /usr/bin/python3)
   checks     the checks of one output directory (make stability)
   fuzz       the Fuzzing section of docs/STABILITY.md (make fuzz-report)
   bench_runs, bench_parallel, bench_doc   make bench (bench/run): docs/BENCHMARKS.md

@@ -2,8 +2,8 @@
 what it needs (runs are cached by their command line under the runs
 directory) and writes its CSV tables and images into the results directory.
 Run them with tools/experiments [STEP...] [--quick] [--out DIR]: references,
-quality, timing, leak, error-time, closed-box, ground-truth, report, or all
-(the default)."""
+quality, timing, leak, error-time, closed-box, ground-truth, sun, room,
+report, or all (the default)."""
 
 import math
 import os
@@ -12,7 +12,7 @@ import subprocess
 import sys
 import time
 
-from . import ROOT, groundtruth, sun_step
+from . import ROOT, groundtruth, room_step, sun_step
 from .cli import parse
 from .cornell import ShadowRegion, region_patch_mean
 from .files import load_json, read_csv, read_pfm, write_csv, write_png
@@ -369,11 +369,12 @@ def meta_info(ctx, start, load_start, commit):
 
 STEPS = {"references": references, "quality": quality, "timing": timing, "leak": leak,
          "error-time": error_time, "closed-box": closed_box,
-         "ground-truth": groundtruth.ground_truth, "sun": sun_step.sun, "report": report}
+         "ground-truth": groundtruth.ground_truth, "sun": sun_step.sun, "room": room_step.room,
+         "report": report}
 
 
 ORDER = ["references", "quality", "leak", "error-time", "timing", "closed-box", "ground-truth",
-         "sun"]
+         "sun", "room"]
 
 
 def main(argv, doc):

@@ -6,7 +6,7 @@ import json
 import math
 import os
 
-from . import gt_report, sun_step
+from . import gt_report, room_step, sun_step
 from .files import csv_dicts, load_json, read_csv
 from .groundtruth import PERCENT, POINTS
 from .runner import log
@@ -207,6 +207,7 @@ def report(ctx, meta=None):
 
     gt_report.report_section(ctx, w, link, table_md)
     sun_step.report_section(ctx, w, table_md)
+    room_step.report_section(ctx, w, table_md)
 
     w("## Reading\n")
     res = [str(r) for r in s["table_res"]]

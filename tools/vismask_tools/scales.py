@@ -70,7 +70,10 @@ SCALES = {
                  # in a pixel the gather's rays leave from).
                  sun=dict(width=256, height=192, spp=1024,
                           runs=[("default", [], 1), ("direct-128", ["--direct-samples", "128"], 1),
-                                ("elements-0", ["--elements", "0"], 1), ("default-2x", [], 2)])),
+                                ("elements-0", ["--elements", "0"], 1), ("default-2x", [], 2)]),
+                 # The occluded room (room_step.py, issue 41): make parallel's room and
+                 # reference, one environment at the defaults; errors over k x k blocks.
+                 room=dict(width=384, height=192, spp=4096, options=[], blocks=[1, 2, 4, 8])),
     "quick": dict(common=CAMERA + ["--patch-size", "140", "--rays", "256", "--stop-unshot", "5e-2",
                          "--width", "48", "--height", "48"],
                  ref_b=["--rays", "1024", "--stop-unshot", "1e-2"],
@@ -88,7 +91,9 @@ SCALES = {
                          default=["--emitted-rays", "50000"], today_rays=256),
                  sun=dict(width=64, height=48, spp=16,
                           runs=[("default", ["--emitted-rays", "100000"], 1),
-                                ("default-2x", ["--emitted-rays", "100000"], 2)])),
+                                ("default-2x", ["--emitted-rays", "100000"], 2)]),
+                 room=dict(width=96, height=48, spp=16, options=["--emitted-rays", "100000"],
+                           blocks=[1, 4])),
 }
 
 
