@@ -36,3 +36,15 @@ def replace_marked(text, begin, end, lines, before):
         return text[:a] + new + text[b:]
     at = text.index(before)
     return text[:at] + new + "\n\n" + text[at:]
+
+
+def skipped(ctx, w, step, table_csv):
+    """For a step's section of RESULTS.md: when the step wrote STEP-skipped.txt
+    or not its table, writes why and returns True."""
+    import os
+    skip = ctx.result(f"{step}-skipped.txt")
+    if not os.path.exists(skip) and os.path.exists(ctx.result(table_csv)):
+        return False
+    why = open(skip).read().strip() if os.path.exists(skip) else f"no results (tools/experiments {step})"
+    w(f"**Skipped**: {why}.\n")
+    return True

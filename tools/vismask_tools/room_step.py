@@ -17,6 +17,7 @@ import subprocess
 from . import ROOT
 from .files import csv_dicts, load_json, write_csv
 from .gt_references import have_blender
+from .markdown import skipped
 from .runner import log, render, shown
 
 GOAL = 0.025  # issue 41: a room with pillars and walls, seen from inside, within 2.5%
@@ -104,10 +105,7 @@ def report_section(ctx, w, table_md):
     """The '## An occluded room against Cycles (issue 41)' section of RESULTS.md."""
     s = ctx.s["room"]
     w("## An occluded room against Cycles (issue 41)\n")
-    skip = ctx.result("room-skipped.txt")
-    if os.path.exists(skip) or not os.path.exists(ctx.result("room.csv")):
-        why = open(skip).read().strip() if os.path.exists(skip) else "no results (tools/experiments room)"
-        w(f"**Skipped**: {why}.\n")
+    if skipped(ctx, w, "room", "room.csv"):
         return
     opts = " ".join(s["options"]) or "(defaults)"
     w("Issue 41's goal: *occluded rooms: a room with pillars and walls, seen from inside, within "

@@ -12,6 +12,7 @@ import subprocess
 from . import ROOT, sun_edge, sunroom
 from .files import csv_dicts, load_json, read_pfm, read_pgm, write_csv, write_pfm
 from .gt_references import have_blender
+from .markdown import skipped
 from .images import rel_rmse
 from .runner import log, render, shown
 
@@ -129,10 +130,7 @@ def report_section(ctx, w, table_md):
     """The '## Sun shadows against Cycles (issue 41)' section of RESULTS.md."""
     s = ctx.s["sun"]
     w("## Sun shadows against Cycles (issue 41)\n")
-    skip = ctx.result("sun-skipped.txt")
-    if os.path.exists(skip) or not os.path.exists(ctx.result("sun-edges.csv")):
-        why = open(skip).read().strip() if os.path.exists(skip) else "no results (tools/experiments sun)"
-        w(f"**Skipped**: {why}.\n")
+    if skipped(ctx, w, "sun", "sun-edges.csv"):
         return
     size = f"`--camera {sunroom.CAMERA}`, {s['width']} × {s['height']} pixels"
     w("Issue 41's goal: *on a scene with the sun through a window, the width of the shadow edge "
