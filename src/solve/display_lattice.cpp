@@ -18,6 +18,7 @@ void DisplayLattice::Layout(Arena& arena, const Staged& staged, bool smoothing) 
   isCut_ = arena.Alloc<uint8_t>(n);
   outline_ = arena.Alloc<uint8_t>(n);
   frac_ = arena.Alloc<float>(n);
+  mark_ = arena.Alloc<uint8_t>(n);
   inward_ = arena.Alloc<glm::vec3>(n);
   interior_ = arena.Alloc<uint8_t>(smoothing ? n : 0);
   raw_ = arena.Alloc<glm::vec3>(smoothing ? 2 * n : 0);

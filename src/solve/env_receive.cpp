@@ -48,7 +48,7 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
   if (hits >= options_.elements.minHits && (hits & (hits - 1)) == 0 &&
       el.depth < options_.elements.maxDepth && options_.elements.perPatch > 0) {
     const ElementTree::Split split = elements_.MaybeSplit(p, leaf, path, depth);
-    if (split == ElementTree::Split::kSplit) MeasurePatchExposure(j);
+    if (split == ElementTree::Split::kSplit) MeasurePatchExposure(j, kFineExposure);
     stats_.splits += split == ElementTree::Split::kSplit;
     stats_.refusedSplits += split == ElementTree::Split::kRefused;
   }

@@ -61,6 +61,13 @@ class DisplayLattice {
     solvedDirect_[v] += weight * d;
   }
   void Finish(Span<const Patch> patches, int smoothSteps = 0);
+  // A mark per vertex for the environment's passes over its patches
+  // (Environment::MeasureExposure: the vertices of patches with a buried part).
+  void ClearMarks() {
+    for (uint8_t& m : mark_) m = 0;
+  }
+  void Mark(uint32_t v) { mark_[v] = 1; }
+  bool Marked(uint32_t v) const { return mark_[v] != 0; }
   // Whether the last Finish smoothed, and vertex v's value without it.
   bool smoothed() const { return smoothed_; }
   glm::vec3 Unsmoothed(uint32_t v) const { return smoothed_ ? raw_[v] : radiosity_[v]; }
@@ -115,6 +122,7 @@ class DisplayLattice {
   // scratch: the corner leaves' edge shares, the inward value.
   Span<uint8_t> outline_;
   Span<float> frac_;
+  Span<uint8_t> mark_;
   Span<glm::vec3> inward_;
   // Smoothing (laid out with it): at a vertex it smooths (its corners'
   // angles close around it and around each neighbour; not cut or smooth)

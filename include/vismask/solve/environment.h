@@ -76,9 +76,13 @@ class Environment {
   // from which a single probe gets out lies in a slit (a ceiling above a
   // lamp hung just below it), lit next to nothing and seen by no eye.
   void MeasureExposure();
-  // The same for patch i's leaves (Reset measures the roots, Receive a
-  // split's children: SampleByPower's origins avoid their buried cells).
-  void MeasurePatchExposure(uint32_t i);
+  // The same for patch i's leaves not yet measured, `fine` points to a side
+  // of each open-cell mask's cell (Reset measures the roots, Receive a
+  // split's children: SampleByPower's origins avoid their buried cells);
+  // whether it measured any.
+  bool MeasurePatchExposure(uint32_t i, int fine);
+  static constexpr int kFineExposure = 2;  // the points to a cell's side near a buried part
+  bool PartlyBuried(uint32_t i) const;
   // Leaf e's exposed area (its area until measured).
   float ExposedArea(uint32_t e) const {
     const float share = elements_.exposed(e);
