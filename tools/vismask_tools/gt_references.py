@@ -11,7 +11,7 @@ from . import ROOT
 from .cornell import SCENE
 from .files import load_json, read_pfm, read_pgm
 from .images import rel_rmse
-from .runner import log
+from .runner import log, shown
 from .scales import CAMERA, arg
 
 # The Cornell box's original camera (eye, target, up, vertical fov).
@@ -38,6 +38,18 @@ class Reference:
     def error(self, img, mask=None):
         keep = self.keep if mask is None else [k and m for k, m in zip(self.keep, mask)]
         return rel_rmse(img, self.px, keep)
+
+
+def cycles_halves(ctx, scene, camera, width, height, spp, out, extra=()):
+    """tools/reference's Cycles render of `scene` into `out` as two halves
+    (their difference gives its own noise), cached by tools/reference;
+    returns its json."""
+    cmd = [os.path.join(ROOT, "tools", "reference"), scene, "--camera", camera, "--size",
+           str(width), str(height), "--spp", str(spp), "--halves"] + list(extra) + [
+           "--quiet", "--out", out]
+    log("  " + shown(cmd))
+    subprocess.run(cmd, check=True, env=dict(os.environ, VISMASK_BIN=ctx.bin))
+    return load_json(out[:-4] + ".json")
 
 
 def render_reference(ctx, name, camera, size, spp):

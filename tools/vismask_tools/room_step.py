@@ -15,10 +15,10 @@ import os
 import subprocess
 
 from . import ROOT
-from .files import csv_dicts, load_json, write_csv
-from .gt_references import have_blender
+from .files import csv_dicts, write_csv
+from .gt_references import cycles_halves, have_blender
 from .markdown import skipped
-from .runner import log, render, shown
+from .runner import render
 
 GOAL = 0.025  # issue 41: a room with pillars and walls, seen from inside, within 2.5%
 TABLES = ("room.csv", "room-times.csv", "room-skipped.txt")
@@ -27,17 +27,6 @@ TABLES = ("room.csv", "room-times.csv", "room-skipped.txt")
 def camera():
     return subprocess.run([os.path.join(ROOT, "tools", "gen-pillars"), "--camera"], check=True,
                           capture_output=True, text=True).stdout.strip()
-
-
-def reference(scene, s, out):
-    """tools/reference's Cycles render of the room (two halves: its own
-    noise), cached by tools/reference."""
-    cmd = [os.path.join(ROOT, "tools", "reference"), scene, "--size", str(s["width"]),
-           str(s["height"]), "--spp", str(s["spp"]), "--halves", "--quiet", "--out", out,
-           "--camera", camera()]
-    log("  " + shown(cmd))
-    subprocess.run(cmd, check=True)
-    return load_json(out[:-4] + ".json")
 
 
 # coarse.py needs numpy: run with the system's python3 (tools/install-deps
@@ -74,7 +63,7 @@ def room(ctx):
     scene = os.path.join(d, "pillars.obj")
     subprocess.run([os.path.join(ROOT, "tools", "gen-pillars"), "--out", scene], check=True)
     ref = os.path.join(d, "cycles.pfm")
-    meta = reference(scene, s, ref)
+    meta = cycles_halves(ctx, scene, camera(), s["width"], s["height"], s["spp"], ref)
     args = ["--width", str(s["width"]), "--height", str(s["height"]), "--camera", camera()]
     args += list(s["options"]) + ["--reference", ref, "--exclude", ref[:-4] + ".mask.pgm"]
     j = render(scene, args, os.path.join(d, "one"), binary=ctx.bin)

@@ -7,14 +7,13 @@ Tables: sun-edges.csv, sun-image.csv (or sun-skipped.txt without blender)."""
 
 import math
 import os
-import subprocess
 
-from . import ROOT, sun_edge, sunroom
-from .files import csv_dicts, load_json, read_pfm, read_pgm, write_csv, write_pfm
-from .gt_references import have_blender
+from . import sun_edge, sunroom
+from .files import csv_dicts, read_pfm, read_pgm, write_csv, write_pfm
+from .gt_references import cycles_halves, have_blender
 from .markdown import skipped
 from .images import rel_rmse
-from .runner import log, render, shown
+from .runner import render
 
 GOAL_EDGE, GOAL_IMAGE = 1.5, 0.03  # issue 41: edge width within 1.5x of Cycles'; image within 3%
 TABLES = ("sun-edges.csv", "sun-image.csv", "sun-skipped.txt")
@@ -24,12 +23,8 @@ def reference(ctx, scene, s):
     """tools/reference's Cycles render of the room under the same sun (two
     halves: its own noise), cached by tools/reference."""
     out = os.path.join(ctx.runs, "sun", "cycles.pfm")
-    cmd = [os.path.join(ROOT, "tools", "reference"), scene, "--camera", sunroom.CAMERA,
-           "--size", str(s["width"]), str(s["height"]), "--spp", str(s["spp"]), "--halves",
-           "--sun", sunroom.sun_arg(), "--quiet", "--out", out]
-    log("  " + shown(cmd))
-    subprocess.run(cmd, check=True, env=dict(os.environ, VISMASK_BIN=ctx.bin))
-    return out, load_json(out[:-4] + ".json")
+    return out, cycles_halves(ctx, scene, sunroom.CAMERA, s["width"], s["height"], s["spp"], out,
+                              ["--sun", sunroom.sun_arg()])
 
 
 def options(extra, k):

@@ -69,20 +69,16 @@ class Environment {
   // area, and weighs that much in its vertices' means.
   void ComputeVertexRadiosity(const double ambient[3]);
   // Measures ElementTree::exposed for every leaf not yet measured
-  // (exposure.cpp): of kExposureSide^2 points spread over the leaf, the
-  // share from which the normal probe ray, or two of the others, reach a
-  // front face or leave the scene. A point from which every probe meets a back face first lies
-  // inside a closed solid, where no light arrives and no eye looks; one
-  // from which a single probe gets out lies in a slit (a ceiling above a
-  // lamp hung just below it), lit next to nothing and seen by no eye.
+  // (exposure.cpp): of the points spread over the leaf (one to each cell
+  // of its open-cell mask, kFineExposure^2 near a buried part), the share
+  // from which the normal probe ray, or two of the others, reach a front
+  // face or leave the scene. A point from which every probe meets a back
+  // face first lies inside a closed solid, where no light arrives and no
+  // eye looks; one from which a single probe gets out lies in a slit (a
+  // ceiling above a lamp hung just below it), lit next to nothing and seen
+  // by no eye. Reset measures the roots, Receive a split's children:
+  // SampleByPower's origins avoid their buried cells.
   void MeasureExposure();
-  // The same for patch i's leaves not yet measured, `fine` points to a side
-  // of each open-cell mask's cell (Reset measures the roots, Receive a
-  // split's children: SampleByPower's origins avoid their buried cells);
-  // whether it measured any.
-  bool MeasurePatchExposure(uint32_t i, int fine);
-  static constexpr int kFineExposure = 2;  // the points to a cell's side near a buried part
-  bool PartlyBuried(uint32_t i) const;
   // Leaf e's exposed area (its area until measured).
   float ExposedArea(uint32_t e) const {
     const float share = elements_.exposed(e);
@@ -143,6 +139,14 @@ class Environment {
   uint32_t numOutside() const { return outside_.size(); }
 
  private:
+  // MeasureExposure's parts (exposure.cpp): patch i's leaves not yet
+  // measured, `fine` points to a side of each open-cell mask's cell
+  // (whether it measured any); whether a leaf of patch i is buried in part
+  // or whole.
+  static constexpr int kFineExposure = 2;  // the points to a cell's side near a buried part
+  bool MeasurePatchExposure(uint32_t i, int fine);
+  bool PartlyBuried(uint32_t i) const;
+
   struct Staged;     // the heap copies between Prepare and Build (environment.cpp)
   struct ShotTally;  // what a shot's rays did here, booked once a shot (trace.cpp)
 
