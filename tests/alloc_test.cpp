@@ -267,6 +267,16 @@ TEST(AllocTest, PowerAllocationRefinementAndCutsAllocateNothing) {
   EXPECT_EQ(run.Json().find("\"splits\": 0,"), std::string::npos) << "no element split";
 }
 
+TEST(AllocTest, PacedMaxSecondsAllocatesNothing) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  // --max-seconds's plan and its pacing (pace.h), which re-plans the ray
+  // quantum between rounds.
+  CountedRender run("scenes/cornell.obj", "--max-seconds 0.2 --width 32 --height 32");
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_NE(run.Json().find("\"emitted_rays_paced\""), std::string::npos) << "not paced";
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
+}
+
 TEST(AllocTest, OriginsByPowerAllocateNothing) {
   SKIP_WITHOUT_ALLOC_HOOKS();
   // One environment: once elements split, a patch's rays leave from its

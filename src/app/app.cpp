@@ -126,6 +126,30 @@ void PlanBudget(RunState* r, const PlanRate& known) {
   o.emittedRaysPlanned = true;
 }
 
+// A planned solve in one environment, without checkpoints, is paced
+// (pace.h) to converge by kPaceEnd of --max-seconds: on the Cornell box at
+// 0.3, 1 and 3 s the paced solves ended within 0.5% of T of one another
+// (at 0.93, 0.96 and 0.97 of it with the tail paid first), against 77-81%
+// planned alone.
+constexpr double kPaceEnd = 0.97;
+
+bool Paces(const RunState& r) {
+  const Options& o = r.options;
+  return o.emittedRaysPlanned && r.envPtrs.size() == 1 && r.transport->size() == 1 &&
+         o.checkpointDir.empty() && o.resumeDir.empty();
+}
+
+PaceInput PaceInputOf(const RunState& r) {
+  PaceInput in;
+  in.endSeconds = kPaceEnd * r.options.maxSeconds;
+  in.stopUnshot = r.options.stopUnshot;
+  if (!r.envPtrs.empty() && r.envPtrs[0]->totalArea() > 0.0)
+    in.rho = std::fmin(r.envPtrs[0]->kdArea() / r.envPtrs[0]->totalArea(), 0.95);
+  if (!r.envPtrs.empty())
+    in.tailRays = TailRays(double(r.envPtrs[0]->patches().size()), r.options.minRays, in.rho);
+  return in;
+}
+
 }  // namespace
 
 // vismask compare A.pfm B.pfm: the relative RMSE of A against B over all
@@ -387,12 +411,18 @@ int Main(int argc, const char* const* argv) {
   if (!r->options.reference.empty()) so.probe = &probe;
   so.errorEvery = r->options.errorEvery;
   if (checkpointing) so.hook = &r->checkpoints;
+  Pacer pacer(PaceInputOf(*r));
+  if (Paces(*r)) so.pacer = &pacer;
   if (r->checkpoints.resumed()) so.resume = &r->resumeState;
   SolveResult res =
       Solve(Span<Environment* const>(r->envPtrs.data(), r->envPtrs.size()), r->rankEnvs,
             r->transport.get(), &r->exchange, so, r->isRoot() ? &r->convergence : nullptr);
   // Past the solve a signal ends the run at once again (the outputs' commit defers it).
   if (checkpointing) os::DeferInterrupts(false);
+  // The emitted rays the paced quantum came to (run.json).
+  if (so.pacer && pacer.updates() > 0)
+    r->options.emittedRaysPaced =
+        static_cast<uint64_t>(static_cast<double>(r->options.emittedRays) / pacer.scale());
   const int early = EndedEarly(r.get(), res);
   if (early >= 0) return early;
   SetPhase(Phase::kOutput);

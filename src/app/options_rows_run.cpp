@@ -114,13 +114,13 @@ stop when unshot power < F * emitted power, 0 <= F < 1
 stop after T seconds of solving (default: no limit;
 a time limit makes the result depend on speed).
 Without --emitted-rays (one rank, power allocation)
-it plans them: the rays a solve that ends within
-about T can afford, from the rays per second timed
-through the scene's grid at init (run.json:
-emitted_rays, emitted_rays_planned); and without
---patch-size, larger patches where T is too short
-for the automatic ones' tail or their indirect
-noise (run.json: patch_size, patch_size_planned))")
+it plans them from the rays per second timed at
+init (run.json: emitted_rays_planned), and in one
+environment paces the solve to end near T, its
+rays per unit power re-planned as it goes (run.json:
+emitted_rays_paced); without --patch-size, larger
+patches where T is too short for the automatic
+ones (run.json: patch_size_planned))")
           .Usage()
           .Json("max_seconds"),
   };

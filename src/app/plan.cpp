@@ -36,17 +36,16 @@ constexpr double kReplan = 1.5;
 // patches going as the square root of the rays.
 constexpr double kRaysPerPatch = 3000.0;
 
-// The rays a converging solve's tail of small shots traces on the mesh.
-double TailRays(const PlanInput& in) {
-  return kTailShotsPerPatch * in.patches * in.minRays / (1.0 - in.rho);
-}
-
 // The rays the solve traces, as the patch size's plan counts them.
 double TracedRays(const PlanInput& in) {
   return kPlanShare * in.rate * in.seconds;
 }
 
 }  // namespace
+
+double TailRays(double patches, uint32_t minRays, double rho) {
+  return kTailShotsPerPatch * patches * minRays / (1.0 - rho);
+}
 
 double PlannedPatches(const PlanInput& in) {
   if (!(in.rate > 0.0) || !(in.patches > 0.0) || !(in.seconds > 0.0)) return 0.0;
@@ -58,7 +57,7 @@ double PlannedPatches(const PlanInput& in) {
 }
 
 uint64_t PlannedEmittedRays(const PlanInput& in) {
-  const double tail = TailRays(in);
+  const double tail = TailRays(in.patches, in.minRays, in.rho);
   const double share = in.oneEnvironment ? kFillShare : kPlanShare;
   // An emitted ray's worth leads to F + rho / (1 - rho) rays traced (F:
   // --emission-rays, its own shots; then the reflected power's, which

@@ -54,6 +54,11 @@ void EmittedRays(Fields& f, const Context& c) {
   f.Key("emitted_rays").Printf("%llu", static_cast<unsigned long long>(c.o.emittedRays));
   // Only when --max-seconds planned --emitted-rays (its value is the plan).
   if (c.o.emittedRaysPlanned) f.Bool("emitted_rays_planned", true);
+  // Only when the solve was paced (pace.h): the --emitted-rays its last
+  // ray quantum is worth (the plan's over the quantum's last scale).
+  if (c.o.emittedRaysPaced > 0)
+    f.Key("emitted_rays_paced")
+        .Printf("%llu", static_cast<unsigned long long>(c.o.emittedRaysPaced));
 }
 void Exposure(Fields& f, const Context& c) {
   f.Key("exposure").Printf("%.9g", c.exposure);

@@ -39,6 +39,7 @@ struct Options {
   bool hasEmittedRays = false;      // --emitted-rays given (else --max-seconds may plan it)
   bool hasEmissionRays = false;     // --emission-rays given (else ResolveEmissionRays)
   bool emittedRaysPlanned = false;  // --max-seconds chose emittedRays (app.cpp, PlanBudget)
+  uint64_t emittedRaysPaced = 0;    // the emitted rays the paced solve's last quantum came to
   bool patchSizePlanned = false;    // --max-seconds chose patchSize (app.cpp, PlanPatchSize)
   bool initAgain = false;           // init made again (the planned patch size): warnings said once
   uint64_t emittedRays = 4000000;   // --emitted-rays: the rays the emitted power is worth (power)

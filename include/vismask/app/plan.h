@@ -44,4 +44,8 @@ double PlannedPatches(const PlanInput& in);
 // share of the budget, never more than the default.
 uint64_t PlannedEmittedRays(const PlanInput& in);
 
+// The rays of a converging solve's tail of small shots on `patches`
+// patches: about two shots a patch at --min-rays each, per bounce.
+double TailRays(double patches, uint32_t minRays, double rho);
+
 }  // namespace vismask

@@ -133,6 +133,7 @@ class Environment {
   double TimeRays(uint32_t rays) const;
   double rayQuantum() const { return options_.rayQuantum; }
   void SetRayQuantum(double q) { options_.rayQuantum = q; }
+  double emissionRays() const { return options_.emissionRays; }
   // Test hooks: the top local shooter, any unshot power, the outside shooters.
   uint32_t TopShooter() const { return tree_.Top(); }
   bool HasLocalUnshot() const;

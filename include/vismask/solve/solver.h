@@ -18,6 +18,7 @@
 #include "vismask/parallel/transport.h"
 #include "vismask/solve/environment.h"
 #include "vismask/solve/exchange.h"
+#include "vismask/solve/pace.h"
 
 namespace vismask {
 
@@ -73,7 +74,10 @@ struct SolveOptions {
   // --correct-unshot's choice of what the estimate is of.
   double stopError = 0.0;
   bool correctUnshot = false;
-  RoundHook* hook = nullptr;           // --checkpoint
+  RoundHook* hook = nullptr;  // --checkpoint
+  // --max-seconds's pacing (pace.h; one environment on one rank): after
+  // each round it may re-plan the environment's ray quantum.
+  Pacer* pacer = nullptr;
   const SolveState* resume = nullptr;  // --resume: the state the checkpoint saved
 };
 
