@@ -451,9 +451,7 @@ TEST(DirectTest, MaxSecondsPlansTheEmittedRays) {
   };
   std::string planned = json("");
   EXPECT_NE(planned.find("\"emitted_rays_planned\": true"), std::string::npos);
-  size_t at = planned.find("\"emitted_rays\": ");
-  ASSERT_NE(at, std::string::npos);
-  long rays = std::atol(planned.c_str() + at + 16);
+  const double rays = test::JsonNumber(planned, "emitted_rays", "options");
   EXPECT_GE(rays, 10000);
   EXPECT_LT(rays, 4000000);
   std::string given = json("--emitted-rays 300000");

@@ -111,19 +111,21 @@ float PlanPatchSize(const RunState& r, PlanRate* measured) {
 // a plan made for a longer one. In one environment, a budget longer than a
 // default solve's plans more rays than the default: the time asked for is
 // spent (several environments: never more than the default; plan.h).
-// `known`: the rate PlanPatchSize timed on this mesh, if it did.
-void PlanBudget(RunState* r, const PlanRate& known) {
+// `known`: the rate PlanPatchSize timed on this mesh, if it did. Returns
+// the rate it planned with (none when it did not plan).
+PlanRate PlanBudget(RunState* r, const PlanRate& known) {
   Options& o = r->options;
-  if (!Plans(*r)) return;
+  if (!Plans(*r)) return PlanRate{};
   const PlanRate p = known.rate > 0.0 ? known : MeasureRate(*r);
-  if (!(p.rate > 0.0)) return;
+  if (!(p.rate > 0.0)) return PlanRate{};
   const uint64_t planned = PlannedEmittedRays(PlanInputOf(o, p, r->envPtrs.size()));
-  if (planned == o.emittedRays) return;
+  if (planned == o.emittedRays) return PlanRate{};
   for (Environment* env : r->envPtrs)
     env->SetRayQuantum(env->rayQuantum() * static_cast<double>(o.emittedRays) /
                        static_cast<double>(planned));
   o.emittedRays = planned;
   o.emittedRaysPlanned = true;
+  return p;
 }
 
 // A planned solve in one environment, without checkpoints, is paced
@@ -139,14 +141,15 @@ bool Paces(const RunState& r) {
          o.checkpointDir.empty() && o.resumeDir.empty();
 }
 
-PaceInput PaceInputOf(const RunState& r) {
+// The pace of a solve planned with `planned` (PlanBudget): its reflectance
+// and tail as the plan counted them.
+PaceInput PaceInputOf(const Options& o, const PlanRate& planned) {
+  const PlanInput plan = PlanInputOf(o, planned, 1);
   PaceInput in;
-  in.endSeconds = kPaceEnd * r.options.maxSeconds;
-  in.stopUnshot = r.options.stopUnshot;
-  if (!r.envPtrs.empty() && r.envPtrs[0]->totalArea() > 0.0)
-    in.rho = std::fmin(r.envPtrs[0]->kdArea() / r.envPtrs[0]->totalArea(), 0.95);
-  if (!r.envPtrs.empty())
-    in.tailRays = TailRays(double(r.envPtrs[0]->patches().size()), r.options.minRays, in.rho);
+  in.endSeconds = kPaceEnd * o.maxSeconds;
+  in.stopUnshot = o.stopUnshot;
+  in.rho = plan.rho;
+  in.tailRays = TailRays(plan.patches, plan.minRays, plan.rho);
   return in;
 }
 
@@ -403,7 +406,7 @@ int Main(int argc, const char* const* argv) {
   }
   r->initSeconds = os::Seconds() - start;
 
-  PlanBudget(r.get(), rate);
+  const PlanRate planned = PlanBudget(r.get(), rate);
 
   SetPhase(Phase::kSolve);
   SolveOptions so = SolveOptionsOf(r->options);
@@ -411,7 +414,7 @@ int Main(int argc, const char* const* argv) {
   if (!r->options.reference.empty()) so.probe = &probe;
   so.errorEvery = r->options.errorEvery;
   if (checkpointing) so.hook = &r->checkpoints;
-  Pacer pacer(PaceInputOf(*r));
+  Pacer pacer(PaceInputOf(r->options, planned));
   if (Paces(*r)) so.pacer = &pacer;
   if (r->checkpoints.resumed()) so.resume = &r->resumeState;
   SolveResult res =

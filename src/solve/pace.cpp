@@ -54,8 +54,7 @@ void Pacer::AfterRound(const RoundTotals& t, Environment* env) {
   const double rho = shot > kMeasuredRho * t.emitted && reflected >= 0.0
                          ? std::fmin(reflected / shot, 0.95)
                          : in_.rho;
-  const double worth =
-      WorthLeft(t.unshot, e, env->emissionRays(), rho, in_.stopUnshot * t.emitted);
+  const double worth = WorthLeft(t.unshot, e, env->emissionRays(), rho, in_.stopUnshot * t.emitted);
   const double q = Quantum(worth, rate_, left);
   if (!(q > 0.0)) return;
   const double now = env->rayQuantum();

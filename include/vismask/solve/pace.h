@@ -13,7 +13,6 @@
 #pragma once
 #include <cstdint>
 
-#include "vismask/core/span.h"
 #include "vismask/solve/exchange.h"
 
 namespace vismask {
