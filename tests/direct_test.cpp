@@ -432,7 +432,11 @@ TEST(DirectTest, EmissionTracesItsShareOfTheRays) {
   EXPECT_NE(json.find("\"emission_rays\": 1,"), std::string::npos);
   EXPECT_EQ(run("", &json), quarter);
   EXPECT_NE(json.find("\"emission_rays\": 0.25"), std::string::npos);
+  // Several environments: a quarter too where their pixels gather every
+  // environment's emitters (--foreign-mask-res, the default), else 1.
   run("--envs 2", &json);
+  EXPECT_NE(json.find("\"emission_rays\": 0.25"), std::string::npos);
+  run("--envs 2 --foreign-mask-res 0", &json);
   EXPECT_NE(json.find("\"emission_rays\": 1,"), std::string::npos);
 }
 

@@ -217,22 +217,22 @@ TEST(RenderTest, RoundSizeDefaults) {
   };
   const Case cases[] = {
       {{"--envs", "1"}, 1, false, 0},
-      // 6 packets a shot in 512 KiB: Method R's (the default) 128 + 8192/8
-      // bytes, 75; B's (--mask-res alone selects it) 128 + 4R^2/8 bytes
-      // (padded to 8), 266 at R = 20 (so the cap of 256), 17 at R = 100.
-      {{"--envs", "2"}, 75, true, 0},
-      {{"--envs", "2", "--mask-res", "20"}, 256, true, 0},
-      {{"--envs", "auto:4"}, 75, true, 0},
+      // 6 packets a shot in 512 KiB: Method R's (the default) 144 + 8192/8
+      // bytes, 74; B's (--mask-res alone selects it) 144 + 4R^2/8 bytes
+      // (padded to 8), 254 at R = 20, 16 at R = 100.
+      {{"--envs", "2"}, 74, true, 0},
+      {{"--envs", "2", "--mask-res", "20"}, 254, true, 0},
+      {{"--envs", "auto:4"}, 74, true, 0},
       {{"--envs", "2", "--round-shots", "8"}, 8, false, 0},
       {{"--envs", "2", "--round-shots", "1"}, 1, false, 0},
       // --round-work alone: the automatic shot limit (the outbox's cap too).
-      {{"--envs", "2", "--round-work", "5000"}, 75, false, 5000},
-      {{"--envs", "2", "--round-work", "0"}, 75, false, 0},
-      {{"--envs", "2", "--round-work", "5000", "--mask-res", "20"}, 256, false, 5000},
+      {{"--envs", "2", "--round-work", "5000"}, 74, false, 5000},
+      {{"--envs", "2", "--round-work", "0"}, 74, false, 0},
+      {{"--envs", "2", "--round-work", "5000", "--mask-res", "20"}, 254, false, 5000},
       {{"--envs", "2", "--round-work", "7", "--round-shots", "3"}, 3, false, 7},
-      {{"--envs", "1", "--round-work", "9"}, 75, false, 9},
-      {{"--envs", "2", "--mask-method", "B"}, 63, true, 0},
-      {{"--envs", "2", "--mask-res", "100"}, 17, true, 0},
+      {{"--envs", "1", "--round-work", "9"}, 74, false, 9},
+      {{"--envs", "2", "--mask-method", "B"}, 62, true, 0},
+      {{"--envs", "2", "--mask-res", "100"}, 16, true, 0},
   };
   for (const Case& c : cases) {
     Options o;
@@ -297,8 +297,8 @@ TEST(RenderTest, QueueDefaults) {
   const uint64_t packet50 = PacketBytes(MaskShapeOf(MaskMethod::kB, 50, Options().maxRays));
   const Case cases[] = {
       {{"--envs", "1"}, 64},
-      {{"--envs", "2"}, 2 * 64},  // R's 75 shots a round, at most 64 an environment
-      {{"--envs", "2", "--mask-method", "B"}, 2 * 63},
+      {{"--envs", "2"}, 2 * 64},  // R's 74 shots a round, at most 64 an environment
+      {{"--envs", "2", "--mask-method", "B"}, 2 * 62},
       {{"--envs", "2", "--round-shots", "1"}, 64},
       {{"--envs", "4x1x4", "--mask-res", "8"}, 16 * 64},  // at most 64 an environment
       {{"--envs", "4x1x4", "--mask-res", "20"}, 16 * 64},

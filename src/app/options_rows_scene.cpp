@@ -145,6 +145,17 @@ hemisphere mask resolution (A, B, C): R rows (theta) x
 without --mask-method it selects B)")
           .Envs()
           .Json("mask_res"),
+      Count("--foreign-mask-res", &O::foreignMaskRes, 0, 256, "an integer in [0, 256]")
+          .Help("R", R"(
+several environments, with --direct-samples: the
+pixels gather every environment's emitters, the part
+of a shadow ray in another environment read from that
+environment's transit mask for the emitter patch, R x
+4R directions from its centre (docs/design/direct-
+light.md); 0: each gathers only its own emitters, the
+others' light shown from the solve. Default 32)")
+          .Envs()
+          .Json("foreign_mask_res"),
       Count("--round-shots", &O::roundShots, 1, 1e6, "an integer in [1, 1e6]")
           .Given(&O::hasRoundShots)
           .Help("K", R"(

@@ -346,6 +346,7 @@ void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepar
   e.indirectFilter = o.indirectFilter;
   e.directSamples = o.directSamples > 0 ? static_cast<uint32_t>(o.directSamples) : 0;
   e.emissionRays = SolveEmissionRays(o);
+  e.gatherForeign = p->grid.count() > 1 && GathersForeign(o);
   p->packetBytes =
       p->grid.count() > 1 ? PacketBytes(MaskShapeOf(o.maskMethod, o.maskRes, RayCap(o))) : 0;
 }

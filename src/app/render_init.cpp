@@ -141,6 +141,49 @@ int LoadRank(RunState* r, const InitBudget& b, Prepared* p) {
   return kExitOk;
 }
 
+// The light of every environment's emitters and the transit masks: this
+// rank's environments cast theirs, every rank gets all. Collective.
+void BuildForeignLight(RunState* r, const EnvGrid& envGrid) {
+  if (r->foreignCounts.emitters == 0) return;
+  const int ranks = r->transport->size();
+  const uint32_t total = r->rankEnvs.total;
+  r->foreign.Build(
+      r->foreignStaged, envGrid, [&](uint32_t env) { return RankOfEnv(env, total, ranks); },
+      [&](int rank) { return EnvsOfRank(total, ranks, rank).first; });
+  std::vector<EmitterRecord>().swap(r->foreignStaged);
+  for (size_t k = 0; k < r->envPtrs.size(); ++k) {
+    Environment& env = *r->envPtrs[k];
+    env.UncountedOnGrid([&](const Grid& grid) {
+      r->foreign.Cast(env.index(), static_cast<uint32_t>(k), grid, env.rayEpsilon(),
+                      [&](uint32_t i) { return env.twinOf(i); });
+    });
+  }
+  Span<float> mine = r->foreign.mine();
+  r->transport->AllGather(mine.data(), mine.bytes(), r->foreign.all().data());
+}
+
+// Several environments gathering every environment's emitters
+// (foreign_light.h): every rank's emitter patches, each rank's block
+// padded to `most`, into r->foreignStaged in global id order, and the
+// counts the light and masks need. Collective (every rank has the same
+// options and environment count, so all or none come here).
+int GatherEmitters(RunState* r, uint64_t most) {
+  const Options& o = r->options;
+  if (r->rankEnvs.total <= 1 || !GathersForeign(o) || most == 0) return kExitOk;
+  const int ranks = r->transport->size();
+  std::vector<EmitterRecord> mine, all(most * size_t(ranks));
+  AppendEmitters(r->envs, &mine);
+  const size_t real = mine.size();
+  mine.resize(most);
+  for (size_t n = real; n < mine.size(); ++n) mine[n].env = kNoPatch;  // padding
+  r->transport->AllGather(mine.data(), mine.size() * sizeof(EmitterRecord), all.data());
+  std::vector<EmitterRecord>& staged = r->foreignStaged;
+  for (const EmitterRecord& e : all)
+    if (e.env != kNoPatch) staged.push_back(e);
+  r->foreignCounts = ForeignCountsOf(o, r->rankEnvs.total, ranks, r->rankEnvs.perRank, &staged);
+  return kExitOk;
+}
+
 // Every rank reaches this collective, whether its load succeeded or not:
 // each learns the others' status and shared-vertex counts (every block
 // of the exchange is as large as the largest rank's). The first failing
@@ -153,9 +196,13 @@ int GatherLoads(RunState* r, int code, GlbMesh* exportMesh) {
     uint64_t twins;
     uint64_t vertices;   // --export: lattice vertices
     uint64_t triangles;  // and triangles (a quad patch gives two)
+    uint64_t emitters;   // emitter patches (GatherEmitters)
   };
-  LoadReport mine{code, 0, 0, 0, 0, 0};
+  LoadReport mine{code, 0, 0, 0, 0, 0, 0};
+  uint64_t emitters = 0;  // the most emitter patches a rank holds
   for (auto& e : r->envs) {
+    for (const Patch& p : e->preparedPatches())
+      mine.emitters += p.ke.r > 0.0f || p.ke.g > 0.0f || p.ke.b > 0.0f ? 1 : 0;
     mine.shared += e->lattice().numShared();
     mine.smooth += e->lattice().smoothVertices().size();
     mine.twins += e->numTwins();
@@ -171,8 +218,9 @@ int GatherLoads(RunState* r, int code, GlbMesh* exportMesh) {
     r->numTwins += k.twins;
     exportMesh->vertices += k.vertices;
     exportMesh->triangles += k.triangles;
+    emitters = std::max(emitters, k.emitters);
   }
-  return kExitOk;
+  return GatherEmitters(r, emitters);
 }
 
 // Rank 0's output directory: made, locked, an interrupted commit finished,
@@ -362,6 +410,7 @@ int Init(RunState* r) {
     map->texels = texels;
     std::vector<float>().swap(map->staged);
   }
+  BuildForeignLight(r, p.grid);
   r->envFb.Clear();  // kept clear between uses (RenderImage clears only what it drew)
   if (!r->isRoot()) return kExitOk;
   for (size_t i = 0; i < r->reference.size(); ++i) r->reference[i] = ref.pixels[i];

@@ -159,6 +159,12 @@ struct RunState {
   uint64_t sharedCapacity = 0;  // the most shared vertices any rank's environments hold
   bool anySmooth = false;       // some rank has smooth vertices
   ShareRule shareRule;
+  // Several environments gathering every environment's emitters
+  // (foreign_light.h): the light and the transit masks, their counts, and
+  // the emitter records gathered at init (freed once built).
+  ForeignLight foreign;
+  ForeignLight::Counts foreignCounts;
+  std::vector<EmitterRecord> foreignStaged;
   TextureSet textures;  // the textures this rank's patches show (texture.h)
   // Every scene texture, for run.json (read-only after init).
   struct TextureInfo {
@@ -218,6 +224,7 @@ struct RunState {
     sharedMine = arena.Alloc<VertexRecord>(sharedCapacity);
     sharedAll = arena.Alloc<VertexRecord>(size_t(ranks) * sharedCapacity);
     sharedScratch = arena.Alloc<uint32_t>(anySmooth ? 2 * size_t(ranks) * sharedCapacity : 0);
+    if (foreignCounts.emitters > 0) foreign.Layout(arena, foreignCounts);
     part(&rankImageBytes);
     textures.Layout(arena, sceneTextures, used);
     part(&rankTextureBytes);
@@ -257,6 +264,30 @@ void GatherByEnv(RunState* r, Span<T> mine, Span<T> all, Span<T> byEnv) {
     for (uint32_t i = 0; i < re.count; ++i)
       byEnv[re.first + i] = all[size_t(k) * r->rankEnvs.perRank + i];
   }
+}
+
+// Several environments gathering every environment's emitters
+// (foreign_light.h): the emitter patches of `envs` (prepared or built)
+// appended to *out, with their environments and local indices.
+template <class Envs>
+void AppendEmitters(const Envs& envs, std::vector<EmitterRecord>* out) {
+  for (const auto& e : envs) {
+    Span<const Patch> patches = e->preparedPatches();
+    for (uint32_t i = 0; i < patches.size(); ++i) {
+      const glm::vec3& ke = patches[i].ke;
+      if (ke.r > 0.0f || ke.g > 0.0f || ke.b > 0.0f)
+        out->push_back(EmitterRecord{patches[i], e->index(), i});
+    }
+  }
+}
+// *all in global id order, and the counts the light and masks need.
+inline ForeignLight::Counts ForeignCountsOf(const Options& o, uint32_t envs, int ranks,
+                                            uint32_t perRank, std::vector<EmitterRecord>* all) {
+  std::sort(all->begin(), all->end(), [](const EmitterRecord& a, const EmitterRecord& b) {
+    return a.patch.globalId < b.patch.globalId;
+  });
+  if (envs <= 1 || !GathersForeign(o) || all->empty()) return ForeignLight::Counts{};
+  return ForeignLight::Count(*all, envs, static_cast<uint32_t>(ranks), perRank, o.foreignMaskRes);
 }
 
 inline int Fail(const Status& s) {

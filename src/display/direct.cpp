@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "vismask/core/check.h"
+#include "vismask/display/foreign_light.h"
 #include "vismask/solve/rng.h"
 
 namespace vismask {
@@ -189,8 +190,30 @@ void DirectLight::Build(Span<const Patch> patches) {
   }
   CHECK(np == emitters_.size() && ne == edges_.size());
   CHECK(plan.corners.size() == corners_.size());
-  for (size_t k = 0; k < corners_.size(); ++k)
-    corners_[k] = Corner{plan.corners[k], plan.cornerGroup[k]};
+  for (size_t k = 0; k < corners_.size(); ++k) {
+    // The group's patch with this corner (the first; the nearest centre
+    // if none has it exactly).
+    const Group& g = groups_[plan.cornerGroup[k]];
+    uint32_t best = emitters_[g.firstPatch].patch;
+    float bestD = std::numeric_limits<float>::infinity();
+    for (uint32_t j = g.firstPatch; j < g.firstPatch + g.numPatches && bestD > 0.0f; ++j) {
+      const Patch& p = patches[emitters_[j].patch];
+      glm::vec3 c(0.0f);
+      for (uint32_t m = 0; m < p.numCorners; ++m) {
+        c += p.corner[m];
+        if (p.corner[m] == plan.corners[k]) {
+          best = emitters_[j].patch;
+          bestD = 0.0f;
+        }
+      }
+      const float d = glm::length(c / static_cast<float>(p.numCorners) - plan.corners[k]);
+      if (d < bestD) {
+        bestD = d;
+        best = emitters_[j].patch;
+      }
+    }
+    corners_[k] = Corner{plan.corners[k], plan.cornerGroup[k], best};
+  }
 }
 
 glm::vec3 DirectLight::PointOn(const Patch& p, float split, glm::vec2 u) {
@@ -278,12 +301,12 @@ glm::vec3 DirectLight::UnoccludedSun(const glm::vec3& n) const {
 
 bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                          const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
-                         uint32_t* hint, glm::vec3* weight, float sunShare,
-                         uint32_t* source) const {
+                         uint32_t* hint, glm::vec3* weight, float sunShare, uint32_t* source,
+                         uint32_t viewer) const {
   uint32_t unused;
   source = source ? source : &unused;
   if (!(sunShare > 0.0f))
-    return SampleArea(grid, receiver, twin, x, n, u, tally, epsilon, hint, weight, source);
+    return SampleArea(grid, receiver, twin, x, n, u, tally, epsilon, hint, weight, source, viewer);
   // The kind from u.x (the sun below sunShare), u.x stretched back to
   // [0, 1) within it; the weight over the kind's share.
   if (u.x < sunShare || emitters_.empty()) {
@@ -296,7 +319,7 @@ bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, con
   }
   const float s = std::fmin((u.x - sunShare) / (1.0f - sunShare), 0.99999994f);
   const bool vis = SampleArea(grid, receiver, twin, x, n, glm::vec2(s, u.y), tally, epsilon, hint,
-                              weight, source);
+                              weight, source, viewer);
   *weight /= 1.0f - sunShare;
   return vis;
 }
@@ -355,8 +378,8 @@ uint32_t Pick(Cdf cdf, uint32_t size, float x, float* stretched, float* share) {
 
 bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                              const glm::vec3& n, glm::vec2 u, Span<const Tally> tally,
-                             float epsilon, uint32_t* hint, glm::vec3* weight,
-                             uint32_t* source) const {
+                             float epsilon, uint32_t* hint, glm::vec3* weight, uint32_t* source,
+                             uint32_t viewer) const {
   *weight = glm::vec3(0.0f);
   if (emitters_.empty()) return false;
   CHECK(tally.size() == groups_.size());
@@ -381,12 +404,18 @@ bool DirectLight::SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin,
   *weight = e.scale * (cosX * cosY / (r2 * r2)) / groupShare;
   float t = epsilon / std::sqrt(r2);
   if (!(t < 0.5f)) return true;
-  return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint);
+  return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint) &&
+         Passes(e.patch, viewer, x, n);
+}
+
+bool DirectLight::Passes(uint32_t patch, uint32_t viewer, const glm::vec3& x,
+                         const glm::vec3& n) const {
+  return viewer == kNoViewer || !transit_ || transit_->Passes(patch, viewer, x, n);
 }
 
 bool DirectLight::CornerVisible(const Grid& grid, uint32_t receiver, uint32_t twin,
                                 const glm::vec3& x, const glm::vec3& n, uint32_t k, float epsilon,
-                                uint32_t* hint, bool* usable) const {
+                                uint32_t* hint, bool* usable, uint32_t viewer) const {
   *usable = false;
   const glm::vec3 y = corners_[k].point;
   glm::vec3 d = y - x;
@@ -398,7 +427,8 @@ bool DirectLight::CornerVisible(const Grid& grid, uint32_t receiver, uint32_t tw
   *usable = true;
   float t = epsilon / std::sqrt(r2);
   if (!(t < 0.5f)) return true;
-  return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint);
+  return Unblocked(grid, Ray{x, d, t, 1.0f - t}, receiver, twin, hint) &&
+         Passes(corners_[k].patch, viewer, x, n);
 }
 
 }  // namespace vismask

@@ -62,7 +62,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
   for (uint32_t k = 0; k < outline && cornersTell; ++k) {
     bool usable;
     cornersSeen += h.light->CornerVisible(*h.grid, h.patch, h.twin, x0, h.normal, k, h.epsilon,
-                                          h.hint, &usable)
+                                          h.hint, &usable, h.viewer)
                        ? 1u
                        : 0u;
     cornersTell = usable;
@@ -86,7 +86,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
     uint32_t source;
     const glm::vec3 x = onPlane(pointOf(k));
     bool vis = h.light->Sample(*h.grid, h.patch, h.twin, x, h.normal, lightSample(k), tally,
-                               h.epsilon, h.hint, &w, sunShare, &source);
+                               h.epsilon, h.hint, &w, sunShare, &source, h.viewer);
     if (!vis && eye && HiddenFrom(*h.grid, x, *eye, h.patch, h.twin, h.epsilon)) {
       ++hidden;
       continue;

@@ -74,7 +74,8 @@ glm::vec3 CornerValue(const Environment& env, uint32_t i, glm::vec2 st, const do
 // The environment's pieces into `fb` as fb->pass says; with `directOnly`
 // only the patches that gather direct light per pixel.
 void DrawPieces(const View& view, const Environment& env, const double ambient[3], Framebuffer* fb,
-                Span<const Texture> textures, bool directOnly) {
+                Span<const Texture> textures, bool directOnly, const DirectLight& light,
+                uint32_t viewer) {
   Span<const Element> elements = env.elements();
   uint32_t hint = kNoPatch;  // the last occluder of a shadow ray
   for (uint32_t i = 0; i < env.patches().size(); ++i) {
@@ -92,11 +93,12 @@ void DrawPieces(const View& view, const Environment& env, const double ambient[3
     // (LeafRadiosity), interpolated as the whole was; the direct part is
     // gathered at each shaded point.
     DirectHook hook;
-    const bool direct = facing && env.direct().ShowsIndirect(i) && !env.direct().light().empty();
+    const bool direct = facing && env.direct().ShowsIndirect(i) && !light.empty();
     if (directOnly && !direct) continue;
     if (direct) {
       constexpr float kInvPi = 0.318309886183790672f;
-      hook.light = &env.direct().light();
+      hook.light = &light;
+      hook.viewer = viewer;
       hook.grid = &env.grid();
       hook.patch = i;
       hook.twin = env.twinOf(i);
@@ -146,16 +148,19 @@ void DrawPieces(const View& view, const Environment& env, const double ambient[3
 // two took its output time from 2.87 to 2.24 s), and what other
 // environments composite in later only hides more.
 void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
-                     Framebuffer* fb, Span<const Texture> textures) {
-  if (!fb->aa || env.direct().light().empty()) {
-    DrawPieces(view, env, ambient, fb, textures, false);
+                     Framebuffer* fb, Span<const Texture> textures, const ForeignLight* foreign) {
+  const bool all = foreign && !foreign->empty();
+  const DirectLight& light = all ? foreign->light() : env.direct().light();
+  const uint32_t viewer = all ? env.index() : DirectLight::kNoViewer;
+  if (!fb->aa || light.empty()) {
+    DrawPieces(view, env, ambient, fb, textures, false, light, viewer);
     return;
   }
   fb->pass = DrawPass::kCoverage;
-  DrawPieces(view, env, ambient, fb, textures, false);
+  DrawPieces(view, env, ambient, fb, textures, false, light, viewer);
   MarkShown(fb);
   fb->pass = DrawPass::kDirect;
-  DrawPieces(view, env, ambient, fb, textures, true);
+  DrawPieces(view, env, ambient, fb, textures, true, light, viewer);
   fb->pass = DrawPass::kWhole;
 }
 

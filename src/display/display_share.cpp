@@ -14,6 +14,12 @@ namespace vismask {
 
 namespace {
 
+// What of vertex v's solved direct light a record carries: all of it, or
+// nothing where every environment's pixels gather every emitter.
+glm::vec3 SharedDirect(const Environment& env, uint32_t v) {
+  return env.direct().gathersForeign() ? glm::vec3(0.0f) : env.lattice().SolvedDirect(v);
+}
+
 // The record of lattice vertex v of `env` (its cut normal, if a cut vertex).
 VertexRecord MakeRecord(const Environment& env, uint32_t v, const glm::vec3& normal, uint32_t flags,
                         const SmoothVertex* s) {
@@ -21,8 +27,10 @@ VertexRecord MakeRecord(const Environment& env, uint32_t v, const glm::vec3& nor
   const DisplayLattice& lattice = env.lattice();
   float w = lattice.weights()[v];
   // The solve's whole (the environments across a cut may gather different
-  // emitters per pixel: what one leaves to its pixels the other shows solved).
-  glm::vec3 x = lattice.vertices()[v], b = lattice.radiosity()[v] + lattice.SolvedDirect(v);
+  // emitters per pixel: what one leaves to its pixels the other shows
+  // solved); where every environment gathers every emitter, the shown
+  // (indirect) part.
+  glm::vec3 x = lattice.vertices()[v], b = lattice.radiosity()[v] + SharedDirect(env, v);
   for (int a = 0; a < 3; ++a) {
     r.pos[a] = x[a];
     r.normal[a] = normal[a];
@@ -225,7 +233,7 @@ bool ShareVertex(const SharedRecords& rec, Environment* env, uint32_t v, bool is
   float w = lattice.weights()[v];
   // Shared as the solve's whole (MakeRecord); this environment's pixels
   // add the direct light they gather to the rest.
-  const glm::vec3 gathered = lattice.SolvedDirect(v), whole = lattice.radiosity()[v] + gathered;
+  const glm::vec3 gathered = SharedDirect(*env, v), whole = lattice.radiosity()[v] + gathered;
   SharedSum sh;
   sh.sum = whole * w;
   sh.weight = w;

@@ -40,6 +40,9 @@ Status MeasureFootprint(const Options& o, const Prepared& p, FootprintFigures* f
       }
       r.sharedCapacity = std::max(r.sharedCapacity, shared);
     }
+    std::vector<EmitterRecord> emitters;
+    AppendEmitters(envs, &emitters);
+    r.foreignCounts = ForeignCountsOf(o, total, ranks, r.rankEnvs.perRank, &emitters);
     Arena measure = Arena::Measure();
     r.LayoutRank(measure, p.packetBytes, ranks, k == 0, p.textures,
                  TexturesUsed(p, r.rankEnvs.first, r.rankEnvs.count));

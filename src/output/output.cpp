@@ -102,7 +102,7 @@ namespace {
 void DrawPointSampled(RunState* r, const double* ambient) {
   Transport* t = r->transport.get();
   for (Environment* env : r->envPtrs)
-    DrawEnvironment(r->view, *env, ambient, &r->fb, r->textures.textures);
+    DrawEnvironment(r->view, *env, ambient, &r->fb, r->textures.textures, &r->foreign);
   const Framebuffer& mine = r->fb;
   const size_t w = static_cast<size_t>(mine.width);
   for (int src = 1; src < t->size(); ++src) {
@@ -144,7 +144,7 @@ void DrawAntialiased(RunState* r, const double* ambient) {
       // The first is drawn straight into the empty image: the same as
       // merging it into one.
       Framebuffer* target = k == 0 ? &mine : &r->envFb;
-      DrawEnvironment(r->view, *r->envPtrs[k], ambient, target, r->textures.textures);
+      DrawEnvironment(r->view, *r->envPtrs[k], ambient, target, r->textures.textures, &r->foreign);
       if (k == 0) continue;
       CompositeDirty(r->envFb, &mine);
       r->envFb.ClearDirty();
@@ -169,7 +169,7 @@ void DrawAntialiased(RunState* r, const double* ambient) {
   }
   for (Environment* env : r->envPtrs) {
     mine.ClearDirty();
-    DrawEnvironment(r->view, *env, ambient, &mine, r->textures.textures);
+    DrawEnvironment(r->view, *env, ambient, &mine, r->textures.textures, &r->foreign);
     // An environment that drew nothing sends the empty range [0, -1].
     int32_t rowsDrawn[2] = {mine.dirtyLo, mine.dirtyHi};
     t->Send(0, rowsDrawn, sizeof rowsDrawn);

@@ -111,6 +111,7 @@ void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uin
   MaskBits out = exchange_.ScratchMask(0);
   out.SetAllOpen();
   PacketHeader shot = ShotHeader(p, power, key, shotIndex, index_, rays);
+  for (int c = 0; c < 3; ++c) shot.direct[c] = static_cast<float>(direct_.shotDirect(c));
   if (options_.maskMethod == MaskMethod::kR) {
     out.CloseFrom(rays);  // bits past the shot's rays
     MaskBits routes[6];
@@ -170,9 +171,9 @@ void Environment::ShootOutside(uint32_t k) {
 }
 
 void Environment::ShootForeign(uint32_t s) {
-  direct_.BookForeignShot();  // a foreign shot's light is indirect here
   ForeignQueue& queue = exchange_.queue();
   const ForeignQueue::Slot& slot = queue.slot(s);
+  direct_.BookForeignShot(slot.header.direct);
   MaskBits in = queue.Mask(s);
   MaskBits out = exchange_.ScratchMask(0);
   if (options_.maskMethod != MaskMethod::kR) out.CopyFrom(in);  // R routes its rays instead

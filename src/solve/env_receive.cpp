@@ -97,7 +97,8 @@ glm::vec3 Environment::LeafRadiosity(uint32_t patch, uint32_t e, const double am
 // leaf's received radiosity that came straight from this environment's
 // emitters (the pixels gather it), scaled as LeafRadiosity scales.
 glm::vec3 Environment::LeafSolvedDirect(uint32_t patch, uint32_t e) const {
-  if (direct_.light().empty()) return glm::vec3(0.0f);  // all it received is indirect
+  // All it received is indirect unless its pixels gather some emitters.
+  if (direct_.light().empty() && !direct_.gathersForeign()) return glm::vec3(0.0f);
   const Element& el = elements_[e];
   const glm::dvec3 ind = elements_.Indirect(e);
   const PatchTexture* t = patchTexture(patch);

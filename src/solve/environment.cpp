@@ -29,6 +29,11 @@ struct Environment::Staged {
   Grid::Work gridWork;  // what MakePlan worked out, for grid_.Build
 };
 
+Span<const Patch> Environment::preparedPatches() const {
+  if (staged_) return Span<const Patch>(staged_->patches.data(), staged_->patches.size());
+  return patches_;
+}
+
 Environment::Environment() = default;
 Environment::~Environment() = default;
 
@@ -287,6 +292,7 @@ bool Environment::Build() {
   // The sun's shadow rays must leave the scene, which only one
   // environment's grid can tell; with neighbours the sun is the solve's.
   direct_.Build(patches_, lattice_, options_.outside, numNeighbours_ == 0);
+  direct_.SetGathersForeign(options_.gatherForeign && numNeighbours_ > 0);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=
          grid_.cellCount())

@@ -48,7 +48,8 @@ bool AutoEnvsForRanks(int ranks, Options* o) {
 
 void ResolveEmissionRays(int numEnvs, Options* o) {
   if (!o->hasEmissionRays)
-    o->emissionRays = o->directSamples > 0 && numEnvs == 1 ? kDefaultEmissionRays : 1.0;
+    o->emissionRays =
+        o->directSamples > 0 && (numEnvs == 1 || GathersForeign(*o)) ? kDefaultEmissionRays : 1.0;
 }
 
 bool SetWorldSize(int ranks, Options* o) {

@@ -79,6 +79,9 @@ struct Options {
   bool hasMaskMethod = false;
   bool hasMaskRes = false;
   uint32_t maskRes = 50;
+  // --foreign-mask-res R: several environments gather every environment's
+  // emitters per pixel, through R x 4R transit masks (foreign_light.h); 0: off.
+  uint32_t foreignMaskRes = 32;
   // Round size (ResolveRounds). --round-shots K: at most K shots per
   // environment per round. --round-work N: a round ends for an environment
   // once its work reaches N, work being a count of its rays' grid steps
@@ -199,6 +202,12 @@ void ResolveRounds(int numEnvs, Options* options);
 // shots did). Called once the environment count is known, after
 // --direct-samples' default.
 void ResolveEmissionRays(int numEnvs, Options* options);
+
+// Whether several environments' pixels gather every environment's
+// emitters (foreign_light.h): per-pixel direct light and --foreign-mask-res.
+inline bool GathersForeign(const Options& o) {
+  return o.directSamples > 0 && o.foreignMaskRes > 0;
+}
 
 // The --emission-rays a solve uses: 1 without per-pixel direct light,
 // whatever was given (the solve is then the image).

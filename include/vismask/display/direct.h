@@ -54,6 +54,8 @@
 
 namespace vismask {
 
+class ForeignLight;
+
 constexpr uint32_t kFirstDirectSamples = 4;
 // The most outline corners GatherDirect sends a ray to (more: it samples
 // every point fully).
@@ -96,6 +98,7 @@ class DirectLight {
   struct Corner {
     glm::vec3 point;
     uint32_t group;
+    uint32_t patch;  // an emitter patch with this corner (its transit masks)
   };
   struct Counts {
     uint32_t emitters = 0, groups = 0, edges = 0, corners = 0;
@@ -141,8 +144,8 @@ class DirectLight {
   // Allocates nothing.
   bool Sample(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
               const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
-              uint32_t* hint, glm::vec3* weight, float sunShare = 0.0f,
-              uint32_t* source = nullptr) const;
+              uint32_t* hint, glm::vec3* weight, float sunShare = 0.0f, uint32_t* source = nullptr,
+              uint32_t viewer = kNoViewer) const;
 
   uint32_t numGroups() const { return static_cast<uint32_t>(groups_.size()); }
   // numGroups() tallies laid out with the lists, for the point being
@@ -155,8 +158,8 @@ class DirectLight {
   // behind its polygon: the ray tells nothing).
   uint32_t numCorners() const { return static_cast<uint32_t>(corners_.size()); }
   bool CornerVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                     const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
-                     bool* usable) const;
+                     const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint, bool* usable,
+                     uint32_t viewer = kNoViewer) const;
 
   // Whether the ray from x (normal n) towards point k of kSunRimRays on the
   // sun's rim leaves the scene (*usable false when that direction lies on
@@ -164,6 +167,14 @@ class DirectLight {
   bool SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                      const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
                      bool* usable) const;
+
+  // Every environment's emitters (foreign_light.h): the patches Build was
+  // given are all of them, and a shadow ray from a point of environment
+  // `viewer` (Sample's, CornerVisible's) to another environment's emitter
+  // must also pass `transit`'s masks. kNoViewer: the grid holds every
+  // emitter (one environment's own light).
+  static constexpr uint32_t kNoViewer = 0xffffffffu;
+  void SetTransit(const ForeignLight* transit) { transit_ = transit; }
 
   // A point of emitter patch `p` from u in [0, 1)^2, uniform in area
   // (`split`: Emitter::split).
@@ -181,10 +192,12 @@ class DirectLight {
   bool hasSun_ = false;
   glm::vec3 sun_{0.0f}, sunToward_{0.0f, 0.0f, 1.0f};
   float sunDegrees_ = 0.0f;
+  const ForeignLight* transit_ = nullptr;
 
   bool SampleArea(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                   const glm::vec3& n, glm::vec2 u, Span<const Tally> tally, float epsilon,
-                  uint32_t* hint, glm::vec3* weight, uint32_t* source) const;
+                  uint32_t* hint, glm::vec3* weight, uint32_t* source, uint32_t viewer) const;
+  bool Passes(uint32_t patch, uint32_t viewer, const glm::vec3& x, const glm::vec3& n) const;
   bool SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                  const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
                  glm::vec3* weight) const;

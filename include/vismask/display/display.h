@@ -25,6 +25,7 @@
 #include <glm/vec3.hpp>
 
 #include "vismask/display/camera.h"
+#include "vismask/display/foreign_light.h"
 #include "vismask/display/raster.h"
 #include "vismask/scene/texture.h"
 #include "vismask/solve/environment.h"
@@ -44,8 +45,11 @@ inline glm::vec3 DisplayRadiance(const glm::vec3& b) {
 // (Environment::patchTexture) are drawn with `textures` (the rank's
 // TextureSet; it must hold theirs), the texture modulating the interpolated
 // value per pixel (texture.h). Allocates nothing.
+// With `foreign` (several environments, foreign_light.h), the pixels
+// gather every environment's emitters from it, not the environment's own.
 void DrawEnvironment(const View& view, const Environment& env, const double ambient[3],
-                     Framebuffer* fb, Span<const Texture> textures = {});
+                     Framebuffer* fb, Span<const Texture> textures = {},
+                     const ForeignLight* foreign = nullptr);
 
 // One shared vertex (on a cut, or smooth, or both) as environments exchange it.
 struct VertexRecord {

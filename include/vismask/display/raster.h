@@ -124,6 +124,9 @@ struct DirectHook {
   uint32_t samples = 0;
   float epsilon = 0.0f;      // shadow rays stop this far from either end (scene units)
   uint32_t* hint = nullptr;  // the last occluder (Grid::Occluded), or null
+  // The receiver's environment, when `light` holds other environments'
+  // emitters too (DirectLight::SetTransit); else DirectLight::kNoViewer.
+  uint32_t viewer = 0xffffffffu;
 };
 
 // A planar convex piece to draw: world corners counter-clockwise from the

@@ -43,11 +43,16 @@ class DirectBook {
   // `fraction` of it: the shot's emission share, in proportion to the
   // emission in its unshot power, and the emission left.
   void BookLocalShot(uint32_t i, int c, double unshot, double power, double fraction);
-  // A foreign shot's light is indirect here: its shooter's emitters are
-  // another environment's, which the pixels here do not gather.
-  void BookForeignShot() {
-    for (double& d : shotDirect_) d = 0.0;
+  // A foreign shot: the share of it that is its shooter's emission
+  // (`direct`, as the packet carries it) is direct here when the pixels
+  // gather every environment's emitters (SetGathersForeign); else it is all
+  // indirect: the shooter's emitters are another environment's, which the
+  // pixels here do not gather.
+  void BookForeignShot(const float direct[3]) {
+    for (int c = 0; c < 3; ++c) shotDirect_[c] = gathersForeign_ ? direct[c] : 0.0;
   }
+  void SetGathersForeign(bool on) { gathersForeign_ = on_ && on; }
+  bool gathersForeign() const { return gathersForeign_; }
   // An outside shooter's shot (--sky, --sun): all direct when the pixels
   // gather its kind (the sun), else all indirect (the sky, which the
   // solve alone shows).
@@ -80,6 +85,7 @@ class DirectBook {
 
  private:
   bool on_ = false;
+  bool gathersForeign_ = false;
   Span<double> emitLeft_;
   double shotDirect_[3] = {0, 0, 0};
   Span<uint8_t> smoothPatch_;  // 1 per patch of a smoothed polygon

@@ -69,6 +69,9 @@ struct EnvOptions {
   // radiosity, direct part included). With N > 0 the environment keeps each
   // patch's indirect radiosity apart and its emitter list.
   uint32_t directSamples = 0;
+  // Several environments whose pixels gather every environment's emitters
+  // (--foreign-mask-res > 0): a foreign shot's emission is direct here too.
+  bool gatherForeign = false;
   int indirectFilter = -1;  // display smoothing steps of the indirect part; -1: by hits a patch
   // --sky, --sun: the light from outside the scene's box (outside.h), in
   // outsideTiles x outsideTiles shooters a face of the box.

@@ -108,6 +108,8 @@ class Environment {
   bool hasNeighbours() const { return numNeighbours_ > 0; }
   const Bounds& box() const { return box_; }
   Span<const Patch> patches() const { return patches_; }
+  // Its patches between Prepare and Build (the staged copies), or after.
+  Span<const Patch> preparedPatches() const;
   // Patch i's twin (two-sided meshes) or kNoPatch; how many patches are twin copies.
   uint32_t twinOf(uint32_t i) const { return twin_.empty() ? kNoPatch : twin_[i]; }
   uint32_t numTwins() const { return numTwins_; }
@@ -117,6 +119,14 @@ class Environment {
     return patchTex_.empty() || patchTex_[i].texture == kNoTexture ? nullptr : &patchTex_[i];
   }
   const Grid& grid() const { return grid_; }
+  // Runs f(grid()) and leaves the grid's step count as it was: rays cast
+  // outside the solve (foreign_light.h's masks at init) are not its work.
+  template <class F>
+  void UncountedOnGrid(F f) {
+    const uint64_t steps = grid_.steps();
+    f(static_cast<const Grid&>(grid_));
+    grid_.SetSteps(steps);
+  }
   const EnergyLedger& ledger() const { return ledger_; }
   const EnvStats& stats() const { return stats_; }
   double totalArea() const { return totalArea_; }

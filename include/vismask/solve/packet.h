@@ -33,9 +33,15 @@ struct PacketHeader {
   uint32_t toEnv;      // the receiver
   float flightShare;   // the receiver's share of `power` in flight (Environment::FlightShare)
   uint32_t rays;       // the shot's ray count (every environment traces as many)
+  // Per-pixel direct light: the share of `power` that is its shooter's own
+  // emission, per channel (DirectBook::shotDirect), which every
+  // environment's pixels gather when they gather every environment's
+  // emitters (foreign_light.h).
+  float direct[3];
+  uint32_t reserved;  // 0
 };
 static_assert(std::is_trivially_copyable<PacketHeader>::value, "packets are plain bytes");
-static_assert(sizeof(PacketHeader) == 128, "the packet header's layout is part of the wire format");
+static_assert(sizeof(PacketHeader) == 144, "the packet header's layout is part of the wire format");
 static_assert(sizeof(PacketHeader) % 8 == 0, "mask bytes start 8-aligned");
 
 // The size in bytes of every packet of a run with mask shape `shape`.
