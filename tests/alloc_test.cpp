@@ -435,6 +435,22 @@ TEST(AllocTest, PipeRanksAllocateNothingAfterInit) {
   EXPECT_EQ(run.allocations, 0) << "heap allocations after init in rank 0";
 }
 
+// Every environment gathering every emitter (--foreign-mask-res, the
+// default with several): the transit maps' lookups in the gather, on both
+// rasters, over pipes.
+TEST(AllocTest, ForeignGatherAllocatesNothingAfterInit) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  for (const char* raster : {"on", "off"}) {
+    CountedRender run("scenes/cornell.obj",
+                      std::string("--envs 2x1x2 --ranks 2 --emitted-rays 200000 --max-shots 900 "
+                                  "--width 64 --height 48 --quiet --aa ") +
+                          raster);
+    ASSERT_EQ(run.code, 0) << run.err;
+    EXPECT_EQ(run.allocations, 0) << "--aa " << raster << ": heap after init";
+    EXPECT_NE(run.Json().find("\"foreign_mask_res\": 32"), std::string::npos);
+  }
+}
+
 // Two-sided scenes: twins everywhere, both sides of the light emitting, on
 // two environments and two ranks (cut vertices of both sides shared).
 TEST(AllocTest, TwoSidedRenderAllocatesNothingAfterInit) {

@@ -306,8 +306,8 @@ Status ResolveEnvironments(Options* o) {
   const int numEnvs = o->envs[0] * o->envs[1] * o->envs[2];
   ResolveRounds(numEnvs, o);
   // Per-pixel direct light: the default whatever the environments (with
-  // several each gathers its own emitters' light, the others' are the
-  // solve's: docs/design/direct-light.md).
+  // several each gathers every environment's emitters through the transit
+  // maps, or with --foreign-mask-res 0 its own: docs/design/direct-light.md).
   if (o->directSamples < 0) o->directSamples = kDefaultDirectSamples;
   ResolveEmissionRays(numEnvs, o);
   if (o->ranks > numEnvs)

@@ -184,8 +184,9 @@ each brings there (rays to the emitters' corners and
 covering part of a pixel its share of N); the solve
 supplies the rest; 0: the solved radiosity alone
 (the images before it). With several environments
-each gathers its own emitters (the others' light
-and the sun's are the solve's). Default 128)")
+each gathers every environment's emitters
+(--foreign-mask-res); the sun's light is the
+solve's. Default 128)")
           .Json("direct_samples"),
       Number("--emission-rays", &O::emissionRays, 0.0, 1.0, "a number in (0, 1]")
           .Open(true, false)
@@ -195,8 +196,8 @@ power allocation: an emission the pixels gather
 (an emitter's own, the sun's, with --direct-samples)
 traces F times the rays its power is worth; the
 solve's direct part then only feeds later shots.
-Default 0.25 in one environment with --direct-samples,
-else 1)")
+Default 0.25 with --direct-samples (in several
+environments, unless --foreign-mask-res 0), else 1)")
           .Json("emission_rays"),
       Count("--indirect-filter", &O::indirectFilter, 0, 64, "an integer in [0, 64]").Help("K", R"(
 with direct light per pixel, the indirect part is

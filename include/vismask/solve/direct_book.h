@@ -28,10 +28,12 @@ class DirectBook {
               const DirectLight::Counts& counts);
   // The emitters from `patches` and (with `sun`) the sun of `outside`, and
   // which patches have a smooth vertex of `lattice` (init: uses the heap).
-  // An environment gathers its own emitters only: a shadow ray between two
+  // This light is the environment's own emitters: a shadow ray between two
   // points of its box never leaves it, and its grid holds every piece of
-  // geometry there; the light of another environment's emitters comes with
-  // the solve's foreign shots, which count as indirect.
+  // geometry there. With several environments the display gathers every
+  // environment's from the rank's ForeignLight instead (foreign_light.h),
+  // and a foreign shot's emission is direct (BookForeignShot); with
+  // --foreign-mask-res 0 it comes with the solve's foreign shots, as indirect.
   void Build(Span<const Patch> patches, const DisplayLattice& lattice, const OutsideLight& outside,
              bool sun);
   // Patch i's emission still unshot is all of `unshot` (a solve's start).
