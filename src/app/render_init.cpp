@@ -201,8 +201,7 @@ int GatherLoads(RunState* r, int code, GlbMesh* exportMesh) {
   LoadReport mine{code, 0, 0, 0, 0, 0, 0};
   uint64_t emitters = 0;  // the most emitter patches a rank holds
   for (auto& e : r->envs) {
-    for (const Patch& p : e->preparedPatches())
-      mine.emitters += p.ke.r > 0.0f || p.ke.g > 0.0f || p.ke.b > 0.0f ? 1 : 0;
+    for (const Patch& p : e->preparedPatches()) mine.emitters += Emits(p) ? 1 : 0;
     mine.shared += e->lattice().numShared();
     mine.smooth += e->lattice().smoothVertices().size();
     mine.twins += e->numTwins();

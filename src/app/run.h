@@ -273,11 +273,8 @@ template <class Envs>
 void AppendEmitters(const Envs& envs, std::vector<EmitterRecord>* out) {
   for (const auto& e : envs) {
     Span<const Patch> patches = e->preparedPatches();
-    for (uint32_t i = 0; i < patches.size(); ++i) {
-      const glm::vec3& ke = patches[i].ke;
-      if (ke.r > 0.0f || ke.g > 0.0f || ke.b > 0.0f)
-        out->push_back(EmitterRecord{patches[i], e->index(), i});
-    }
+    for (uint32_t i = 0; i < patches.size(); ++i)
+      if (Emits(patches[i])) out->push_back(EmitterRecord{patches[i], e->index(), i});
   }
 }
 // *all in global id order, and the counts the light and masks need.

@@ -18,10 +18,6 @@ namespace vismask {
 
 namespace {
 
-bool Emits(const Patch& p) {
-  return p.ke.r > 0.0f || p.ke.g > 0.0f || p.ke.b > 0.0f;
-}
-
 float TriangleArea(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
   return 0.5f * glm::length(glm::cross(b - a, c - a));
 }
@@ -198,15 +194,12 @@ void DirectLight::Build(Span<const Patch> patches) {
     float bestD = std::numeric_limits<float>::infinity();
     for (uint32_t j = g.firstPatch; j < g.firstPatch + g.numPatches && bestD > 0.0f; ++j) {
       const Patch& p = patches[emitters_[j].patch];
-      glm::vec3 c(0.0f);
-      for (uint32_t m = 0; m < p.numCorners; ++m) {
-        c += p.corner[m];
+      for (uint32_t m = 0; m < p.numCorners; ++m)
         if (p.corner[m] == plan.corners[k]) {
           best = emitters_[j].patch;
           bestD = 0.0f;
         }
-      }
-      const float d = glm::length(c / static_cast<float>(p.numCorners) - plan.corners[k]);
+      const float d = glm::length(CentreOf(p) - plan.corners[k]);
       if (d < bestD) {
         bestD = d;
         best = emitters_[j].patch;

@@ -20,12 +20,6 @@ std::vector<Patch> PatchesOf(const std::vector<EmitterRecord>& all) {
   return p;
 }
 
-glm::vec3 CentreOf(const Patch& p) {
-  glm::vec3 c(0.0f);
-  for (uint32_t k = 0; k < p.numCorners; ++k) c += p.corner[k];
-  return c / static_cast<float>(p.numCorners);
-}
-
 // Whether the segment a -> b meets box `b` (closed), by slabs.
 bool SegmentMeetsBox(const glm::vec3& a, const glm::vec3& b, const Bounds& box) {
   float t0 = 0.0f, t1 = 1.0f;

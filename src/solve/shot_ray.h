@@ -101,10 +101,4 @@ inline uint32_t EntryPixel(const Ray& ray, float t0, const glm::vec3& centre, co
   return dirs.Pixel(len > 0.0f && l.z > 0.0f ? l / len : local);
 }
 
-inline glm::vec3 CentreOf(const Patch& p) {
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < p.numCorners; ++k) centre += p.corner[k];
-  return centre / static_cast<float>(p.numCorners);
-}
-
 }  // namespace vismask

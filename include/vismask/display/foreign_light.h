@@ -81,12 +81,10 @@ class ForeignLight {
 
   bool empty() const { return records_.empty(); }
   const DirectLight& light() const { return light_; }
-  DirectLight& light() { return light_; }
   // Whether the ray from emitter patch `e`'s centre to x (unit normal n,
   // in environment `viewer`) passes every other environment it crosses
   // (viewer's own part is the caller's shadow ray).
   bool Passes(uint32_t e, uint32_t viewer, const glm::vec3& x, const glm::vec3& n) const;
-  uint32_t envOf(uint32_t e) const { return records_[e].env; }
 
  private:
   Span<EmitterRecord> records_;

@@ -92,6 +92,18 @@ inline double UnshotKey(const PatchEnergy& e) {
   return e.unshot[0] + e.unshot[1] + e.unshot[2];
 }
 
+// Whether the patch emits (Ke > 0 in some channel).
+inline bool Emits(const Patch& p) {
+  return p.ke.r > 0.0f || p.ke.g > 0.0f || p.ke.b > 0.0f;
+}
+
+// The mean of the patch's corners.
+inline glm::vec3 CentreOf(const Patch& p) {
+  glm::vec3 centre(0.0f);
+  for (uint32_t k = 0; k < p.numCorners; ++k) centre += p.corner[k];
+  return centre / static_cast<float>(p.numCorners);
+}
+
 // Builds a patch's ray-test data from its corners and normal.
 PatchGeom MakePatchGeom(const Patch& p);
 
