@@ -52,6 +52,9 @@ class PacerOnAnEnvironment : public ::testing::Test {
     t.radiosity = 1250.0;
     return t;
   }
+  Span<Environment* const> envs() const {
+    return Span<Environment* const>(envs_.ptrs.data(), envs_.ptrs.size());
+  }
   test::TestEnvs envs_;
   Environment* env_ = nullptr;
 };
@@ -62,19 +65,19 @@ TEST_F(PacerOnAnEnvironment, ASlowSolveCoarsensItsQuantumAndAFastOneRefinesIt) {
   in.stopUnshot = 0.0;
   // Within the first interval (1/64 of the end): nothing yet.
   Pacer pacer(in);
-  pacer.AfterRound(Totals(0.01, 10000), env_);
+  pacer.AfterRound(Totals(0.01, 10000), envs());
   EXPECT_EQ(env_->rayQuantum(), 1.0);
   EXPECT_EQ(pacer.updates(), 0u);
   // At 0.5 s, 1e6 rays traced (2e6 a second): the worth left, 250 / 0.75,
   // in the 0.5 s left asks for a quantum of 1/3000, but a re-plan moves it
   // by at most half.
-  pacer.AfterRound(Totals(0.5, 1000000), env_);
+  pacer.AfterRound(Totals(0.5, 1000000), envs());
   const double worth = 250.0 / 0.75, rays = 2.0e6 * 0.5;
   EXPECT_NEAR(env_->rayQuantum(), 1.0 / 2.0, 1e-12) << "clamped to half the quantum";
   EXPECT_EQ(pacer.updates(), 1u);
   // The next interval, far slower: the quantum the time left affords.
   env_->SetRayQuantum(worth / rays);
-  pacer.AfterRound(Totals(0.6, 1010000), env_);
+  pacer.AfterRound(Totals(0.6, 1010000), envs());
   const double rate = 0.5 * 2.0e6 + 0.5 * 1.0e5;  // the recent intervals' rays a second
   EXPECT_NEAR(env_->rayQuantum(), std::fmin(worth / (rate * 0.4), 2.0 * worth / rays), 1e-12);
   EXPECT_GT(env_->rayQuantum(), worth / rays);
@@ -87,18 +90,19 @@ TEST_F(PacerOnAnEnvironment, TheTailIsPaidFirstAndNearTheEndTheQuantumStays) {
   in.tailRays = 0.3e6;  // 0.3 s at 1e6 rays a second
   Pacer pacer(in);
   env_->SetRayQuantum(0.001);
-  pacer.AfterRound(Totals(0.5, 500000), env_);
+  pacer.AfterRound(Totals(0.5, 500000), envs());
   // Of the 0.5 s left the tail takes 0.3: the worth's rays in 0.2 s.
   EXPECT_NEAR(env_->rayQuantum(), std::fmin(250.0 / 0.75 / (1.0e6 * 0.2), 0.002), 1e-15);
   const double q = env_->rayQuantum();
-  pacer.AfterRound(Totals(0.69, 690000), env_);
+  pacer.AfterRound(Totals(0.69, 690000), envs());
   EXPECT_EQ(env_->rayQuantum(), q) << "the tail takes all the time left";
   EXPECT_EQ(pacer.updates(), 1u);
 }
 
-// A planned --max-seconds run in one environment is paced and says so in
-// run.json; given --emitted-rays, or cut into environments, it is not.
-TEST(PaceTest, APlannedRunInOneEnvironmentIsPaced) {
+// A planned --max-seconds run in one environment, or in several under
+// Method R, is paced and says so in run.json; given --emitted-rays, or
+// under Method B, whose time goes to its masks, it is not.
+TEST(PaceTest, APlannedRunInOneEnvironmentOrUnderMethodRIsPaced) {
   test::TempDir dir;
   auto json = [&](const std::string& extra) {
     std::vector<std::string> args = {
@@ -111,7 +115,8 @@ TEST(PaceTest, APlannedRunInOneEnvironmentIsPaced) {
   };
   EXPECT_GT(test::JsonNumber(json(""), "emitted_rays_paced", "options"), 10000);
   EXPECT_EQ(json("--emitted-rays 300000").find("emitted_rays_paced"), std::string::npos);
-  EXPECT_EQ(json("--envs 2").find("emitted_rays_paced"), std::string::npos);
+  EXPECT_GT(test::JsonNumber(json("--envs 2"), "emitted_rays_paced", "options"), 10000);
+  EXPECT_EQ(json("--envs 2 --mask-method B").find("emitted_rays_paced"), std::string::npos);
 }
 
 }  // namespace

@@ -49,6 +49,19 @@ TEST(PlanTest, SeveralEnvironmentsKeepTheTailsRuleAlone) {
             static_cast<uint64_t>((0.7 * in.rate * in.seconds - tail) * (1.0 - in.rho)));
 }
 
+// Several environments paced (Method R): the tail's rule for the mesh, and
+// the emitted rays one environment's plan would fill the budget with.
+TEST(PlanTest, SeveralEnvironmentsPacedFillTheBudget) {
+  PlanInput in = Cornell(10.0);
+  in.oneEnvironment = false;
+  in.paced = true;
+  EXPECT_EQ(PlannedEmittedRays(in), PlannedEmittedRays(Cornell(10.0)));
+  EXPECT_GT(PlannedEmittedRays(in), 4000000u);
+  in.seconds = 1.0;
+  EXPECT_EQ(PlannedEmittedRays(in), PlannedEmittedRays(Cornell(1.0)));
+  EXPECT_EQ(PlannedPatches(in), 0.0);
+}
+
 // A long budget keeps the automatic mesh (never more patches than it), and
 // its emitted rays grow with T past the default 4e6: the budget is spent.
 TEST(PlanTest, ALongBudgetKeepsTheMeshAndSpendsItsTime) {

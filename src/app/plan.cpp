@@ -14,8 +14,8 @@ namespace {
 // shots a patch makes at --min-rays in a converging solve's tail, per
 // bounce. With kPlanShare for both, the Cornell box's planned solves ended
 // at 63-68% of T (0.3-10 s, docs/RESULTS.md at 2765efe); with kFillShare
-// they end at 80-87%. Several environments keep kPlanShare and the default
-// as the most (plan.h).
+// they end at 80-87%. Several environments unpaced keep kPlanShare and the
+// default as the most (plan.h).
 constexpr double kPlanShare = 0.7;
 constexpr double kFillShare = 0.9;
 constexpr double kTailShotsPerPatch = 2.0;
@@ -63,14 +63,15 @@ double PlannedPatches(const PlanInput& in) {
 
 uint64_t PlannedEmittedRays(const PlanInput& in) {
   const double tail = TailRays(in.patches, in.minRays, in.rho);
-  const double share = in.oneEnvironment ? kFillShare : kPlanShare;
+  const bool capped = !in.oneEnvironment && !in.paced;
+  const double share = capped ? kPlanShare : kFillShare;
   // An emitted ray's worth leads to F + rho / (1 - rho) rays traced (F:
   // --emission-rays, its own shots; then the reflected power's, which
   // trace all their worth).
   const double traced = in.emissionRays + in.rho / (1.0 - in.rho);
   const double emitted =
       std::fmax(share * in.rate * in.seconds - tail, kCutShare * in.rate * in.seconds) / traced;
-  const double most = in.oneEnvironment ? emitted : static_cast<double>(in.emittedRays);
+  const double most = capped ? static_cast<double>(in.emittedRays) : emitted;
   return static_cast<uint64_t>(std::fmax(std::fmin(emitted, most), 10000.0));
 }
 

@@ -42,9 +42,9 @@ void AddFields(T* to, const T& from, M T::*... field) {
 
 void EnvSums::Add(const EnvSums& o) {
   using S = EnvSums;
-  AddFields(this, o, &S::unshot, &S::flight, &S::lost, &S::emitted, &S::radiosity, &S::kdArea,
-            &S::area, &S::work, &S::steps, &S::shots, &S::rays, &S::forwardsCreated, &S::held,
-            &S::shootable);
+  AddFields(this, o, &S::unshot, &S::flight, &S::lost, &S::emitted, &S::emission, &S::radiosity,
+            &S::kdArea, &S::area, &S::work, &S::steps, &S::shots, &S::rays, &S::forwardsCreated,
+            &S::held, &S::shootable);
 }
 
 namespace {
@@ -78,6 +78,9 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
     // What --sky and --sun lost at once never lit the scene: the stop rules
     // count without it (EnergyLedger::outsideLost; 0 without them).
     r.emitted = Sum3(l.emitted) - Sum3(l.outsideLost);
+    double emission[3];
+    e->EmissionUnshot(emission);
+    r.emission = Sum3(emission);
     const uint32_t queued = e->exchange().queue().count(), out = e->exchange().outbox().count();
     r.held = uint64_t(queued) + out;
     r.shootable = queued + out + e->HasLocalUnshot();

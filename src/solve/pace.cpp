@@ -32,7 +32,9 @@ double Pacer::WorthLeft(double unshot, double emission, double f, double rho, do
   return f * emission + reflected / (1.0 - rho);
 }
 
-void Pacer::AfterRound(const RoundTotals& t, Environment* env) {
+void Pacer::AfterRound(const RoundTotals& t, Span<Environment* const> envs) {
+  if (envs.empty()) return;
+  const Environment* env = envs[0];
   const double step = in_.endSeconds / kIntervals;
   if (t.elapsed < lastSeconds_ + step) return;
   const double seconds = t.elapsed - lastSeconds_;
@@ -45,9 +47,7 @@ void Pacer::AfterRound(const RoundTotals& t, Environment* env) {
   // the quantum stays).
   const double left = in_.endSeconds - t.elapsed - in_.tailRays / rate_;
   if (!(left > step) || !(t.emitted > 0.0)) return;
-  double emission[3];
-  env->EmissionUnshot(emission);
-  const double e = emission[0] + emission[1] + emission[2];
+  const double e = t.emission;
   // What comes back of the power shot so far (the open sides of a scene
   // lose light that the mean kd does not know of).
   const double shot = t.radiosity - t.unshot, reflected = t.radiosity - t.emitted;
@@ -58,8 +58,9 @@ void Pacer::AfterRound(const RoundTotals& t, Environment* env) {
   const double q = Quantum(worth, rate_, left);
   if (!(q > 0.0)) return;
   const double now = env->rayQuantum();
-  env->SetRayQuantum(std::clamp(q, now / kMostStep, now * kMostStep));
-  scale_ = env->rayQuantum() / q0_;
+  const double next = std::clamp(q, now / kMostStep, now * kMostStep);
+  for (Environment* each : envs) each->SetRayQuantum(next);
+  scale_ = next / q0_;
   ++updates_;
 }
 

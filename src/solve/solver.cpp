@@ -306,7 +306,7 @@ SolveResult Solve(Span<Environment* const> envs, const RankEnvs& rankEnvs, Trans
         ExchangeRound(envs, rankEnvs, transport, buffers, elapsed, roundCpu, &result.waitSeconds);
     ++result.collectives;
     AddRound(totals, options, &result);
-    if (options.pacer && envs.size() == 1) options.pacer->AfterRound(totals, envs[0]);
+    if (options.pacer) options.pacer->AfterRound(totals, envs);
     // A round without a shot is convergence only when nothing is left to
     // shoot anywhere (--stop-unshot 0 drains every queue). Otherwise the
     // admission held back every environment that had power; its rotation

@@ -1,6 +1,9 @@
 // --max-seconds's pacing: a planned solve (one environment on one rank,
 // power allocation, --emitted-rays from the plan) spends its budget by
-// re-planning its ray quantum as it goes. The plan's rate is timed at init
+// re-planning its ray quantum as it goes. Several environments are paced
+// as one: the quantum is the same in all of them, and it is re-planned
+// from the round's totals alone (rank 0's clock, the sums in environment
+// order), so every rank would set the same one at the same round. The plan's rate is timed at init
 // on 20 000 rays and the solve's own rate differs from it (its shots land,
 // book and split elements), so a plan alone ends its solves anywhere from
 // 70% to past 100% of T. The pacer measures the rate the solve traces at,
@@ -13,6 +16,7 @@
 #pragma once
 #include <cstdint>
 
+#include "vismask/core/span.h"
 #include "vismask/solve/exchange.h"
 
 namespace vismask {
@@ -31,9 +35,10 @@ struct PaceInput {
 class Pacer {
  public:
   explicit Pacer(const PaceInput& in) : in_(in) {}
-  // After a round: re-plans the environment's ray quantum when an interval
-  // of the solve's clock has passed since the last time.
-  void AfterRound(const RoundTotals& totals, Environment* env);
+  // After a round: re-plans the environments' ray quantum (theirs all
+  // alike: `envs` are this rank's) when an interval of the solve's clock
+  // has passed since the last time.
+  void AfterRound(const RoundTotals& totals, Span<Environment* const> envs);
   // The quantum's last change over the plan's (1: never re-planned), and
   // how many times it was re-planned.
   double scale() const { return scale_; }
