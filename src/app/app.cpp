@@ -61,14 +61,11 @@ PlanRate MeasureRate(const RunState& r) {
   return p;
 }
 
-// Whether a planned solve is paced (pace.h): without --checkpoint or
-// --resume, in one environment, or in several under Method R, whose time
-// goes as its rays. Methods A, B and C spend theirs on each foreign
-// shot's mask whatever its rays, which a quantum paced by rays misjudges:
-// Method B on the Cornell box in two environments, paced and planned past
-// the default at --max-seconds 10, was cut at 10 s with a tenth of its
-// unshot power left (1.77% from Cycles, against 1.36% converged in 5.5 s
-// at the default).
+// Whether a planned solve is paced (pace.h): no --checkpoint or --resume,
+// and one environment or Method R, whose time goes as its rays. A, B and C
+// spend theirs on masks whatever the rays, which a pace by rays misjudges
+// (B on the Cornell box in two environments, paced past the default at
+// --max-seconds 10: cut with 1% unshot, 1.77% from Cycles; 1.36% at the default).
 bool PacedPlan(const Options& o, size_t environments) {
   return o.checkpointDir.empty() && o.resumeDir.empty() &&
          (environments == 1 || o.maskMethod == MaskMethod::kR);
