@@ -20,9 +20,9 @@ namespace vismask {
 namespace {
 
 // The floor [0, 4]^2 at y = 0, facing up, whole or (holed) cut around the
-// block's footprint [1, 2.5] x [1, 2]; the block (height 1, five faces, no
+// block's footprint [1, 2.5] x [1, 2]; the block (height h, five faces, no
 // bottom) and a lamp [0, 4]^2 facing down at y = 6.
-void WriteBlockScene(const std::string& dir, bool holed) {
+void WriteBlockScene(const std::string& dir, bool holed, double h = 1.0) {
   std::string obj = "mtllib s.mtl\nusemtl white\n";
   int v = 1;
   auto quad = [&](std::vector<std::vector<double>> c) {
@@ -45,7 +45,7 @@ void WriteBlockScene(const std::string& dir, bool holed) {
   } else {
     floor(0, 0, 4, 4);
   }
-  const double x0 = 1, x1 = 2.5, z0 = 1, z1 = 2, h = 1;
+  const double x0 = 1, x1 = 2.5, z0 = 1, z1 = 2;
   quad({{x0, h, z0}, {x0, h, z1}, {x1, h, z1}, {x1, h, z0}});  // top, up
   quad({{x0, h, z0}, {x1, h, z0}, {x1, 0, z0}, {x0, 0, z0}});  // -z
   quad({{x1, h, z1}, {x0, h, z1}, {x0, 0, z1}, {x1, 0, z1}});  // +z
@@ -56,6 +56,17 @@ void WriteBlockScene(const std::string& dir, bool holed) {
   test::WriteFile(dir + "/s.obj", obj);
   test::WriteFile(dir + "/s.mtl",
                   "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n");
+}
+
+// Sum of b * area (channels summed) over patches.csv's patches.
+double PatchPowerTotal(const std::string& path) {
+  double total = 0.0;
+  const auto rows = test::ReadCsv(path);
+  for (size_t i = 1; i < rows.size(); ++i) {
+    const auto& r = rows[i];
+    total += std::stod(r[8]) * (std::stod(r[15]) + std::stod(r[16]) + std::stod(r[17]));
+  }
+  return total;
 }
 
 // The block scene with the whole floor, in one environment (built, so
@@ -219,6 +230,110 @@ TEST(ExposureTest, RootsAreMeasuredBeforeTheFirstShot) {
     partBuried += share > 0.0f && share < 1.0f;
   }
   EXPECT_EQ(partBuried, 1) << "the floor patch half under the block";
+}
+
+// Cut into two environments by the plane y = 3 through a block 4 high,
+// the lower one holds the floor and the block's walls, the upper one its
+// top. From under the block the normal probe leaves for the upper
+// environment, and the floor there is still measured buried: the slanted
+// probes meet the walls from inside. The patch half under the block keeps
+// its open cells in Patch::openCells, which its rays leave from wherever
+// they are traced; one environment draws by power instead and keeps 0.
+TEST(ExposureTest, AFloorUnderABlockCutAboveItIsStillBuried) {
+  for (const int envs : {1, 2}) {
+    test::TempDir dir;
+    WriteBlockScene(dir.path(), false, 4.0);
+    EnvOptions eo;
+    eo.rayEpsilon = 1e-4f;
+    EnvGrid grid;
+    grid.n[1] = envs;
+    test::TestEnvs made;
+    test::MakeTestEnvs(dir.File("s.obj").c_str(), grid, 1.0f, eo, &made);
+    if (HasFatalFailure()) return;
+    const Environment& env = *made.ptrs[0];
+    int seen = 0;
+    for (uint32_t i = 0; i < env.patches().size(); ++i) {
+      const Patch& p = env.patches()[i];
+      const glm::vec3 c = CentreOf(p);
+      if (p.normal.y < 0.5f || std::fabs(c.y) > 1e-4f || std::fabs(c.z - 1.5f) > 1e-3f) continue;
+      const float share = env.elementTree().exposed(i);
+      if (std::fabs(c.x - 1.5f) < 1e-3f) {
+        EXPECT_EQ(share, 0.0f) << envs << " environments: under the block";
+        EXPECT_EQ(p.openCells, 0) << "wholly buried: it never shoots";
+        ++seen;
+      } else if (std::fabs(c.x - 2.5f) < 1e-3f) {
+        EXPECT_EQ(share, 0.5f) << envs << " environments: half under the block";
+        EXPECT_EQ(p.openCells, envs == 1 ? 0 : env.elementTree().open(i));
+        EXPECT_EQ(__builtin_popcount(p.openCells), envs == 1 ? 0 : 8);
+        ++seen;
+      }
+    }
+    EXPECT_EQ(seen, 2) << envs;
+  }
+}
+
+// A closed box 4 on a side, all Kd 0.5, its ceiling the lamp (Ke 1), a
+// block 2 x 2 x 2 in the middle of the floor; at patch size 2 each floor
+// patch is a quarter under the block. Cut by the plane x = 2 through the
+// block, the patches' radiosity accounts for all the light one
+// environment's does (closed: every watt emitted is absorbed by a patch, so
+// the total is the same however it is spread); with the floor's rays left
+// uniformly from under the block (--origins uniform), the block's inside
+// absorbs a share of them on its back faces.
+TEST(ExposureTest, ASplitThroughABlockLosesNoLightUnderIt) {
+  test::TempDir dir;
+  std::string obj = "mtllib s.mtl\nusemtl white\n";
+  int v = 1;
+  auto quad = [&](std::vector<std::vector<double>> c) {
+    for (const auto& p : c)
+      obj += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) +
+             "\n";
+    obj += "f " + std::to_string(v) + " " + std::to_string(v + 1) + " " + std::to_string(v + 2) +
+           " " + std::to_string(v + 3) + "\n";
+    v += 4;
+  };
+  const double L = 4, x0 = 1, x1 = 3, h = 2;
+  quad({{0, 0, 0}, {0, 0, L}, {L, 0, L}, {L, 0, 0}});  // floor, up
+  quad({{0, 0, 0}, {L, 0, 0}, {L, L, 0}, {0, L, 0}});  // the walls, inward
+  quad({{0, 0, L}, {0, L, L}, {L, L, L}, {L, 0, L}});
+  quad({{0, 0, 0}, {0, L, 0}, {0, L, L}, {0, 0, L}});
+  quad({{L, 0, 0}, {L, 0, L}, {L, L, L}, {L, L, 0}});
+  quad({{x0, h, x0}, {x0, h, x1}, {x1, h, x1}, {x1, h, x0}});  // the block: top
+  quad({{x0, h, x0}, {x1, h, x0}, {x1, 0, x0}, {x0, 0, x0}});  // and walls
+  quad({{x1, h, x1}, {x0, h, x1}, {x0, 0, x1}, {x1, 0, x1}});
+  quad({{x0, h, x1}, {x0, h, x0}, {x0, 0, x0}, {x0, 0, x1}});
+  quad({{x1, h, x0}, {x1, h, x1}, {x1, 0, x1}, {x1, 0, x0}});
+  obj += "usemtl lamp\n";
+  quad({{0, L, 0}, {L, L, 0}, {L, L, L}, {0, L, L}});  // ceiling, down
+  test::WriteFile(dir.File("s.obj"), obj);
+  test::WriteFile(dir.File("s.mtl"),
+                  "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+  auto total = [&](const std::string& extra) {
+    std::vector<std::string> args = {"render",
+                                     dir.File("s.obj"),
+                                     "--out",
+                                     dir.File("out"),
+                                     "--width",
+                                     "8",
+                                     "--height",
+                                     "8",
+                                     "--patch-size",
+                                     "2",
+                                     "--direct-samples",
+                                     "0",
+                                     "--emitted-rays",
+                                     "200000",
+                                     "--quiet"};
+    for (const std::string& w : test::Words(extra)) args.push_back(w);
+    test::RunResult r = test::RunMain(args);
+    EXPECT_EQ(r.code, 0) << r.err;
+    return PatchPowerTotal(dir.File("out/patches.csv"));
+  };
+  const double one = total("");
+  ASSERT_GT(one, 0.0);
+  const double split = total("--envs 2"), uniform = total("--envs 2 --origins uniform");
+  EXPECT_NEAR(split / one, 1.0, 0.002) << "split " << split << ", one " << one;
+  EXPECT_LT(uniform / one, 0.995) << "uniform origins lose light under the block";
 }
 
 }  // namespace

@@ -180,8 +180,9 @@ TEST(PacketTest, ForeignEnvironmentsRegenerateTheSourcesRaysExactly) {
   ASSERT_TRUE(MeshScene(scene, all, 45.0f, 1u << 20, &mesh).ok());
   ASSERT_GT(mesh.patches.size(), 100u);
   bool sawTriangle = false;
-  for (const Patch& p : mesh.patches) {
+  for (Patch p : mesh.patches) {
     sawTriangle |= p.numCorners == 3;
+    p.openCells = static_cast<uint16_t>(0x0f0f ^ p.globalId);  // any bits travel
     double power[3] = {1.0, 2.0, 3.0};
     uint64_t key = ShotKey(17, p.globalId, 3);
     uint8_t packet[sizeof(PacketHeader)];
@@ -190,6 +191,7 @@ TEST(PacketTest, ForeignEnvironmentsRegenerateTheSourcesRaysExactly) {
     Patch q = PatchFromHeader(h);
     EXPECT_EQ(h.shotKey, key);
     EXPECT_EQ(q.globalId, p.globalId);
+    EXPECT_EQ(q.openCells, p.openCells);
     PatchSampler a = MakePatchSampler(p), b = MakePatchSampler(q);
     ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << "patch " << p.globalId;
     Rng ra = ShotRng(key), rb = ShotRng(h.shotKey);

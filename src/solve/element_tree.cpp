@@ -115,6 +115,17 @@ double ElementTree::SubtreePower(uint32_t e) const {
   return sum;
 }
 
+void ElementTree::OpenCellsPoint(uint16_t open, float* ua, float* ub) {
+  const int count = __builtin_popcount(open);
+  const float x = *ua * static_cast<float>(count);
+  int pick = std::min(static_cast<int>(x), count - 1), cell = 0;
+  for (int seen = -1; cell < kOpenSide * kOpenSide; ++cell)
+    if (((open >> cell) & 1u) && ++seen == pick) break;
+  const float within = std::min(std::max(x - static_cast<float>(pick), 0.0f), 1.0f);
+  *ua = (static_cast<float>(cell / kOpenSide) + within) / kOpenSide;
+  *ub = (static_cast<float>(cell % kOpenSide) + *ub) / kOpenSide;
+}
+
 bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
                                 glm::vec2* st) const {
   uint32_t e = patch;
@@ -142,17 +153,7 @@ bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
   // part buried, in its open cells (u[1] picks one and is stretched back).
   constexpr float kMargin = 1e-5f;
   float ua = u[1], ub = u[2];
-  if (PartBuried(triangle, e)) {
-    const uint16_t open = open_[e];
-    const int count = __builtin_popcount(open);
-    const float x = ua * static_cast<float>(count);
-    int pick = std::min(static_cast<int>(x), count - 1), cell = 0;
-    for (int seen = -1; cell < kOpenSide * kOpenSide; ++cell)
-      if (((open >> cell) & 1u) && ++seen == pick) break;
-    const float within = std::min(std::max(x - static_cast<float>(pick), 0.0f), 1.0f);
-    ua = (static_cast<float>(cell / kOpenSide) + within) / kOpenSide;
-    ub = (static_cast<float>(cell % kOpenSide) + ub) / kOpenSide;
-  }
+  if (PartBuried(triangle, e)) OpenCellsPoint(open_[e], &ua, &ub);
   float a = std::min(std::max(ua, kMargin), 1.0f - kMargin);
   float b = std::min(std::max(ub, kMargin), 1.0f - kMargin);
   if (triangle) {

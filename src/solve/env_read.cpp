@@ -105,15 +105,16 @@ bool Environment::ReadsOnly(uint32_t rays) const {
 // enters the box, seen from the shooter's centre) of every ray of h that
 // environment `env` traces for it: its stream (ForeignStream), its box.
 template <typename Visit>
-void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
-                                    const glm::vec3& centre, Visit visit) const {
+void Environment::ForEachEntryPixel(const PacketHeader& h, int env, const Patch& shooter,
+                                    const PatchSampler& sampler, const glm::vec3& centre,
+                                    Visit visit) const {
   const Bounds box = envGrid_.EnvBox(env);
   RayPoints points(options_.sobol, ForeignStream(h.shotKey, static_cast<uint32_t>(env)));
   for (uint32_t r = 0; r < h.rays; ++r) {
     float u[5];
     points.Next(r, u, true);
     glm::vec3 local;
-    Ray ray = MakeShotRay(sampler, h.shooterId, u, &local);
+    Ray ray = MakeShotRay(shooter, sampler, u, &local);
     float t0, t1;
     if (!Slabs(ray, box, &t0, &t1)) continue;
     visit(EntryPixel(ray, t0, centre, sampler.frame, local, exchange_.directions()));
@@ -142,7 +143,8 @@ void Environment::ReadPixels(const PacketHeader& h, MaskBits* read) {
       if (cell_[a] != source[a]) beyond &= (c[a] - cell_[a]) * (cell_[a] - source[a]) >= 0;
     if (!beyond) continue;
     stats_.readRays += h.rays;
-    ForEachEntryPixel(h, e, sampler, centre, [read](uint32_t pixel) { read->Open(pixel); });
+    ForEachEntryPixel(h, e, shooter, sampler, centre,
+                      [read](uint32_t pixel) { read->Open(pixel); });
   }
 }
 
@@ -153,7 +155,7 @@ double Environment::ReadShare(const PacketHeader& h, const MaskBits& mask, int t
   const PatchSampler sampler = MakePatchSampler(shooter);
   stats_.readRays += h.rays;
   uint32_t open = 0;
-  ForEachEntryPixel(h, to, sampler, CentreOf(shooter),
+  ForEachEntryPixel(h, to, shooter, sampler, CentreOf(shooter),
                     [&](uint32_t pixel) { open += mask.IsOpen(pixel); });
   return h.rays > 0 ? static_cast<double>(open) / h.rays : 0.0;
 }

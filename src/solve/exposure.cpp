@@ -104,12 +104,14 @@ bool Environment::MeasurePatchExposure(uint32_t i, int fine) {
         int reached = 0;
         for (int r = 0; r < kProbes && reached < kMinReaching; ++r) {
           Hit hit;
-          const bool out =
-              !grid_.Intersect(Ray{x, dirs[r], eps, std::numeric_limits<float>::infinity()}, skip,
-                               &hit) ||
-              hit.front;
-          // The normal alone is enough: a slit's mouth is never straight above.
-          reached += out ? (r == 0 ? kMinReaching : 1) : 0;
+          const Ray probe{x, dirs[r], eps, std::numeric_limits<float>::infinity()};
+          const bool missed = !grid_.Intersect(probe, skip, &hit);
+          // The normal alone is enough: a slit's mouth is never straight
+          // above. Not when it leaves for a neighbour, though: a block cut
+          // by the plane above it has its top there, and from under it only
+          // the slanted probes meet its walls from inside.
+          const bool whole = r == 0 && !(missed && ExitFace(probe) >= 0);
+          reached += missed || hit.front ? (whole ? kMinReaching : 1) : 0;
         }
         const bool reaches = reached >= kMinReaching;
         open += reaches ? 1 : 0;

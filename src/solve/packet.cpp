@@ -17,6 +17,7 @@ PacketHeader ShotHeader(const Patch& p, const double power[3], uint64_t shotKey,
   h.shotIndex = shotIndex;
   h.sourceEnv = sourceEnv;
   h.rays = rays;
+  h.openCells = p.openCells;
   return h;
 }
 
@@ -28,6 +29,7 @@ Patch PatchFromHeader(const PacketHeader& h) {
   p.area = h.area;
   p.numCorners = h.numCorners;
   p.globalId = h.shooterId;
+  p.openCells = h.openCells;
   return p;
 }
 

@@ -92,16 +92,28 @@ struct Environment::ShotTally {
   bool outside;                   // an outside shooter's rays (EnergyLedger::outsideLost)
 };
 
-// Ray r of a shot of shooter `id` from its five uniforms: ShotRay for a
-// patch; for an outside shooter (outside.h) its direction (cosine for the
-// sky, the sun's cone for the sun) from a point of its face, the origin
-// moved back along the ray to OutsideLift() outside the scene's box, so
-// that the ray crosses geometry lying on the box's face (a floor on its
-// bottom) rather than starting in its plane.
-Ray Environment::MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
+// Ray r of a shot of `shooter` from its five uniforms: ShotRay for a
+// patch, its origin moved into the patch's open cells when it has them
+// (Patch::openCells: u[1] picks the cell, u[2] the point across it, as
+// ElementTree::SampleByPower does in a leaf); for an outside shooter (outside.h) its direction
+// (cosine for the sky, the sun's cone for the sun) from a point of its face, the origin moved back
+// along the ray to OutsideLift() outside the scene's box, so that the ray crosses geometry lying on
+// the box's face (a floor on its bottom) rather than starting in its plane.
+Ray Environment::MakeShotRay(const Patch& shooter, const PatchSampler& sampler, const float u[5],
                              glm::vec3* local) const {
-  const OutsideKind kind = OutsideKindOf(id);
-  if (kind == OutsideKind::kNone) return ShotRay(sampler, u, options_.rayEpsilon, local);
+  const OutsideKind kind = OutsideKindOf(shooter.globalId);
+  if (kind == OutsideKind::kNone) {
+    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, local);
+    if (shooter.openCells != 0) {
+      float a = u[1], b = u[2];
+      ElementTree::OpenCellsPoint(shooter.openCells, &a, &b);
+      constexpr float kMargin = 1e-5f;  // PatchSampler::Point's
+      a = FMin(FMax(a, kMargin), 1.0f - kMargin);
+      b = FMin(FMax(b, kMargin), 1.0f - kMargin);
+      ray.o = PatchPoint(shooter, glm::vec2(a, b)) + options_.rayEpsilon * sampler.frame.n;
+    }
+    return ray;
+  }
   const Frame& f = sampler.frame;
   glm::vec3 d;
   if (kind == OutsideKind::kSky) {
@@ -204,8 +216,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   const glm::vec3 centre = CentreOf(shooter);
   // One environment: a local patch's rays leave from where its light
   // landed (ElementTree::SampleByPower). With neighbours a foreign
-  // environment regenerates the shot's rays from the patch alone, so they
-  // leave uniformly.
+  // environment regenerates the shot's rays from the packet alone, so they
+  // leave uniformly from the patch's open cells (MakeShotRay).
   const bool byPower = options_.originsByPower && !foreign && numNeighbours_ == 0 &&
                        OutsideKindOf(shooter.globalId) == OutsideKind::kNone &&
                        shooter.ke[0] + shooter.ke[1] + shooter.ke[2] == 0.0f;
@@ -213,7 +225,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     float u[5];
     shot.points.Next(r, u, true);
     glm::vec3 local;
-    Ray ray = MakeShotRay(shot.sampler, shooter.globalId, u, &local);
+    Ray ray = MakeShotRay(shooter, shot.sampler, u, &local);
     glm::vec2 st;
     if (byPower && elements_.SampleByPower(shooter.numCorners == 3, skip.patch, u, &st))
       ray.o = PatchPoint(shooter, st) + options_.rayEpsilon * shot.sampler.frame.n;
@@ -371,7 +383,7 @@ void Environment::TraceAlive(const Patch& shooter, Skip skip, const double power
   double flight[3] = {0, 0, 0}, ratio[3];
   auto trace = [&](uint32_t r, const float u[5]) {
     glm::vec3 local;
-    Ray ray = MakeShotRay(shot.sampler, shooter.globalId, u, &local);
+    Ray ray = MakeShotRay(shooter, shot.sampler, u, &local);
     ++tally.traced;
     if (shot.sky.map) {
       shot.sky.Of(ray.d, shot.share, ratio);

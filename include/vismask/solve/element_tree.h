@@ -67,6 +67,14 @@ class ElementTree {
     open_[e] = open;
   }
   uint16_t open(uint32_t e) const { return open_[e]; }
+  // Leaf e's open cells when it is a quad measured part buried, else 0
+  // (Patch::openCells of a root).
+  uint16_t PartOpen(bool triangle, uint32_t e) const {
+    return PartBuried(triangle, e) ? open_[e] : 0;
+  }
+  // (ua, ub) uniform in a unit square moved into its open cells `open`
+  // (nonzero): ua picks one, in cell order, and is stretched back.
+  static void OpenCellsPoint(uint16_t open, float* ua, float* ub);
   // What spreads leaf e's received power over its exposed part: 1 / its
   // exposed share, 1 until measured or where wholly buried (the leaf then
   // weighs nothing in its vertices, and any value will do).

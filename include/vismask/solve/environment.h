@@ -174,7 +174,7 @@ class Environment {
   // pixels gather, which counts options_.emissionRays of its worth in rays.
   uint32_t ShotRays(const double power[3], double emission, uint64_t shotKey,
                     double* fraction) const;
-  Ray MakeShotRay(const PatchSampler& sampler, uint32_t id, const float u[5],
+  Ray MakeShotRay(const Patch& shooter, const PatchSampler& sampler, const float u[5],
                   glm::vec3* local) const;
   void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
                   uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
@@ -192,8 +192,8 @@ class Environment {
   void ReadPixels(const PacketHeader& h, MaskBits* read);
   double ReadShare(const PacketHeader& h, const MaskBits& mask, int to);
   template <typename Visit>
-  void ForEachEntryPixel(const PacketHeader& h, int env, const PatchSampler& sampler,
-                         const glm::vec3& centre, Visit visit) const;
+  void ForEachEntryPixel(const PacketHeader& h, int env, const Patch& shooter,
+                         const PatchSampler& sampler, const glm::vec3& centre, Visit visit) const;
   float CentreLift(uint32_t id) const;
   float OutsideLift() const;
   bool PartCentres() const;

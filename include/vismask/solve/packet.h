@@ -38,7 +38,8 @@ struct PacketHeader {
   // environment's pixels gather when they gather every environment's
   // emitters (foreign_light.h).
   float direct[3];
-  uint32_t reserved;  // 0
+  uint16_t openCells;  // Patch::openCells: where the shot's rays leave from
+  uint16_t reserved;   // 0
 };
 static_assert(std::is_trivially_copyable<PacketHeader>::value, "packets are plain bytes");
 static_assert(sizeof(PacketHeader) == 144, "the packet header's layout is part of the wire format");

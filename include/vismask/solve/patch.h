@@ -67,6 +67,12 @@ struct Patch {
   uint32_t surface;     // index of the source polygon in the scene
   uint32_t vertex[4];   // display-lattice vertices, for Gouraud shading
   uint32_t globalId;    // id in the whole scene, independent of partition
+  // With neighbours, the kOpenSide x kOpenSide cells of a quad's parameter
+  // square that are not buried in a closed solid (ElementTree::open, bit
+  // a * 4 + b), when some are and some are not: its rays leave from those
+  // cells alone, locally and wherever a packet carries the shot
+  // (ElementTree::OpenCellsPoint). 0: every cell open, or not measured.
+  uint16_t openCells;
 };
 
 constexpr uint32_t kNoTexture = 0xffffffffu;
