@@ -13,6 +13,8 @@
 #include <type_traits>
 #include <unordered_map>
 
+#include "shot_ray.h"
+#include "vismask/core/os.h"
 #include "vismask/solve/centre_raster.h"
 #include "vismask/solve/rng.h"
 
@@ -394,6 +396,27 @@ bool Environment::RestoreState(const EnvState& s) {
   StateFields(*this, s);
   exchange_.outbox().Clear();
   return true;
+}
+
+// --max-seconds's plan: the seconds `rays` form-factor-like rays take here.
+double Environment::TimeRays(uint32_t rays) const {
+  if (patches_.empty()) return 0.0;
+  Rng rng(0x5eed, 41);
+  const uint32_t n = static_cast<uint32_t>(patches_.size());
+  uint64_t hits = 0;
+  double start = os::Seconds();
+  for (uint32_t k = 0; k < rays; ++k) {
+    uint32_t i = static_cast<uint32_t>((uint64_t(k) * 2654435761u) % n);
+    PatchSampler sampler = MakePatchSampler(patches_[i]);
+    float u[5];
+    for (float& x : u) x = rng.NextFloat();
+    glm::vec3 local;
+    Ray ray = ShotRay(sampler, u, options_.rayEpsilon, &local);
+    Hit hit;
+    hits += grid_.Intersect(ray, Skip(i, twinOf(i)), &hit) ? 1 : 0;
+  }
+  double seconds = os::Seconds() - start;
+  return hits > rays ? 0.0 : seconds;  // (hits read, so the loop stays)
 }
 
 }  // namespace vismask
