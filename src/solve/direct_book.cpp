@@ -11,6 +11,7 @@ void DirectBook::Layout(Arena& arena, uint32_t numPatches, bool on, bool smooth,
                         const DirectLight::Counts& counts) {
   on_ = on;
   emitLeft_ = arena.Alloc<double>(on ? 3 * size_t(numPatches) : 0);
+  emitTotal_ = arena.Alloc<double>(on ? 3 : 0);
   smoothPatch_ = arena.Alloc<uint8_t>(on && smooth ? numPatches : 0);
   light_.Layout(arena, on ? counts : DirectLight::Counts{});
 }
@@ -40,7 +41,9 @@ void DirectBook::BookLocalShot(uint32_t i, int c, double unshot, double power, d
   if (!emitLeft_.empty() && unshot > 0.0) {
     double& left = emitLeft_[3 * size_t(i) + c];
     shotDirect_[c] = std::fmin(1.0, left / unshot);
+    const double before = left;
     left = fraction < 1.0 ? left - shotDirect_[c] * power : 0.0;
+    emitTotal_[c] += left - before;
   }
 }
 

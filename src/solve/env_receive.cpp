@@ -149,6 +149,15 @@ uint32_t Environment::IndirectFilterSteps() const {
 
 void Environment::EmissionUnshot(double out[3]) const {
   direct_.EmissionUnshot(out);
+  AddOutsideEmission(out);
+}
+
+void Environment::EmissionLeft(double out[3]) const {
+  direct_.EmissionLeft(out);
+  AddOutsideEmission(out);
+}
+
+void Environment::AddOutsideEmission(double out[3]) const {
   for (uint32_t k = 0; k < outside_.size(); ++k)
     if (direct_.Gathers(OutsideKindOf(outside_[k].shooter.patch.globalId)))
       for (int c = 0; c < 3; ++c) out[c] += outside_[k].unshot[c];

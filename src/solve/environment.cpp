@@ -324,6 +324,7 @@ void Environment::Reset() {
     direct_.ResetPatch(i, e.unshot);
     tree_.Set(i, UnshotKey(e));
   }
+  direct_.SumEmission();
   elements_.Reset(patches_);
   // The leaves' buried parts, before any shot: rays leave from the open
   // part of a patch that runs on under a solid (ElementTree::SampleByPower).

@@ -79,7 +79,7 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
     // count without it (EnergyLedger::outsideLost; 0 without them).
     r.emitted = Sum3(l.emitted) - Sum3(l.outsideLost);
     double emission[3];
-    e->EmissionUnshot(emission);
+    e->EmissionLeft(emission);
     r.emission = Sum3(emission);
     const uint32_t queued = e->exchange().queue().count(), out = e->exchange().outbox().count();
     r.held = uint64_t(queued) + out;

@@ -76,6 +76,15 @@ class DirectBook {
     return e;
   }
   void EmissionUnshot(double out[3]) const;
+  // The same, kept as the shots book it (within rounding of
+  // EmissionUnshot's sum; SumEmission sets it exactly): what every round's
+  // report carries (EnvSums::emission), which may not walk the patches.
+  void SumEmission() {
+    if (!emitTotal_.empty()) EmissionUnshot(emitTotal_.data());
+  }
+  void EmissionLeft(double out[3]) const {
+    for (int c = 0; c < 3; ++c) out[c] = emitTotal_.empty() ? 0.0 : emitTotal_[c];
+  }
 
   void SetShowIndirect(bool on) { showIndirect_ = on; }
   bool showIndirect() const { return showIndirect_; }
@@ -89,6 +98,7 @@ class DirectBook {
   bool on_ = false;
   bool gathersForeign_ = false;
   Span<double> emitLeft_;
+  Span<double> emitTotal_;  // 3: the sum of emitLeft_ as booked
   double shotDirect_[3] = {0, 0, 0};
   Span<uint8_t> smoothPatch_;  // 1 per patch of a smoothed polygon
   bool showIndirect_ = false;

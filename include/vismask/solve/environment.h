@@ -102,6 +102,9 @@ class Environment {
   float rayEpsilon() const { return options_.rayEpsilon; }
   // Unshot emission whose first bounce the pixels gather (emitters', gathered suns').
   void EmissionUnshot(double out[3]) const;
+  // The same from DirectBook's running sum (EmissionLeft): without walking
+  // the patches, so that every round may report it (EnvSums::emission).
+  void EmissionLeft(double out[3]) const;
 
   uint32_t index() const { return index_; }
   uint32_t packetBytes() const { return exchange_.outbox().packetBytes(); }
@@ -194,6 +197,7 @@ class Environment {
   template <typename Visit>
   void ForEachEntryPixel(const PacketHeader& h, int env, const Patch& shooter,
                          const PatchSampler& sampler, const glm::vec3& centre, Visit visit) const;
+  void AddOutsideEmission(double out[3]) const;  // the gathered outside shooters' unshot
   float CentreLift(uint32_t id) const;
   float OutsideLift() const;
   bool PartCentres() const;
