@@ -336,5 +336,24 @@ TEST(ExposureTest, ASplitThroughABlockLosesNoLightUnderIt) {
   EXPECT_LT(uniform / one, 0.995) << "uniform origins lose light under the block";
 }
 
+// A shooter's masks are cast from its centre, or with open cells from the
+// centre of the open cell nearest their mean: from a patch whose centre
+// lies under a block every centre ray would start inside it.
+TEST(ExposureTest, MasksAreCastFromAnOpenCell) {
+  gridtest::TestScene s;
+  gridtest::AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1, 1, &s);
+  ASSERT_EQ(s.patches.size(), 1u);
+  Patch p = s.patches[0];
+  const glm::vec3 centre = CentreOf(p);
+  EXPECT_EQ(MaskCentre(p), centre) << "no open cells: the centre";
+  // Open: the cells with a (along the first edge) 0 or 1, and (2, 0).
+  p.openCells = 0x00ff | (1u << 8);
+  const glm::vec2 st = PatchParam(p, MaskCentre(p));
+  const int a = static_cast<int>(st.x * 4.0f), b = static_cast<int>(st.y * 4.0f);
+  EXPECT_TRUE((p.openCells >> (a * 4 + b)) & 1u) << st.x << "," << st.y;
+  EXPECT_NEAR(st.x, 0.375f, 1e-6f) << "the open cell nearest the mean (0.29, 0.46)";
+  EXPECT_NEAR(st.y, 0.375f, 1e-6f);
+}
+
 }  // namespace
 }  // namespace vismask

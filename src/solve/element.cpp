@@ -65,6 +65,28 @@ glm::vec3 PatchPoint(const Patch& p, glm::vec2 st) {
          st.x * st.y * p.corner[2] + (1.0f - st.x) * st.y * p.corner[3];
 }
 
+glm::vec3 MaskCentre(const Patch& p) {
+  if (p.openCells == 0) return CentreOf(p);
+  constexpr int kSide = 4;  // ElementTree::kOpenSide
+  auto centre = [](int cell) {
+    return glm::vec2((cell / kSide + 0.5f) / kSide, (cell % kSide + 0.5f) / kSide);
+  };
+  glm::vec2 mean(0.0f);
+  int count = 0;
+  for (int cell = 0; cell < kSide * kSide; ++cell)
+    if ((p.openCells >> cell) & 1u) mean += centre(cell), ++count;
+  mean /= static_cast<float>(count);
+  int best = -1;
+  float bestD = 0.0f;
+  for (int cell = 0; cell < kSide * kSide; ++cell) {
+    if (!((p.openCells >> cell) & 1u)) continue;
+    const glm::vec2 d = centre(cell) - mean;
+    const float d2 = d.x * d.x + d.y * d.y;
+    if (best < 0 || d2 < bestD) best = cell, bestD = d2;
+  }
+  return PatchPoint(p, centre(best));
+}
+
 uint32_t ChildOf(bool triangle, glm::vec2* st) {
   float s = st->x, t = st->y;
   if (!triangle) {

@@ -51,9 +51,7 @@ double Environment::FlightShare(const PacketHeader& h, const uint8_t* bits, cons
   // The centre ray's origin and frame, as Method B casts it.
   Patch shooter = PatchFromHeader(h);
   Frame f = MakePatchSampler(shooter).frame;
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
-  centre /= static_cast<float>(shooter.numCorners);
+  const glm::vec3 centre = MaskCentre(shooter);
   const glm::vec3 o = centre + CentreLift(shooter.globalId) * f.n;
   const double halfPi = 1.5707963267948966;
   const double* colCs = exchange_.flightCols();

@@ -129,7 +129,7 @@ void Environment::ReadPixels(const PacketHeader& h, MaskBits* read) {
   read->SetAllClosed();
   const Patch shooter = PatchFromHeader(h);  // as the receivers make it
   const PatchSampler sampler = MakePatchSampler(shooter);
-  const glm::vec3 centre = CentreOf(shooter);
+  const glm::vec3 centre = MaskCentre(shooter);
   int source[3];
   envGrid_.Cell(static_cast<int>(h.sourceEnv), source);
   for (int e = 0; e < envGrid_.count(); ++e) {
@@ -155,7 +155,7 @@ double Environment::ReadShare(const PacketHeader& h, const MaskBits& mask, int t
   const PatchSampler sampler = MakePatchSampler(shooter);
   stats_.readRays += h.rays;
   uint32_t open = 0;
-  ForEachEntryPixel(h, to, shooter, sampler, CentreOf(shooter),
+  ForEachEntryPixel(h, to, shooter, sampler, MaskCentre(shooter),
                     [&](uint32_t pixel) { open += mask.IsOpen(pixel); });
   return h.rays > 0 ? static_cast<double>(open) / h.rays : 0.0;
 }

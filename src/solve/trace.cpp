@@ -212,7 +212,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   }
   ShotSetup shot(options_, shooter, power, stream, rays);
   ShotTally tally(shooter);
-  const glm::vec3 centre = CentreOf(shooter);
+  const glm::vec3 centre = MaskCentre(shooter);
   // One environment: a local patch's rays leave from where its light
   // landed (ElementTree::SampleByPower). With neighbours a foreign
   // environment regenerates the shot's rays from the packet alone, so they
@@ -318,9 +318,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
 // hit, after closing those that lead to no neighbour (KeepExits).
 void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
   PatchSampler sampler = MakePatchSampler(shooter);
-  glm::vec3 centre(0.0f);
-  for (uint32_t k = 0; k < shooter.numCorners; ++k) centre += shooter.corner[k];
-  centre /= static_cast<float>(shooter.numCorners);
+  const glm::vec3 centre = MaskCentre(shooter);
   const CentreRays rays{centre + CentreLift(shooter.globalId) * sampler.frame.n, sampler.frame,
                         &exchange_.directions()};
   // From inside this box, a direction that cannot leave through a face

@@ -51,6 +51,12 @@ struct ElementOptions {
 glm::vec2 PatchParam(const Patch& p, const glm::vec3& x);
 // The point of patch `p` at (s, t).
 glm::vec3 PatchPoint(const Patch& p, glm::vec2 st);
+// Where a shooter's centre rays (its masks, Methods B and C, and the share
+// of its power in flight) leave from: its centre (CentreOf), or with open
+// cells (Patch::openCells) the centre of the open cell nearest their mean,
+// so that a patch whose centre lies under a block does not cast them all
+// from inside it. The same on every rank: the packet carries the cells.
+glm::vec3 MaskCentre(const Patch& p);
 // The child of an element holding `st` (in the element's own parameters),
 // with `st` mapped into the child's parameters.
 uint32_t ChildOf(bool triangle, glm::vec2* st);
