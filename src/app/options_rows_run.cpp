@@ -69,11 +69,12 @@ shot's origin x direction; random: independent draws)")
           .Json("sampler"),
       Choice("--origins", &O::originsByPower, "power|uniform")
           .Help("O", R"(
-where a patch's rays leave from, with one environment:
-power (default): its elements in proportion to the
-light each received (none from a part hidden under a
-block, or behind a lamp); uniform: anywhere on the
-patch alike (always, with several environments))")
+where a patch's rays leave from: power (default):
+with one environment its elements in proportion to the
+light each received, with several uniformly over its
+cells not buried in a solid (none from a part hidden
+under a block, or behind a lamp); uniform: anywhere on
+the patch alike)")
           .Json("origins"),
       Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
           .Help("N", "stop once N form-factor rays have been traced")
