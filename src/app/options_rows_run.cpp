@@ -69,12 +69,11 @@ shot's origin x direction; random: independent draws)")
           .Json("sampler"),
       Choice("--origins", &O::originsByPower, "power|uniform")
           .Help("O", R"(
-where a patch's rays leave from: power (default):
-with one environment its elements in proportion to the
-light each received, with several uniformly over its
-cells not buried in a solid (none from a part hidden
-under a block, or behind a lamp); uniform: anywhere on
-the patch alike)")
+where a patch's rays leave from: power (default): its
+elements by the light each received (one environment),
+or its cells not buried in a solid (several), none
+from a part under a block or behind a lamp; uniform:
+anywhere on the patch alike)")
           .Json("origins"),
       Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
           .Help("N", "stop once N form-factor rays have been traced")
