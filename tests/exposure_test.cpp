@@ -19,20 +19,27 @@
 namespace vismask {
 namespace {
 
+// An OBJ file's text in material white (s.mtl), one quad face a call
+// (its corners in order).
+struct ObjQuads {
+  std::string text = "mtllib s.mtl\nusemtl white\n";
+  int next = 1;
+  void Quad(const std::vector<std::vector<double>>& c) {
+    for (const auto& p : c)
+      text += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " +
+              std::to_string(p[2]) + "\n";
+    text += "f " + std::to_string(next) + " " + std::to_string(next + 1) + " " +
+            std::to_string(next + 2) + " " + std::to_string(next + 3) + "\n";
+    next += 4;
+  }
+};
+
 // The floor [0, 4]^2 at y = 0, facing up, whole or (holed) cut around the
 // block's footprint [1, 2.5] x [1, 2]; the block (height h, five faces, no
 // bottom) and a lamp [0, 4]^2 facing down at y = 6.
 void WriteBlockScene(const std::string& dir, bool holed, double h = 1.0) {
-  std::string obj = "mtllib s.mtl\nusemtl white\n";
-  int v = 1;
-  auto quad = [&](std::vector<std::vector<double>> c) {
-    for (const auto& p : c)
-      obj += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) +
-             "\n";
-    obj += "f " + std::to_string(v) + " " + std::to_string(v + 1) + " " + std::to_string(v + 2) +
-           " " + std::to_string(v + 3) + "\n";
-    v += 4;
-  };
+  ObjQuads obj;
+  auto quad = [&](const std::vector<std::vector<double>>& c) { obj.Quad(c); };
   // Counter-clockwise seen from above: facing up.
   auto floor = [&](double x0, double z0, double x1, double z1) {
     quad({{x0, 0, z0}, {x0, 0, z1}, {x1, 0, z1}, {x1, 0, z0}});
@@ -51,9 +58,9 @@ void WriteBlockScene(const std::string& dir, bool holed, double h = 1.0) {
   quad({{x1, h, z1}, {x0, h, z1}, {x0, 0, z1}, {x1, 0, z1}});  // +z
   quad({{x0, h, z1}, {x0, h, z0}, {x0, 0, z0}, {x0, 0, z1}});  // -x
   quad({{x1, h, z0}, {x1, h, z1}, {x1, 0, z1}, {x1, 0, z0}});  // +x
-  obj += "usemtl lamp\n";
+  obj.text += "usemtl lamp\n";
   quad({{0, 6, 0}, {4, 6, 0}, {4, 6, 4}, {0, 6, 4}});  // facing down
-  test::WriteFile(dir + "/s.obj", obj);
+  test::WriteFile(dir + "/s.obj", obj.text);
   test::WriteFile(dir + "/s.mtl",
                   "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 4 4 4\n");
 }
@@ -282,16 +289,8 @@ TEST(ExposureTest, AFloorUnderABlockCutAboveItIsStillBuried) {
 // absorbs a share of them on its back faces.
 TEST(ExposureTest, ASplitThroughABlockLosesNoLightUnderIt) {
   test::TempDir dir;
-  std::string obj = "mtllib s.mtl\nusemtl white\n";
-  int v = 1;
-  auto quad = [&](std::vector<std::vector<double>> c) {
-    for (const auto& p : c)
-      obj += "v " + std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) +
-             "\n";
-    obj += "f " + std::to_string(v) + " " + std::to_string(v + 1) + " " + std::to_string(v + 2) +
-           " " + std::to_string(v + 3) + "\n";
-    v += 4;
-  };
+  ObjQuads obj;
+  auto quad = [&](const std::vector<std::vector<double>>& c) { obj.Quad(c); };
   const double L = 4, x0 = 1, x1 = 3, h = 2;
   quad({{0, 0, 0}, {0, 0, L}, {L, 0, L}, {L, 0, 0}});  // floor, up
   quad({{0, 0, 0}, {L, 0, 0}, {L, L, 0}, {0, L, 0}});  // the walls, inward
@@ -303,9 +302,9 @@ TEST(ExposureTest, ASplitThroughABlockLosesNoLightUnderIt) {
   quad({{x1, h, x1}, {x0, h, x1}, {x0, 0, x1}, {x1, 0, x1}});
   quad({{x0, h, x1}, {x0, h, x0}, {x0, 0, x0}, {x0, 0, x1}});
   quad({{x1, h, x0}, {x1, h, x1}, {x1, 0, x1}, {x1, 0, x0}});
-  obj += "usemtl lamp\n";
+  obj.text += "usemtl lamp\n";
   quad({{0, L, 0}, {L, L, 0}, {L, L, L}, {0, L, L}});  // ceiling, down
-  test::WriteFile(dir.File("s.obj"), obj);
+  test::WriteFile(dir.File("s.obj"), obj.text);
   test::WriteFile(dir.File("s.mtl"),
                   "newmtl white\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
   auto total = [&](const std::string& extra) {

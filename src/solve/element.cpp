@@ -4,6 +4,7 @@
 #include <glm/geometric.hpp>
 
 #include "vismask/core/fminmax.h"
+#include "vismask/solve/element_tree.h"
 
 namespace vismask {
 
@@ -67,7 +68,7 @@ glm::vec3 PatchPoint(const Patch& p, glm::vec2 st) {
 
 glm::vec3 MaskCentre(const Patch& p) {
   if (p.openCells == 0) return CentreOf(p);
-  constexpr int kSide = 4;  // ElementTree::kOpenSide
+  constexpr int kSide = ElementTree::kOpenSide;
   auto centre = [](int cell) {
     return glm::vec2((cell / kSide + 0.5f) / kSide, (cell % kSide + 0.5f) / kSide);
   };

@@ -122,8 +122,10 @@ void ElementTree::OpenCellsPoint(uint16_t open, float* ua, float* ub) {
   for (int seen = -1; cell < kOpenSide * kOpenSide; ++cell)
     if (((open >> cell) & 1u) && ++seen == pick) break;
   const float within = std::min(std::max(x - static_cast<float>(pick), 0.0f), 1.0f);
-  *ua = (static_cast<float>(cell / kOpenSide) + within) / kOpenSide;
-  *ub = (static_cast<float>(cell % kOpenSide) + *ub) / kOpenSide;
+  *ua = std::min(std::max((static_cast<float>(cell / kOpenSide) + within) / kOpenSide, kMargin),
+                 1.0f - kMargin);
+  *ub = std::min(std::max((static_cast<float>(cell % kOpenSide) + *ub) / kOpenSide, kMargin),
+                 1.0f - kMargin);
 }
 
 bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
@@ -151,7 +153,6 @@ bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
   }
   // Uniform in the leaf, a hair inside it (PatchSampler::Point's margin);
   // part buried, in its open cells (u[1] picks one and is stretched back).
-  constexpr float kMargin = 1e-5f;
   float ua = u[1], ub = u[2];
   if (PartBuried(triangle, e)) OpenCellsPoint(open_[e], &ua, &ub);
   float a = std::min(std::max(ua, kMargin), 1.0f - kMargin);

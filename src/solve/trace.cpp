@@ -94,10 +94,12 @@ struct Environment::ShotTally {
 // Ray r of a shot of `shooter` from its five uniforms: ShotRay for a
 // patch, its origin moved into the patch's open cells when it has them
 // (Patch::openCells: u[1] picks the cell, u[2] the point across it, as
-// ElementTree::SampleByPower does in a leaf); for an outside shooter (outside.h) its direction
-// (cosine for the sky, the sun's cone for the sun) from a point of its face, the origin moved back
-// along the ray to OutsideLift() outside the scene's box, so that the ray crosses geometry lying on
-// the box's face (a floor on its bottom) rather than starting in its plane.
+// ElementTree::SampleByPower does in a leaf); for an outside shooter
+// (outside.h) its direction (cosine for the sky, the sun's cone for the
+// sun) from a point of its face, the origin moved back along the ray to
+// OutsideLift() outside the scene's box, so that the ray crosses geometry
+// lying on the box's face (a floor on its bottom) rather than starting in
+// its plane.
 Ray Environment::MakeShotRay(const Patch& shooter, const PatchSampler& sampler, const float u[5],
                              glm::vec3* local) const {
   const OutsideKind kind = OutsideKindOf(shooter.globalId);
@@ -106,9 +108,6 @@ Ray Environment::MakeShotRay(const Patch& shooter, const PatchSampler& sampler, 
     if (shooter.openCells != 0) {
       float a = u[1], b = u[2];
       ElementTree::OpenCellsPoint(shooter.openCells, &a, &b);
-      constexpr float kMargin = 1e-5f;  // PatchSampler::Point's
-      a = FMin(FMax(a, kMargin), 1.0f - kMargin);
-      b = FMin(FMax(b, kMargin), 1.0f - kMargin);
       ray.o = PatchPoint(shooter, glm::vec2(a, b)) + options_.rayEpsilon * sampler.frame.n;
     }
     return ray;

@@ -73,7 +73,9 @@ class ElementTree {
     return PartBuried(triangle, e) ? open_[e] : 0;
   }
   // (ua, ub) uniform in a unit square moved into its open cells `open`
-  // (nonzero): ua picks one, in cell order, and is stretched back.
+  // (nonzero): ua picks one, in cell order, and is stretched back; kept
+  // kMargin inside the square (PatchSampler::Point's margin).
+  static constexpr float kMargin = 1e-5f;
   static void OpenCellsPoint(uint16_t open, float* ua, float* ub);
   // What spreads leaf e's received power over its exposed part: 1 / its
   // exposed share, 1 until measured or where wholly buried (the leaf then

@@ -23,7 +23,7 @@ struct EnvSums {
   double flight = 0.0;  // the latter (Environment::FlightPower), channels summed
   double lost = 0.0;    // emitted - absorbed - escaped - unshot (both parts): the loss
   double emitted = 0.0;
-  // The emission not yet shot (Environment::EmissionUnshot), channels summed.
+  // The emission not yet shot (Environment::EmissionLeft), channels summed.
   double emission = 0.0;
   double radiosity = 0.0;  // sum of b * area, channels summed
   double kdArea = 0.0;     // sum of kd * area, channels averaged (constant)

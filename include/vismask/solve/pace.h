@@ -1,18 +1,19 @@
-// --max-seconds's pacing: a planned solve (one environment on one rank,
-// power allocation, --emitted-rays from the plan) spends its budget by
-// re-planning its ray quantum as it goes. Several environments are paced
-// as one: the quantum is the same in all of them, and it is re-planned
-// from the round's totals alone (rank 0's clock, the sums in environment
-// order), so every rank would set the same one at the same round. The plan's rate is timed at init
-// on 20 000 rays and the solve's own rate differs from it (its shots land,
-// book and split elements), so a plan alone ends its solves anywhere from
-// 70% to past 100% of T. The pacer measures the rate the solve traces at,
-// estimates the ray worth still to shoot (the unshot power, the emission's
-// at its --emission-rays share, and what the power reflects until
-// --stop-unshot), and sets the quantum that spends those rays by the
-// target end. Each shot stays an unbiased estimate whatever its ray count;
-// only the rays per unit power move. The outputs then depend on the timing,
-// as every --max-seconds run's already do through the plan.
+// --max-seconds's pacing: a planned solve (one rank, power allocation,
+// --emitted-rays from the plan) spends its budget by re-planning its ray
+// quantum as it goes. Several environments (Method R) are paced as one:
+// the quantum is the same in all of them, and it is re-planned from the
+// round's totals alone (rank 0's clock, the sums in environment order), so
+// every rank would set the same one at the same round. The plan's rate is
+// timed at init on 20 000 rays and the solve's own rate differs from it
+// (its shots land, book and split elements), so a plan alone ends its
+// solves anywhere from 70% to past 100% of T. The pacer measures the rate
+// the solve traces at, estimates the ray worth still to shoot (the unshot
+// power, the emission's at its --emission-rays share, and what the power
+// reflects until --stop-unshot), and sets the quantum that spends those
+// rays by the target end. Each shot stays an unbiased estimate whatever
+// its ray count; only the rays per unit power move. The outputs then
+// depend on the timing, as every --max-seconds run's already do through
+// the plan.
 #pragma once
 #include <cstdint>
 
