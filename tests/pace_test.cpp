@@ -99,6 +99,77 @@ TEST_F(PacerOnAnEnvironment, TheTailIsPaidFirstAndNearTheEndTheQuantumStays) {
   EXPECT_EQ(pacer.updates(), 1u);
 }
 
+// The shots a solve with shot costs still makes: the plan's local shots,
+// each with as many foreign ones as the shots made so far have had, less
+// those made; or the shots a tenfold fall has taken, for each fall still
+// to come; whichever is more.
+TEST(PaceTest, TheShotsLeftAreThePlansOrTheFallsToComeWhicheverIsMore) {
+  // 1000 shots made, 750 of them foreign: a local shot leads to 4 in all.
+  EXPECT_NEAR(Pacer::ShotsLeft(10000.0, 1000, 750, 0.0, 100.0, 1.0), 40000.0 - 1000.0, 1e-9);
+  // None made yet: the plan's.
+  EXPECT_NEAR(Pacer::ShotsLeft(10000.0, 0, 0, 0.0, 100.0, 1.0), 10000.0, 1e-9);
+  // Two tenfold falls to come at 30 000 shots each.
+  EXPECT_NEAR(Pacer::ShotsLeft(10000.0, 1000, 750, 30000.0, 100.0, 1.0), 60000.0, 1e-6);
+  // Past the plan, and at the stop: none.
+  EXPECT_EQ(Pacer::ShotsLeft(100.0, 1000, 0, 30000.0, 1.0, 1.0), 0.0);
+}
+
+// With shot costs (several environments, Methods A-C) the time the shots
+// still to make take beside their rays is paid first, at the work a shot
+// has cost (its least over an interval) over the work a second; the rays'
+// rate is the work a second over the work a ray costs. Shots that leave
+// no time coarsen the quantum as fast as it may (1.25 a re-plan); while
+// the emission is still to shoot it never refines.
+TEST_F(PacerOnAnEnvironment, WithShotCostsTheShotsLeftArePaidFirst) {
+  PaceInput in;
+  in.endSeconds = 1.0;
+  in.stopUnshot = 0.001;  // 1 of the 1000 emitted
+  in.shotCosts = true;
+  // At 0.5 s: 1e8 work (2e8 a second), 1e6 rays, 1000 shots from 1000
+  // unshot to 250 (1000 / log10(4) shots a tenfold fall), shotWork a shot.
+  auto totals = [](double shotWork, double emission) {
+    RoundTotals t = Totals(0.5, 1000000);
+    t.paceWork = 100000000;
+    t.shotWork = static_cast<uint64_t>(1000.0 * shotWork);
+    t.shots = 1000;
+    t.emission = emission;
+    return t;
+  };
+  const double perDecade = 1000.0 / std::log10(4.0), shotsLeft = perDecade * std::log10(250.0);
+  const double worth = (250.0 - 1.0) / 0.75;
+  {
+    // 1e4 work a shot: the shots left take 0.2 s of the 0.5; a ray costs
+    // (1e8 - 1e7) / 1e6 = 90, so 2e8 / 90 rays a second in the 0.3 s left.
+    const double shotSeconds = shotsLeft * 1.0e4 / 2.0e8;
+    const double want = worth / (2.0e8 / 90.0 * (0.5 - shotSeconds));
+    env_->SetRayQuantum(1.1 * want);
+    Pacer pacer(in);
+    pacer.AfterRound(totals(1.0e4, 0.0), envs());
+    EXPECT_NEAR(env_->rayQuantum(), want, 1e-9 * want);
+    // A pace by rays alone would have spent the 0.5 s on rays.
+    EXPECT_GT(env_->rayQuantum(), 1.5 * worth / (2.0e8 / 90.0 * 0.5));
+  }
+  {
+    // 5e4 work a shot: the shots left take all the time left.
+    env_->SetRayQuantum(0.01);
+    Pacer pacer(in);
+    pacer.AfterRound(totals(5.0e4, 0.0), envs());
+    EXPECT_NEAR(env_->rayQuantum(), 0.0125, 1e-15) << "behind: coarsened as fast as it may";
+  }
+  {
+    // Cheap shots and 10% of the emission still to shoot: the pace would
+    // refine a coarse quantum, but keeps it.
+    env_->SetRayQuantum(1.0);
+    Pacer pacer(in);
+    pacer.AfterRound(totals(1.0e4, 100.0), envs());
+    EXPECT_EQ(env_->rayQuantum(), 1.0);
+    env_->SetRayQuantum(1.0);
+    Pacer refines(in);
+    refines.AfterRound(totals(1.0e4, 0.0), envs());
+    EXPECT_NEAR(env_->rayQuantum(), 0.8, 1e-12) << "without emission left it refines";
+  }
+}
+
 // The round reports' emission not yet shot (EnvSums::emission) is kept
 // as the shots book it, not summed over the patches each round (a
 // one-environment solve's rounds are one shot each: the sum over 7 500
@@ -128,10 +199,10 @@ TEST(PaceTest, TheReportedEmissionIsTheSumOverThePatches) {
   EXPECT_LT(sum[0], 0.5 * emitted) << "the lamp has shot";
 }
 
-// A planned --max-seconds run in one environment, or in several under
-// Method R, is paced and says so in run.json; given --emitted-rays, or
-// under Method B, whose time goes to its masks, it is not.
-TEST(PaceTest, APlannedRunInOneEnvironmentOrUnderMethodRIsPaced) {
+// A planned --max-seconds run, in one environment or several, under any
+// method, is paced and says so in run.json; given --emitted-rays, or
+// with --checkpoint, it is not.
+TEST(PaceTest, APlannedRunIsPacedUnlessGivenItsRaysOrCheckpointed) {
   test::TempDir dir;
   auto json = [&](const std::string& extra) {
     std::vector<std::string> args = {
@@ -145,7 +216,11 @@ TEST(PaceTest, APlannedRunInOneEnvironmentOrUnderMethodRIsPaced) {
   EXPECT_GT(test::JsonNumber(json(""), "emitted_rays_paced", "options"), 10000);
   EXPECT_EQ(json("--emitted-rays 300000").find("emitted_rays_paced"), std::string::npos);
   EXPECT_GT(test::JsonNumber(json("--envs 2"), "emitted_rays_paced", "options"), 10000);
-  EXPECT_EQ(json("--envs 2 --mask-method B").find("emitted_rays_paced"), std::string::npos);
+  // (At 0.3 s Method B's shots take all of it: its quantum coarsens to the end.)
+  EXPECT_GT(test::JsonNumber(json("--envs 2 --mask-method B"), "emitted_rays_paced", "options"), 0);
+  test::TempDir ckpt;
+  EXPECT_EQ(json("--envs 2 --checkpoint " + ckpt.path()).find("emitted_rays_paced"),
+            std::string::npos);
 }
 
 }  // namespace

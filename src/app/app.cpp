@@ -61,20 +61,21 @@ PlanRate MeasureRate(const RunState& r) {
   return p;
 }
 
-// Whether a planned solve is paced (pace.h): no --checkpoint or --resume,
-// and one environment or Method R, whose time goes as its rays. A, B and C
-// spend theirs on masks whatever the rays, which a pace by rays misjudges
-// (B on the Cornell box in two environments, paced past the default at
-// --max-seconds 10: cut with 1% unshot, 1.77% from Cycles; 1.36% at the default).
-bool PacedPlan(const Options& o, size_t environments) {
-  return o.checkpointDir.empty() && o.resumeDir.empty() &&
-         (environments == 1 || o.maskMethod == MaskMethod::kR);
+// Whether a planned solve is paced (pace.h): no --checkpoint or --resume;
+// and whether its pace pays the shots' costs apart (several environments,
+// Methods A, B and C, whose masks cost whatever the rays).
+bool PacedPlan(const Options& o) {
+  return o.checkpointDir.empty() && o.resumeDir.empty();
+}
+bool ShotCosts(const Options& o, size_t environments) {
+  return environments > 1 && o.maskMethod != MaskMethod::kR;
 }
 
 PlanInput PlanInputOf(const Options& o, const PlanRate& p, size_t environments) {
   PlanInput in;
   in.oneEnvironment = environments == 1;
-  in.paced = PacedPlan(o, environments);
+  in.paced = PacedPlan(o);
+  in.shotCosts = ShotCosts(o, environments);
   in.rate = p.rate;
   in.rho = p.rho;
   in.patches = p.patches;
@@ -113,15 +114,12 @@ float PlanPatchSize(const RunState& r, PlanRate* measured) {
 
 // --max-seconds T without --emitted-rays (one rank, power allocation):
 // the emitted rays a solve that converges within about T can afford, from
-// the rays per second this machine traces through the scene's grids now.
-// The solve traces about 1 / (1 - mean kd) rays for each emitted one, and
-// its tail of small shots at least --min-rays each whatever the emitted
-// rays: the plan is what the budget's rays leave once the tail is paid
-// (at least a quarter of them; PlannedEmittedRays).
-// The solve then ends converged, or nearly, rather than cut off early in
-// a plan made for a longer one. In one environment, a budget longer than a
-// default solve's plans more rays than the default: the time asked for is
-// spent (several environments: never more than the default; plan.h).
+// the rays per second this machine traces through the scene's grids now
+// (PlannedEmittedRays: what the budget's rays leave once the tail of small
+// shots is paid, at about 1 / (1 - mean kd) rays traced for each emitted),
+// so that it ends converged or nearly rather than cut early in a plan made
+// for a longer one; a budget longer than a default solve's plans more rays
+// than the default (with shot costs or unpaced, not more; plan.h).
 // `known`: the rate PlanPatchSize timed on this mesh, if it did. Returns
 // the rate it planned with (none when it did not plan).
 PlanRate PlanBudget(RunState* r, const PlanRate& known) {
@@ -130,7 +128,8 @@ PlanRate PlanBudget(RunState* r, const PlanRate& known) {
   const PlanRate p = known.rate > 0.0 ? known : MeasureRate(*r);
   if (!(p.rate > 0.0)) return PlanRate{};
   const uint64_t planned = PlannedEmittedRays(PlanInputOf(o, p, r->envPtrs.size()));
-  if (planned == o.emittedRays) return PlanRate{};
+  // Paced, the plan is the pace's start even when it is the default.
+  if (planned == o.emittedRays && !PacedPlan(o)) return PlanRate{};
   for (Environment* env : r->envPtrs)
     env->SetRayQuantum(env->rayQuantum() * static_cast<double>(o.emittedRays) /
                        static_cast<double>(planned));
@@ -140,26 +139,27 @@ PlanRate PlanBudget(RunState* r, const PlanRate& known) {
 }
 
 // A planned solve (PacedPlan) is paced (pace.h) to converge by kPaceEnd
-// of --max-seconds: on the Cornell box at
-// 0.3, 1 and 3 s the paced solves ended within 0.5% of T of one another
-// (at 0.93, 0.96 and 0.97 of it with the tail paid first), against 77-81%
-// planned alone.
+// of --max-seconds: on the Cornell box at 0.3, 1 and 3 s the paced solves
+// ended within 0.5% of T of one another (at 0.93, 0.96 and 0.97 of it with
+// the tail paid first), against 77-81% planned alone.
 constexpr double kPaceEnd = 0.97;
 
 bool Paces(const RunState& r) {
   const Options& o = r.options;
-  return o.emittedRaysPlanned && PacedPlan(o, r.envPtrs.size());
+  return o.emittedRaysPlanned && PacedPlan(o);
 }
 
-// The pace of a solve planned with `planned` (PlanBudget): its reflectance
-// and tail as the plan counted them.
-PaceInput PaceInputOf(const Options& o, const PlanRate& planned) {
+// The pace of a solve planned with `planned` (PlanBudget) in `environments`:
+// its reflectance, tail and shot costs as the plan counted them.
+PaceInput PaceInputOf(const Options& o, const PlanRate& planned, size_t environments) {
   const PlanInput plan = PlanInputOf(o, planned, 1);
   PaceInput in;
   in.endSeconds = kPaceEnd * o.maxSeconds;
   in.stopUnshot = o.stopUnshot;
   in.rho = plan.rho;
   in.tailRays = TailRays(plan.patches, plan.minRays, plan.rho);
+  in.shotCosts = ShotCosts(o, environments);
+  in.tailShots = TailShots(plan.patches, plan.rho);
   return in;
 }
 
@@ -424,7 +424,7 @@ int Main(int argc, const char* const* argv) {
   if (!r->options.reference.empty()) so.probe = &probe;
   so.errorEvery = r->options.errorEvery;
   if (checkpointing) so.hook = &r->checkpoints;
-  Pacer pacer(PaceInputOf(r->options, planned));
+  Pacer pacer(PaceInputOf(r->options, planned, r->envPtrs.size()));
   if (Paces(*r)) so.pacer = &pacer;
   if (r->checkpoints.resumed()) so.resume = &r->resumeState;
   SolveResult res =

@@ -48,6 +48,10 @@ double TracedRays(const PlanInput& in) {
 
 }  // namespace
 
+double TailShots(double patches, double rho) {
+  return kTailShotsPerPatch * patches / (1.0 - rho);
+}
+
 double TailRays(double patches, uint32_t minRays, double rho) {
   return kTailShotsPerPatch * patches * minRays / (1.0 - rho);
 }
@@ -63,7 +67,7 @@ double PlannedPatches(const PlanInput& in) {
 
 uint64_t PlannedEmittedRays(const PlanInput& in) {
   const double tail = TailRays(in.patches, in.minRays, in.rho);
-  const bool capped = !in.oneEnvironment && !in.paced;
+  const bool capped = !in.oneEnvironment && (!in.paced || in.shotCosts);
   const double share = capped ? kPlanShare : kFillShare;
   // An emitted ray's worth leads to F + rho / (1 - rho) rays traced (F:
   // --emission-rays, its own shots; then the reflected power's, which

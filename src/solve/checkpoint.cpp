@@ -12,8 +12,9 @@ namespace vismask {
 namespace {
 
 constexpr char kMagic[8] = {'v', 'i', 's', 'm', 'c', 'k', 'p', 't'};
-constexpr uint32_t kVersion =
-    3;  // 2: RoundTotals' fields reordered (EnvSums); 3: EnvSums::emission
+// 2: RoundTotals' fields reordered (EnvSums); 3: EnvSums::emission;
+// 4: EnvSums::foreignShots and shotWork.
+constexpr uint32_t kVersion = 4;
 constexpr char kManifestHead[] = "vismask checkpoint 1\n";
 constexpr size_t kManifestExtra = 1024;  // the manifest's lines beside the identity
 

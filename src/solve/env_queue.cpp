@@ -232,6 +232,15 @@ uint64_t Environment::workSteps() const {
          w.shot * (stats_.shots + stats_.foreignShots);
 }
 
+uint64_t Environment::shotWork() const {
+  return stats_.castWork +
+         WorkCostsOf(options_.maskMethod).shot * (stats_.shots + stats_.foreignShots);
+}
+
+uint64_t Environment::paceWork() const {
+  return workSteps() - centreWork_ + stats_.castWork;
+}
+
 // One round: up to `shotBudget` shots, each the larger of the local patch
 // or outside shooter with most unshot power (while `newForwards` remains,
 // with neighbours) and the ready foreign shooter with most power; ends once

@@ -43,8 +43,8 @@ void AddFields(T* to, const T& from, M T::*... field) {
 void EnvSums::Add(const EnvSums& o) {
   using S = EnvSums;
   AddFields(this, o, &S::unshot, &S::flight, &S::lost, &S::emitted, &S::emission, &S::radiosity,
-            &S::kdArea, &S::area, &S::work, &S::steps, &S::shots, &S::rays, &S::forwardsCreated,
-            &S::held, &S::shootable);
+            &S::kdArea, &S::area, &S::work, &S::steps, &S::shots, &S::foreignShots, &S::paceWork,
+            &S::shotWork, &S::rays, &S::forwardsCreated, &S::held, &S::shootable);
 }
 
 namespace {
@@ -88,6 +88,8 @@ void FillReports(Span<Environment* const> envs, const RankEnvs& rankEnvs, Exchan
     r.rays = e->stats().rays;
     r.forwardsCreated = e->stats().forwardsCreated;
     r.foreignShots = e->stats().foreignShots;
+    r.paceWork = e->paceWork();
+    r.shotWork = e->shotWork();
     r.radiosity = Sum3(e->ledger().radiosity) - Sum3(l.outsideLost);
     r.area = e->totalArea();
     r.kdArea = e->kdArea();

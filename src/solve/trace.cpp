@@ -341,6 +341,7 @@ void Environment::CastCentres(const Patch& shooter, Skip skip, MaskBits* mask) {
     work = WalkCentres(grid_, skip, rays, mask);
     centreSteps_ += work;
   }
+  stats_.castWork += work;
   // The round's work counts the casts that every --mask-cache makes: a
   // foreign shooter's, and a local shooter's first (later ones may come
   // from the cache).

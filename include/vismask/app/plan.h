@@ -27,12 +27,16 @@ struct PlanInput {
   // past the default overran 10 s and was cut (12.3% from Cycles with
   // Method B, 4.3% with R, against 1.8% converged at the default).
   bool oneEnvironment = true;
-  // Paced (pace.h; app.cpp's PacedPlan: without --checkpoint or --resume,
-  // in one environment or several under Method R): the solve re-plans its
-  // quantum by the rate it traces at, so several environments too may plan
-  // past the default and fill the budget as one does; unpaced, they keep
-  // (b)'s cap.
+  // Paced (pace.h; app.cpp's PacedPlan: without --checkpoint or --resume):
+  // the solve re-plans its quantum by the rate it traces at, so several
+  // environments too may plan past the default and fill the budget as one
+  // does; unpaced, they keep (b)'s cap.
   bool paced = false;
+  // Paced with shot costs (pace.h: several environments, Methods A-C): the
+  // plan knows nothing of what a shot's mask costs, and the emitters' first
+  // shots are made at its quantum before the pace can re-plan it, so it
+  // starts from (b)'s cap, which the pace then refines.
+  bool shotCosts = false;
 };
 
 // The patches the budget's mesh should have, or 0 to keep the automatic
@@ -46,13 +50,16 @@ double PlannedPatches(const PlanInput& in);
 // The emitted rays a solve that converges within about T affords on a
 // mesh of `patches` timed at `rate` (at least 10 000). One environment:
 // more than the default --emitted-rays where T affords more (a budget is
-// spent, not capped at what a default solve traces); several, paced: the
-// same; several unpaced: a smaller share of the budget, never more than
-// the default.
+// spent, not capped at what a default solve traces); several, paced under
+// Method R: the same; several unpaced or with shot costs: a smaller share
+// of the budget, never more than the default.
 uint64_t PlannedEmittedRays(const PlanInput& in);
 
 // The rays of a converging solve's tail of small shots on `patches`
 // patches: about two shots a patch at --min-rays each, per bounce.
 double TailRays(double patches, uint32_t minRays, double rho);
+// Those shots (TailRays without --min-rays): in a converging solve most of
+// its local shots are these.
+double TailShots(double patches, double rho);
 
 }  // namespace vismask

@@ -52,6 +52,12 @@ class Environment {
   // One round of shots, and the work rounds are measured in (env_queue.cpp).
   void RunRound(uint32_t shotBudget, uint32_t newForwards, uint64_t roundWork = 0);
   uint64_t workSteps() const;
+  // For the pacer's shot costs (pace.h): the work with every centre cast
+  // (a local shooter's cached ones too), and its part the shots cost
+  // whatever their rays: WorkCosts::shot for each, local and foreign, and
+  // the casts.
+  uint64_t paceWork() const;
+  uint64_t shotWork() const;
   // A centre ray's work: the integer cube root of the grid's cells, at least 1.
   uint64_t centreStepsPerRay() const { return centreStepsPerRay_; }
 

@@ -31,7 +31,12 @@ struct EnvSums {
   uint64_t work = 0;       // work so far (Environment::workSteps)
   uint64_t steps = 0;      // grid steps so far (EnvStats::gridSteps)
   uint64_t shots = 0;      // local and foreign
-  uint64_t rays = 0;       // form-factor rays traced
+  uint64_t foreignShots = 0;
+  // The pacer's work, and the shots' part of it beside their rays
+  // (Environment::paceWork, shotWork).
+  uint64_t paceWork = 0;
+  uint64_t shotWork = 0;
+  uint64_t rays = 0;  // form-factor rays traced
   uint64_t forwardsCreated = 0;
   // Queued shooters and outbox packets: a bound on the shots whose rays
   // are still on their way (Method R, SolveOptions::routed).
@@ -53,7 +58,6 @@ struct EnvReport : EnvSums {
   double envCpu;        // CPU seconds of this environment's shots in the last round
   uint64_t roundSteps;  // grid steps of this environment's shots in the last round
   uint64_t roundWork;   // their work (Environment::workSteps), what rounds are sized by
-  uint64_t foreignShots;
 };
 
 struct RoundTotals : EnvSums {

@@ -38,6 +38,7 @@ struct EnvStats {
   uint64_t maskRays = 0;         // Method B's and C's centre rays (pixels decided)
   uint64_t maskRaysByPatch = 0;  // those decided patch by patch (RasterCentres)
   uint64_t maskNoExit = 0;       // pixels closed because they lead to no neighbour (KeepExits)
+  uint64_t castWork = 0;         // the work of every centre cast, cached or not (CastCentres)
   uint64_t readShots = 0;        // B's local shots deciding only the pixels read (ReadsOnly)
   uint64_t readRays = 0;         // rays regenerated for it (ReadPixels, ReadShare)
   uint64_t gridSteps = 0;        // their walks' cells entered and patches tested (Grid::steps)

@@ -1,6 +1,6 @@
 // --max-seconds's pacing: a planned solve (one rank, power allocation,
 // --emitted-rays from the plan) spends its budget by re-planning its ray
-// quantum as it goes. Several environments (Method R) are paced as one:
+// quantum as it goes. Several environments are paced as one:
 // the quantum is the same in all of them, and it is re-planned from the
 // round's totals alone (rank 0's clock, the sums in environment order), so
 // every rank would set the same one at the same round. The plan's rate is
@@ -31,6 +31,17 @@ struct PaceInput {
   // The tail: the rays of the small shots at the end, at --min-rays each
   // whatever the quantum (plan.h's TailRays), paid from the time left first.
   double tailRays = 0.0;
+  // Shot costs: the shots carry hemisphere masks (several environments,
+  // Methods A, B and C), whose cost does not go as their rays. The time
+  // the shots still to make will take beside their rays is then paid first
+  // too: the shots left (the more of the plan's, tailShots (plan.h's
+  // TailShots) as many again for each foreign shot a local one has led to,
+  // less those made, and the shots a tenfold fall of the unshot power has
+  // recently taken, for the falls still to come) at the work a shot has
+  // recently cost (Environment::shotWork), at the work a second the solve
+  // does; the rays' rate is that over the work a ray costs.
+  bool shotCosts = false;
+  double tailShots = 0.0;
 };
 
 class Pacer {
@@ -48,16 +59,31 @@ class Pacer {
   // The quantum that spends `worth` (ray worth left, in power) at `rate`
   // rays a second in `seconds` (exposed for tests).
   static double Quantum(double worth, double rate, double seconds);
+  // The shots a solve with shot costs still makes: `tail` local shots
+  // (each with foreign ones at the ratio of `shots` made, `foreign` of
+  // them) less those made, or `perDecade` for each tenfold fall from
+  // `unshot` to `stop`, whichever is more.
+  static double ShotsLeft(double tail, uint64_t shots, uint64_t foreign, double perDecade,
+                          double unshot, double stop);
   // The power still to shoot, in ray worth: unshot power U of which E is
   // emission not yet shot (shot at share f), reflected at rho until the
   // unshot falls to `stop` of the emitted power.
   static double WorthLeft(double unshot, double emission, double f, double rho, double stop);
 
  private:
+  // With shot costs: the work a second, a ray and a shot, and the shots a
+  // tenfold fall, over the interval since the last re-plan.
+  void MeasureShots(const RoundTotals& t, double seconds);
+
   PaceInput in_;
   double lastSeconds_ = 0.0;
   uint64_t lastRays_ = 0;
   double rate_ = 0.0;
+  // With shot costs: the last re-plan's totals, and the work a second, a
+  // ray and a shot, and the shots a tenfold fall, over recent intervals.
+  uint64_t lastWork_ = 0, lastShotWork_ = 0, lastShots_ = 0;
+  double lastUnshot_ = 0.0;
+  double workRate_ = 0.0, rayWork_ = 0.0, shotWork_ = 0.0, perDecade_ = 0.0;
   double q0_ = 0.0;
   double scale_ = 1.0;
   uint32_t updates_ = 0;
