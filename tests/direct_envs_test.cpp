@@ -52,7 +52,7 @@ TEST(DirectEnvsTest, ShadowEdgeInTheLampsEnvironmentIsAsSharpAsWithOne) {
   WriteOffsetShadowScene(dir.path());
   const int n = 128;
   const double geometric = 0.08 * n;  // the penumbra's 10%-90% part, as in DirectTest
-  // At --emission-rays 1 (the default with the gather is a quarter).
+  // At --emission-rays 1 (the default with the gather is an eighth).
   PfmImage direct =
       RenderOffset(dir, "direct", n, "--envs 2x1x1 --direct-samples 32 --emission-rays 1");
   PfmImage solved = RenderOffset(dir, "solved", n, "--envs 2x1x1 --direct-samples 0");

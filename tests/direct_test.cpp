@@ -408,8 +408,8 @@ TEST(DirectTest, EmissionTracesItsShareOfTheRays) {
   // --emission-rays F: the light's own emission traces F of the rays its
   // power is worth, the reflected power all of them; without per-pixel
   // direct light (whose image would show that noise) all of them, the
-  // same solve as F = 1. Defaults: 0.25 with direct light in one
-  // environment, 1 in several or without it.
+  // same solve as F = 1. Defaults: 0.125 with direct light (in several
+  // environments where their pixels gather every emitter), else 1.
   test::TempDir dir;
   auto run = [&](const std::string& extra, std::string* json) {
     std::vector<std::string> args = {
@@ -430,12 +430,16 @@ TEST(DirectTest, EmissionTracesItsShareOfTheRays) {
             run("--direct-samples 0", &json));
   EXPECT_EQ(run("--direct-samples 0", &json), all);
   EXPECT_NE(json.find("\"emission_rays\": 1,"), std::string::npos);
-  EXPECT_EQ(run("", &json), quarter);
-  EXPECT_NE(json.find("\"emission_rays\": 0.25"), std::string::npos);
-  // Several environments: a quarter too where their pixels gather every
+  // The default, an eighth.
+  std::string given;
+  const double eighth = run("--emission-rays 0.125", &given);
+  EXPECT_LT(eighth, quarter);
+  EXPECT_EQ(run("", &json), eighth);
+  EXPECT_NE(json.find("\"emission_rays\": 0.125"), std::string::npos);
+  // Several environments: an eighth too where their pixels gather every
   // environment's emitters (--foreign-mask-res, the default), else 1.
   run("--envs 2", &json);
-  EXPECT_NE(json.find("\"emission_rays\": 0.25"), std::string::npos);
+  EXPECT_NE(json.find("\"emission_rays\": 0.125"), std::string::npos);
   run("--envs 2 --foreign-mask-res 0", &json);
   EXPECT_NE(json.find("\"emission_rays\": 1,"), std::string::npos);
 }

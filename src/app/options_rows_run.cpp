@@ -196,7 +196,7 @@ power allocation: an emission the pixels gather
 (an emitter's own, the sun's, with --direct-samples)
 traces F times the rays its power is worth; the
 solve's direct part then only feeds later shots.
-Default 0.25 with --direct-samples (in several
+Default 0.125 with --direct-samples (in several
 environments, unless --foreign-mask-res 0), else 1)")
           .Json("emission_rays"),
       Count("--indirect-filter", &O::indirectFilter, 0, 64, "an integer in [0, 64]").Help("K", R"(

@@ -185,7 +185,7 @@ std::string EnvSpec(const Options& o);
 // The default --direct-samples with one environment.
 constexpr int kDefaultDirectSamples = 128;
 // The default --emission-rays with per-pixel direct light in one environment.
-constexpr double kDefaultEmissionRays = 0.25;
+constexpr double kDefaultEmissionRays = 0.125;
 
 // Parses argv (argv[0] is the program). On error returns a Status whose
 // message names the flag and the offending value.
