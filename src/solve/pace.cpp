@@ -31,6 +31,11 @@ constexpr double kEmissionShot = 0.01;
 // The shots' own reflectance once they have shot this share of the emitted power.
 constexpr double kMeasuredRho = 0.05;
 
+// A rate over the last intervals, each weighing kRecent.
+double Recent(double before, double now) {
+  return before > 0.0 ? (1.0 - kRecent) * before + kRecent * now : now;
+}
+
 }  // namespace
 
 double Pacer::Quantum(double worth, double rate, double seconds) {
@@ -51,15 +56,6 @@ double Pacer::ShotsLeft(double tail, uint64_t shots, uint64_t foreign, double pe
   const double byFalls = unshot > stop && stop > 0.0 ? perDecade * std::log10(unshot / stop) : 0.0;
   return std::fmax(std::fmax(byTail, byFalls), 0.0);
 }
-
-namespace {
-
-// A rate over the last intervals, each weighing kRecent.
-double Recent(double before, double now) {
-  return before > 0.0 ? (1.0 - kRecent) * before + kRecent * now : now;
-}
-
-}  // namespace
 
 void Pacer::MeasureShots(const RoundTotals& t, double seconds) {
   const double work = static_cast<double>(t.paceWork - lastWork_);

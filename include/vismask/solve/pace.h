@@ -33,13 +33,9 @@ struct PaceInput {
   double tailRays = 0.0;
   // Shot costs: the shots carry hemisphere masks (several environments,
   // Methods A, B and C), whose cost does not go as their rays. The time
-  // the shots still to make will take beside their rays is then paid first
-  // too: the shots left (the more of the plan's, tailShots (plan.h's
-  // TailShots) as many again for each foreign shot a local one has led to,
-  // less those made, and the shots a tenfold fall of the unshot power has
-  // recently taken, for the falls still to come) at the work a shot has
-  // recently cost (Environment::shotWork), at the work a second the solve
-  // does; the rays' rate is that over the work a ray costs.
+  // the shots left (ShotsLeft, from tailShots: plan.h's TailShots) take at
+  // the work a shot costs (Environment::shotWork) is then paid first too,
+  // and the rays' rate is the work a second over the work a ray costs.
   bool shotCosts = false;
   double tailShots = 0.0;
 };
