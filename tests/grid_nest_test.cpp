@@ -5,13 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <glm/geometric.hpp>
 #include <random>
+#include <sstream>
 #include <vector>
 
 #include "grid_test_util.h"
+#include "test_util.h"
 #include "vismask/accel/grid.h"
+#include "vismask/app/options.h"
 
 namespace vismask {
 namespace {
@@ -191,6 +195,61 @@ TEST(GridNestTest, EvenScenesStayUniform) {
   EXPECT_EQ(nested.plan.occupied, uniform.plan.occupied);
   EXPECT_EQ(nested.grid.bytes(), uniform.grid.bytes());
   EXPECT_EQ(nested.arena.used(), uniform.arena.used());
+}
+
+// A room lit from its ceiling, with a small ball of 512 faces on its floor:
+// the ball's top cells hold hundreds of references each.
+void WriteBallRoom(const std::string& dir) {
+  std::ostringstream obj;
+  obj << "mtllib room.mtl\nusemtl wall\n"
+      << "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 3 0\nv 4 3 0\nv 4 3 4\nv 0 3 4\n"
+      << "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n"
+      << "usemtl light\nv 1.5 2.99 1.5\nv 2.5 2.99 1.5\nv 2.5 2.99 2.5\nv 1.5 2.99 2.5\n"
+      << "f 9 10 11 12\nusemtl ball\n";
+  const int kU = 32, kV = 16;
+  const double r = 0.15, pi = std::acos(-1.0);
+  for (int j = 0; j <= kV; ++j)
+    for (int i = 0; i < kU; ++i) {
+      const double th = pi * j / kV, ph = 2.0 * pi * i / kU;
+      obj << "v " << 2.0 + r * std::sin(th) * std::cos(ph) << " " << r + r * std::cos(th) << " "
+          << 2.0 + r * std::sin(th) * std::sin(ph) << "\n";
+    }
+  auto at = [&](int i, int j) { return 13 + j * kU + (i % kU); };
+  for (int j = 0; j < kV; ++j)
+    for (int i = 0; i < kU; ++i)
+      obj << "f " << at(i, j) << " " << at(i + 1, j) << " " << at(i + 1, j + 1) << " "
+          << at(i, j + 1) << "\n";
+  test::WriteFile(dir + "/room.obj", obj.str());
+  test::WriteFile(dir + "/room.mtl",
+                  "newmtl wall\nKd 0.6 0.6 0.6\nnewmtl ball\nKd 0.7 0.3 0.3\n"
+                  "newmtl light\nKd 0.5 0.5 0.5\nKe 10 10 10\n");
+}
+
+// --sub-grids: the default nests the ball's cells and 0 gives one uniform
+// grid; in one environment every output byte is the same, since the
+// sub-grids give the uniform grid's hit on every ray.
+TEST(GridNestTest, SubGridsOptionChangesNoImageOrPatchByte) {
+  EXPECT_EQ(Options().subGrids, Grid::Nest().minRefs);
+  test::TempDir dir;
+  WriteBallRoom(dir.path());
+  std::string json[2];
+  for (int k = 0; k < 2; ++k) {
+    std::vector<std::string> args = test::Words("render " + dir.File("room.obj") +
+                                                " --width 32 --height 32 --max-shots 300 --out " +
+                                                dir.File(k ? "uniform" : "nested"));
+    if (k) args = test::Join(args, {"--sub-grids", "0"});
+    auto r = test::RunMain(args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    json[k] = test::ReadFile(dir.File(k ? "uniform/run.json" : "nested/run.json"));
+  }
+  EXPECT_GT(test::JsonNumber(json[0], "grid_sub_grids", "counts"), 0.0);
+  EXPECT_EQ(test::JsonNumber(json[1], "grid_sub_grids", "counts"), 0.0);
+  EXPECT_EQ(test::JsonNumber(json[1], "sub_grids", "options"), 0.0);
+  EXPECT_EQ(test::JsonNumber(json[0], "shots"), test::JsonNumber(json[1], "shots"));
+  for (const char* f : {"image.pfm", "patches.csv"})
+    EXPECT_TRUE(test::ReadFile(dir.File(std::string("nested/") + f)) ==
+                test::ReadFile(dir.File(std::string("uniform/") + f)))
+        << f;
 }
 
 }  // namespace

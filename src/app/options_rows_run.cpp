@@ -4,9 +4,46 @@
 
 namespace vismask::option_rows {
 
+namespace {
+
+// The seed and when the solve stops (SolveRows' last rows).
+std::vector<Row> StopRows() {
+  return {
+      Count("--seed", &O::seed, 0, kNoLimit, "an unsigned 64-bit integer")
+          .Help("S", "random seed, unsigned 64-bit (default 1)")
+          .Json("seed"),
+      Number("--stop-unshot", &O::stopUnshot, 0.0, 1.0, "a number in [0, 1)")
+          .Open(false, true)
+          .Help("F", R"(
+stop when unshot power < F * emitted power, 0 <= F < 1
+(default 1e-3); 0 needs another stop as well)")
+          .Json("stop_unshot"),
+      Count("--max-shots", &O::maxShots, 1, kNoLimit, "a positive integer")
+          .Help("N", "stop after N shots (default: no limit)")
+          .Json("max_shots"),
+      Number("--max-seconds", &O::maxSeconds, 0.0, kNoLimit, "a number of seconds > 0")
+          .Open(true, false)
+          .Help("T", R"(
+stop after T seconds of solving (default: no limit;
+a time limit makes the result depend on speed).
+Without --emitted-rays (one rank, power allocation)
+it plans them from the rays per second timed at
+init (run.json: emitted_rays_planned), and in one
+environment paces the solve to end near T, its
+rays per unit power re-planned as it goes (run.json:
+emitted_rays_paced); without --patch-size, larger
+patches where T is too short for the automatic
+ones (run.json: patch_size_planned))")
+          .Usage()
+          .Json("max_seconds"),
+  };
+}
+
+}  // namespace
+
 // Where the run writes, how big a solve is and when it stops.
 std::vector<Row> SolveRows() {
-  return {
+  std::vector<Row> rows = {
       Text("--out", &O::outDir, "a directory")
           .Help("DIR", "output directory (default out/); created if missing")
           .Usage()
@@ -78,6 +115,16 @@ anywhere on the patch alike)")
       Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
           .Help("N", "stop once N form-factor rays have been traced")
           .Json("ray_budget"),
+      Count("--sub-grids", &O::subGrids, 0, 1e6, "an integer in [0, 1e6]")
+          .Help("N", R"(
+a cell of an environment's ray-casting grid that
+holds N or more patch references (not all on one
+plane) gets a grid of its own (default 32); 0: one
+uniform grid. The same image and patches either way
+in one environment; only the speed and the grid's
+bytes change (and, with several environments, the
+rounds, which count grid steps))")
+          .Json("sub_grids"),
       Count("--elements", &O::elementsPerPatch, 0, 1024, "an integer in [0, 1024]").Help("K", R"(
 receivers finer than shooters: each patch is a
 quadtree of elements that split where the radiosity
@@ -96,34 +143,9 @@ more than its Monte Carlo noise explains)"),
       Number("--element-chi2", &O::elementChi2, 0.0, 1e6, "a number in [0, 1e6]").Help("X", R"(
 ... explains: chi-square (3 dof) of its quarters
 against an even spread above X (default 20))"),
-      Count("--seed", &O::seed, 0, kNoLimit, "an unsigned 64-bit integer")
-          .Help("S", "random seed, unsigned 64-bit (default 1)")
-          .Json("seed"),
-      Number("--stop-unshot", &O::stopUnshot, 0.0, 1.0, "a number in [0, 1)")
-          .Open(false, true)
-          .Help("F", R"(
-stop when unshot power < F * emitted power, 0 <= F < 1
-(default 1e-3); 0 needs another stop as well)")
-          .Json("stop_unshot"),
-      Count("--max-shots", &O::maxShots, 1, kNoLimit, "a positive integer")
-          .Help("N", "stop after N shots (default: no limit)")
-          .Json("max_shots"),
-      Number("--max-seconds", &O::maxSeconds, 0.0, kNoLimit, "a number of seconds > 0")
-          .Open(true, false)
-          .Help("T", R"(
-stop after T seconds of solving (default: no limit;
-a time limit makes the result depend on speed).
-Without --emitted-rays (one rank, power allocation)
-it plans them from the rays per second timed at
-init (run.json: emitted_rays_planned), and in one
-environment paces the solve to end near T, its
-rays per unit power re-planned as it goes (run.json:
-emitted_rays_paced); without --patch-size, larger
-patches where T is too short for the automatic
-ones (run.json: patch_size_planned))")
-          .Usage()
-          .Json("max_seconds"),
   };
+  for (Row& r : StopRows()) rows.push_back(r);
+  return rows;
 }
 
 // The image: its size, camera, exposure and filtering.

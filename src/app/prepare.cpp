@@ -335,6 +335,7 @@ void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepar
   e.outsideTiles = outsideTiles;
   e.maskMethod = o.maskMethod;
   e.maskRes = o.maskRes;
+  e.subGridRefs = o.subGrids;
   e.roundShots = o.roundShots;
   e.queueCapacity = o.queue;
   e.maskCacheBytes = uint64_t{o.maskCacheKiB} << 10;

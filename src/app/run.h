@@ -65,6 +65,7 @@ struct EnvSummary {
   uint64_t vertices;
   uint64_t gridCells;
   uint64_t gridRefs;
+  uint64_t gridSubGrids;  // top cells with a grid of their own (--sub-grids)
   uint64_t elementsUsed;  // roots included
   uint64_t elementCapacity;
   uint64_t leaves;

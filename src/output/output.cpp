@@ -271,6 +271,7 @@ int WriteOutputs(RunState* r, const SolveResult& res) {
     s.vertices = e.lattice().vertices().size();
     s.gridCells = e.grid().cellCount();
     s.gridRefs = e.grid().plan().refs;
+    s.gridSubGrids = e.grid().plan().subGrids;
     s.elementsUsed = e.elementsUsed();
     s.elementCapacity = e.elements().size();
     s.filterSteps = e.filterSteps();

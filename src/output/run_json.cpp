@@ -90,12 +90,13 @@ namespace {
 void WriteCounts(const RunState* r, TextWriter* out) {
   const Options& o = r->options;
   TextWriter& w = *out;
-  size_t patches = 0, vertices = 0, cells = 0, refs = 0;
+  size_t patches = 0, vertices = 0, cells = 0, refs = 0, subGrids = 0;
   for (const EnvSummary& e : r->summary) {
     patches += e.patches;
     vertices += e.vertices;
     cells += e.gridCells;
     refs += e.gridRefs;
+    subGrids += e.gridSubGrids;
   }
   w.Printf("  \"counts\": {\n    \"polygons\": %zu,\n    \"patches\": %zu,\n", r->numPolygons,
            patches);
@@ -104,7 +105,8 @@ void WriteCounts(const RunState* r, TextWriter* out) {
   w.Printf("    \"vertices\": %zu,\n    \"environments\": %zu,\n", vertices, r->summary.size());
   w.Printf("    \"ranks\": %d,\n    \"transport\": \"%s\",\n", r->transport->size(),
            r->transport->name());
-  w.Printf("    \"grid_cells\": %zu,\n    \"grid_refs\": %zu", cells, refs);
+  w.Printf("    \"grid_cells\": %zu,\n    \"grid_refs\": %zu,\n    \"grid_sub_grids\": %zu", cells,
+           refs, subGrids);
   if (!o.exportPath.empty())  // the .glb: its vertices, triangles and bytes
     w.Printf(",\n    \"export\": {\"vertices\": %llu, \"triangles\": %llu, \"bytes\": %llu}",
              static_cast<unsigned long long>(r->exportWhole.vertices),

@@ -254,9 +254,11 @@ const EnvFootprint& Environment::Prepare(const EnvGrid& grid, uint32_t index, co
   StageCuts(grid, cell_, box_, staged_->patches, &staged_->lattice);
   StageSmooth(mesh, vertexMap, staged_->patches, &staged_->lattice);
   uint32_t n = static_cast<uint32_t>(staged_->patches.size());
+  Grid::Nest nest;
+  nest.minRefs = options.subGridRefs;
   plan_ = Grid::MakePlan(Span<const Patch>(staged_->patches.data(), n),
-                         Span<const PatchGeom>(staged_->geom.data(), n), options.gridDensity,
-                         Grid::Nest(), &staged_->gridWork);
+                         Span<const PatchGeom>(staged_->geom.data(), n), options.gridDensity, nest,
+                         &staged_->gridWork);
   Arena measure = Arena::Measure();
   Layout(measure, n, plan_);
   // What --export will write of this environment (src/output/export.cpp).

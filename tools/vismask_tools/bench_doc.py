@@ -3,6 +3,7 @@ machine, load), section 1 (ray casting, from vismask_bench's own Markdown),
 section 2 (bench_parallel) and section 3 (mask cost), then the hand-written
 bench/analysis.md. Every figure comes from the runs; none is typed in."""
 
+import filecmp
 import os
 import statistics
 
@@ -92,8 +93,34 @@ not counted.""", "", rays_md, "", "### Cell size", "",
          f"in turn, {s.reps} rounds of them; each figure is the median of the rounds (min–max).", ""]
     rows = [r for d in s.dens
             for r in density_rows(d, [s.dir(f"dens{d}.{k}.md") for k in range(s.reps)])]
-    return L + table(["cells per patch", "patches", "grid bytes", "B/patch (with PatchGeom)",
-                      "uniform closest", "uniform any hit", "cosine closest", "cosine any hit"], rows)
+    L += table(["cells per patch", "patches", "grid bytes", "B/patch (with PatchGeom)",
+                "uniform closest", "uniform any hit", "cosine closest", "cosine any hit"], rows)
+    return L + end_to_end(s)
+
+
+def end_to_end(s):
+    """The sub-grids' effect on whole runs: each case with them and with
+    --sub-grids 0, by turns; the goal (issue 45) is 2x."""
+    L = ["", "### End to end: the sub-grids against the uniform grid", "",
+         f"Each command with the sub-grids (the default) and with `--sub-grids 0` (one uniform grid, "
+         f"the grid before issue 45), by turns, {s.reps} runs each; seconds are medians (min–max). "
+         "*same bytes*: image.pfm and patches.csv identical in every run of both. "
+         "**Target: the sub-grids at least 2x faster end to end.**", ""]
+    rows = []
+    for name, what, args in s.e2e:
+        n, u = s.runs(s.names(name + "N")), s.runs(s.names(name + "U"))
+        same = all(filecmp.cmp(os.path.join(a, f), os.path.join(n.dirs[0], f), shallow=False)
+                   for a in n.dirs + u.dirs for f in ("image.pfm", "patches.csv"))
+        ns, us = n.median("timings", "solve_seconds"), u.median("timings", "solve_seconds")
+        nc, uc = n.median_cpu(), u.median_cpu()
+        rows.append([what, f"`{s.bin()} {args}`", n.same("counts", "grid_sub_grids"),
+                     n.same("result", "rays"), n.same("result", "mask_rays"),
+                     n.spread("timings", "solve_seconds"), u.spread("timings", "solve_seconds"),
+                     f"**{us / ns:.2f}x**", n.cpu_spread(), u.cpu_spread(), f"{uc / nc:.2f}x",
+                     "yes" if same else "**no**"])
+    return L + table(["case", "command", "sub-grids", "rays", "mask rays", "solve s (sub-grids)",
+                      "solve s (uniform)", "**uniform ÷ sub-grids (solve)**", "CPU s (sub-grids)",
+                      "CPU s (uniform)", "uniform ÷ sub-grids (CPU)", "same bytes"], rows)
 
 
 def signed_pct(x):

@@ -51,6 +51,16 @@ class Settings:
         stop1, stop2, mshots, bstop, self.brooms = (("0.3", "0.5", 10, "0.7", "4x4") if quick else
                                                     ("2e-2", "5e-2", 200, "0.55", "8x8"))
         self.dens = [2, 4] if quick else [1, 2, 4, 8]
+        # Issue 45's end-to-end effect: the living room's default solve, and
+        # Method B's centre casts in it (every open pixel's centre ray, a
+        # round a shot), each with the sub-grids (the default) and without
+        # (--sub-grids 0: the uniform grid of before).
+        room = (f"render {self.out}/living.obj --width 64 --height 64" +
+                (" --patch-size 0.5 --max-shots 200" if quick else ""))
+        self.e2e = [("e2eSolve", "the default solve", room),
+                    ("e2eB", "Method B, every open pixel's centre cast, 2 environments",
+                     room + " --mask-method B --envs 2 --round-shots 1 --mask-res 50 "
+                     "--centre-rays all" + ("" if quick else " --max-shots 1500"))]
         # The cell-size table's sets (quick: rayargs' own), one repetition a
         # round: the rounds alternate the densities.
         self.densargs = "" if quick else "--sizes 19.5,4.7 --rays 32768 --reps 1"
@@ -125,6 +135,12 @@ def rays(s):
         for d in s.dens:
             bench(s, f"dens{d}.{r}", ["--md", s.dir(f"dens{d}.{r}.md"), "--density", str(d),
                                       "--benchmark_filter=vismask"] + base + more)
+    # The sub-grids end to end, by turns.
+    say("end to end: the sub-grids against the uniform grid")
+    for i in range(1, s.reps + 1):
+        for name, _, args in s.e2e:
+            s.vismask(f"{name}N{i}", args)
+            s.vismask(f"{name}U{i}", args, "--sub-grids", "0")
 
 
 def gen_scenes(s):

@@ -79,6 +79,9 @@ struct Options {
   bool hasMaskMethod = false;
   bool hasMaskRes = false;
   uint32_t maskRes = 50;
+  // --sub-grids N: a top grid cell with at least N references gets a grid
+  // of its own (Grid::Nest's minRefs, the same default); 0: one uniform grid.
+  uint32_t subGrids = 32;
   // --foreign-mask-res R: several environments gather every environment's
   // emitters per pixel, through R x 4R transit masks (foreign_light.h); 0: off.
   uint32_t foreignMaskRes = 32;

@@ -55,6 +55,7 @@ struct EnvOptions {
   uint64_t seed = 1;  // run seed
   MaskMethod maskMethod = MaskMethod::kB;
   uint32_t maskRes = 50;
+  uint32_t subGridRefs = 32;    // Grid::Nest's minRefs (--sub-grids; 0: a uniform grid)
   uint32_t roundShots = 1;      // shots per environment per round
   uint32_t queueCapacity = 64;  // foreign shooters held at once
   // Methods B and C: bytes for the centre masks of local shooters, one slot
