@@ -5,6 +5,7 @@
 // (the sun's first bounce counted once) and patches.csv stays its bytes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -68,14 +69,16 @@ TEST(DirectSunTest, UnoccludedAndSamplesGiveItsIrradianceTimesTheCosine) {
   EXPECT_NEAR(sum.y / n, 1.0 * 0.5, 1e-3);
 }
 
-// A floor [-10, 10]^2 at y = 0 (Kd 0.5, facing up) and, with `occluder` > 0,
-// a black roof over x < 0 at that height facing up (the floor sees its
-// back, which absorbs). Nothing emits.
-void WriteSunScene(const std::string& dir, double occluder) {
+// A floor [-h, h]^2 at y = 0 (Kd 0.5, facing up; h = 10 unless given) and,
+// with `occluder` > 0, a black roof over x < 0 at that height facing up
+// (the floor sees its back, which absorbs). Nothing emits.
+void WriteSunScene(const std::string& dir, double occluder, double h = 10.0) {
   std::ostringstream obj;
-  obj << "mtllib s.mtl\nv -10 0 -10\nv 10 0 -10\nv 10 0 10\nv -10 0 10\n"
-      << "v -10 " << occluder << " -10\nv 0 " << occluder << " -10\nv 0 " << occluder
-      << " 10\nv -10 " << occluder << " 10\nusemtl floor\nf 1 4 3 2\n";
+  obj << "mtllib s.mtl\nv " << -h << " 0 " << -h << "\nv " << h << " 0 " << -h << "\nv " << h
+      << " 0 " << h << "\nv " << -h << " 0 " << h << "\n"
+      << "v " << -h << " " << occluder << " " << -h << "\nv 0 " << occluder << " " << -h << "\nv 0 "
+      << occluder << " " << h << "\nv " << -h << " " << occluder << " " << h
+      << "\nusemtl floor\nf 1 4 3 2\n";
   if (occluder > 0) obj << "usemtl black\nf 5 8 7 6\n";
   test::WriteFile(dir + "/s.obj", obj.str());
   test::WriteFile(dir + "/s.mtl", "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl black\nKd 0 0 0\n");
@@ -136,6 +139,47 @@ TEST(DirectSunTest, ShadowEdgeIsAsSharpAsTheSunsDisc) {
   // The solve alone draws it at its elements' scale, smeared where they
   // straddle the edge (the test tells them apart).
   EXPECT_GT(wSolved, geometric);
+}
+
+// Where row y crosses halfway between its least and greatest value (in
+// pixels from the left), or -1.
+double EdgeAt(const PfmImage& img, int y) {
+  double lo = 1e30, hi = -1e30;
+  for (int x = 0; x < img.width; ++x) {
+    const double v = Pixel(img, x, y);
+    lo = std::min(lo, v), hi = std::max(hi, v);
+  }
+  const double t = 0.5 * (lo + hi);
+  for (int x = 1; x < img.width; ++x) {
+    const double a = Pixel(img, x - 1, y), b = Pixel(img, x, y);
+    if ((a - t) * (b - t) <= 0.0 && a != b) return x - 1 + (t - a) / (b - a);
+  }
+  return -1.0;
+}
+
+TEST(DirectSunTest, ShadowCastAcrossAnEnvironmentPlaneIsWhereAndAsSharpAsInOne) {
+  // The roof over x < 0 at 1.5 on a floor 2 across, the sun 4 degrees
+  // across and tilted towards -x: the roof's edge falls on the floor near
+  // x = 0.3. Cut at x = 0 (--envs 2x1x1), the roof lies in the first
+  // environment and the edge in the second, whose shadow rays leave its box
+  // below the roof: the first's sun map must shade them (without it the
+  // edge would be at x = 0, 38 pixels off). Seen from above x = 0.3, 128
+  // pixels a unit. The map's texel (8 x 32 across the scene's box, at most
+  // its diagonal, 3.2) is what the edge may move by: 1.6 pixels.
+  test::TempDir dir;
+  WriteSunScene(dir.path(), 1.5, 1.0);
+  const int n = 128;
+  const double texel = std::sqrt(2.0 * 2.0 + 1.5 * 1.5 + 2.0 * 2.0) / 256.0 * n;
+  const std::string sun = "--sun -0.2,1,0,3,3,3,4 --direct-samples 32";
+  PfmImage one = RenderDown(dir, n, sun, 0.3, "one");
+  PfmImage two = RenderDown(dir, n, sun + " --envs 2x1x1", 0.3, "two");
+  for (int y : {20, 64, 100}) {
+    const double at = EdgeAt(one, y);
+    ASSERT_GT(at, 0.25 * n) << "the edge in view";
+    ASSERT_LT(at, 0.75 * n);
+    EXPECT_NEAR(EdgeAt(two, y), at, texel) << "row " << y;
+    EXPECT_NEAR(EdgeWidth(two, y), EdgeWidth(one, y), 1.5) << "row " << y;
+  }
 }
 
 double Mean(const PfmImage& img) {

@@ -144,11 +144,12 @@ int LoadRank(RunState* r, const InitBudget& b, Prepared* p) {
 // The light of every environment's emitters and the transit masks: this
 // rank's environments cast theirs, every rank gets all. Collective.
 void BuildForeignLight(RunState* r, const EnvGrid& envGrid) {
-  if (r->foreignCounts.emitters == 0) return;
+  if (r->foreignCounts.emitters == 0 && r->foreignCounts.sunRes == 0) return;
   const int ranks = r->transport->size();
   const uint32_t total = r->rankEnvs.total;
   r->foreign.Build(
-      r->foreignStaged, envGrid, [&](uint32_t env) { return RankOfEnv(env, total, ranks); },
+      r->foreignStaged, envGrid, r->options.outside,
+      [&](uint32_t env) { return RankOfEnv(env, total, ranks); },
       [&](int rank) { return EnvsOfRank(total, ranks, rank).first; });
   std::vector<EmitterRecord>().swap(r->foreignStaged);
   for (size_t k = 0; k < r->envPtrs.size(); ++k) {
@@ -160,6 +161,8 @@ void BuildForeignLight(RunState* r, const EnvGrid& envGrid) {
   }
   Span<float> mine = r->foreign.mine();
   r->transport->AllGather(mine.data(), mine.bytes(), r->foreign.all().data());
+  Span<float> sun = r->foreign.sunMine();  // empty without --sun, as on every rank
+  if (!sun.empty()) r->transport->AllGather(sun.data(), sun.bytes(), r->foreign.sunAll().data());
 }
 
 // Several environments gathering every environment's emitters
@@ -169,7 +172,8 @@ void BuildForeignLight(RunState* r, const EnvGrid& envGrid) {
 // options and environment count, so all or none come here).
 int GatherEmitters(RunState* r, uint64_t most) {
   const Options& o = r->options;
-  if (r->rankEnvs.total <= 1 || !GathersForeign(o) || most == 0) return kExitOk;
+  if (r->rankEnvs.total <= 1 || !GathersForeign(o) || (most == 0 && !o.outside.HasSun()))
+    return kExitOk;
   const int ranks = r->transport->size();
   std::vector<EmitterRecord> mine, all(most * size_t(ranks));
   AppendEmitters(r->envs, &mine);

@@ -225,7 +225,8 @@ struct RunState {
     sharedMine = arena.Alloc<VertexRecord>(sharedCapacity);
     sharedAll = arena.Alloc<VertexRecord>(size_t(ranks) * sharedCapacity);
     sharedScratch = arena.Alloc<uint32_t>(anySmooth ? 2 * size_t(ranks) * sharedCapacity : 0);
-    if (foreignCounts.emitters > 0) foreign.Layout(arena, foreignCounts);
+    if (foreignCounts.emitters > 0 || foreignCounts.sunRes > 0)
+      foreign.Layout(arena, foreignCounts);
     part(&rankImageBytes);
     textures.Layout(arena, sceneTextures, used);
     part(&rankTextureBytes);
@@ -284,8 +285,10 @@ inline ForeignLight::Counts ForeignCountsOf(const Options& o, uint32_t envs, int
   std::sort(all->begin(), all->end(), [](const EmitterRecord& a, const EmitterRecord& b) {
     return a.patch.globalId < b.patch.globalId;
   });
-  if (envs <= 1 || !GathersForeign(o) || all->empty()) return ForeignLight::Counts{};
-  return ForeignLight::Count(*all, envs, static_cast<uint32_t>(ranks), perRank, o.foreignMaskRes);
+  const bool sun = o.outside.HasSun();
+  if (envs <= 1 || !GathersForeign(o) || (all->empty() && !sun)) return ForeignLight::Counts{};
+  return ForeignLight::Count(*all, envs, static_cast<uint32_t>(ranks), perRank, o.foreignMaskRes,
+                             sun);
 }
 
 inline int Fail(const Status& s) {

@@ -306,7 +306,7 @@ bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, con
     *source = numGroups();
     const float s = std::fmin(u.x / sunShare, 0.99999994f);
     const bool vis =
-        SampleSun(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight);
+        SampleSun(grid, receiver, twin, x, n, glm::vec2(s, u.y), epsilon, hint, weight, viewer);
     *weight /= std::fmin(sunShare, 1.0f);
     return vis;
   }
@@ -319,7 +319,7 @@ bool DirectLight::Sample(const Grid& grid, uint32_t receiver, uint32_t twin, con
 
 bool DirectLight::SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
                             const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
-                            glm::vec3* weight) const {
+                            glm::vec3* weight, uint32_t viewer) const {
   *weight = glm::vec3(0.0f);
   // A direction uniform in solid angle within the sun's disc: the radiance
   // E / (the disc's solid angle) times the cosine over the pdf 1 / (the
@@ -328,21 +328,29 @@ bool DirectLight::SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, 
   const float cosX = glm::dot(n, d);
   if (!(cosX > 0.0f)) return false;
   *weight = sun_ * cosX;
-  // The ray must leave the scene: nothing in the way, however far.
+  // The ray must leave the scene: nothing in the way, however far (and
+  // through the other environments, their maps).
   return Unblocked(grid, Ray{x, d, epsilon, std::numeric_limits<float>::infinity()}, receiver, twin,
-                   hint);
+                   hint) &&
+         PassesSun(viewer, x, n, d);
+}
+
+bool DirectLight::PassesSun(uint32_t viewer, const glm::vec3& x, const glm::vec3& n,
+                            const glm::vec3& d) const {
+  return viewer == kNoViewer || !transit_ || transit_->PassesSun(x, n, d);
 }
 
 bool DirectLight::SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin,
                                 const glm::vec3& x, const glm::vec3& n, uint32_t k, float epsilon,
-                                uint32_t* hint, bool* usable) const {
+                                uint32_t* hint, bool* usable, uint32_t viewer) const {
   // u1 = 1: the cone's edge; u2: the azimuth.
   const glm::vec3 d =
       -SunConeDirection(sunToward_, sunDegrees_, 1.0f, static_cast<float>(k) / kSunRimRays);
   *usable = glm::dot(n, d) > 0.0f;
   if (!*usable) return false;
   return Unblocked(grid, Ray{x, d, epsilon, std::numeric_limits<float>::infinity()}, receiver, twin,
-                   hint);
+                   hint) &&
+         PassesSun(viewer, x, n, d);
 }
 
 namespace {

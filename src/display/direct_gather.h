@@ -70,7 +70,7 @@ glm::vec3 GatherDirect(const DirectHook& h, glm::vec3 centre, uint32_t pixel, Po
   for (uint32_t k = outline; k < corners && cornersTell; ++k) {
     bool usable;
     cornersSeen += h.light->SunRimVisible(*h.grid, h.patch, h.twin, x0, h.normal, k - outline,
-                                          h.epsilon, h.hint, &usable)
+                                          h.epsilon, h.hint, &usable, h.viewer)
                        ? 1u
                        : 0u;
     cornersTell = usable;

@@ -20,8 +20,10 @@ std::vector<Patch> PatchesOf(const std::vector<EmitterRecord>& all) {
   return p;
 }
 
-// Whether the segment a -> b meets box `b` (closed), by slabs.
-bool SegmentMeetsBox(const glm::vec3& a, const glm::vec3& b, const Bounds& box) {
+// Whether the segment a -> b meets box `b` (closed), by slabs; *leave:
+// where it leaves the box, as a share of the segment from b back to a.
+bool SegmentMeetsBox(const glm::vec3& a, const glm::vec3& b, const Bounds& box,
+                     float* leave = nullptr) {
   float t0 = 0.0f, t1 = 1.0f;
   for (int k = 0; k < 3; ++k) {
     const float d = b[k] - a[k];
@@ -35,19 +37,21 @@ bool SegmentMeetsBox(const glm::vec3& a, const glm::vec3& b, const Bounds& box) 
     t1 = std::fmin(t1, tb);
     if (t0 > t1) return false;
   }
+  if (leave) *leave = 1.0f - t0;
   return true;
 }
 
 }  // namespace
 
 ForeignLight::Counts ForeignLight::Count(const std::vector<EmitterRecord>& all, uint32_t envs,
-                                         uint32_t ranks, uint32_t perRank, uint32_t res) {
+                                         uint32_t ranks, uint32_t perRank, uint32_t res, bool sun) {
   Counts c;
   c.emitters = static_cast<uint32_t>(all.size());
   c.envs = envs;
   c.ranks = ranks;
   c.perRank = perRank;
   c.res = res;
+  c.sunRes = sun ? kSunTexelsPerRes * res : 0;
   const std::vector<Patch> patches = PatchesOf(all);
   c.light = DirectLight::Count(Span<const Patch>(patches.data(), patches.size()));
   return c;
@@ -65,10 +69,15 @@ void ForeignLight::Layout(Arena& arena, const Counts& c) {
   mine_ = arena.Alloc<float>(size_t(c.perRank) * c.emitters * pixels_);
   all_ = arena.Alloc<float>(size_t(c.ranks) * c.perRank * c.emitters * pixels_);
   slot_ = arena.Alloc<uint32_t>(c.envs);
+  sunRes_ = c.sunRes;
+  const size_t texels = size_t(c.sunRes) * c.sunRes;
+  sunMine_ = arena.Alloc<float>(size_t(c.perRank) * texels);
+  sunAll_ = arena.Alloc<float>(size_t(c.ranks) * c.perRank * texels);
   light_.Layout(arena, c.light);
 }
 
-void ForeignLight::BuildRecords(const std::vector<EmitterRecord>& all, const EnvGrid& envGrid) {
+void ForeignLight::BuildRecords(const std::vector<EmitterRecord>& all, const EnvGrid& envGrid,
+                                const OutsideLight& outside) {
   CHECK(all.size() == records_.size());
   for (size_t e = 0; e < all.size(); ++e) {
     records_[e] = all[e];
@@ -79,8 +88,94 @@ void ForeignLight::BuildRecords(const std::vector<EmitterRecord>& all, const Env
   for (size_t k = 0; k < boxes_.size(); ++k) boxes_[k] = envGrid.EnvBox(static_cast<int>(k));
   for (float& d : mine_) d = 0.0f;
   for (float& d : all_) d = 0.0f;
+  for (float& d : sunMine_) d = 0.0f;
+  for (float& d : sunAll_) d = 0.0f;
   light_.Build(patches_);
+  if (sunRes_ > 0) {
+    light_.SetSun(outside);
+    BuildSunFrame(outside.sunToward);
+  }
   light_.SetTransit(this);
+}
+
+// The sun's maps' frame: e1, e2 across the direction towards it, the
+// scene's box (every environment's) projected on them, square texels that
+// cover it, and a plane above its highest corner along the sun's rays.
+void ForeignLight::BuildSunFrame(const glm::vec3& toward) {
+  sunToward_ = glm::normalize(toward);
+  const glm::vec3 a = std::fabs(sunToward_.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+  sunE1_ = glm::normalize(glm::cross(sunToward_, a));
+  sunE2_ = glm::cross(sunToward_, sunE1_);
+  Bounds box = boxes_[0];
+  for (const Bounds& b : boxes_) box.lo = glm::min(box.lo, b.lo), box.hi = glm::max(box.hi, b.hi);
+  float u0 = std::numeric_limits<float>::infinity(), u1 = -u0, v0 = u0, v1 = -u0, top = -u0;
+  for (int k = 0; k < 8; ++k) {
+    const glm::vec3 p((k & 1) ? box.hi.x : box.lo.x, (k & 2) ? box.hi.y : box.lo.y,
+                      (k & 4) ? box.hi.z : box.lo.z);
+    const float u = glm::dot(p, sunE1_), v = glm::dot(p, sunE2_), h = glm::dot(p, sunToward_);
+    u0 = std::fmin(u0, u), u1 = std::fmax(u1, u), v0 = std::fmin(v0, v), v1 = std::fmax(v1, v);
+    top = std::fmax(top, h);
+  }
+  const float side = std::fmax(u1 - u0, v1 - v0);
+  sunTexel_ = side / static_cast<float>(sunRes_) * 1.0001f;  // the far edge inside
+  sunU0_ = u0, sunV0_ = v0;
+  sunTop_ = top + 0.01f * side;
+}
+
+void ForeignLight::CastSun(const Grid& grid, Span<float> out) const {
+  for (uint32_t j = 0; j < sunRes_; ++j)
+    for (uint32_t i = 0; i < sunRes_; ++i) {
+      const float u = sunU0_ + (static_cast<float>(i) + 0.5f) * sunTexel_;
+      const float v = sunV0_ + (static_cast<float>(j) + 0.5f) * sunTexel_;
+      const Ray ray{u * sunE1_ + v * sunE2_ + sunTop_ * sunToward_, -sunToward_, 0.0f,
+                    std::numeric_limits<float>::infinity()};
+      Hit hit;
+      out[size_t(j) * sunRes_ + i] = grid.Intersect(ray, Skip(kNoPatch), &hit)
+                                         ? hit.t
+                                         : std::numeric_limits<float>::infinity();
+    }
+}
+
+bool ForeignLight::SunTexel(const glm::vec3& p, size_t* texel) const {
+  const float fu = (glm::dot(p, sunE1_) - sunU0_) / sunTexel_;
+  const float fv = (glm::dot(p, sunE2_) - sunV0_) / sunTexel_;
+  if (!(fu >= 0.0f && fv >= 0.0f && fu < static_cast<float>(sunRes_) &&
+        fv < static_cast<float>(sunRes_)))
+    return false;
+  *texel = size_t(static_cast<uint32_t>(fv)) * sunRes_ + static_cast<uint32_t>(fu);
+  return true;
+}
+
+bool ForeignLight::PassesSun(const glm::vec3& x, const glm::vec3& n, const glm::vec3& d) const {
+  size_t at;
+  if (sunRes_ == 0 || !SunTexel(x, &at)) return true;     // outside every box's shadow
+  const float depth = sunTop_ - glm::dot(x, sunToward_);  // x's distance below the plane
+  // The bias: a surface through x meets the texel's rays up to its width
+  // over the cosine away from x.
+  const float cosX = std::fabs(glm::dot(n, sunToward_));
+  const float reach = depth - 2.0f * sunTexel_ / std::fmax(cosX, 0.05f);
+  const float along = glm::dot(d, sunToward_);
+  const size_t texels = size_t(sunRes_) * sunRes_;
+  if (!(along > 0.0f)) return true;
+  // Every environment the sample's ray crosses up to the maps' plane, its
+  // own too (the own grid's ray may leave the box below an occluder that
+  // the maps' texel lines meet there); the segment stops just short of x.
+  const glm::vec3 top = x + (depth / along) * d, near = x + 1e-4f * (top - x);
+  for (uint32_t k = 0; k < boxes_.size(); ++k) {
+    float leave;
+    if (!SegmentMeetsBox(top, near, boxes_[k], &leave)) continue;
+    const float* map = sunAll_.data() + size_t(slot_[k]) * texels;
+    // The sample's ray (d, within the sun's disc) where it is as high as
+    // the occluder on x's own line, or as where it enters the box from
+    // above: the map's texel there, so that the disc gives the shadow a
+    // penumbra.
+    const float t = map[at];
+    const float h = t < reach ? depth - t : leave * depth;
+    size_t texel;
+    if (!SunTexel(x + (h / along) * d, &texel)) texel = at;
+    if (map[texel] < reach) return false;
+  }
+  return true;
 }
 
 void ForeignLight::CastOne(uint32_t e, const Grid& grid, float epsilon, Skip skip,

@@ -295,7 +295,10 @@ bool Environment::Build() {
   grid_.Build(patches_, geom_, &staged_->gridWork);
   // The sun's shadow rays must leave the scene, which only one
   // environment's grid can tell; with neighbours the sun is the solve's.
-  direct_.Build(patches_, lattice_, options_.outside, numNeighbours_ == 0);
+  // The sun per pixel: in one environment, or in several that gather every
+  // environment's light (its other environments' part from their maps).
+  direct_.Build(patches_, lattice_, options_.outside,
+                numNeighbours_ == 0 || options_.gatherForeign);
   direct_.SetGathersForeign(options_.gatherForeign && numNeighbours_ > 0);
   centreStepsPerRay_ = 1;
   while ((centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) * (centreStepsPerRay_ + 1) <=

@@ -165,8 +165,8 @@ class DirectLight {
   // sun's rim leaves the scene (*usable false when that direction lies on
   // or below x's horizon: the ray tells nothing).
   bool SunRimVisible(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                     const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint,
-                     bool* usable) const;
+                     const glm::vec3& n, uint32_t k, float epsilon, uint32_t* hint, bool* usable,
+                     uint32_t viewer = kNoViewer) const;
 
   // Every environment's emitters (foreign_light.h): the patches Build was
   // given are all of them, and a shadow ray from a point of environment
@@ -199,8 +199,9 @@ class DirectLight {
                   uint32_t* hint, glm::vec3* weight, uint32_t* source, uint32_t viewer) const;
   bool Passes(uint32_t patch, uint32_t viewer, const glm::vec3& x, const glm::vec3& n) const;
   bool SampleSun(const Grid& grid, uint32_t receiver, uint32_t twin, const glm::vec3& x,
-                 const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint,
-                 glm::vec3* weight) const;
+                 const glm::vec3& n, glm::vec2 u, float epsilon, uint32_t* hint, glm::vec3* weight,
+                 uint32_t viewer) const;
+  bool PassesSun(uint32_t viewer, const glm::vec3& x, const glm::vec3& n, const glm::vec3& d) const;
 };
 
 // The k-th sample of pixel `pixel` (row-major index) of the per-pixel

@@ -18,6 +18,17 @@
 // mask's resolution (R = 32: 2.8 degrees a pixel), so shadows cast across an
 // environment plane are as sharp as the emitter's patches and the mask
 // allow. Within the pixel's own environment nothing changes.
+//
+// The sun (--sun) the same way, with an orthographic map a environment:
+// S x S texels (S = kSunTexelsPerRes x R) on a plane across the sun's
+// direction, covering the scene's box, each the distance along the sun's
+// rays from that plane to the first thing the ray through the texel's
+// centre meets inside the environment's box. A point is lit through
+// another environment when that environment's first hit on x's line lies
+// beyond x, less a bias for the texel's width. Beyond the pixel's own
+// environment the sun is a point (every sample of its disc reads x's
+// texel), so a shadow cast across an environment plane has the texel's
+// edge, not the sun's penumbra.
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
@@ -27,6 +38,7 @@
 #include "vismask/core/arena.h"
 #include "vismask/core/span.h"
 #include "vismask/display/direct.h"
+#include "vismask/solve/outside.h"
 #include "vismask/solve/partition.h"
 #include "vismask/solve/patch.h"
 #include "vismask/solve/sampling.h"
@@ -48,21 +60,24 @@ class ForeignLight {
  public:
   // The counts a scene's emitters need (init: uses the heap): `all` sorted
   // by global id.
+  // sunRes: the sun's maps' texels a side (0: no sun).
   struct Counts {
-    uint32_t emitters = 0, envs = 0, ranks = 1, perRank = 0, res = 0;
+    uint32_t emitters = 0, envs = 0, ranks = 1, perRank = 0, res = 0, sunRes = 0;
     DirectLight::Counts light;
   };
+  static constexpr uint32_t kSunTexelsPerRes = 8;
   static Counts Count(const std::vector<EmitterRecord>& all, uint32_t envs, uint32_t ranks,
-                      uint32_t perRank, uint32_t res);
+                      uint32_t perRank, uint32_t res, bool sun);
   // Carves its lists, the light's, and the masks of all environments and of
   // this rank's (the exchange's block) from `arena` (also a measuring one).
   void Layout(Arena& arena, const Counts& counts);
-  // The records and the light from `all` (init); `rankOf(env)` and
-  // `firstOf(rank)`: where each environment's masks land in all().
+  // The records and the light from `all` and `outside`'s sun (init);
+  // `rankOf(env)` and `firstOf(rank)`: where each environment's masks land
+  // in all().
   template <class RankOf, class FirstOf>
-  void Build(const std::vector<EmitterRecord>& all, const EnvGrid& envGrid, RankOf rankOf,
-             FirstOf firstOf) {
-    BuildRecords(all, envGrid);
+  void Build(const std::vector<EmitterRecord>& all, const EnvGrid& envGrid,
+             const OutsideLight& outside, RankOf rankOf, FirstOf firstOf) {
+    BuildRecords(all, envGrid, outside);
     for (uint32_t k = 0; k < slot_.size(); ++k) {
       const int rank = rankOf(k);
       slot_[k] = static_cast<uint32_t>(rank) * perRank_ + (k - firstOf(rank));
@@ -72,19 +87,26 @@ class ForeignLight {
   // block `slot` of this rank's: rays from each patch's centre (offset
   // `epsilon` along its normal) through `grid`, the patch itself skipped
   // where `env` holds it (its local index and twin: `twinOf`).
+  // With the sun, also its map of `env` into block `slot` of sunMine().
   template <class TwinOf>
   void Cast(uint32_t env, uint32_t slot, const Grid& grid, float epsilon, TwinOf twinOf);
   // This rank's blocks (perRank of them) and every rank's (the exchange
   // fills `all` with every rank's `mine`, in rank order).
   Span<float> mine() const { return mine_; }
   Span<float> all() const { return all_; }
+  // The sun's maps, the same way.
+  Span<float> sunMine() const { return sunMine_; }
+  Span<float> sunAll() const { return sunAll_; }
 
-  bool empty() const { return records_.empty(); }
+  bool empty() const { return records_.empty() && sunRes_ == 0; }
   const DirectLight& light() const { return light_; }
   // Whether the ray from emitter patch `e`'s centre to x (unit normal n,
   // in environment `viewer`) passes every other environment it crosses
   // (viewer's own part is the caller's shadow ray).
   bool Passes(uint32_t e, uint32_t viewer, const glm::vec3& x, const glm::vec3& n) const;
+  // Whether the sun's ray from x (normal n) towards d (a direction within
+  // its disc) passes the environments x's line to the sun crosses.
+  bool PassesSun(const glm::vec3& x, const glm::vec3& n, const glm::vec3& d) const;
 
  private:
   Span<EmitterRecord> records_;
@@ -95,8 +117,18 @@ class ForeignLight {
   Span<float> mine_, all_;
   Span<uint32_t> slot_;  // per environment: its block in all_
   uint32_t res_ = 0, pixels_ = 0, perRank_ = 0;
+  // The sun's maps: a frame across its direction (e1, e2; toward the sun),
+  // the maps' corner on that plane, their texel and the plane's height.
+  Span<float> sunMine_, sunAll_;
+  uint32_t sunRes_ = 0;
+  glm::vec3 sunE1_{0.0f}, sunE2_{0.0f}, sunToward_{0.0f};
+  float sunU0_ = 0.0f, sunV0_ = 0.0f, sunTexel_ = 0.0f, sunTop_ = 0.0f;
 
-  void BuildRecords(const std::vector<EmitterRecord>& all, const EnvGrid& envGrid);
+  void BuildRecords(const std::vector<EmitterRecord>& all, const EnvGrid& envGrid,
+                    const OutsideLight& outside);
+  void BuildSunFrame(const glm::vec3& toward);
+  bool SunTexel(const glm::vec3& p, size_t* texel) const;
+  void CastSun(const Grid& grid, Span<float> out) const;
   DirectLight light_;
 
   void CastOne(uint32_t e, const Grid& grid, float epsilon, Skip skip, Span<float> out) const;
@@ -111,6 +143,8 @@ void ForeignLight::Cast(uint32_t env, uint32_t slot, const Grid& grid, float eps
     CastOne(e, grid, epsilon, skip,
             mine_.subspan((size_t(slot) * records_.size() + e) * pixels_, pixels_));
   }
+  const size_t texels = size_t(sunRes_) * sunRes_;
+  if (texels > 0) CastSun(grid, sunMine_.subspan(size_t(slot) * texels, texels));
 }
 
 }  // namespace vismask
