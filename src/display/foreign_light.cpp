@@ -51,7 +51,8 @@ ForeignLight::Counts ForeignLight::Count(const std::vector<EmitterRecord>& all, 
   c.ranks = ranks;
   c.perRank = perRank;
   c.res = res;
-  c.sunRes = sun ? kSunTexelsPerRes * res : 0;
+  const double most = std::floor(std::sqrt(kSunMapBytes / (sizeof(float) * std::max(envs, 1u))));
+  c.sunRes = sun ? static_cast<uint32_t>(std::min<double>(kSunTexelsPerRes * res, most)) : 0;
   const std::vector<Patch> patches = PatchesOf(all);
   c.light = DirectLight::Count(Span<const Patch>(patches.data(), patches.size()));
   return c;
@@ -73,6 +74,7 @@ void ForeignLight::Layout(Arena& arena, const Counts& c) {
   const size_t texels = size_t(c.sunRes) * c.sunRes;
   sunMine_ = arena.Alloc<float>(size_t(c.perRank) * texels);
   sunAll_ = arena.Alloc<float>(size_t(c.ranks) * c.perRank * texels);
+  sunMaps_ = arena.Alloc<SunMap>(c.sunRes > 0 ? c.envs : 0);
   light_.Layout(arena, c.light);
 }
 
@@ -98,35 +100,39 @@ void ForeignLight::BuildRecords(const std::vector<EmitterRecord>& all, const Env
   light_.SetTransit(this);
 }
 
-// The sun's maps' frame: e1, e2 across the direction towards it, the
-// scene's box (every environment's) projected on them, square texels that
-// cover it, and a plane above its highest corner along the sun's rays.
+// The sun's maps' frame: e1, e2 across the direction towards it, a plane
+// above the scene's highest corner along the sun's rays, and for each
+// environment square texels that cover its box projected on the plane.
 void ForeignLight::BuildSunFrame(const glm::vec3& toward) {
   sunToward_ = glm::normalize(toward);
   const glm::vec3 a = std::fabs(sunToward_.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
   sunE1_ = glm::normalize(glm::cross(sunToward_, a));
   sunE2_ = glm::cross(sunToward_, sunE1_);
-  Bounds box = boxes_[0];
-  for (const Bounds& b : boxes_) box.lo = glm::min(box.lo, b.lo), box.hi = glm::max(box.hi, b.hi);
-  float u0 = std::numeric_limits<float>::infinity(), u1 = -u0, v0 = u0, v1 = -u0, top = -u0;
-  for (int k = 0; k < 8; ++k) {
-    const glm::vec3 p((k & 1) ? box.hi.x : box.lo.x, (k & 2) ? box.hi.y : box.lo.y,
-                      (k & 4) ? box.hi.z : box.lo.z);
-    const float u = glm::dot(p, sunE1_), v = glm::dot(p, sunE2_), h = glm::dot(p, sunToward_);
-    u0 = std::fmin(u0, u), u1 = std::fmax(u1, u), v0 = std::fmin(v0, v), v1 = std::fmax(v1, v);
-    top = std::fmax(top, h);
+  float top = -std::numeric_limits<float>::infinity(), most = 0.0f;
+  for (size_t e = 0; e < boxes_.size(); ++e) {
+    const Bounds& box = boxes_[e];
+    float u0 = std::numeric_limits<float>::infinity(), u1 = -u0, v0 = u0, v1 = -u0;
+    for (int k = 0; k < 8; ++k) {
+      const glm::vec3 p((k & 1) ? box.hi.x : box.lo.x, (k & 2) ? box.hi.y : box.lo.y,
+                        (k & 4) ? box.hi.z : box.lo.z);
+      const float u = glm::dot(p, sunE1_), v = glm::dot(p, sunE2_);
+      u0 = std::fmin(u0, u), u1 = std::fmax(u1, u), v0 = std::fmin(v0, v), v1 = std::fmax(v1, v);
+      top = std::fmax(top, glm::dot(p, sunToward_));
+    }
+    const float side = std::fmax(u1 - u0, v1 - v0);
+    most = std::fmax(most, side);
+    // The far edge inside the last texel.
+    sunMaps_[e] = SunMap{u0, v0, side / static_cast<float>(sunRes_) * 1.0001f};
   }
-  const float side = std::fmax(u1 - u0, v1 - v0);
-  sunTexel_ = side / static_cast<float>(sunRes_) * 1.0001f;  // the far edge inside
-  sunU0_ = u0, sunV0_ = v0;
-  sunTop_ = top + 0.01f * side;
+  sunTop_ = top + 0.01f * most;
 }
 
-void ForeignLight::CastSun(const Grid& grid, Span<float> out) const {
+void ForeignLight::CastSun(uint32_t env, const Grid& grid, Span<float> out) const {
+  const SunMap& m = sunMaps_[env];
   for (uint32_t j = 0; j < sunRes_; ++j)
     for (uint32_t i = 0; i < sunRes_; ++i) {
-      const float u = sunU0_ + (static_cast<float>(i) + 0.5f) * sunTexel_;
-      const float v = sunV0_ + (static_cast<float>(j) + 0.5f) * sunTexel_;
+      const float u = m.u0 + (static_cast<float>(i) + 0.5f) * m.texel;
+      const float v = m.v0 + (static_cast<float>(j) + 0.5f) * m.texel;
       const Ray ray{u * sunE1_ + v * sunE2_ + sunTop_ * sunToward_, -sunToward_, 0.0f,
                     std::numeric_limits<float>::infinity()};
       Hit hit;
@@ -136,9 +142,10 @@ void ForeignLight::CastSun(const Grid& grid, Span<float> out) const {
     }
 }
 
-bool ForeignLight::SunTexel(const glm::vec3& p, size_t* texel) const {
-  const float fu = (glm::dot(p, sunE1_) - sunU0_) / sunTexel_;
-  const float fv = (glm::dot(p, sunE2_) - sunV0_) / sunTexel_;
+bool ForeignLight::SunTexel(uint32_t env, const glm::vec3& p, size_t* texel) const {
+  const SunMap& m = sunMaps_[env];
+  const float fu = (glm::dot(p, sunE1_) - m.u0) / m.texel;
+  const float fv = (glm::dot(p, sunE2_) - m.v0) / m.texel;
   if (!(fu >= 0.0f && fv >= 0.0f && fu < static_cast<float>(sunRes_) &&
         fv < static_cast<float>(sunRes_)))
     return false;
@@ -147,16 +154,14 @@ bool ForeignLight::SunTexel(const glm::vec3& p, size_t* texel) const {
 }
 
 bool ForeignLight::PassesSun(const glm::vec3& x, const glm::vec3& n, const glm::vec3& d) const {
-  size_t at;
-  if (sunRes_ == 0 || !SunTexel(x, &at)) return true;     // outside every box's shadow
-  const float depth = sunTop_ - glm::dot(x, sunToward_);  // x's distance below the plane
-  // The bias: a surface through x meets the texel's rays up to its width
-  // over the cosine away from x.
-  const float cosX = std::fabs(glm::dot(n, sunToward_));
-  const float reach = depth - 2.0f * sunTexel_ / std::fmax(cosX, 0.05f);
   const float along = glm::dot(d, sunToward_);
+  if (sunRes_ == 0 || !(along > 0.0f)) return true;
+  const float depth = sunTop_ - glm::dot(x, sunToward_);  // x's distance below the plane
+  const float cosX = std::fmax(std::fabs(glm::dot(n, sunToward_)), 0.05f);
+  const float sinX = std::sqrt(std::fmax(0.0f, 1.0f - cosX * cosX));
+  // The sample's sideways drift from x's line per unit of height.
+  const float drift = glm::length(d - along * sunToward_) / along;
   const size_t texels = size_t(sunRes_) * sunRes_;
-  if (!(along > 0.0f)) return true;
   // Every environment the sample's ray crosses up to the maps' plane, its
   // own too (the own grid's ray may leave the box below an occluder that
   // the maps' texel lines meet there); the segment stops just short of x.
@@ -165,15 +170,21 @@ bool ForeignLight::PassesSun(const glm::vec3& x, const glm::vec3& n, const glm::
     float leave;
     if (!SegmentMeetsBox(top, near, boxes_[k], &leave)) continue;
     const float* map = sunAll_.data() + size_t(slot_[k]) * texels;
+    // The bias: a surface through x meets the texel's rays up to its width
+    // over the cosine away from x.
+    const float reach = depth - 2.0f * sunMaps_[k].texel / cosX;
     // The sample's ray (d, within the sun's disc) where it is as high as
     // the occluder on x's own line, or as where it enters the box from
     // above: the map's texel there, so that the disc gives the shadow a
     // penumbra.
-    const float t = map[at];
+    size_t at;
+    const float t = SunTexel(k, x, &at) ? map[at] : std::numeric_limits<float>::infinity();
     const float h = t < reach ? depth - t : leave * depth;
+    // There the surface through x lies up to drift h sin / cos nearer the
+    // plane than x: no shadow of its own.
     size_t texel;
-    if (!SunTexel(x + (h / along) * d, &texel)) texel = at;
-    if (map[texel] < reach) return false;
+    if (SunTexel(k, x + (h / along) * d, &texel) && map[texel] < reach - drift * h * sinX / cosX)
+      return false;
   }
   return true;
 }

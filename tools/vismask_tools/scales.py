@@ -66,11 +66,13 @@ SCALES = {
                  # The sun room (sun_step.py, issue 41's sun-shadow goal): Cycles at
                  # spp (two halves); vismask's runs (name, options, k): its defaults,
                  # more shadow rays, no elements (no pieces split along the edges),
-                 # and the defaults at k = 2 times the size box-averaged down (where
-                 # in a pixel the gather's rays leave from).
+                 # the defaults at k = 2 times the size box-averaged down (where
+                 # in a pixel the gather's rays leave from), and in 2x1x2
+                 # environments (the sun through the other environments' maps).
                  sun=dict(width=256, height=192, spp=1024,
                           runs=[("default", [], 1), ("direct-128", ["--direct-samples", "128"], 1),
-                                ("elements-0", ["--elements", "0"], 1), ("default-2x", [], 2)]),
+                                ("elements-0", ["--elements", "0"], 1), ("default-2x", [], 2),
+                                ("envs-2x1x2", ["--envs", "2x1x2"], 1)]),
                  # The occluded room (room_step.py, issue 41): make parallel's room and
                  # reference, one environment at the defaults; errors over k x k blocks.
                  room=dict(width=384, height=192, spp=4096, options=[], blocks=[1, 2, 4, 8])),

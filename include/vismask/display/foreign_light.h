@@ -19,16 +19,18 @@
 // environment plane are as sharp as the emitter's patches and the mask
 // allow. Within the pixel's own environment nothing changes.
 //
-// The sun (--sun) the same way, with an orthographic map a environment:
-// S x S texels (S = kSunTexelsPerRes x R) on a plane across the sun's
-// direction, covering the scene's box, each the distance along the sun's
-// rays from that plane to the first thing the ray through the texel's
-// centre meets inside the environment's box. A point is lit through
-// another environment when that environment's first hit on x's line lies
-// beyond x, less a bias for the texel's width. Beyond the pixel's own
-// environment the sun is a point (every sample of its disc reads x's
-// texel), so a shadow cast across an environment plane has the texel's
-// edge, not the sun's penumbra.
+// The sun (--sun) the same way, with an orthographic map an environment:
+// S x S texels (S = kSunTexelsPerRes x R, fewer where all of them would
+// pass kSunMapBytes) on a plane across the sun's direction, covering the
+// environment's box, each the distance along the sun's rays from that
+// plane to the first thing the ray through the texel's centre meets inside
+// that box. A sun sample from x leaves its own box through every map its
+// ray crosses (x's own environment's too), read where the sample's ray is
+// as high as the occluder on x's line, so the sun's disc still gives a
+// penumbra; lit when that texel's first hit lies below x, less a bias for
+// the texel's width. What it loses: a shadow cast across an environment
+// plane may move by up to a texel, and the occluder's height for the
+// penumbra is read on x's line.
 #pragma once
 #include <cstdint>
 #include <glm/vec3.hpp>
@@ -65,7 +67,10 @@ class ForeignLight {
     uint32_t emitters = 0, envs = 0, ranks = 1, perRank = 0, res = 0, sunRes = 0;
     DirectLight::Counts light;
   };
-  static constexpr uint32_t kSunTexelsPerRes = 8;
+  // The sun's maps: 16R texels a side (512 at R = 32), fewer where every
+  // environment's would take more than kSunMapBytes in all.
+  static constexpr uint32_t kSunTexelsPerRes = 16;
+  static constexpr double kSunMapBytes = 16.0 * 1024 * 1024;
   static Counts Count(const std::vector<EmitterRecord>& all, uint32_t envs, uint32_t ranks,
                       uint32_t perRank, uint32_t res, bool sun);
   // Carves its lists, the light's, and the masks of all environments and of
@@ -118,17 +123,22 @@ class ForeignLight {
   Span<uint32_t> slot_;  // per environment: its block in all_
   uint32_t res_ = 0, pixels_ = 0, perRank_ = 0;
   // The sun's maps: a frame across its direction (e1, e2; toward the sun),
-  // the maps' corner on that plane, their texel and the plane's height.
+  // the plane's height along it, and each environment's map's corner on
+  // that plane and texel.
+  struct SunMap {
+    float u0 = 0.0f, v0 = 0.0f, texel = 0.0f;
+  };
   Span<float> sunMine_, sunAll_;
+  Span<SunMap> sunMaps_;
   uint32_t sunRes_ = 0;
   glm::vec3 sunE1_{0.0f}, sunE2_{0.0f}, sunToward_{0.0f};
-  float sunU0_ = 0.0f, sunV0_ = 0.0f, sunTexel_ = 0.0f, sunTop_ = 0.0f;
+  float sunTop_ = 0.0f;
 
   void BuildRecords(const std::vector<EmitterRecord>& all, const EnvGrid& envGrid,
                     const OutsideLight& outside);
   void BuildSunFrame(const glm::vec3& toward);
-  bool SunTexel(const glm::vec3& p, size_t* texel) const;
-  void CastSun(const Grid& grid, Span<float> out) const;
+  bool SunTexel(uint32_t env, const glm::vec3& p, size_t* texel) const;
+  void CastSun(uint32_t env, const Grid& grid, Span<float> out) const;
   DirectLight light_;
 
   void CastOne(uint32_t e, const Grid& grid, float epsilon, Skip skip, Span<float> out) const;
@@ -144,7 +154,7 @@ void ForeignLight::Cast(uint32_t env, uint32_t slot, const Grid& grid, float eps
             mine_.subspan((size_t(slot) * records_.size() + e) * pixels_, pixels_));
   }
   const size_t texels = size_t(sunRes_) * sunRes_;
-  if (texels > 0) CastSun(grid, sunMine_.subspan(size_t(slot) * texels, texels));
+  if (texels > 0) CastSun(env, grid, sunMine_.subspan(size_t(slot) * texels, texels));
 }
 
 }  // namespace vismask
