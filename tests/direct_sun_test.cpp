@@ -164,8 +164,9 @@ TEST(DirectSunTest, ShadowCastAcrossAnEnvironmentPlaneIsWhereAndAsSharpAsInOne) 
   // environment and the edge in the second, whose shadow rays leave its box
   // below the roof: the first's sun map must shade them (without it the
   // edge would be at x = 0, 38 pixels off). Seen from above x = 0.3, 128
-  // pixels a unit. The map's texel (8 x 32 across the scene's box, at most
-  // its diagonal, 3.2) is what the edge may move by: 1.6 pixels.
+  // pixels a unit. The map's texel is what the edge may move by: here the
+  // scene's diagonal (3.2) over 256, 1.6 pixels, no finer than the maps'
+  // (16 x 32 texels across each environment's box).
   test::TempDir dir;
   WriteSunScene(dir.path(), 1.5, 1.0);
   const int n = 128;

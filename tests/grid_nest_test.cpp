@@ -16,6 +16,7 @@
 #include "test_util.h"
 #include "vismask/accel/grid.h"
 #include "vismask/app/options.h"
+#include "vismask/solve/env_options.h"
 
 namespace vismask {
 namespace {
@@ -230,6 +231,7 @@ void WriteBallRoom(const std::string& dir) {
 // sub-grids give the uniform grid's hit on every ray.
 TEST(GridNestTest, SubGridsOptionChangesNoImageOrPatchByte) {
   EXPECT_EQ(Options().subGrids, Grid::Nest().minRefs);
+  EXPECT_EQ(EnvOptions().subGridRefs, Grid::Nest().minRefs);
   test::TempDir dir;
   WriteBallRoom(dir.path());
   std::string json[2];

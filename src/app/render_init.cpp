@@ -144,7 +144,7 @@ int LoadRank(RunState* r, const InitBudget& b, Prepared* p) {
 // The light of every environment's emitters and the transit masks: this
 // rank's environments cast theirs, every rank gets all. Collective.
 void BuildForeignLight(RunState* r, const EnvGrid& envGrid) {
-  if (r->foreignCounts.emitters == 0 && r->foreignCounts.sunRes == 0) return;
+  if (r->foreignCounts.empty()) return;
   const int ranks = r->transport->size();
   const uint32_t total = r->rankEnvs.total;
   r->foreign.Build(

@@ -225,8 +225,7 @@ struct RunState {
     sharedMine = arena.Alloc<VertexRecord>(sharedCapacity);
     sharedAll = arena.Alloc<VertexRecord>(size_t(ranks) * sharedCapacity);
     sharedScratch = arena.Alloc<uint32_t>(anySmooth ? 2 * size_t(ranks) * sharedCapacity : 0);
-    if (foreignCounts.emitters > 0 || foreignCounts.sunRes > 0)
-      foreign.Layout(arena, foreignCounts);
+    if (!foreignCounts.empty()) foreign.Layout(arena, foreignCounts);
     part(&rankImageBytes);
     textures.Layout(arena, sceneTextures, used);
     part(&rankTextureBytes);

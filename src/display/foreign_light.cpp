@@ -20,10 +20,11 @@ std::vector<Patch> PatchesOf(const std::vector<EmitterRecord>& all) {
   return p;
 }
 
-// Whether the segment a -> b meets box `b` (closed), by slabs; *leave:
-// where it leaves the box, as a share of the segment from b back to a.
+// Whether the segment a -> b meets box `b` (closed), by slabs; *entry:
+// where, going from a, it first meets the box, as the share of the segment
+// from there to b.
 bool SegmentMeetsBox(const glm::vec3& a, const glm::vec3& b, const Bounds& box,
-                     float* leave = nullptr) {
+                     float* entry = nullptr) {
   float t0 = 0.0f, t1 = 1.0f;
   for (int k = 0; k < 3; ++k) {
     const float d = b[k] - a[k];
@@ -37,7 +38,7 @@ bool SegmentMeetsBox(const glm::vec3& a, const glm::vec3& b, const Bounds& box,
     t1 = std::fmin(t1, tb);
     if (t0 > t1) return false;
   }
-  if (leave) *leave = 1.0f - t0;
+  if (entry) *entry = 1.0f - t0;
   return true;
 }
 
@@ -167,8 +168,8 @@ bool ForeignLight::PassesSun(const glm::vec3& x, const glm::vec3& n, const glm::
   // the maps' texel lines meet there); the segment stops just short of x.
   const glm::vec3 top = x + (depth / along) * d, near = x + 1e-4f * (top - x);
   for (uint32_t k = 0; k < boxes_.size(); ++k) {
-    float leave;
-    if (!SegmentMeetsBox(top, near, boxes_[k], &leave)) continue;
+    float entry;  // the height where the sample's ray enters the box, over depth
+    if (!SegmentMeetsBox(top, near, boxes_[k], &entry)) continue;
     const float* map = sunAll_.data() + size_t(slot_[k]) * texels;
     // The bias: a surface through x meets the texel's rays up to its width
     // over the cosine away from x.
@@ -179,7 +180,7 @@ bool ForeignLight::PassesSun(const glm::vec3& x, const glm::vec3& n, const glm::
     // penumbra.
     size_t at;
     const float t = SunTexel(k, x, &at) ? map[at] : std::numeric_limits<float>::infinity();
-    const float h = t < reach ? depth - t : leave * depth;
+    const float h = t < reach ? depth - t : entry * depth;
     // There the surface through x lies up to drift h sin / cos nearer the
     // plane than x: no shadow of its own.
     size_t texel;

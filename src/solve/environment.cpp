@@ -293,10 +293,10 @@ bool Environment::Build() {
   for (size_t i = 0; i < patchTex_.size(); ++i) patchTex_[i] = staged_->tex[i];
   lattice_.Build(staged_->lattice, patches_);
   grid_.Build(patches_, geom_, &staged_->gridWork);
-  // The sun's shadow rays must leave the scene, which only one
-  // environment's grid can tell; with neighbours the sun is the solve's.
-  // The sun per pixel: in one environment, or in several that gather every
-  // environment's light (its other environments' part from their maps).
+  // The sun per pixel: its shadow rays must leave the scene, which one
+  // environment's grid tells alone; with neighbours, only where the pixels
+  // gather every environment's light (the other environments' part from
+  // their sun maps, foreign_light.h); else the sun is the solve's.
   direct_.Build(patches_, lattice_, options_.outside,
                 numNeighbours_ == 0 || options_.gatherForeign);
   direct_.SetGathersForeign(options_.gatherForeign && numNeighbours_ > 0);

@@ -66,6 +66,7 @@ class ForeignLight {
   struct Counts {
     uint32_t emitters = 0, envs = 0, ranks = 1, perRank = 0, res = 0, sunRes = 0;
     DirectLight::Counts light;
+    bool empty() const { return emitters == 0 && sunRes == 0; }  // nothing to lay out
   };
   // The sun's maps: 16R texels a side (512 at R = 32), fewer where every
   // environment's would take more than kSunMapBytes in all.
