@@ -221,8 +221,9 @@ TEST(AllocTest, PerPixelSunAllocatesNothingAfterInit) {
   for (const char* raster : {"on", "off"})
     for (const char* scene : {"scenes/skylight.obj", "scenes/cornell.obj"}) {
       for (const char* envs : {"", " --envs 2x1x2"}) {
-        // Several environments: each gathers its own emitters (their cut
-        // vertices share the solve's whole), the sun is the solve's.
+        // Several environments: every environment's emitters and the sun
+        // gathered per pixel, the other environments' parts read from
+        // their transit masks and sun maps (foreign_light.h).
         CountedRender run(scene, std::string("--sun 1,4,0.5,3,3,3 --direct-samples 32 --max-shots "
                                              "300 --width 64 --height 48 --aa ") +
                                      raster + envs);
