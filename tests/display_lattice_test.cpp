@@ -43,12 +43,17 @@ struct Square {
     lattice.Build(staged, Span<const Patch>(patches.data(), patches.size()));
   }
   // Each patch one leaf showing `value(patch)`, as ComputeVertexRadiosity adds it.
-  template <typename F>
-  void Fill(F value, int steps) {
+  // `weight(patch)`: its leaf's exposed area (0: buried, nothing sees it).
+  template <typename F, typename W>
+  void Fill(F value, int steps, W weight) {
     lattice.Clear();
     for (uint32_t i = 0; i < patches.size(); ++i)
-      for (int k = 0; k < 4; ++k) lattice.Add(patches[i].vertex[k], 1.0f, value(i), 1.0f);
+      for (int k = 0; k < 4; ++k) lattice.Add(patches[i].vertex[k], weight(i), value(i), 1.0f);
     lattice.Finish(Span<const Patch>(patches.data(), patches.size()), steps);
+  }
+  template <typename F>
+  void Fill(F value, int steps) {
+    Fill(value, steps, [](uint32_t) { return 1.0f; });
   }
   glm::vec3 Centre(uint32_t i) const {
     return 0.25f * (patches[i].corner[0] + patches[i].corner[1] + patches[i].corner[2] +
@@ -101,6 +106,30 @@ TEST(DisplayLatticeTest, SmoothingTakesTheNoiseOutAndKeepsTheMean) {
   double after = spread(&mean6);
   EXPECT_LT(after, 0.5 * before);
   EXPECT_NEAR(mean6, mean0, 0.05);
+}
+
+// A vertex no exposed leaf touches (weight 0: under a lamp that hangs just
+// below the ceiling, under a block on the floor) holds no value, so its
+// neighbours must not take it in: a uniform field stays uniform around a
+// buried block of 2 x 2 patches (it went dark there, a halo around the
+// Cornell box's lamp).
+TEST(DisplayLatticeTest, SmoothingLeavesBuriedVerticesOut) {
+  Square s;
+  auto buried = [](uint32_t i) {
+    const int x = static_cast<int>(i) % Square::kN, y = static_cast<int>(i) / Square::kN;
+    return (x == 3 || x == 4) && (y == 3 || y == 4);
+  };
+  s.Fill([](uint32_t) { return glm::vec3(1.0f); }, 6,
+         [&](uint32_t i) { return buried(i) ? 0.0f : 1.0f; });
+  const uint32_t centre = 4 + (Square::kN + 1) * 4;  // touches only buried patches
+  EXPECT_EQ(s.lattice.weights()[centre], 0.0f);
+  int checked = 0;
+  for (uint32_t v = 0; v < s.lattice.radiosity().size(); ++v) {
+    if (v == centre) continue;
+    EXPECT_NEAR(s.lattice.radiosity()[v].x, 1.0f, 1e-5f) << "vertex " << v;
+    ++checked;
+  }
+  EXPECT_EQ(checked, (Square::kN + 1) * (Square::kN + 1) - 1);
 }
 
 }  // namespace

@@ -225,7 +225,7 @@ environments, unless --foreign-mask-res 0), else 1)")
 with direct light per pixel, the indirect part is
 smoothed over each polygon's display lattice, K steps
 (each vertex half its own value, half its edge
-neighbours' mean; the outline is extrapolated from
+neighbours' mean, those nothing sees left out; the outline is extrapolated from
 inside, as without). Not given: from the rays a patch
 received (more steps the fewer: its noise), 0 once
 converged; 0: off. run.json: indirect_filter_steps)"),

@@ -136,15 +136,22 @@ void DisplayLattice::Finish(Span<const Patch> patches, int smoothSteps) {
   }
   for (int step = 0; step < smoothSteps; ++step) {
     for (size_t v = 0; v < n; ++v) acc[v] = glm::vec3(0.0f);
+    // inward_.x (Extrapolate's scratch, cleared there) counts the
+    // neighbours that hold a value: a vertex no exposed leaf touches
+    // (weight 0) holds none, and is neither taken in nor smoothed.
+    for (size_t v = 0; v < n; ++v) inward_[v] = glm::vec3(0.0f);
     for (const Patch& p : patches)
       for (uint32_t k = 0; k < p.numCorners; ++k) {
         uint32_t a = p.vertex[k], b = p.vertex[(k + 1) % p.numCorners];
-        acc[a] += radiosity_[b];
-        acc[b] += radiosity_[a];
+        float wa = weight_[a] > 0.0f ? 1.0f : 0.0f, wb = weight_[b] > 0.0f ? 1.0f : 0.0f;
+        acc[a] += wb * radiosity_[b];
+        acc[b] += wa * radiosity_[a];
+        inward_[a].x += wb;
+        inward_[b].x += wa;
       }
     for (size_t v = 0; v < n; ++v)
-      if (interior_[v])
-        radiosity_[v] = 0.5f * radiosity_[v] + 0.5f * acc[v] / static_cast<float>(interior_[v]);
+      if (interior_[v] && weight_[v] > 0.0f && inward_[v].x > 0.0f)
+        radiosity_[v] = 0.5f * radiosity_[v] + 0.5f * acc[v] / inward_[v].x;
   }
   Extrapolate(patches);
 }

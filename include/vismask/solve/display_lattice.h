@@ -42,8 +42,9 @@ class DisplayLattice {
   // polygon's outline along quads' diagonals. With `smoothSteps` > 0 (laid
   // out for smoothing) the vertices two edges or more inside the outline
   // are smoothed first, that many steps: each takes half its value and half
-  // its edge neighbours' mean (a linear field stays as it was), and the
-  // outline is extrapolated from them.
+  // the mean of its edge neighbours that hold a value (weight > 0; a vertex
+  // no exposed leaf touches holds none and keeps its 0) (a linear field
+  // stays as it was), and the outline is extrapolated from them.
   void Clear();
   void Add(uint32_t v, float weight, const glm::vec3& b, float edgeShare) {
     radiosity_[v] += weight * b;
