@@ -1,6 +1,5 @@
-// Init's scene work (run.h): the OBJ read in passes (scene_stream.h), cut
-// into environments of which this rank keeps its own (their meshing and
-// init's peak: src/app/prepare_envs.cpp).
+// Init's scene work (run.h): the OBJ read in passes (scene_stream.h), cut into environments of
+// which this rank keeps its own (their meshing and init's peak: src/app/prepare_envs.cpp).
 #include "run.h"
 
 namespace vismask::run {
@@ -151,6 +150,8 @@ Status PlanGrid(const Options& o, Prepared* p) {
   glm::vec3 extent = info.bounds.hi - info.bounds.lo;
   float maxExtent = std::fmax(extent.x, std::fmax(extent.y, extent.z));
   p->patchSize = o.patchSize > 0.0f ? o.patchSize : maxExtent / kAutoPatchDivisions;
+  const float r = maxExtent / kAutoPatchDivisions / p->patchSize;  // (env_options.h)
+  p->envOptions.filterPatchScale = std::isfinite(r) && r > 0.0f ? double(r) * r : 1.0;
   p->tolerance = 1e-5f * maxExtent;
   p->smooth = o.smooth;
   for (int a = 0; a < 3; ++a) p->grid.n[a] = o.envs[a];

@@ -74,6 +74,9 @@ struct EnvOptions {
   // (--foreign-mask-res > 0): a foreign shot's emission is direct here too.
   bool gatherForeign = false;
   int indirectFilter = -1;  // display smoothing steps of the indirect part; -1: by hits a patch
+  // (The automatic patch size over the patch size)^2: the automatic steps
+  // scale with it (Environment::IndirectFilterSteps); set by PlanGrid.
+  double filterPatchScale = 1.0;
   // --sky, --sun: the light from outside the scene's box (outside.h), in
   // outsideTiles x outsideTiles shooters a face of the box.
   OutsideLight outside;
