@@ -354,5 +354,66 @@ TEST(ExposureTest, MasksAreCastFromAnOpenCell) {
   EXPECT_NEAR(st.y, 0.375f, 1e-6f);
 }
 
+// A patch that is still one leaf sends its rays by the power its quarters
+// received once it has ElementTree::kQuarterHits hits (each quarter also
+// counting kQuarterPrior hits' worth spread evenly), over its open cells
+// when part buried; a triangle's by its child triangles.
+TEST(ExposureTest, OneLeafPatchesLeaveByTheirQuartersPower) {
+  gridtest::TestScene s;
+  gridtest::AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1, 1, &s);
+  Span<const Patch> patches(s.patches.data(), s.patches.size());
+  Arena arena(1 << 16);
+  ElementTree tree;
+  tree.Layout(arena, 1, ElementOptions{}, false);
+  tree.Reset(patches);
+  tree.SetExposed(0, 1.0f, 0xffff);
+  ElementTree::QuarterOrigins o;
+  Element& el = tree[0];
+  const double q[4] = {1.0, 3.0, 0.0, 0.0};  // k = [s >= 1/2] + 2 [t >= 1/2]
+  for (int k = 0; k < 4; ++k)
+    for (int c = 0; c < 3; ++c) el.quarter[k][c] = q[k] / 3.0;
+  el.hits = ElementTree::kQuarterHits - 1;
+  EXPECT_FALSE(tree.MakeQuarterOrigins(false, 0, &o)) << "too few hits: as before";
+  el.hits = 100;
+  // The shares a stratified u[0] must find, and where the points fall.
+  auto shares = [&](const ElementTree::QuarterOrigins& origins, int perQuarter[4], int* buried,
+                    uint16_t open) {
+    const int n = 4000;
+    for (int i = 0; i < n; ++i) {
+      const float u[3] = {(i + 0.5f) / n, 0.37f, 0.61f};
+      const glm::vec2 st = origins.Point(u);
+      ASSERT_TRUE(st.x > 0.0f && st.x < 1.0f && st.y > 0.0f && st.y < 1.0f);
+      ++perQuarter[(st.x >= 0.5f) + 2 * (st.y >= 0.5f)];
+      const int a = static_cast<int>(st.x * 4.0f), b = static_cast<int>(st.y * 4.0f);
+      *buried += !((open >> (a * 4 + b)) & 1u);
+    }
+  };
+  const double prior = ElementTree::kQuarterPrior * 4.0 / (4.0 * el.hits), all = 4.0 + 4.0 * prior;
+  ASSERT_TRUE(tree.MakeQuarterOrigins(false, 0, &o));
+  int per[4] = {0, 0, 0, 0}, buried = 0;
+  shares(o, per, &buried, 0xffff);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(per[k] / 4000.0, (q[k] + prior) / all, 1e-3) << k;
+  // Part buried: cell (a, b) open for b >= 2 (the cells of quarters 2 and 3)
+  // and for (1, 0) and (3, 1); each quarter's power over its open cells.
+  const uint16_t open = 0xcccc | (1u << 4) | (1u << 13);
+  tree.SetExposed(0, 10.0f / 16.0f, open);
+  ASSERT_TRUE(tree.MakeQuarterOrigins(false, 0, &o));
+  int perB[4] = {0, 0, 0, 0};
+  buried = 0;
+  shares(o, perB, &buried, open);
+  EXPECT_EQ(buried, 0);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(perB[k] / 4000.0, (q[k] + prior) / all, 1e-3) << k;
+  // A triangle: the child triangle ChildOf names.
+  ASSERT_TRUE(tree.MakeQuarterOrigins(true, 0, &o));
+  int perT[4] = {0, 0, 0, 0};
+  for (int i = 0; i < 4000; ++i) {
+    const float u[3] = {(i + 0.5f) / 4000.0f, 0.37f, 0.61f};
+    glm::vec2 st = o.Point(u);
+    ASSERT_LT(st.x + st.y, 1.0f);
+    ++perT[ChildOf(true, &st)];
+  }
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(perT[k] / 4000.0, (q[k] + prior) / all, 1e-3) << k;
+}
+
 }  // namespace
 }  // namespace vismask

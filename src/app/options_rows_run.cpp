@@ -107,8 +107,8 @@ shot's origin x direction; random: independent draws)")
       Choice("--origins", &O::originsByPower, "power|uniform")
           .Help("O", R"(
 where a patch's rays leave from: power (default): its
-elements by the light each received (one environment),
-or its cells not buried in a solid (several), none
+elements (or, unsplit, its quarters) by the light each
+received (one environment), or its cells not buried in a solid (several), none
 from a part under a block or behind a lamp; uniform:
 anywhere on the patch alike)")
           .Json("origins"),

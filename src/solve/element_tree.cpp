@@ -128,6 +128,65 @@ void ElementTree::OpenCellsPoint(uint16_t open, float* ua, float* ub) {
                  1.0f - kMargin);
 }
 
+static_assert(ElementTree::kOpenSide * ElementTree::kOpenSide == 16, "QuarterOrigins::cdf");
+
+bool ElementTree::MakeQuarterOrigins(bool triangle, uint32_t patch, QuarterOrigins* out) const {
+  const Element& el = elements_[patch];
+  if (el.child != kNoElement || el.hits < kQuarterHits) return false;
+  double q[4], total = 0.0;
+  for (int k = 0; k < 4; ++k)
+    total += q[k] = el.quarter[k][0] + el.quarter[k][1] + el.quarter[k][2];
+  if (!(total > 0.0)) return false;
+  for (double& v : q) v += kQuarterPrior * total / (4.0 * el.hits);
+  double w[16], sum = 0.0;
+  out->triangle = triangle;
+  if (triangle) {
+    glm::vec2 root[4];
+    RootCorners(true, root);
+    out->count = 4;
+    for (uint32_t k = 0; k < 4; ++k) {
+      ChildCorners(true, root, k, out->corners[k]);
+      sum += w[k] = q[k];
+    }
+  } else {
+    // A cell's share: its quarter's power over the quarter's open cells
+    // (all, unless the leaf is part buried).
+    const uint16_t open = PartBuried(false, patch) ? open_[patch] : uint16_t{0xffff};
+    auto quarterOf = [](int cell) {
+      return (cell / kOpenSide >= kOpenSide / 2) + 2 * (cell % kOpenSide >= kOpenSide / 2);
+    };
+    int inQuarter[4] = {0, 0, 0, 0};
+    for (int cell = 0; cell < 16; ++cell) inQuarter[quarterOf(cell)] += (open >> cell) & 1u;
+    out->count = 16;
+    for (int cell = 0; cell < 16; ++cell)
+      sum += w[cell] =
+          ((open >> cell) & 1u) ? q[quarterOf(cell)] / inQuarter[quarterOf(cell)] : 0.0;
+  }
+  double below = 0.0;
+  for (int k = 0; k < out->count; ++k) out->cdf[k] = static_cast<float>((below += w[k]) / sum);
+  out->cdf[out->count - 1] = 1.0f;
+  return true;
+}
+
+glm::vec2 ElementTree::QuarterOrigins::Point(const float u[3]) const {
+  int k = 0;
+  while (k < count - 1 && u[0] >= cdf[k]) ++k;
+  while (k > 0 && !(cdf[k] > cdf[k - 1])) --k;  // never a cell that sends nothing
+  float a = u[1], b = u[2];
+  if (triangle) {
+    a = std::min(std::max(a, kMargin), 1.0f - kMargin);
+    b = std::min(std::max(b, kMargin), 1.0f - kMargin);
+    const glm::vec2* c = corners[k];
+    const float su = std::sqrt(a);
+    return c[0] + su * (1.0f - b) * (c[1] - c[0]) + su * b * (c[2] - c[0]);
+  }
+  a = std::min(std::max((static_cast<float>(k / kOpenSide) + a) / kOpenSide, kMargin),
+               1.0f - kMargin);
+  b = std::min(std::max((static_cast<float>(k % kOpenSide) + b) / kOpenSide, kMargin),
+               1.0f - kMargin);
+  return glm::vec2(a, b);
+}
+
 bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
                                 glm::vec2* st) const {
   uint32_t e = patch;

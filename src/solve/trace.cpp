@@ -183,6 +183,16 @@ int Environment::ExitFace(const Ray& ray) const {
   return 2 * axis + (step > 0);
 }
 
+// One environment: a local patch's rays leave from where its light landed
+// (ElementTree::SampleByPower, MakeQuarterOrigins). With neighbours a
+// foreign environment regenerates the shot's rays from the packet alone,
+// so they leave uniformly from the patch's open cells (MakeShotRay).
+bool Environment::OriginsByPower(const Patch& shooter, bool foreign) const {
+  return options_.originsByPower && !foreign && numNeighbours_ == 0 &&
+         OutsideKindOf(shooter.globalId) == OutsideKind::kNone &&
+         shooter.ke[0] + shooter.ke[1] + shooter.ke[2] == 0.0f;
+}
+
 // Traces `rays` rays of one shooter through this environment. Rays whose
 // pixel is closed in `in` are skipped; with a mask method, `out` loses the
 // pixels of rays that hit here (A), of centre rays that hit (B), or of
@@ -212,20 +222,19 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   ShotSetup shot(options_, shooter, power, stream, rays);
   ShotTally tally(shooter);
   const glm::vec3 centre = MaskCentre(shooter);
-  // One environment: a local patch's rays leave from where its light
-  // landed (ElementTree::SampleByPower). With neighbours a foreign
-  // environment regenerates the shot's rays from the packet alone, so they
-  // leave uniformly from the patch's open cells (MakeShotRay).
-  const bool byPower = options_.originsByPower && !foreign && numNeighbours_ == 0 &&
-                       OutsideKindOf(shooter.globalId) == OutsideKind::kNone &&
-                       shooter.ke[0] + shooter.ke[1] + shooter.ke[2] == 0.0f;
+  const bool byPower = OriginsByPower(shooter, foreign);
+  ElementTree::QuarterOrigins origins;
+  const bool quarters =
+      byPower && elements_.MakeQuarterOrigins(shooter.numCorners == 3, skip.patch, &origins);
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     shot.points.Next(r, u, true);
     glm::vec3 local;
     Ray ray = MakeShotRay(shooter, shot.sampler, u, &local);
     glm::vec2 st;
-    if (byPower && elements_.SampleByPower(shooter.numCorners == 3, skip.patch, u, &st))
+    if (quarters)
+      ray.o = PatchPoint(shooter, origins.Point(u)) + options_.rayEpsilon * shot.sampler.frame.n;
+    else if (byPower && elements_.SampleByPower(shooter.numCorners == 3, skip.patch, u, &st))
       ray.o = PatchPoint(shooter, st) + options_.rayEpsilon * shot.sampler.frame.n;
     double ratio[3];
     if (shot.sky.map) shot.sky.Of(ray.d, shot.share, ratio);

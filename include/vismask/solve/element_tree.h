@@ -45,6 +45,29 @@ class ElementTree {
   // block's inside. False, and nothing drawn, when the patch is a single
   // leaf not part buried, or received nothing.
   bool SampleByPower(bool triangle, uint32_t patch, const float u[3], glm::vec2* st) const;
+  // A patch that is still one leaf knows more than its total: the power
+  // each quarter of it received. Once it has kQuarterHits hits its rays
+  // leave by that (QuarterOrigins), not uniformly: a patch larger than the
+  // light's detail on it (the Cornell box's floor under the lamp, in the
+  // --max-seconds 0.3 plan's 50-unit patches) then shoots from where its
+  // light landed. Each quarter also counts kQuarterPrior hits' worth
+  // spread evenly, so that one no ray happened to reach still sends some.
+  static constexpr uint32_t kQuarterHits = 16;
+  static constexpr double kQuarterPrior = 1.0;
+  // Cells of the leaf's parameter square (kOpenSide x kOpenSide; a
+  // triangle's four child triangles) with the share of the patch's rays
+  // each sends, made once a shot.
+  struct QuarterOrigins {
+    bool triangle = false;
+    int count = 0;                 // cells (16) or child triangles (4)
+    float cdf[16] = {};            // cumulative shares (kOpenSide^2 cells), the last 1
+    glm::vec2 corners[4][3] = {};  // a triangle's children
+    // A point (s, t) of the patch from three uniforms.
+    glm::vec2 Point(const float u[3]) const;
+  };
+  // False, and `out` untouched, unless patch `patch` is one leaf with
+  // kQuarterHits hits or more.
+  bool MakeQuarterOrigins(bool triangle, uint32_t patch, QuarterOrigins* out) const;
   // What MaybeSplit did.
   enum class Split { kNone, kSplit, kRefused };
   // Splits leaf `e` of patch `p` (reached from the root by the children

@@ -185,6 +185,7 @@ class Environment {
                     double* fraction) const;
   Ray MakeShotRay(const Patch& shooter, const PatchSampler& sampler, const float u[5],
                   glm::vec3* local) const;
+  bool OriginsByPower(const Patch& shooter, bool foreign) const;
   void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
                   uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
                   MaskBits* known = nullptr, MaskBits* read = nullptr);
