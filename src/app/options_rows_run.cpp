@@ -108,9 +108,9 @@ shot's origin x direction; random: independent draws)")
           .Help("O", R"(
 where a patch's rays leave from: power (default): its
 elements (or, unsplit, its quarters) by the light each
-received (one environment), or its cells not buried in a solid (several), none
-from a part under a block or behind a lamp; uniform:
-anywhere on the patch alike)")
+received (one environment), or its cells not buried
+in a solid (several), none from a part under a block
+or behind a lamp; uniform: anywhere on the patch alike)")
           .Json("origins"),
       Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
           .Help("N", "stop once N form-factor rays have been traced")
@@ -225,10 +225,11 @@ environments, unless --foreign-mask-res 0), else 1)")
 with direct light per pixel, the indirect part is
 smoothed over each polygon's display lattice, K steps
 (each vertex half its own value, half its edge
-neighbours' mean, those nothing sees left out; the outline is extrapolated from
-inside, as without). Not given: from the rays a patch
-received (more steps the fewer: its noise), 0 once
-converged; 0: off. run.json: indirect_filter_steps)"),
+neighbours' mean, those nothing sees left out; the
+outline is extrapolated from inside, as without).
+Not given: from the rays a patch received (more steps
+the fewer: its noise), 0 once converged; 0: off.
+run.json: indirect_filter_steps)"),
       Choice("--smooth", &O::smooth, "on|off")
           .Help("on|off", R"(
 on: where polygons with a smoothing group ('s N') or

@@ -134,20 +134,24 @@ void DisplayLattice::Finish(Span<const Patch> patches, int smoothSteps) {
     raw[v] = radiosity_[v];
     radiosity_[v] = acc[v];
   }
+  // inward_.x (Extrapolate's scratch, cleared there) counts the edge
+  // neighbours that hold a value, the same every step: a vertex no exposed
+  // leaf touches (weight 0) holds none, and is neither taken in nor smoothed.
+  auto holds = [&](uint32_t v) { return weight_[v] > 0.0f ? 1.0f : 0.0f; };
+  for (size_t v = 0; v < n; ++v) inward_[v] = glm::vec3(0.0f);
+  for (const Patch& p : patches)
+    for (uint32_t k = 0; k < p.numCorners; ++k) {
+      uint32_t a = p.vertex[k], b = p.vertex[(k + 1) % p.numCorners];
+      inward_[a].x += holds(b);
+      inward_[b].x += holds(a);
+    }
   for (int step = 0; step < smoothSteps; ++step) {
     for (size_t v = 0; v < n; ++v) acc[v] = glm::vec3(0.0f);
-    // inward_.x (Extrapolate's scratch, cleared there) counts the
-    // neighbours that hold a value: a vertex no exposed leaf touches
-    // (weight 0) holds none, and is neither taken in nor smoothed.
-    for (size_t v = 0; v < n; ++v) inward_[v] = glm::vec3(0.0f);
     for (const Patch& p : patches)
       for (uint32_t k = 0; k < p.numCorners; ++k) {
         uint32_t a = p.vertex[k], b = p.vertex[(k + 1) % p.numCorners];
-        float wa = weight_[a] > 0.0f ? 1.0f : 0.0f, wb = weight_[b] > 0.0f ? 1.0f : 0.0f;
-        acc[a] += wb * radiosity_[b];
-        acc[b] += wa * radiosity_[a];
-        inward_[a].x += wb;
-        inward_[b].x += wa;
+        acc[a] += holds(b) * radiosity_[b];
+        acc[b] += holds(a) * radiosity_[a];
       }
     for (size_t v = 0; v < n; ++v)
       if (interior_[v] && weight_[v] > 0.0f && inward_[v].x > 0.0f)

@@ -130,6 +130,24 @@ void ElementTree::OpenCellsPoint(uint16_t open, float* ua, float* ub) {
 
 static_assert(ElementTree::kOpenSide * ElementTree::kOpenSide == 16, "QuarterOrigins::cdf");
 
+namespace {
+
+// The point at (a, b) of the uniforms in the leaf with `corners` (a quad's
+// bilinear parameters; a triangle's, square-root warped), a hair inside it
+// (PatchSampler::Point's margin).
+glm::vec2 PointInLeaf(bool triangle, const glm::vec2* corners, float a, float b) {
+  a = std::min(std::max(a, ElementTree::kMargin), 1.0f - ElementTree::kMargin);
+  b = std::min(std::max(b, ElementTree::kMargin), 1.0f - ElementTree::kMargin);
+  if (triangle) {
+    const float su = std::sqrt(a);
+    return corners[0] + su * (1.0f - b) * (corners[1] - corners[0]) +
+           su * b * (corners[2] - corners[0]);
+  }
+  return corners[0] + a * (corners[1] - corners[0]) + b * (corners[3] - corners[0]);
+}
+
+}  // namespace
+
 bool ElementTree::MakeQuarterOrigins(bool triangle, uint32_t patch, QuarterOrigins* out) const {
   const Element& el = elements_[patch];
   if (el.child != kNoElement || el.hits < kQuarterHits) return false;
@@ -141,13 +159,8 @@ bool ElementTree::MakeQuarterOrigins(bool triangle, uint32_t patch, QuarterOrigi
   double w[16], sum = 0.0;
   out->triangle = triangle;
   if (triangle) {
-    glm::vec2 root[4];
-    RootCorners(true, root);
     out->count = 4;
-    for (uint32_t k = 0; k < 4; ++k) {
-      ChildCorners(true, root, k, out->corners[k]);
-      sum += w[k] = q[k];
-    }
+    for (int k = 0; k < 4; ++k) sum += w[k] = q[k];
   } else {
     // A cell's share: its quarter's power over the quarter's open cells
     // (all, unless the leaf is part buried).
@@ -172,19 +185,21 @@ glm::vec2 ElementTree::QuarterOrigins::Point(const float u[3]) const {
   int k = 0;
   while (k < count - 1 && u[0] >= cdf[k]) ++k;
   while (k > 0 && !(cdf[k] > cdf[k - 1])) --k;  // never a cell that sends nothing
-  float a = u[1], b = u[2];
+  // Entry k's corners: a triangle's child k; a quad's cell k (a = k /
+  // kOpenSide along the first edge, b = k % kOpenSide along the last).
+  glm::vec2 c[4];
   if (triangle) {
-    a = std::min(std::max(a, kMargin), 1.0f - kMargin);
-    b = std::min(std::max(b, kMargin), 1.0f - kMargin);
-    const glm::vec2* c = corners[k];
-    const float su = std::sqrt(a);
-    return c[0] + su * (1.0f - b) * (c[1] - c[0]) + su * b * (c[2] - c[0]);
+    glm::vec2 root[4];
+    RootCorners(true, root);
+    ChildCorners(true, root, static_cast<uint32_t>(k), c);
+  } else {
+    const float side = 1.0f / kOpenSide;
+    const glm::vec2 lo(static_cast<float>(k / kOpenSide) * side,
+                       static_cast<float>(k % kOpenSide) * side);
+    c[0] = lo, c[1] = lo + glm::vec2(side, 0.0f), c[2] = lo + glm::vec2(side),
+    c[3] = lo + glm::vec2(0.0f, side);
   }
-  a = std::min(std::max((static_cast<float>(k / kOpenSide) + a) / kOpenSide, kMargin),
-               1.0f - kMargin);
-  b = std::min(std::max((static_cast<float>(k % kOpenSide) + b) / kOpenSide, kMargin),
-               1.0f - kMargin);
-  return glm::vec2(a, b);
+  return PointInLeaf(triangle, c, u[1], u[2]);
 }
 
 bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
@@ -210,19 +225,11 @@ bool ElementTree::SampleByPower(bool triangle, uint32_t patch, const float u[3],
     for (int c = 0; c < n; ++c) corners[c] = child[c];
     e = elements_[e].child + k;
   }
-  // Uniform in the leaf, a hair inside it (PatchSampler::Point's margin);
-  // part buried, in its open cells (u[1] picks one and is stretched back).
+  // Uniform in the leaf (PointInLeaf); part buried, in its open cells (u[1]
+  // picks one and is stretched back).
   float ua = u[1], ub = u[2];
   if (PartBuried(triangle, e)) OpenCellsPoint(open_[e], &ua, &ub);
-  float a = std::min(std::max(ua, kMargin), 1.0f - kMargin);
-  float b = std::min(std::max(ub, kMargin), 1.0f - kMargin);
-  if (triangle) {
-    float su = std::sqrt(a);
-    *st = corners[0] + su * (1.0f - b) * (corners[1] - corners[0]) +
-          su * b * (corners[2] - corners[0]);
-  } else {
-    *st = corners[0] + a * (corners[1] - corners[0]) + b * (corners[3] - corners[0]);
-  }
+  *st = PointInLeaf(triangle, corners, ua, ub);
   return true;
 }
 

@@ -59,9 +59,8 @@ class ElementTree {
   // each sends, made once a shot.
   struct QuarterOrigins {
     bool triangle = false;
-    int count = 0;                 // cells (16) or child triangles (4)
-    float cdf[16] = {};            // cumulative shares (kOpenSide^2 cells), the last 1
-    glm::vec2 corners[4][3] = {};  // a triangle's children
+    int count = 0;       // cells (16) or child triangles (4)
+    float cdf[16] = {};  // cumulative shares (kOpenSide^2 cells), the last 1
     // A point (s, t) of the patch from three uniforms.
     glm::vec2 Point(const float u[3]) const;
   };
