@@ -112,6 +112,14 @@ received (one environment), or its cells not buried
 in a solid (several), none from a part under a block
 or behind a lamp; uniform: anywhere on the patch alike)")
           .Json("origins"),
+      Choice("--sequence", &O::patchSequence, "patch|shot")
+          .Help("Q", R"(
+with Sobol' points in one environment: patch
+(default): a patch's shots continue one sequence, so
+its rays over all its shots are one stratified set
+(an emitter's excepted); shot: each shot its own, as
+several environments draw them)")
+          .Json("sequence"),
       Count("--ray-budget", &O::rayBudget, 1, kNoLimit, "a positive integer")
           .Help("N", "stop once N form-factor rays have been traced")
           .Json("ray_budget"),

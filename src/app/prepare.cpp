@@ -312,8 +312,7 @@ void KeepPieces(const Options& o, Prepared* p, uint32_t total, std::vector<OwnPi
   own->shrink_to_fit();
 }
 
-// The environments' options: rays, masks, elements, the power a ray of
-// --emitted-rays carries, and the packet size.
+// The environments' options: rays, masks, elements, a ray's power, packets.
 void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepared* p) {
   const SceneInfo& info = p->info;
   const glm::vec3 extent = info.bounds.hi - info.bounds.lo;
@@ -327,6 +326,7 @@ void SetEnvOptions(const Options& o, double power, uint32_t outsideTiles, Prepar
   e.rays = RayCap(o);
   e.sobol = o.sobol;
   e.originsByPower = o.originsByPower;
+  e.patchSequence = o.patchSequence;
   if (o.rayAlloc == Options::RayAlloc::kPower) {
     e.rayQuantum = power / static_cast<double>(o.emittedRays);
     e.minRays = o.minRays;

@@ -12,14 +12,21 @@ void ElementTree::Layout(Arena& arena, uint32_t numPatches, const ElementOptions
   options_ = options;
   elements_ = arena.Alloc<Element>(size_t(numPatches) * (1 + options.perPatch));
   indirect_ = arena.Alloc<double>(indirect ? 3 * size_t(numPatches) * (1 + options.perPatch) : 0);
+  indirectQuarter_ =
+      arena.Alloc<float>(indirect ? 12 * size_t(numPatches) * (1 + options.perPatch) : 0);
+  indirectSquares_ =
+      arena.Alloc<double>(indirect ? size_t(numPatches) * (1 + options.perPatch) : 0);
   exposed_ = arena.Alloc<float>(elements_.size());
   open_ = arena.Alloc<uint16_t>(elements_.size());
 }
 
 void ElementTree::Reset(Span<const Patch> patches) {
   for (uint32_t i = 0; i < patches.size(); ++i) {
-    if (!indirect_.empty())
+    if (!indirect_.empty()) {
       for (int c = 0; c < 3; ++c) indirect_[3 * i + c] = 0.0;
+      for (int k = 0; k < 12; ++k) indirectQuarter_[12 * size_t(i) + k] = 0.0f;
+      indirectSquares_[i] = 0.0;
+    }
     Element& root = elements_[i];
     root = Element{};
     root.area = patches[i].area;
@@ -32,25 +39,9 @@ void ElementTree::Reset(Span<const Patch> patches) {
 
 ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uint8_t* path,
                                            uint32_t depth) {
-  const bool triangle = p.numCorners == 3;
   Element& el = elements_[e];
-  // The element's corners in the patch's parameters, down its path.
-  glm::vec2 corners[4], next[4];
-  int n = RootCorners(triangle, corners);
-  for (uint32_t d = 0; d < depth; ++d) {
-    ChildCorners(triangle, corners, path[d], next);
-    for (int k = 0; k < n; ++k) corners[k] = next[k];
-  }
-  // Each quarter's area, from its corners on the patch.
   double quarterArea[4];
-  for (uint32_t q = 0; q < 4; ++q) {
-    ChildCorners(triangle, corners, q, next);
-    glm::vec3 w[4];
-    for (int k = 0; k < n; ++k) w[k] = PatchPoint(p, next[k]);
-    glm::vec3 cr =
-        n == 3 ? glm::cross(w[1] - w[0], w[2] - w[0]) : glm::cross(w[2] - w[0], w[3] - w[1]);
-    quarterArea[q] = 0.5 * glm::length(glm::dvec3(cr));
-  }
+  QuarterAreas(p, path, depth, quarterArea);
   double areaSum = quarterArea[0] + quarterArea[1] + quarterArea[2] + quarterArea[3];
   double power[4], total = 0.0;
   for (uint32_t q = 0; q < 4; ++q) {
@@ -77,6 +68,10 @@ ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uin
     ch.area = static_cast<float>(quarterArea[q] * (el.area / areaSum));
     ch.child = kNoElement;
     ch.depth = el.depth + 1;
+    if (!indirect_.empty()) {
+      for (int k = 0; k < 12; ++k) indirectQuarter_[12 * size_t(first + q) + k] = 0.0f;
+      indirectSquares_[first + q] = 0.0;
+    }
     exposed_[first + q] = kUnmeasured;
     open_[first + q] = 0;
     for (int c = 0; c < 3; ++c) {
@@ -92,6 +87,58 @@ ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uin
   }
   el.child = first;
   return Split::kSplit;
+}
+
+void ElementTree::QuarterAreas(const Patch& p, const uint8_t* path, uint32_t depth,
+                               double out[4]) const {
+  const bool triangle = p.numCorners == 3;
+  // The element's corners in the patch's parameters, down its path.
+  glm::vec2 corners[4], next[4];
+  int n = RootCorners(triangle, corners);
+  for (uint32_t d = 0; d < depth; ++d) {
+    ChildCorners(triangle, corners, path[d], next);
+    for (int k = 0; k < n; ++k) corners[k] = next[k];
+  }
+  // Each quarter's area, from its corners on the patch.
+  for (uint32_t q = 0; q < 4; ++q) {
+    ChildCorners(triangle, corners, q, next);
+    glm::vec3 w[4];
+    for (int k = 0; k < n; ++k) w[k] = PatchPoint(p, next[k]);
+    glm::vec3 cr =
+        n == 3 ? glm::cross(w[1] - w[0], w[2] - w[0]) : glm::cross(w[2] - w[0], w[3] - w[1]);
+    out[q] = 0.5 * glm::length(glm::dvec3(cr));
+  }
+}
+
+glm::dvec3 ElementTree::CornerShift(const Patch& p, uint32_t e, const uint8_t* path, uint32_t depth,
+                                    uint32_t q, double* alpha) const {
+  *alpha = 0.0;
+  if (indirect_.empty()) return glm::dvec3(0.0);
+  const float* s = &indirectQuarter_[12 * size_t(e)];
+  double area[4], areaSum = 0.0, power[4], total = 0.0;
+  QuarterAreas(p, path, depth, area);
+  for (int k = 0; k < 4; ++k) {
+    areaSum += area[k];
+    power[k] = double(s[3 * k]) + double(s[3 * k + 1]) + double(s[3 * k + 2]);
+    total += power[k];
+  }
+  const double squares = indirectSquares_[e];
+  if (!(total > 0.0) || !(squares > 0.0) || !(areaSum > 0.0)) return glm::dvec3(0.0);
+  double chi2 = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    const double f = area[k] / areaSum, expect = f * total;
+    chi2 += (power[k] - expect) * (power[k] - expect) / (f * squares);
+  }
+  if (!(chi2 > kCornerDof)) return glm::dvec3(0.0);
+  *alpha = 1.0 - kCornerDof / chi2;
+  // Densities over the leaf's own area (its quarters' areas scaled to it).
+  const double scale = areaSum / static_cast<double>(elements_[e].area);
+  glm::dvec3 shift;
+  for (int c = 0; c < 3; ++c) {
+    double all = double(s[c]) + double(s[3 + c]) + double(s[6 + c]) + double(s[9 + c]);
+    shift[c] = *alpha * (double(s[3 * q + c]) / area[q] - all / areaSum) * scale;
+  }
+  return shift;
 }
 
 uint32_t ElementTree::Descend(bool triangle, uint32_t patch, glm::vec2* st, uint8_t* path,

@@ -105,6 +105,21 @@ void Environment::ShootLocal(uint32_t i) {
 void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uint64_t key,
                            uint32_t shotIndex, uint32_t rays, uint32_t cached) {
   if (numNeighbours_ == 0) {
+    // One environment, Sobol' points: a local patch's shots continue one
+    // sequence (PatchStream), so that its rays over all its shots are one
+    // stratified set, not a few independent ones. Not an emitter's: its
+    // emission's many partial shots then made one long sequence whose
+    // scramble, unlucky for one seed in six, moved the whole image (docs/
+    // design/solve.md). With neighbours a foreign environment regenerates
+    // a shot's rays from its key alone.
+    if (options_.patchSequence && options_.sobol && skip.patch != kNoPatch &&
+        p.ke[0] + p.ke[1] + p.ke[2] == 0.0f) {
+      const uint32_t first = raysShot_[skip.patch];
+      raysShot_[skip.patch] += rays;
+      Distribute(p, skip, power, PatchStream(options_.seed, p.globalId), rays, nullptr, nullptr,
+                 nullptr, nullptr, nullptr, first);
+      return;
+    }
     Distribute(p, skip, power, key, rays, nullptr, nullptr);
     return;
   }

@@ -26,7 +26,7 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
   uint32_t leaf = elements_.Descend(p.numCorners == 3, j, &st, path, &depth);
   Element& el = elements_[leaf];
   uint32_t quarter = ChildOf(p.numCorners == 3, &st);
-  double hitPower = 0.0;
+  double hitPower = 0.0, indirect[3];
   for (int c = 0; c < 3; ++c) {
     double reflected = share[c] * p.kd[c];
     hitPower += reflected;
@@ -35,13 +35,14 @@ void Environment::Receive(uint32_t j, const double share[3], const glm::vec3& x)
     e.b[c] += reflected * invArea;
     e.var[c] += (reflected * invArea) * (reflected * invArea);  // one ray's term
     e.unshot[c] += reflected;
-    if (elements_.hasIndirect())
-      elements_.AddIndirect(leaf, c, reflected * (1.0 - direct_.shotDirect(c)));
+    indirect[c] = reflected * (1.0 - direct_.shotDirect(c));
+    if (elements_.hasIndirect()) elements_.AddIndirect(leaf, c, indirect[c]);
     ledger_.unshot[c] += reflected;
     ledger_.radiosity[c] += reflected;
     ledger_.absorbed[c] += share[c] - reflected;
   }
   el.squares += hitPower * hitPower;
+  if (elements_.hasIndirect()) elements_.AddIndirectHit(leaf, quarter, indirect);
   tree_.Increase(j, UnshotKey(e));
   // Whether to split is asked at 64, 128, 256, ... hits.
   uint32_t hits = ++el.hits;
@@ -113,6 +114,7 @@ glm::vec3 Environment::LeafSolvedDirect(uint32_t patch, uint32_t e) const {
 void Environment::ComputeVertexRadiosity(const double ambient[3]) {
   MeasureExposure();
   lattice_.Clear();
+  filterSteps_ = direct_.showIndirect() ? IndirectFilterSteps() : 0;
   for (uint32_t i = 0; i < patches_.size(); ++i) {
     const Patch& p = patches_[i];
     glm::vec2 corners[4];
@@ -122,15 +124,33 @@ void Environment::ComputeVertexRadiosity(const double ambient[3]) {
     for (uint32_t k = 0; k < p.numCorners; ++k) {
       // A point just inside the corner, so the leaf is the corner's own.
       glm::vec2 centre = p.numCorners == 3 ? glm::vec2(1.0f / 3.0f) : glm::vec2(0.5f);
-      uint32_t leaf = LeafAt(i, corners[k] + 1e-4f * (centre - corners[k]));
-      float w = ExposedArea(leaf);
-      lattice_.Add(p.vertex[k], w, LeafRadiosity(i, leaf, ambient),
-                   std::sqrt(elements_[leaf].area / p.area));
+      glm::vec2 st = corners[k] + 1e-4f * (centre - corners[k]);
+      uint8_t path[32];
+      uint32_t depth = 0;
+      const uint32_t leaf = elements_.Descend(p.numCorners == 3, i, &st, path, &depth);
+      const float w = ExposedArea(leaf);
+      glm::vec3 b = LeafRadiosity(i, leaf, ambient);
+      float edge = std::sqrt(elements_[leaf].area / p.area);
+      // The indirect part at the corner as the leaf's quarter there tells
+      // it (ElementTree::CornerShift), where the leaf is wholly exposed and
+      // the image is not smoothed (smoothing means too few hits a patch:
+      // the shift would add noise where the smoothing takes it out); the
+      // outline's extrapolation then starts from between the leaf's centre
+      // and its quarter's.
+      if (filterSteps_ == 0 && direct_.ShowsIndirect(i) && elements_.exposed(leaf) == 1.0f) {
+        static constexpr uint32_t kQuadQuarter[4] = {0, 1, 3, 2};  // at corners 0..3
+        double alpha = 0.0;
+        const glm::dvec3 shift = elements_.CornerShift(
+            p, leaf, path, depth, p.numCorners == 3 ? k : kQuadQuarter[k], &alpha);
+        const PatchTexture* t = patchTexture(i);
+        for (int c = 0; c < 3; ++c) b[c] += static_cast<float>(shift[c] * (t ? t->scale[c] : 1.0f));
+        edge *= static_cast<float>(1.0 - 0.5 * alpha);
+      }
+      lattice_.Add(p.vertex[k], w, b, edge);
       if (lattice_.keepsSolvedDirect() && direct_.ShowsIndirect(i))
         lattice_.AddSolvedDirect(p.vertex[k], w, LeafSolvedDirect(i, leaf));
     }
   }
-  filterSteps_ = direct_.showIndirect() ? IndirectFilterSteps() : 0;
   lattice_.Finish(patches_, static_cast<int>(filterSteps_));
 }
 

@@ -76,6 +76,7 @@ void Environment::Layout(Arena& arena, uint32_t numPatches, const Grid::Plan& pl
   twin_ = arena.Alloc<uint32_t>(staged_->twin.size());
   energy_ = arena.Alloc<PatchEnergy>(numPatches);
   shotCount_ = arena.Alloc<uint32_t>(numPatches);
+  raysShot_ = arena.Alloc<uint32_t>(numPatches);
   outside_.Layout(arena, static_cast<uint32_t>(staged_->outside.size()));
   tree_.Layout(arena, numPatches);
   part(&footprint_.patches);
@@ -326,6 +327,7 @@ void Environment::Reset() {
       ledger_.radiosity[c] += e.unshot[c];
     }
     shotCount_[i] = 0;
+    raysShot_[i] = 0;
     direct_.ResetPatch(i, e.unshot);
     tree_.Set(i, UnshotKey(e));
   }

@@ -38,13 +38,16 @@ inline bool Slabs(const Ray& ray, const Bounds& box, float* t0, float* t1) {
 }
 
 // The five uniforms of ray r of a shot, (point: triangle, u, v; direction:
-// u, v): scrambled Sobol' point r (direction in the two best-stratified
-// dimensions), or with `sobol` off the next five PCG32 draws of the shot's
-// stream, in which case rays must be taken in order.
+// u, v): scrambled Sobol' point first + r (direction in the two
+// best-stratified dimensions), or with `sobol` off the next five PCG32
+// draws of the shot's stream, in which case rays must be taken in order.
 class RayPoints {
  public:
-  RayPoints(bool sobol, uint64_t stream)
-      : sobol_(sobol), qmc_(Mix64(stream ^ 0xd1b54a32d192ed03ull)), rng_(ShotRng(stream)) {}
+  RayPoints(bool sobol, uint64_t stream, uint32_t first = 0)
+      : sobol_(sobol),
+        first_(first),
+        qmc_(Mix64(stream ^ 0xd1b54a32d192ed03ull)),
+        rng_(ShotRng(stream)) {}
   // Ray r; with Sobol', `sequential` promises r is the previous call's + 1
   // (starting at 0), which walks the points one XOR at a time; otherwise
   // the point is reached from the last one drawn (ShotSampler::Seek).
@@ -54,10 +57,10 @@ class RayPoints {
       return;
     }
     float p[kSobolDims];
-    if (sequential)
+    if (sequential && (r > 0 || first_ == 0))
       qmc_.Next(p);
     else
-      qmc_.Seek(r, p);
+      qmc_.Seek(first_ + r, p);
     u[0] = p[4];
     u[1] = p[2];
     u[2] = p[3];
@@ -68,6 +71,7 @@ class RayPoints {
 
  private:
   bool sobol_;
+  uint32_t first_;
   ShotSampler qmc_;
   Rng rng_;
 };

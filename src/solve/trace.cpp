@@ -52,9 +52,9 @@ SkyShares SkySharesOf(const OutsideLight& lit, bool sobol, const Frame& frame, u
 // `power` a ray carries, and the sky map's shares (SkySharesOf).
 struct ShotSetup {
   ShotSetup(const EnvOptions& options, const Patch& shooter, const double power[3], uint64_t stream,
-            uint32_t rays)
+            uint32_t rays, uint32_t first = 0)
       : sampler(MakePatchSampler(shooter)),
-        points(options.sobol, stream),
+        points(options.sobol, stream, first),
         sky(SkySharesOf(options.outside, options.sobol, sampler.frame, shooter.globalId, stream,
                         rays, power)) {
     for (int c = 0; c < 3; ++c) share[c] = power[c] / rays;
@@ -204,7 +204,8 @@ bool Environment::OriginsByPower(const Patch& shooter, bool foreign) const {
 // decides only those (ReadPixels).
 void Environment::Distribute(const Patch& shooter, Skip skip, const double power[3],
                              uint64_t stream, uint32_t rays, const MaskBits* in, MaskBits* out,
-                             MaskBits* centreMask, MaskBits* known, MaskBits* read) {
+                             MaskBits* centreMask, MaskBits* known, MaskBits* read,
+                             uint32_t first) {
   const bool masks = shape_.res > 0;
   const bool foreign = in != nullptr || skip.patch == kNoPatch;
   // Method C: which open pixels the rays hit in, and which they passed.
@@ -219,7 +220,7 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
     hitPixels.SetAllClosed();
     passedPixels.SetAllClosed();
   }
-  ShotSetup shot(options_, shooter, power, stream, rays);
+  ShotSetup shot(options_, shooter, power, stream, rays, first);
   ShotTally tally(shooter);
   const glm::vec3 centre = MaskCentre(shooter);
   const bool byPower = OriginsByPower(shooter, foreign);

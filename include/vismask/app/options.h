@@ -49,6 +49,7 @@ struct Options {
   uint32_t maxRays = 8192;
   bool sobol = true;              // --sampler sobol|random
   bool originsByPower = true;     // --origins power|uniform
+  bool patchSequence = true;      // --sequence patch|shot
   uint32_t elementsPerPatch = 8;  // --elements K: the element pool, K per patch beyond the roots
   uint32_t elementDepth = 4;      // --element-depth D: the deepest an element splits
   float elementSpread = 0.1f;     // --element-spread S: the least relative spread that splits

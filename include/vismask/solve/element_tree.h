@@ -116,9 +116,32 @@ class ElementTree {
     return glm::dvec3(indirect_[3 * e], indirect_[3 * e + 1], indirect_[3 * e + 2]) /
            static_cast<double>(elements_[e].area);
   }
+  // ... and of a hit's indirect power `power` (W per channel) on leaf e, in
+  // its quarter q: the quarters' sums and the sum of the hits' squared
+  // powers (channels summed) since the leaf was made, for CornerShift.
+  void AddIndirectHit(uint32_t e, uint32_t q, const double power[3]) {
+    float* s = &indirectQuarter_[12 * size_t(e) + 3 * q];
+    for (int c = 0; c < 3; ++c) s[c] += static_cast<float>(power[c]);
+    const double sum = power[0] + power[1] + power[2];
+    indirectSquares_[e] += sum * sum;
+  }
+  // The display's shift of leaf e's indirect radiosity towards its quarter
+  // q (the one at the corner being drawn), from the indirect power its
+  // quarters received: the quarter's density minus the leaf's, times the
+  // share of the quarters' spread that is not noise, alpha = 1 - kCornerDof
+  // / chi2 (0 below kCornerDof; chi2 of the quarters against their areas
+  // with the hits' squared powers as variance, as MaybeSplit's). A leaf
+  // then shows its corners as a split would, as far as its rays can tell.
+  // Leaf e of patch p is reached from the root by path[0..depth); *alpha
+  // gets alpha.
+  static constexpr double kCornerDof = 4.0;
+  glm::dvec3 CornerShift(const Patch& p, uint32_t e, const uint8_t* path, uint32_t depth,
+                         uint32_t q, double* alpha) const;
 
  private:
   double SubtreePower(uint32_t e) const;
+  // The areas of the quarters of leaf e of patch p (MaybeSplit's path).
+  void QuarterAreas(const Patch& p, const uint8_t* path, uint32_t depth, double out[4]) const;
   // A quad leaf measured part buried: some of its cells open, not all.
   bool PartBuried(bool triangle, uint32_t e) const {
     return !triangle && exposed_[e] > 0.0f && exposed_[e] < 1.0f && open_[e] != 0;
@@ -126,6 +149,8 @@ class ElementTree {
   ElementOptions options_;
   Span<Element> elements_;
   Span<double> indirect_;
+  Span<float> indirectQuarter_;   // with indirect_: 4 quarters x 3 channels an element
+  Span<double> indirectSquares_;  // with indirect_: one an element
   Span<float> exposed_;
   Span<uint16_t> open_;
   uint32_t used_ = 0;

@@ -52,6 +52,9 @@ struct EnvOptions {
   // A local patch's rays leave from where its light landed (its leaves, in
   // proportion to their power), with one environment; false: uniform.
   bool originsByPower = true;
+  // One environment, Sobol' points: a non-emitting patch's shots continue
+  // one sequence (PatchStream); false: each shot its own (its key's).
+  bool patchSequence = true;
   uint64_t seed = 1;  // run seed
   MaskMethod maskMethod = MaskMethod::kB;
   uint32_t maskRes = 50;

@@ -188,7 +188,7 @@ class Environment {
   bool OriginsByPower(const Patch& shooter, bool foreign) const;
   void Distribute(const Patch& shooter, Skip skip, const double power[3], uint64_t stream,
                   uint32_t rays, const MaskBits* in, MaskBits* out, MaskBits* centre = nullptr,
-                  MaskBits* known = nullptr, MaskBits* read = nullptr);
+                  MaskBits* known = nullptr, MaskBits* read = nullptr, uint32_t first = 0);
   void TraceAlive(const Patch& shooter, Skip skip, const double power[3], uint64_t shotKey,
                   uint32_t rays, bool foreign, const MaskBits& alive, MaskBits* routes);
   void Land(const Ray& ray, const Hit& hit, const double share[3], ShotTally* tally);
@@ -229,6 +229,7 @@ class Environment {
   uint32_t numTwins_ = 0;
   Span<PatchEnergy> energy_;
   Span<uint32_t> shotCount_;
+  Span<uint32_t> raysShot_;  // one environment: the rays of a patch's shots so far (PatchStream)
   Span<PatchTexture> patchTex_;  // one per patch when any is textured, else empty
   ElementTree elements_;
   DirectBook direct_;

@@ -43,6 +43,13 @@ inline uint64_t ShotKey(uint64_t runSeed, uint32_t patchGlobalId, uint32_t shotI
   return Mix64(Mix64(runSeed) ^ ((static_cast<uint64_t>(patchGlobalId) << 32) | shotIndex));
 }
 
+// The stream of every local shot of one patch in one environment, with
+// Sobol' points: shot k takes the points after those of shots 0..k-1, so
+// that the patch's rays over all its shots are one stratified prefix.
+inline uint64_t PatchStream(uint64_t runSeed, uint32_t patchGlobalId) {
+  return Mix64(ShotKey(runSeed, patchGlobalId, 0) ^ 0xa0761d6478bd642full);
+}
+
 // The stream of a foreign environment's rays for a shot: fresh samples, as
 // in the paper, where every environment makes its own Monte Carlo estimate.
 // Any environment can make another's (--centre-rays read).
