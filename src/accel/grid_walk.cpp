@@ -12,6 +12,18 @@
 namespace vismask {
 
 namespace {
+// std::nextafter(t, +inf) for a finite t, without the library call (0.9%
+// of a solve's instructions on the Cornell box): the next float up.
+inline float NextUp(float t) {
+  uint32_t b;
+  std::memcpy(&b, &t, sizeof b);
+  b = t > 0.0f ? b + 1 : t == 0.0f ? 1u : b - 1;
+  std::memcpy(&t, &b, sizeof t);
+  return t;
+}
+}  // namespace
+
+namespace {
 
 // Of two hits at the same t, whether patch p (side `front`) beats `best`:
 // a front side beats a back side, then the lower index wins. A total order
@@ -345,7 +357,7 @@ inline __attribute__((always_inline)) bool Grid::TestCell(const CellRecord* rec,
       st->bestPatch = p;
       st->bestT = t;
       st->bestFront = front;
-      st->tMax = std::nextafter(t, std::numeric_limits<float>::infinity());
+      st->tMax = NextUp(t);
       st->limit = std::min(st->t1, t);
     }
   }

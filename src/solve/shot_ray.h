@@ -83,14 +83,18 @@ class RayPoints {
 // wall beside it however close. A tMin > 0 instead let such rays through the
 // wall and out of a closed box, a bias of ~4e-6 of the shot power a bounce,
 // which rho = 0.999 amplifies to -0.4% (docs/STABILITY.md).
-inline Ray ShotRay(const PatchSampler& sampler, const float u[5], float lift, glm::vec3* local) {
-  *local = CosineDirection(u[3], u[4]);
+inline Ray ShotRayFrom(const glm::vec3& point, const PatchSampler& sampler, const glm::vec3& local,
+                       float lift) {
   Ray ray;
-  ray.o = sampler.Point(u[0], u[1], u[2]) + lift * sampler.frame.n;
-  ray.d = sampler.frame.ToWorld(*local);
+  ray.o = point + lift * sampler.frame.n;
+  ray.d = sampler.frame.ToWorld(local);
   ray.tMin = 0.0f;
   ray.tMax = std::numeric_limits<float>::infinity();
   return ray;
+}
+inline Ray ShotRay(const PatchSampler& sampler, const float u[5], float lift, glm::vec3* local) {
+  *local = CosineDirection(u[3], u[4]);
+  return ShotRayFrom(sampler.Point(u[0], u[1], u[2]), sampler, *local, lift);
 }
 
 // The pixel of the direction from the shooter's centre to where `ray`

@@ -230,12 +230,14 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     shot.points.Next(r, u, true);
-    glm::vec3 local;
-    Ray ray = MakeShotRay(shooter, shot.sampler, u, &local);
+    // With quarters the origin is theirs alone: MakeShotRay's is not made.
+    glm::vec3 local = CosineDirection(u[3], u[4]);
+    Ray ray = quarters ? ShotRayFrom(PatchPoint(shooter, origins.Point(u)), shot.sampler, local,
+                                     options_.rayEpsilon)
+                       : MakeShotRay(shooter, shot.sampler, u, &local);
     glm::vec2 st;
-    if (quarters)
-      ray.o = PatchPoint(shooter, origins.Point(u)) + options_.rayEpsilon * shot.sampler.frame.n;
-    else if (byPower && elements_.SampleByPower(shooter.numCorners == 3, skip.patch, u, &st))
+    if (!quarters && byPower &&
+        elements_.SampleByPower(shooter.numCorners == 3, skip.patch, u, &st))
       ray.o = PatchPoint(shooter, st) + options_.rayEpsilon * shot.sampler.frame.n;
     double ratio[3];
     if (shot.sky.map) shot.sky.Of(ray.d, shot.share, ratio);
