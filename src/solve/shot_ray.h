@@ -10,6 +10,8 @@
 
 #include "vismask/core/fminmax.h"
 #include "vismask/scene/scene.h"
+#include "vismask/solve/element.h"
+#include "vismask/solve/element_tree.h"
 #include "vismask/solve/mask.h"
 #include "vismask/solve/patch.h"
 #include "vismask/solve/rng.h"
@@ -95,6 +97,16 @@ inline Ray ShotRayFrom(const glm::vec3& point, const PatchSampler& sampler, cons
 inline Ray ShotRay(const PatchSampler& sampler, const float u[5], float lift, glm::vec3* local) {
   *local = CosineDirection(u[3], u[4]);
   return ShotRayFrom(sampler.Point(u[0], u[1], u[2]), sampler, *local, lift);
+}
+
+// Ray r of a shot from an unsplit patch's quarters (ElementTree::
+// QuarterOrigins): ShotRay's with the quarters' origin, the uniform one
+// not made.
+inline Ray QuarterRay(const Patch& shooter, const PatchSampler& sampler,
+                      const ElementTree::QuarterOrigins& origins, const float u[5], float lift,
+                      glm::vec3* local) {
+  *local = CosineDirection(u[3], u[4]);
+  return ShotRayFrom(PatchPoint(shooter, origins.Point(u)), sampler, *local, lift);
 }
 
 // The pixel of the direction from the shooter's centre to where `ray`

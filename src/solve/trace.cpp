@@ -230,10 +230,8 @@ void Environment::Distribute(const Patch& shooter, Skip skip, const double power
   for (uint32_t r = 0; r < rays; ++r) {
     float u[5];
     shot.points.Next(r, u, true);
-    // With quarters the origin is theirs alone: MakeShotRay's is not made.
-    glm::vec3 local = CosineDirection(u[3], u[4]);
-    Ray ray = quarters ? ShotRayFrom(PatchPoint(shooter, origins.Point(u)), shot.sampler, local,
-                                     options_.rayEpsilon)
+    glm::vec3 local;
+    Ray ray = quarters ? QuarterRay(shooter, shot.sampler, origins, u, options_.rayEpsilon, &local)
                        : MakeShotRay(shooter, shot.sampler, u, &local);
     glm::vec2 st;
     if (!quarters && byPower &&
