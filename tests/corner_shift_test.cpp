@@ -7,9 +7,7 @@
 #include <vector>
 
 #include "../src/solve/shot_ray.h"
-#include "grid_test_util.h"
-#include "vismask/core/arena.h"
-#include "vismask/solve/element_tree.h"
+#include "env_test_util.h"
 
 namespace vismask {
 namespace {
@@ -38,12 +36,9 @@ double Expected(const int hits[4], double p, uint32_t q, double* alpha) {
 }
 
 TEST(CornerShiftTest, CornersFollowTheirQuartersAsFarAsTheHitsTell) {
-  gridtest::TestScene s;
-  gridtest::AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1, 1, &s);
-  Span<const Patch> patches(s.patches.data(), s.patches.size());
-  Arena arena(1 << 16);
-  ElementTree tree;
-  tree.Layout(arena, 1, ElementOptions{}, true);
+  test::UnitQuadTree quad(true);
+  ElementTree& tree = quad.tree;
+  const Span<const Patch> patches = quad.patches;
   const uint8_t* path = nullptr;
   double alpha = -1.0;
   // Even: nothing to shift.

@@ -139,14 +139,9 @@ TEST(ExposureTest, TheFloorBesideABlockIsNotDarkenedByThePartBeneath) {
 // cells only (and alike over them), a whole or unmeasured one anywhere:
 // a ray from under a block would only meet the block's inside.
 TEST(ExposureTest, OriginsLeaveFromTheOpenCellsOnly) {
-  gridtest::TestScene s;
-  gridtest::AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1, 1, &s);
-  ASSERT_EQ(s.patches.size(), 1u);
-  Span<const Patch> patches(s.patches.data(), s.patches.size());
-  Arena arena(1 << 16);
-  ElementTree tree;
-  tree.Layout(arena, 1, ElementOptions{}, false);
-  tree.Reset(patches);
+  test::UnitQuadTree quad(false);
+  ASSERT_EQ(quad.patches.size(), 1u);
+  ElementTree& tree = quad.tree;
   glm::vec2 st;
   const float mid[3] = {0.5f, 0.5f, 0.5f};
   EXPECT_FALSE(tree.SampleByPower(false, 0, mid, &st)) << "unmeasured: the caller's uniform point";
@@ -359,13 +354,8 @@ TEST(ExposureTest, MasksAreCastFromAnOpenCell) {
 // counting kQuarterPrior hits' worth spread evenly), over its open cells
 // when part buried; a triangle's by its child triangles.
 TEST(ExposureTest, OneLeafPatchesLeaveByTheirQuartersPower) {
-  gridtest::TestScene s;
-  gridtest::AddSubdividedQuad(1, 0.0f, 0.0f, 1.0f, 0.0f, 1.0f, 1, 1, &s);
-  Span<const Patch> patches(s.patches.data(), s.patches.size());
-  Arena arena(1 << 16);
-  ElementTree tree;
-  tree.Layout(arena, 1, ElementOptions{}, false);
-  tree.Reset(patches);
+  test::UnitQuadTree quad(false);
+  ElementTree& tree = quad.tree;
   tree.SetExposed(0, 1.0f, 0xffff);
   ElementTree::QuarterOrigins o;
   Element& el = tree[0];

@@ -21,9 +21,6 @@ inline float NextUp(float t) {
   std::memcpy(&t, &b, sizeof t);
   return t;
 }
-}  // namespace
-
-namespace {
 
 // Of two hits at the same t, whether patch p (side `front`) beats `best`:
 // a front side beats a back side, then the lower index wins. A total order

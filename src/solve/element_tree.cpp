@@ -37,6 +37,23 @@ void ElementTree::Reset(Span<const Patch> patches) {
   used_ = static_cast<uint32_t>(patches.size());
 }
 
+namespace {
+
+// The quarters' spread beyond noise: chi-square of the power each received
+// against an even spread (quarter q expects f_q = area_q / area of the
+// total), with variance f_q * (sum of the hits' squared powers).
+double QuarterChi2(const double area[4], double areaSum, const double power[4], double total,
+                   double squares) {
+  double chi2 = 0.0;
+  for (uint32_t q = 0; q < 4; ++q) {
+    const double f = area[q] / areaSum, expect = f * total;
+    chi2 += (power[q] - expect) * (power[q] - expect) / (f * squares);
+  }
+  return chi2;
+}
+
+}  // namespace
+
 ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uint8_t* path,
                                            uint32_t depth) {
   Element& el = elements_[e];
@@ -49,13 +66,12 @@ ElementTree::Split ElementTree::MaybeSplit(const Patch& p, uint32_t e, const uin
     total += power[q];
   }
   if (!(total > 0.0) || !(el.squares > 0.0)) return Split::kNone;
-  // Against an even spread, quarter q expects f_q = area_q / area of the
-  // power, with variance f_q * (sum of the hits' squared powers).
-  double chi2 = 0.0, spread = 0.0;
+  // Significant (QuarterChi2), and large: the relative RMS spread of the
+  // quarters' densities.
+  const double chi2 = QuarterChi2(quarterArea, areaSum, power, total, el.squares);
+  double spread = 0.0;
   for (uint32_t q = 0; q < 4; ++q) {
-    double f = quarterArea[q] / areaSum, expect = f * total;
-    chi2 += (power[q] - expect) * (power[q] - expect) / (f * el.squares);
-    double rel = power[q] / expect - 1.0;
+    double f = quarterArea[q] / areaSum, rel = power[q] / (f * total) - 1.0;
     spread += f * rel * rel;
   }
   if (chi2 <= options_.chi2 || std::sqrt(spread) <= options_.threshold) return Split::kNone;
@@ -115,20 +131,16 @@ glm::dvec3 ElementTree::CornerShift(const Patch& p, uint32_t e, const uint8_t* p
   *alpha = 0.0;
   if (indirect_.empty()) return glm::dvec3(0.0);
   const float* s = &indirectQuarter_[12 * size_t(e)];
-  double area[4], areaSum = 0.0, power[4], total = 0.0;
+  double area[4], power[4], total = 0.0;
   QuarterAreas(p, path, depth, area);
+  const double areaSum = area[0] + area[1] + area[2] + area[3];
   for (int k = 0; k < 4; ++k) {
-    areaSum += area[k];
     power[k] = double(s[3 * k]) + double(s[3 * k + 1]) + double(s[3 * k + 2]);
     total += power[k];
   }
   const double squares = indirectSquares_[e];
   if (!(total > 0.0) || !(squares > 0.0) || !(areaSum > 0.0)) return glm::dvec3(0.0);
-  double chi2 = 0.0;
-  for (int k = 0; k < 4; ++k) {
-    const double f = area[k] / areaSum, expect = f * total;
-    chi2 += (power[k] - expect) * (power[k] - expect) / (f * squares);
-  }
+  const double chi2 = QuarterChi2(area, areaSum, power, total, squares);
   if (!(chi2 > kCornerDof)) return glm::dvec3(0.0);
   *alpha = 1.0 - kCornerDof / chi2;
   // Densities over the leaf's own area (its quarters' areas scaled to it).

@@ -112,15 +112,15 @@ void Environment::ShootOwn(const Patch& p, Skip skip, const double power[3], uin
     // scramble, unlucky for one seed in six, moved the whole image (docs/
     // design/solve.md). With neighbours a foreign environment regenerates
     // a shot's rays from its key alone.
+    uint64_t stream = key;
+    uint32_t first = 0;
     if (options_.patchSequence && options_.sobol && skip.patch != kNoPatch &&
         p.ke[0] + p.ke[1] + p.ke[2] == 0.0f) {
-      const uint32_t first = raysShot_[skip.patch];
+      stream = PatchStream(options_.seed, p.globalId);
+      first = raysShot_[skip.patch];
       raysShot_[skip.patch] += rays;
-      Distribute(p, skip, power, PatchStream(options_.seed, p.globalId), rays, nullptr, nullptr,
-                 nullptr, nullptr, nullptr, first);
-      return;
     }
-    Distribute(p, skip, power, key, rays, nullptr, nullptr);
+    Distribute(p, skip, power, stream, rays, nullptr, nullptr, nullptr, nullptr, nullptr, first);
     return;
   }
   MaskBits out = exchange_.ScratchMask(0);
