@@ -290,6 +290,20 @@ TEST(AllocTest, OriginsByPowerAllocateNothing) {
   EXPECT_NE(run.Json().find("\"origins\": \"power\""), std::string::npos);
 }
 
+// With per-pixel direct light and no smoothing, a leaf's corners show its
+// quarters' indirect density (ElementTree::CornerShift, each image); one
+// environment's non-emitting patches continue one Sobol' sequence across
+// their shots (--sequence patch, the default).
+TEST(AllocTest, CornerShiftAndPatchSequenceAllocateNothing) {
+  SKIP_WITHOUT_ALLOC_HOOKS();
+  CountedRender run("scenes/cornell.obj",
+                    "--emitted-rays 300000 --width 32 --height 32 --indirect-filter 0");
+  ASSERT_EQ(run.code, 0) << run.err;
+  EXPECT_EQ(run.allocations, 0) << "heap allocations after init";
+  EXPECT_NE(run.Json().find("\"indirect_filter_steps\": 0,"), std::string::npos);
+  EXPECT_NE(run.Json().find("\"sequence\": \"patch\""), std::string::npos);
+}
+
 unsigned long long JsonField(const std::string& json, const std::string& key) {
   size_t at = json.find("\"" + key + "\": ");
   EXPECT_NE(at, std::string::npos) << key;
