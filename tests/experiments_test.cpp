@@ -179,6 +179,24 @@ TEST(ExperimentsTest, MiniaturePipelineWritesEveryResult) {
     auto rp = ReadCsv(dir.File("gt-renderpark-measured.csv"));
     ASSERT_GE(rp.size(), 2u);
     for (int c : {2, 3, 4}) EXPECT_TRUE(IsNumber(rp[1][c])) << rp[1][c];
+    // Budget by budget (from --quick's vs_from, 0.02 s: both anytime budgets):
+    // RenderPark's best setting within T, or none; the verdict its numbers'.
+    auto vs = ReadCsv(dir.File("gt-renderpark-vs.csv"));
+    ASSERT_EQ(vs.size(), 3u);
+    ASSERT_EQ(vs[0].size(), 10u);
+    EXPECT_EQ(vs[0][7], "below_renderpark");
+    for (size_t i = 1; i < vs.size(); ++i) {
+      const auto& r = vs[i];
+      ASSERT_TRUE(IsNumber(r[0]) && IsNumber(r[3])) << r[0] << " " << r[3];
+      if (r[4] == "none") {
+        EXPECT_EQ(r[7], "");
+        continue;
+      }
+      ASSERT_TRUE(IsNumber(r[5]) && IsNumber(r[6])) << r[5] << " " << r[6];
+      EXPECT_LE(std::stod(r[5]), std::stod(r[0]));
+      EXPECT_EQ(r[7], std::stod(r[3]) < std::stod(r[6]) ? "yes" : "NO");
+    }
+    EXPECT_NE(doc.find("| budget | vismask_run |"), std::string::npos);
   } else {
     EXPECT_NE(ReadFile(dir.File("gt-renderpark-skipped.txt")).find("make renderpark RPK_SRC="),
               std::string::npos);

@@ -413,6 +413,16 @@ int Footprint(const Options& o);
 int SceneDump(const Options& o);
 const char* SceneDumpHelpText();
 int Compare(const Options& o);
+// --max-seconds's plan and pace (plan_run.cpp). PlanRate: the rays per
+// second this machine traces through the scene's grids now, the mean kd
+// (at most 0.95) and the patches, over this rank's environments.
+struct PlanRate {
+  double rate = 0.0, rho = 0.0, patches = 0.0;
+};
+float PlanPatchSize(const RunState& r, PlanRate* measured);
+PlanRate PlanBudget(RunState* r, const PlanRate& known);
+bool Paces(const RunState& r);
+PaceInput PaceInputOf(const Options& o, const PlanRate& planned, size_t environments);
 int Verify(const Options& o);
 // The size and CRC-32 of a file; false (with *why) if it cannot be read.
 bool SizeAndCrc(const std::string& path, uint64_t* bytes, uint32_t* crc, std::string* why);

@@ -44,7 +44,8 @@ GOAL_1S, GOAL_10S, GOAL_RATIO, GOAL_DEMO, GOAL_DEMO_S, GOAL_ENVS = 0.03, 0.02, 2
 PERCENT = {"vs_gt_minus_ref_noise", "noise_seed", "total_vs_gt", "aa_off_vs_on", "aliasing",
            "ref_noise", "discretisation", "renderpark_vs_gt", "vismask_front_vs_gt",
            "max_abs_at_seam", "mean_abs_elsewhere", "final_vs_gt", "run_final_vs_gt",
-           "minus_ref_noise_percent"}
+           "minus_ref_noise_percent", "vismask_no_silhouettes", "renderpark_no_silhouettes",
+           "issue_quoted"}
 POINTS = {"minus_1_env_points", "step_left_minus_right"}
 
 

@@ -118,10 +118,17 @@ def report_section(ctx, w, link, table_md):
           "(tools/renderpark-run: the scene in metres, a one-ray-per-pixel raycast of the "
           "solution), by its own CPU seconds, interleaved with the `--max-seconds` runs above "
           "(`run_order`: each repetition's place in the one sequence of both; each row is its "
-          "median repetition by `vs_gt`, `vs_gt_range` over all of them):\n")
+          "median repetition by `vs_gt`, `vs_gt_range` over all of them, and `cpu_seconds` the "
+          "median of their CPU seconds):\n")
         skipped = ctx.result("gt-renderpark-skipped.txt")
         if os.path.exists(ctx.result("gt-renderpark-measured.csv")):
             w(table_md(ctx.result("gt-renderpark-measured.csv")) + "\n")
+            w("Issue 41's goal without the 1-px silhouettes, budget by budget: vismask's "
+              "`--max-seconds T` row above (its median repetition) against RenderPark's best "
+              "setting whose CPU seconds were at most T (`renderpark_within`; a setting that took "
+              "longer does not count at T, as vismask's runs may not take longer either), and "
+              "against the figure issue 41 quotes for T (`issue_quoted`):\n")
+            w(table_md(ctx.result("gt-renderpark-vs.csv")) + "\n")
         else:
             w("**Skipped**: " + (open(skipped).read().strip() if os.path.exists(skipped)
                                  else "no results") + ".\n")
