@@ -88,10 +88,10 @@ ISSUE_QUOTED = {0.3: 0.0166, 1: 0.0127, 10: 0.0102, 30: 0.0099}
 
 def against_renderpark(rows, rpk_rows, first):
     """Issue 41's comparison without the 1-px silhouettes, at each
-    `--max-seconds` budget T from `first` (0.3 s: the issue's; `rows`: gt-silhouettes.csv's, the
-    best-fixed columns in): vismask's anytime-T row against
-    RenderPark's best setting whose CPU seconds (the median of its
-    repetitions) were at most T, the issue's own comparison by budget
+    `--max-seconds` budget T from `first` (the issue's: 0.3 s): vismask's
+    anytime-T row (`rows`: gt-silhouettes.csv's, the best-fixed columns
+    in) against RenderPark's best setting whose CPU seconds (the median of
+    its repetitions) were at most T, the issue's own comparison by budget
     ("none" where no setting finished within T), and against the figure the
     issue quotes for T."""
     out = []

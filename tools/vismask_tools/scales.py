@@ -59,7 +59,7 @@ SCALES = {
                          reps=3,
                          # rpkCpp's Galerkin (make renderpark): 30 Jacobi
                          # iterations at four link error thresholds (2e-5:
-                         # 0.17-0.19 CPU s here, so that a setting counts at
+                         # 0.13-0.19 CPU s here, so that a setting counts at
                          # 0.3 s where 1e-5 takes longer than that).
                          rpk=[["-iterations", "30", "-gr-link-error-threshold", t]
                               for t in ("2e-5", "1e-5", "1e-6", "1e-7")],
