@@ -9,6 +9,7 @@ gt-silhouette-mask.csv, gt-silhouettes.csv, gt-renderpark-measured.csv and
 gt-renderpark-vs.csv."""
 
 import os
+import statistics
 import subprocess
 import sys
 
@@ -160,7 +161,7 @@ def interleaved(ctx, ref, keep, run, image):
     rpk_rows = []
     for opts, reps in zip(settings, rp):
         m, tail = median_rep(reps)
-        cpu = sorted(r["cpu_seconds"] for r in reps)[(len(reps) - 1) // 2]
+        cpu = statistics.median_low(r["cpu_seconds"] for r in reps)  # median_rep's middle
         rpk_rows.append(["rpkCpp hierarchical Galerkin", " ".join(opts), cpu,
                          m["vs_gt"], m["vs_gt_no_silhouettes"]] + tail)
     return rows, rpk_rows
